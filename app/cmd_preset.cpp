@@ -1,0 +1,104 @@
+// mesolab preset validate | schema | show, and mesolab info.
+#include "app/commands.h"
+#include "app/workbench.h"
+#include "core/error.h"
+#include "core/scene.h"
+#include "core/technique.h"
+#include "gpu/context.h"
+
+#include <GLFW/glfw3.h>
+#include <OpenImageIO/oiioversion.h>
+#include <imgui.h>
+#include <tbb/version.h>
+#include <cstdio>
+#include <thread>
+
+namespace mesolab {
+
+// [SECTION] preset validate
+int run_preset_validate(const std::vector<std::string>& args) {
+    int bad = 0;
+    std::vector<std::string> files;
+    try {
+        files = expand_presets(args);
+    } catch (const InputError& e) {
+        std::fprintf(stderr, "mesolab: error: %s\n", e.what());
+        return 2;
+    }
+    for (const auto& f : files) {
+        try {
+            const Scene s = load_preset(f);
+            std::printf("ok     %s (%zu object%s)\n", f.c_str(), s.objects.size(), s.objects.size() == 1 ? "" : "s");
+        } catch (const InputError& e) {
+            std::fprintf(stderr, "mesolab: error: %s\n", e.what());
+            ++bad;
+        }
+    }
+    return bad ? 2 : 0;
+}
+
+// [SECTION] preset schema
+int run_preset_schema(const std::string& technique, bool as_json) {
+    const Registry& reg = Registry::instance();
+    std::vector<const ParamGroup*> groups;
+    if (technique.empty()) {
+        groups = reg.groups();
+    } else if (const ParamGroup* g = reg.group(technique)) {
+        groups.push_back(g);
+    } else {
+        std::vector<std::string> names;
+        for (auto* gg : reg.groups()) names.push_back(gg->name());
+        const std::string hint = nearest_key(technique, names);
+        throw InputError("preset schema: unknown technique or group '" + technique + "'" + (hint.empty() ? "" : " (did you mean '" + hint + "'?)"));
+    }
+    if (as_json) {
+        json j;
+        j["schema"] = kPresetSchema;
+        j["groups"] = json::array();
+        for (auto* g : groups) j["groups"].push_back(group_schema(*g));
+        std::printf("%s\n", j.dump(2).c_str());
+        return 0;
+    }
+    for (auto* g : groups) {
+        std::printf("%s — %s\n", g->name().c_str(), g->title().c_str());
+        for (const auto& d : g->decls()) {
+            const std::string key = g->name() + "." + d.name;
+            const std::string range = describe_range(d);
+            std::printf("  %-26s %-6s default %-18s %-22s %-10s %-9s %s\n", key.c_str(), to_string(d.type), value_to_text(d, d.def).c_str(),
+                        range.c_str(), d.unit.c_str(), to_string(d.cost), d.help.c_str());
+        }
+        std::printf("\n");
+    }
+    return 0;
+}
+
+// [SECTION] preset show
+int run_preset_show(const std::string& file, const std::vector<std::string>& sets) {
+    Scene s = load_preset(file);
+    for (const auto& set : sets) apply_set(s, set);
+    std::printf("%s", scene_to_text(s).c_str());
+    return 0;
+}
+
+// [SECTION] info
+int run_info() {
+    std::printf("mesolab %s\n", version_string());
+    std::printf("cpu threads       %u\n", std::thread::hardware_concurrency());
+    std::printf("techniques        ");
+    for (const auto& t : Registry::instance().technique_names()) std::printf("%s ", t.c_str());
+    std::printf("\n");
+    try {
+        auto ctx = gpu::HeadlessContext::create();
+        const auto& i = ctx->info();
+        std::printf("gl platform       %s\ngl vendor         %s\ngl renderer       %s\ngl version        %s\nglsl version      %s\n", i.platform.c_str(),
+                    i.vendor.c_str(), i.renderer.c_str(), i.version.c_str(), i.glsl_version.c_str());
+    } catch (const std::exception& e) {
+        std::printf("gl                unavailable: %s\n", e.what());
+    }
+    int maj = 0, min = 0, rev = 0;
+    glfwGetVersion(&maj, &min, &rev);
+    std::printf("glfw              %d.%d.%d\nimgui             %s\nopenimageio       %s\ntbb               %d.%d\n", maj, min, rev, IMGUI_VERSION,
+                OIIO_VERSION_STRING, TBB_VERSION_MAJOR, TBB_VERSION_MINOR);
+    return 0;
+}
+}  // namespace mesolab

@@ -1,0 +1,58 @@
+#pragma once
+// Subcommands of `mesolab`. Each returns the process exit status: 0 success, 2 bad input,
+// 1 internal failure (main() maps exceptions: InputError -> 2, anything else -> 1).
+#include <string>
+#include <vector>
+
+namespace mesolab {
+
+struct CaptureOptions {
+    std::vector<std::string> presets;  // files or folders (every *.json below)
+    std::string out_dir = "screenshots";
+    std::string size = "512x512";
+    std::string backend = "gpu";
+    std::vector<std::string> sets;
+    std::vector<std::string> aovs;
+};
+int run_capture(const CaptureOptions& o);
+
+struct BenchOptions {
+    std::vector<std::string> tables;
+    std::string format = "md";
+    int repeat = 5;
+    std::string out;
+    std::string backend = "both";  // cpu|gpu|both
+};
+int run_bench(const BenchOptions& o);
+
+struct SweepOptions {
+    std::string preset;
+    std::string knob;                     // KEY=V1,V2,...
+    std::vector<std::string> reference;   // KEY=V
+    std::string out_dir = "screenshots/sweeps";
+    std::string size = "256x256";
+    std::string backend = "cpu";
+    std::vector<std::string> sets;
+    int repeat = 3;
+};
+int run_sweep(const SweepOptions& o);
+
+int run_preset_validate(const std::vector<std::string>& files);
+int run_preset_schema(const std::string& technique, bool as_json);
+int run_preset_show(const std::string& file, const std::vector<std::string>& sets);
+int run_info();
+
+struct GuiOptions {
+    std::string preset;
+    std::string script;          // scripted mode: one command per line
+    int frames = 0;              // > 0: render N frames then exit
+    std::string screenshot;      // with --frames: viewport screenshot path
+    std::string window_screenshot;  // with --frames: whole-window screenshot path
+    std::string size = "1600x900";
+};
+int run_gui(const GuiOptions& o);
+
+// Helpers shared by the commands.
+void parse_size(const std::string& s, int& w, int& h);  // "WxH", InputError otherwise
+std::vector<std::string> expand_presets(const std::vector<std::string>& args);  // folders -> *.json
+}  // namespace mesolab

@@ -1,0 +1,113 @@
+// mesolab: interactive workbench for meso-scale appearance. Subcommands: gui (default),
+// capture, bench, sweep, preset validate|schema|show, info.
+#include "app/commands.h"
+#include "app/workbench.h"
+#include "core/error.h"
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <cstring>
+#include <iostream>
+
+using namespace mesolab;
+
+int main(int argc, char** argv) {
+    // `mesolab PRESET` and `mesolab` alone mean `mesolab gui ...`.
+    static const char* kCommands[] = {"gui", "capture", "bench", "sweep", "preset", "info", "-h", "--help", "--version"};
+    std::vector<char*> args(argv, argv + argc);
+    bool known = argc > 1 && std::any_of(std::begin(kCommands), std::end(kCommands), [&](const char* c) { return std::strcmp(argv[1], c) == 0; });
+    static char gui_word[] = "gui";
+    if (!known) args.insert(args.begin() + 1, gui_word);
+
+    CLI::App app{"mesolab: interactive workbench for meso-scale appearance (micro-geometry, bump synthesis, translucency, cloth)"};
+    app.set_version_flag("--version", std::string(version_string()));
+    app.require_subcommand(1);
+
+    GuiOptions gui;
+    auto* g = app.add_subcommand("gui", "Open the window (default). Scripted: --script FILE, or --frames N with --screenshot/--window-screenshot");
+    g->add_option("preset", gui.preset, "Preset to load");
+    g->add_option("--script", gui.script, "Run the commands in FILE (load, set, frames, screenshot, window-screenshot, quit), then exit");
+    g->add_option("--frames", gui.frames, "Render N frames, take the requested screenshots, then exit");
+    g->add_option("--screenshot", gui.screenshot, "With --frames: save the viewport to this PNG");
+    g->add_option("--window-screenshot", gui.window_screenshot, "With --frames: save the whole window with its panels to this PNG");
+    g->add_option("--size", gui.size, "Window size WxH")->capture_default_str();
+
+    CaptureOptions cap;
+    auto* c = app.add_subcommand("capture", "Render presets headless: DIR/<name>.png (8-bit sRGB), DIR/<name>.<aov>.exr (float), DIR/<name>.json (parameters, renderer, timings, stages, version)");
+    c->add_option("presets", cap.presets, "Preset files or folders (every *.json below)")->required();
+    c->add_option("-o,--output", cap.out_dir, "Output folder")->capture_default_str();
+    c->add_option("--size", cap.size, "Frame size WxH (texture mode may use the technique's native size)")->capture_default_str();
+    c->add_option("--backend", cap.backend, "gpu (EGL, headless) or cpu")->capture_default_str();
+    c->add_option("--set", cap.sets, "Override a parameter: KEY=VALUE (repeatable), e.g. camera.distance=4");
+    c->add_option("--aov", cap.aovs, "Also write this AOV as 32-bit float EXR (repeatable): radiance, normal, ...");
+
+    BenchOptions bench;
+    auto* b = app.add_subcommand("bench", "Timing tables laid out like the papers' tables (all tables when none is named)");
+    b->add_option("tables", bench.tables, "Table names");
+    b->add_option("--format", bench.format, "md, csv or json")->capture_default_str();
+    b->add_option("--repeat", bench.repeat, "Runs per cell (median, min, max)")->capture_default_str();
+    b->add_option("-o,--output", bench.out, "Write to FILE instead of standard output");
+    b->add_option("--backend", bench.backend, "cpu, gpu or both")->capture_default_str();
+
+    SweepOptions sweep;
+    auto* s = app.add_subcommand("sweep", "Accuracy vs time: render a preset at each value of a knob, measure time and error against a reference");
+    s->add_option("preset", sweep.preset, "Preset file")->required();
+    s->add_option("--knob", sweep.knob, "KEY=V1,V2,... (e.g. geometry.resolution=8,16,32,64)")->required();
+    s->add_option("--reference", sweep.reference, "KEY=V settings of the reference rendering (default: the knob's most accurate setting)");
+    s->add_option("-o,--output", sweep.out_dir, "Output folder for CSV, Markdown and the PNG plot")->capture_default_str();
+    s->add_option("--size", sweep.size, "Frame size WxH")->capture_default_str();
+    s->add_option("--backend", sweep.backend, "cpu or gpu")->capture_default_str();
+    s->add_option("--set", sweep.sets, "Override a parameter: KEY=VALUE (repeatable)");
+    s->add_option("--repeat", sweep.repeat, "Timed runs per value (median)")->capture_default_str();
+
+    auto* p = app.add_subcommand("preset", "Validate, describe and show presets");
+    p->require_subcommand(1);
+    std::vector<std::string> validate_files;
+    auto* pv = p->add_subcommand("validate", "Check preset files; exit 2 naming the file and key of the first problem in each");
+    pv->add_option("files", validate_files, "Preset files or folders")->required();
+    std::string schema_tech;
+    bool schema_json = false;
+    auto* ps = p->add_subcommand("schema", "Every parameter with type, default, range, unit, help and cost");
+    ps->add_option("technique", schema_tech, "Only this technique (or group: camera, light, env, geometry, effects)");
+    ps->add_flag("--json", schema_json, "JSON output");
+    std::string show_file;
+    std::vector<std::string> show_sets;
+    auto* psh = p->add_subcommand("show", "Print the fully resolved preset JSON");
+    psh->add_option("file", show_file, "Preset file")->required();
+    psh->add_option("--set", show_sets, "Override a parameter: KEY=VALUE (repeatable)");
+
+    auto* info = app.add_subcommand("info", "GL vendor/renderer/version of the headless context, CPU threads, versions");
+
+    try {
+        app.parse(int(args.size()), args.data());
+    } catch (const CLI::CallForHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForAllHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForVersion& e) {
+        return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+        app.exit(e);
+        return 2;
+    }
+
+    try {
+        if (g->parsed()) return run_gui(gui);
+        if (c->parsed()) return run_capture(cap);
+        if (b->parsed()) return run_bench(bench);
+        if (s->parsed()) return run_sweep(sweep);
+        if (pv->parsed()) return run_preset_validate(validate_files);
+        if (ps->parsed()) return run_preset_schema(schema_tech, schema_json);
+        if (psh->parsed()) return run_preset_show(show_file, show_sets);
+        if (info->parsed()) return run_info();
+    } catch (const InputError& e) {
+        tty_progress_done();
+        std::fprintf(stderr, "mesolab: error: %s\n", e.what());
+        return 2;
+    } catch (const std::exception& e) {
+        tty_progress_done();
+        std::fprintf(stderr, "mesolab: internal error: %s\n", e.what());
+        return 1;
+    }
+    return 1;
+}

@@ -1,0 +1,82 @@
+#include "app/workbench.h"
+#include "core/error.h"
+#include "gpu/context.h"
+#include "gpu/renderer.h"
+
+#include <epoxy/gl.h>
+#include <chrono>
+#include <cstdio>
+#include <unistd.h>
+
+namespace mesolab {
+
+Backend parse_backend(const std::string& s) {
+    if (s == "cpu") return Backend::Cpu;
+    if (s == "gpu") return Backend::Gpu;
+    throw InputError("--backend: '" + s + "' is not one of gpu|cpu");
+}
+
+Workbench::Workbench() = default;
+Workbench::~Workbench() {
+    renderer_.reset();  // GL objects go before their context
+    context_.reset();
+}
+
+StageGraph& Workbench::stages() { return Registry::instance().stages(); }
+
+gpu::Renderer& Workbench::gpu() {
+    if (!context_) context_ = gpu::HeadlessContext::create();
+    context_->make_current();
+    if (!renderer_) renderer_ = std::make_unique<gpu::Renderer>();
+    return *renderer_;
+}
+
+std::string Workbench::gl_renderer() {
+    gpu();
+    return context_->info().renderer;
+}
+
+RenderResult Workbench::render(const Scene& s, const RenderRequest& req) {
+    using clock = std::chrono::steady_clock;
+    RenderResult r;
+    auto t0 = clock::now();
+    r.eval = stages().evaluate(s, Registry::instance().frame_stages(s), req.progress);
+    r.stages_ms = std::chrono::duration<double, std::milli>(clock::now() - t0).count();
+    const ivec2 size = frame_size(s, r.eval, {req.width, req.height});
+    if (req.backend == Backend::Cpu) {
+        t0 = clock::now();
+        r.frame = render_cpu(s, r.eval, size.x, size.y);
+        r.render_ms = std::chrono::duration<double, std::milli>(clock::now() - t0).count();
+        r.renderer = "cpu";
+    } else {
+        gpu::Renderer& g = gpu();
+        r.renderer = context_->info().renderer;
+        t0 = clock::now();
+        g.render(s, r.eval, size.x, size.y);
+        glFinish();
+        r.render_ms = std::chrono::duration<double, std::milli>(clock::now() - t0).count();
+        r.gpu_ms = g.last_gpu_ms();
+        r.frame = g.read_frame();
+    }
+    return r;
+}
+
+// [SECTION] Progress on a terminal
+namespace {
+bool g_progress_shown = false;
+}
+
+ProgressFn tty_progress() {
+    if (!::isatty(2)) return {};
+    return [](const std::string& stage, double f) {
+        std::fprintf(stderr, "\r  %-32s %5.1f%%", stage.c_str(), 100.0 * f);
+        std::fflush(stderr);
+        g_progress_shown = true;
+    };
+}
+
+void tty_progress_done() {
+    if (g_progress_shown) std::fprintf(stderr, "\r%60s\r", "");
+    g_progress_shown = false;
+}
+}  // namespace mesolab

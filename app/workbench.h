@@ -1,0 +1,54 @@
+#pragma once
+// Headless rendering shared by capture, sweep, bench and info: evaluates the stage graph,
+// renders on the CPU or through an EGL context on the GPU, and reports what ran.
+#include "core/render.h"
+#include "core/stage.h"
+#include <memory>
+#include <string>
+
+namespace mesolab::gpu {
+class HeadlessContext;
+class Renderer;
+}  // namespace mesolab::gpu
+
+namespace mesolab {
+
+const char* version_string();
+
+enum class Backend { Cpu, Gpu };
+Backend parse_backend(const std::string& s);  // "cpu" | "gpu", InputError otherwise
+
+struct RenderRequest {
+    Backend backend = Backend::Gpu;
+    int width = 512, height = 512;
+    ProgressFn progress;
+};
+
+struct RenderResult {
+    Frame frame;
+    Evaluation eval;
+    std::string renderer;   // GL_RENDERER or "cpu"
+    double stages_ms = 0;   // evaluation of the stage graph
+    double render_ms = 0;   // frame render (GPU: wall time to a finished frame, read-back excluded)
+    double gpu_ms = 0;      // GPU timer query of the frame (GPU backend)
+};
+
+class Workbench {
+public:
+    Workbench();
+    ~Workbench();
+    RenderResult render(const Scene& s, const RenderRequest& r);
+    // The headless GL context, created on first use; throws with an explanation when none can be made.
+    gpu::Renderer& gpu();
+    std::string gl_renderer();
+    StageGraph& stages();
+
+private:
+    std::unique_ptr<gpu::HeadlessContext> context_;
+    std::unique_ptr<gpu::Renderer> renderer_;
+};
+
+// Progress printer for the CLI: a single updating line on a TTY (stderr), nothing otherwise.
+ProgressFn tty_progress();
+void tty_progress_done();
+}  // namespace mesolab

@@ -1,0 +1,40 @@
+#pragma once
+// [SECTION] Timing tables laid out like the papers' tables.
+// A technique declares its table once: the paper's rows and columns, the paper's figure for
+// each cell where it has one, and what each cell measures (a stage of the graph, recomputed
+// from a cold cache, or a whole frame on the CPU and/or GPU). `mesolab bench` measures every
+// cell N times and prints median (min-max) beside the paper's figure and the ratio.
+#include "core/scene.h"
+#include "core/stage.h"
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace mesolab {
+
+struct BenchColumn {
+    std::string name;        // as in the paper ("S_i precompute")
+    std::string stage;       // time this stage (cold cache) ...
+    int frame_width = 0;     // ... or, when stage is empty, a whole frame of this size
+    int frame_height = 0;
+    bool cpu = true, gpu = false;  // devices measured (stages are CPU unless they say otherwise)
+};
+
+struct BenchRow {
+    std::string name;                               // as in the paper ("Bricks 128x128")
+    std::function<Scene()> scene;                   // the scene this row measures
+    std::vector<std::optional<double>> paper_ms;    // one per column, empty where the paper has none
+};
+
+struct BenchTable {
+    std::string name;     // `mesolab bench NAME`
+    std::string title;    // "Heidrich et al. 2000, Table 1"
+    std::string paper_machine;  // "SGI Octane 300 MHz / GeForce 256"
+    std::vector<BenchColumn> columns;
+    std::vector<BenchRow> rows;
+};
+
+// Tables registered by techniques (see Technique::bench_tables).
+std::vector<BenchTable> bench_tables();
+}  // namespace mesolab

@@ -1,0 +1,142 @@
+#pragma once
+// [SECTION] Parameters declared once.
+// Each technique (and each scene-level group: camera, light, env, geometry, effects) declares
+// its parameters exactly once as a ParamGroup: name, type, default, range, unit, help, and what
+// a change costs. Everything else is derived from that declaration: the ImGui widgets
+// (panels/widgets.cpp), the preset JSON (core/scene.cpp), `--set group.param=value`, the
+// `preset schema` listing, and the stage graph's cache keys (core/stage.cpp).
+#include "core/math.h"
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+#include <nlohmann/json.hpp>
+
+namespace mesolab {
+
+using json = nlohmann::ordered_json;
+
+enum class ParamType { Bool, Int, Float, Vec2, Vec3, Color, Enum, Path };
+// What a change costs: only redraw the frame, rebuild GPU resources, or recompute a stage.
+enum class Cost { Redraw, Rebuild, Recompute };
+// Which way of a knob is more accurate (used by `sweep` to pick its reference).
+enum class Accuracy { None, Higher, Lower };
+
+// Value storage per type: Bool->bool, Int->int64_t, Float->double, Vec2->array<double,2>,
+// Vec3/Color->array<double,3>, Enum/Path->string.
+using Value = std::variant<bool, int64_t, double, std::array<double, 2>, std::array<double, 3>, std::string>;
+
+const char* to_string(ParamType t);
+const char* to_string(Cost c);
+
+struct ParamDecl {
+    std::string name;  // short name inside its group ("kd"); the public key is "group.name"
+    ParamType type = ParamType::Float;
+    Value def;
+    double min = -std::numeric_limits<double>::infinity();  // per component for vectors
+    double max = std::numeric_limits<double>::infinity();
+    std::string unit;
+    std::string help;
+    Cost cost = Cost::Redraw;
+    std::vector<std::string> choices;  // Enum values
+    Accuracy accuracy = Accuracy::None;
+    std::optional<Value> reference;    // the converged setting of this knob, for sweeps
+    bool log_scale = false;            // widget hint: logarithmic slider
+    // Only used when sibling `used_when_key` has one of `used_when_values` (e.g. geometry.path
+    // only when geometry.type is mesh). A preset that sets an unused key is an error.
+    std::string used_when_key;
+    std::vector<std::string> used_when_values;
+
+    // Fluent setters for concise declarations.
+    ParamDecl& range(double lo, double hi) { min = lo; max = hi; return *this; }
+    ParamDecl& in(std::string u) { unit = std::move(u); return *this; }
+    ParamDecl& doc(std::string h) { help = std::move(h); return *this; }
+    ParamDecl& costs(Cost c) { cost = c; return *this; }
+    ParamDecl& log() { log_scale = true; return *this; }
+    ParamDecl& more_accurate(Accuracy a, std::optional<Value> ref = std::nullopt) { accuracy = a; reference = std::move(ref); return *this; }
+    ParamDecl& used_when(std::string key, std::vector<std::string> values) { used_when_key = std::move(key); used_when_values = std::move(values); return *this; }
+};
+
+class ParamTable;
+
+class ParamGroup {
+public:
+    ParamGroup() = default;
+    ParamGroup(std::string name, std::string title) : name_(std::move(name)), title_(std::move(title)) {}
+
+    ParamDecl& add_bool(std::string name, bool def);
+    ParamDecl& add_int(std::string name, int64_t def);
+    ParamDecl& add_float(std::string name, double def);
+    ParamDecl& add_vec2(std::string name, std::array<double, 2> def);
+    ParamDecl& add_vec3(std::string name, std::array<double, 3> def);
+    ParamDecl& add_color(std::string name, std::array<double, 3> def);
+    ParamDecl& add_enum(std::string name, std::vector<std::string> choices, std::string def);
+    ParamDecl& add_path(std::string name, std::string def = "");
+
+    const std::string& name() const { return name_; }
+    const std::string& title() const { return title_; }
+    const std::vector<ParamDecl>& decls() const { return decls_; }
+    const ParamDecl* find(std::string_view name) const;
+    int index_of(std::string_view name) const;  // -1 if absent
+    std::vector<std::string> names() const;
+
+    // A table holding every default.
+    ParamTable defaults() const;
+
+private:
+    ParamDecl& add(ParamDecl d);
+    std::string name_, title_;
+    std::vector<ParamDecl> decls_;
+};
+
+// [SECTION] Values of one group (one object's material, one light, the camera...).
+class ParamTable {
+public:
+    ParamTable() = default;
+    explicit ParamTable(const ParamGroup* g);
+
+    const ParamGroup& group() const { return *group_; }
+    bool valid() const { return group_ != nullptr; }
+    const std::vector<Value>& values() const { return values_; }
+
+    const Value& get(std::string_view name) const;
+    bool get_bool(std::string_view name) const;
+    int64_t get_int(std::string_view name) const;
+    double get_float(std::string_view name) const;
+    vec2 get_vec2(std::string_view name) const;
+    vec3 get_vec3(std::string_view name) const;
+    const std::string& get_string(std::string_view name) const;
+
+    // Checks type, range and choices; throws InputError naming "group.name" (and `where`).
+    void set(std::string_view name, const Value& v, const std::string& where = "");
+    // Whether a declaration is in use given the current values (see ParamDecl::used_when).
+    bool is_used(const ParamDecl& d) const;
+
+    bool operator==(const ParamTable& o) const { return group_ == o.group_ && values_ == o.values_; }
+
+private:
+    const ParamGroup* group_ = nullptr;
+    std::vector<Value> values_;
+};
+
+// [SECTION] Conversions, each naming `where` (file and key) in its InputError.
+// JSON value -> Value with type/range/choice checks.
+Value value_from_json(const ParamDecl& d, const json& j, const std::string& where);
+json value_to_json(const ParamDecl& d, const Value& v);
+// Text from `--set` ("0.5", "true", "1,2,3", "orbit", a path) -> Value with checks.
+Value value_from_text(const ParamDecl& d, std::string_view text, const std::string& where);
+// Human text ("0.5", "1, 2, 3"); parses back with value_from_text.
+std::string value_to_text(const ParamDecl& d, const Value& v);
+// Throws InputError if v is out of range or not one of the choices.
+void validate_value(const ParamDecl& d, const Value& v, const std::string& where);
+// Canonical bytes for cache keys. Paths include the file's size and modification time, so
+// editing a file on disk invalidates the stages that read it.
+std::string value_canonical(const ParamDecl& d, const Value& v, const std::string& base_dir);
+// The schema of one group as JSON (every parameter with type, default, range, unit, help, cost).
+json group_schema(const ParamGroup& g);
+std::string describe_range(const ParamDecl& d);
+}  // namespace mesolab

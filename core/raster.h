@@ -1,0 +1,41 @@
+#pragma once
+// CPU rasteriser that follows OpenGL's conventions closely enough that the CPU and GPU paths
+// agree pixel for pixel away from silhouettes: pixel centres at (x+0.5, y+0.5) in window
+// coordinates, perspective-correct attribute interpolation, depth = NDC z interpolated linearly
+// in screen space with a LESS test, no face culling, a top-left fill rule. Image row 0 is the
+// top of the image (GL window row height-1). Parallel over tiles (TBB).
+#include "core/math.h"
+#include "core/mesh.h"
+#include <cstdint>
+#include <vector>
+
+namespace mesolab {
+
+struct RasterCamera {
+    int width = 0, height = 0;
+    mat4 view{1.f}, proj{1.f};   // orbit mode: world -> clip is proj*view
+    bool texture_space = false;  // texture mode: clip = (2u-1, 2v-1, 0, 1); v=1 at the image top
+};
+
+// One object to draw: a mesh and its model matrix (object -> world).
+struct DrawItem {
+    const TriMesh* mesh = nullptr;
+    mat4 model{1.f};
+    int object_id = 0;
+};
+
+// Per-pixel surface data, world space. Pixels not covered have object == -1.
+struct GBuffer {
+    int width = 0, height = 0;
+    std::vector<float> depth;       // window depth in [0,1], 1 where nothing was drawn
+    std::vector<int32_t> object;    // object_id or -1
+    std::vector<vec3> position;     // world position
+    std::vector<vec3> normal;       // normalised interpolated world normal
+    std::vector<vec3> tangent;      // normalised interpolated world tangent (may be 0 if mesh has none)
+    std::vector<vec2> uv;           // interpolated texture coordinate
+    size_t index(int x, int y) const { return size_t(y) * size_t(width) + size_t(x); }
+};
+
+// Rasterise all items into `out` (resized and cleared first).
+void rasterize(const std::vector<DrawItem>& items, const RasterCamera& cam, GBuffer& out);
+}  // namespace mesolab

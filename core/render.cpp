@@ -1,0 +1,175 @@
+#include "core/render.h"
+#include "core/error.h"
+#include "core/profile.h"
+#include "core/scene_stages.h"
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <tbb/parallel_for.h>
+#include <algorithm>
+
+namespace mesolab {
+
+// [SECTION] Camera
+vec3 FrameCamera::ray_dir(int x, int y) const {
+    if (texture_mode) return -view_dir;
+    const float nx = (float(x) + 0.5f) / float(raster.width) * 2.f - 1.f;
+    const float ny = 1.f - (float(y) + 0.5f) / float(raster.height) * 2.f;
+    vec4 a = inv_view_proj * vec4(nx, ny, -1.f, 1.f), b = inv_view_proj * vec4(nx, ny, 1.f, 1.f);
+    return glm::normalize(vec3(b) / b.w - vec3(a) / a.w);
+}
+
+FrameCamera make_camera(const Scene& s, const std::vector<Bounds>& wb, int width, int height) {
+    FrameCamera c;
+    c.raster.width = width;
+    c.raster.height = height;
+    const vec2 orbit = s.camera.get_vec2("orbit");
+    const vec3 dir = direction_from_degrees(orbit.x, orbit.y);
+    if (s.camera.get_string("mode") == "texture") {
+        c.texture_mode = true;
+        c.raster.texture_space = true;
+        c.view_dir = dir;
+        return c;
+    }
+    const vec3 target = s.camera.get_vec3("target");
+    const float distance = float(s.camera.get_float("distance"));
+    c.eye = target + distance * dir;
+    const vec3 up = std::fabs(dir.z) > 0.999f ? vec3(0.f, 1.f, 0.f) : vec3(0.f, 0.f, 1.f);
+    c.raster.view = glm::lookAt(c.eye, target, up);
+    // Near/far around the scene's bounding sphere, so depth precision survives any zoom.
+    vec3 lo(1e30f), hi(-1e30f);
+    for (const auto& b : wb) { lo = glm::min(lo, b.lo); hi = glm::max(hi, b.hi); }
+    float far_plane = 100.f, near_plane = 0.01f;
+    if (!wb.empty()) {
+        const vec3 centre = 0.5f * (lo + hi);
+        const float radius = 0.5f * glm::length(hi - lo) * 1.01f + 1e-6f;
+        const float d = glm::length(c.eye - centre);
+        far_plane = d + radius;
+        near_plane = std::max(d - radius, far_plane * 1e-4f);
+    }
+    c.raster.proj = glm::perspective(radians(float(s.camera.get_float("fov"))), float(width) / float(height), near_plane, far_plane);
+    c.inv_view_proj = glm::inverse(c.raster.proj * c.raster.view);
+    return c;
+}
+
+// [SECTION] Lights
+void Light::sample(vec3 p, vec3& wi, vec3& E) const {
+    if (!point) {
+        wi = direction;
+        E = radiance;
+        return;
+    }
+    const vec3 d = position - p;
+    const float r2 = std::max(glm::dot(d, d), 1e-12f);
+    wi = d / std::sqrt(r2);
+    E = radiance / r2;
+}
+
+vec3 Lighting::env_irradiance(vec3 n) const {
+    if (!env_lighting) return vec3(0.f);
+    if (sh) return sh9_irradiance(*sh, n) * env.intensity;
+    return kPi * env.color * env.intensity;
+}
+
+Lighting make_lighting(const Scene& s, const Evaluation& ev) {
+    Lighting L;
+    for (const auto& t : s.lights) {
+        Light l;
+        l.point = t.get_string("type") == "point";
+        const vec2 d = t.get_vec2("direction");
+        l.direction = direction_from_degrees(d.x, d.y);
+        l.position = t.get_vec3("position");
+        l.radiance = t.get_vec3("color") * float(t.get_float("intensity"));
+        L.lights.push_back(l);
+    }
+    L.env.color = s.env.get_vec3("color");
+    L.env.intensity = float(s.env.get_float("intensity"));
+    L.env.map = ev.get<Image>("env.map");
+    L.sh = ev.get<SH9>("env.irradiance");
+    L.env_lighting = s.effect("environment");
+    return L;
+}
+
+// [SECTION] Frames
+Frame make_frame(const std::vector<AovDecl>& layout, int width, int height) {
+    Frame f;
+    f.width = width;
+    f.height = height;
+    f.layout = layout;
+    for (const auto& a : layout) f.aovs.emplace(a.name, Image(width, height, a.channels, 0.f));
+    return f;
+}
+
+bool ShadeContext::mine(size_t pixel) const {
+    const int o = gbuffer.object[pixel];
+    return o >= 0 && std::find(objects.begin(), objects.end(), o) != objects.end();
+}
+
+std::vector<Bounds> world_bounds(const Scene& s, const Evaluation& ev) {
+    std::vector<Bounds> r;
+    auto geo = ev.get<SceneGeometry>("scene.geometry");
+    if (!geo) return r;
+    for (size_t i = 0; i < s.objects.size() && i < geo->meshes.size(); ++i) {
+        const Bounds b = bounds(geo->meshes[i]);
+        const mat4 m = object_to_world(s.objects[i]);
+        Bounds w{vec3(1e30f), vec3(-1e30f)};
+        for (int k = 0; k < 8; ++k) {
+            const vec3 p(k & 1 ? b.hi.x : b.lo.x, k & 2 ? b.hi.y : b.lo.y, k & 4 ? b.hi.z : b.lo.z);
+            const vec3 q = vec3(m * vec4(p, 1.f));
+            w.lo = glm::min(w.lo, q);
+            w.hi = glm::max(w.hi, q);
+        }
+        r.push_back(w);
+    }
+    return r;
+}
+
+ivec2 frame_size(const Scene& s, const Evaluation& ev, ivec2 requested) {
+    if (s.camera.get_string("mode") == "texture")
+        for (const Technique* t : Registry::instance().techniques())
+            if (s.uses_technique(t->name()))
+                if (auto size = t->texture_size(s, ev)) return *size;
+    return requested;
+}
+
+Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height) {
+    PROFILE_SCOPE("frame.cpu");
+    if (width < 1 || height < 1 || width > 16384 || height > 16384)
+        throw InputError("frame size " + std::to_string(width) + "x" + std::to_string(height) + " is out of range (1..16384 per side)");
+    const Registry& reg = Registry::instance();
+    Frame f = make_frame(reg.aovs(s), width, height);
+    auto geo = ev.get<SceneGeometry>("scene.geometry");
+    if (!geo) throw std::logic_error("render_cpu: scene.geometry was not evaluated");
+    const FrameCamera cam = make_camera(s, world_bounds(s, ev), width, height);
+    const Lighting lighting = make_lighting(s, ev);
+
+    GBuffer gb;
+    {
+        PROFILE_SCOPE("raster");
+        std::vector<DrawItem> items;
+        for (size_t i = 0; i < s.objects.size(); ++i) items.push_back({&geo->meshes[i], object_to_world(s.objects[i]), int(i)});
+        rasterize(items, cam.raster, gb);
+    }
+    {
+        PROFILE_SCOPE("background");
+        Image& rad = f.aov("radiance");
+        if (!cam.texture_mode)
+            tbb::parallel_for(0, height, [&](int y) {
+                for (int x = 0; x < width; ++x) {
+                    if (gb.object[gb.index(x, y)] >= 0) continue;
+                    const vec3 L = lighting.env.radiance(cam.ray_dir(x, y));
+                    float* p = rad.at(x, y);
+                    p[0] = L.x, p[1] = L.y, p[2] = L.z;
+                }
+            });
+    }
+    for (const Technique* t : reg.techniques()) {
+        ShadeContext ctx{s, ev, gb, cam, lighting, {}, f};
+        for (size_t i = 0; i < s.objects.size(); ++i)
+            if (s.objects[i].technique == t->name()) ctx.objects.push_back(int(i));
+        if (ctx.objects.empty()) continue;
+        PROFILE_SCOPE("shade." + t->name());
+        t->shade_cpu(ctx);
+    }
+    return f;
+}
+}  // namespace mesolab

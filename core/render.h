@@ -1,0 +1,87 @@
+#pragma once
+// [SECTION] Frames: camera, lights and the CPU render path.
+// A frame is a set of AOV images (radiance, normal, technique AOVs) of one scene at one size.
+// The CPU path rasterises every object into a G-buffer (core/raster.h), then each technique
+// shades the pixels of its objects. The GPU path (gpu/renderer.h) draws the same triangles
+// with the same camera and the same lighting maths, so the two agree within stated tolerances.
+#include "core/env.h"
+#include "core/image.h"
+#include "core/raster.h"
+#include "core/scene.h"
+#include "core/stage.h"
+#include "core/technique.h"
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace mesolab {
+
+// Camera of a frame: orbit (perspective) or texture space (orthographic over (u,v)).
+struct FrameCamera {
+    RasterCamera raster;
+    bool texture_mode = false;
+    vec3 eye{0.f};        // orbit: eye position (world)
+    vec3 view_dir{0.f};   // texture mode: unit direction towards the viewer
+    mat4 inv_view_proj{1.f};
+    // Unit direction from a world point towards the viewer.
+    vec3 wo(vec3 p) const { return texture_mode ? view_dir : glm::normalize(eye - p); }
+    // World direction of the primary ray through the centre of pixel (x, y), image row 0 at the top.
+    vec3 ray_dir(int x, int y) const;
+};
+
+// Near and far planes come from the scene's bounds so that any zoom (1e-3..1e6) keeps depth precision.
+FrameCamera make_camera(const Scene& s, const std::vector<Bounds>& world_bounds, int width, int height);
+
+struct Light {
+    bool point = false;
+    vec3 direction{0.f, 0.f, 1.f};  // directional: unit vector towards the light
+    vec3 position{0.f};             // point light
+    vec3 radiance{1.f};             // colour * intensity
+    // Direction towards the light from p and the irradiance at normal incidence there.
+    void sample(vec3 p, vec3& wi, vec3& E) const;
+};
+
+struct Lighting {
+    std::vector<Light> lights;
+    Environment env;                    // constant colour, intensity and the map
+    std::shared_ptr<const SH9> sh;      // env.irradiance (null: constant colour, or effect off)
+    bool env_lighting = true;           // effects.environment
+    // Diffuse irradiance from the environment for normal n (0 when the effect is off).
+    vec3 env_irradiance(vec3 n) const;
+};
+Lighting make_lighting(const Scene& s, const Evaluation& ev);
+
+// AOV images of one frame, all width x height, row 0 at the top.
+struct Frame {
+    int width = 0, height = 0;
+    std::vector<AovDecl> layout;
+    std::map<std::string, Image> aovs;
+    Image& aov(const std::string& name) { return aovs.at(name); }
+    const Image& aov(const std::string& name) const { return aovs.at(name); }
+};
+Frame make_frame(const std::vector<AovDecl>& layout, int width, int height);
+
+// Everything a technique's shade_cpu needs.
+struct ShadeContext {
+    const Scene& scene;
+    const Evaluation& eval;
+    const GBuffer& gbuffer;
+    const FrameCamera& camera;
+    const Lighting& lighting;
+    std::vector<int> objects;  // indices of the scene objects that use this technique
+    Frame& frame;
+    // Whether a pixel shows one of `objects`.
+    bool mine(size_t pixel) const;
+};
+
+// Frame size for a scene: texture mode asks the techniques for a native texture size first.
+ivec2 frame_size(const Scene& s, const Evaluation& ev, ivec2 requested);
+
+// The CPU render path: G-buffer, background, then each technique's shade_cpu. Times itself
+// under "frame.cpu/..." in the profiler.
+Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height);
+
+// World-space bounds of the scene's objects (for camera planes).
+std::vector<Bounds> world_bounds(const Scene& s, const Evaluation& ev);
+}  // namespace mesolab

@@ -1,0 +1,20 @@
+#pragma once
+// Scene-level stages every frame uses, whatever the techniques:
+//   scene.geometry  — tessellate procedural shapes / read mesh files (object space)
+//   env.map         — read the lat-long environment EXR (absent when env.map is "")
+//   env.irradiance  — SH9 projection of env.map, needed only by effects.environment
+#include "core/env.h"
+#include "core/mesh.h"
+#include "core/stage.h"
+#include <vector>
+
+namespace mesolab {
+
+struct SceneGeometry {
+    std::vector<TriMesh> meshes;  // one per scene object, object space
+};
+
+void declare_scene_stages(StageGraph& g);
+// The object -> world matrix of an object (geometry.scale, geometry.position).
+mat4 object_to_world(const SceneObject& o);
+}  // namespace mesolab

@@ -1,0 +1,130 @@
+#include "core/technique.h"
+#include "core/error.h"
+#include "core/scene_stages.h"
+
+#include <algorithm>
+#include <set>
+
+namespace mesolab {
+
+// [SECTION] Scene-level declarations (camera, light, env, geometry, effects)
+Registry::Registry()
+    : camera_("camera", "Camera"), light_("light", "Light"), env_("env", "Environment"), geometry_("geometry", "Geometry"), effects_("effects", "Effects") {
+    camera_.add_enum("mode", {"orbit", "texture"}, "orbit")
+        .doc("orbit: perspective view around camera.target (drag to orbit, wheel to zoom, right-drag to pan). "
+             "texture: the object's texture (u,v) space 1:1, one pixel per texel, seen from direction camera.orbit");
+    camera_.add_float("distance", 3.0).range(1e-3, 1e6).in("scene units").log().doc("Distance from the eye to camera.target");
+    camera_.add_vec2("orbit", {60.0, -90.0}).range(-360.0, 360.0).in("degrees")
+        .doc("THETA,PHI of the eye seen from the target: theta from +z, phi from +x towards +y. In texture mode, the view direction");
+    camera_.add_vec3("target", {0.0, 0.0, 0.0}).range(-1e6, 1e6).in("scene units").doc("Point the orbit camera looks at");
+    camera_.add_float("fov", 40.0).range(1.0, 150.0).in("degrees").doc("Vertical field of view of the orbit camera");
+
+    light_.add_enum("type", {"directional", "point"}, "directional").doc("Directional (sun-like) or point light");
+    light_.add_vec2("direction", {45.0, 30.0}).range(-360.0, 360.0).in("degrees").used_when("type", {"directional"})
+        .doc("THETA,PHI towards the light: theta from the surface normal / the z axis, phi from +x towards +y");
+    light_.add_vec3("position", {2.0, -2.0, 3.0}).range(-1e6, 1e6).in("scene units").used_when("type", {"point"}).doc("Point light position");
+    light_.add_float("intensity", 3.0).range(0.0, 1e6).log()
+        .doc("Directional: irradiance at normal incidence (W/m^2). Point: radiant intensity (W/sr)");
+    light_.add_color("color", {1.0, 1.0, 1.0}).doc("Light colour (linear RGB), multiplies the intensity");
+
+    env_.add_color("color", {0.05, 0.05, 0.06}).doc("Constant environment radiance (linear RGB), used where there is no env.map");
+    env_.add_path("map", "").costs(Cost::Recompute).doc("Lat-long environment map (EXR, linear radiance); relative paths are relative to the preset's folder");
+    env_.add_float("intensity", 1.0).range(0.0, 1e6).log().doc("Scale of the environment radiance");
+
+    geometry_.add_enum("type", {"sphere", "plane", "torus", "cylinder", "mesh"}, "sphere").costs(Cost::Recompute)
+        .doc("Procedural shape or a mesh file (geometry.path)");
+    geometry_.add_path("path", "").costs(Cost::Recompute).used_when("type", {"mesh"})
+        .doc("Mesh file read with OpenMesh (OBJ, OFF, PLY, STL, OM); relative to the preset's folder");
+    geometry_.add_int("resolution", 64).range(3, 4096).costs(Cost::Recompute).used_when("type", {"sphere", "plane", "torus", "cylinder"})
+        .more_accurate(Accuracy::Higher, int64_t(1024)).doc("Tessellation: segments around u");
+    geometry_.add_float("minor_ratio", 0.35).range(0.01, 0.99).costs(Cost::Recompute).used_when("type", {"torus"})
+        .doc("Torus tube radius relative to the major radius");
+    geometry_.add_float("scale", 1.0).range(1e-6, 1e6).log().doc("Uniform scale (object -> world)");
+    geometry_.add_vec3("position", {0.0, 0.0, 0.0}).range(-1e6, 1e6).in("scene units").doc("Translation (object -> world)");
+
+    scene_effects_.push_back({"environment", true, "Environment light on surfaces (diffuse irradiance from env.color / env.map)"});
+
+    declare_scene_stages(stages_);
+    register_core_techniques(*this);
+    finish();
+}
+
+Registry& Registry::instance() {
+    static Registry r;
+    return r;
+}
+
+void Registry::add(std::unique_ptr<Technique> t) {
+    if (technique(t->name())) throw std::logic_error("technique registered twice: " + t->name());
+    t->declare_stages(stages_);
+    techniques_.push_back(std::move(t));
+}
+
+void Registry::finish() {
+    // The effects group is the union of the scene's and the techniques' effect switches.
+    std::vector<EffectDecl> all = scene_effects_;
+    for (const auto& t : techniques_)
+        for (const auto& e : t->effects())
+            if (std::none_of(all.begin(), all.end(), [&](const EffectDecl& x) { return x.name == e.name; })) all.push_back(e);
+    for (const auto& e : all) effects_.add_bool(e.name, e.def).costs(Cost::Recompute).doc(e.help);
+}
+
+// [SECTION] Look-ups
+const Technique* Registry::technique(const std::string& name) const {
+    for (const auto& t : techniques_)
+        if (t->name() == name) return t.get();
+    return nullptr;
+}
+std::vector<const Technique*> Registry::techniques() const {
+    std::vector<const Technique*> r;
+    for (const auto& t : techniques_) r.push_back(t.get());
+    return r;
+}
+std::vector<std::string> Registry::technique_names() const {
+    std::vector<std::string> r;
+    for (const auto& t : techniques_) r.push_back(t->name());
+    return r;
+}
+const ParamGroup* Registry::group(const std::string& name) const {
+    for (const ParamGroup* g : groups())
+        if (g->name() == name) return g;
+    return nullptr;
+}
+std::vector<const ParamGroup*> Registry::groups() const {
+    std::vector<const ParamGroup*> r{&camera_, &light_, &env_, &geometry_, &effects_};
+    for (const auto& t : techniques_) r.push_back(&t->params());
+    return r;
+}
+
+std::vector<std::string> Registry::frame_stages(const Scene& s) const {
+    std::vector<std::string> r{"scene.geometry", "env.map", "env.irradiance"};
+    for (const auto& t : techniques_)
+        if (s.uses_technique(t->name()))
+            for (auto& st : t->frame_stages()) r.push_back(st);
+    return r;
+}
+
+std::vector<AovDecl> Registry::aovs(const Scene& s) const {
+    std::vector<AovDecl> r{{"radiance", 3, "Outgoing radiance towards the eye (linear RGB)"},
+                           {"normal", 3, "Shading normal, world space (texture mode: tangent space)"}};
+    for (const auto& t : techniques_) {
+        if (!s.uses_technique(t->name())) continue;
+        for (const auto& a : t->aovs())
+            if (std::none_of(r.begin(), r.end(), [&](const AovDecl& x) { return x.name == a.name; })) r.push_back(a);
+    }
+    return r;
+}
+
+std::vector<BenchTable> bench_tables() {
+    std::vector<BenchTable> r;
+    for (const Technique* t : Registry::instance().techniques())
+        for (auto& b : t->bench_tables()) r.push_back(std::move(b));
+    return r;
+}
+
+std::vector<AovDecl> Registry::all_aovs() const {
+    Scene everything;
+    for (const auto& t : techniques_) everything.objects.push_back({"", {}, t->name(), {}});
+    return aovs(everything);
+}
+}  // namespace mesolab

@@ -1,0 +1,36 @@
+#pragma once
+// Headless OpenGL through EGL, with no window and no X server. Tries, in order, the EGL device
+// platform (EGL_EXT_platform_device: real NVIDIA/AMD drivers and Mesa), the Mesa surfaceless
+// platform (EGL_PLATFORM_SURFACELESS_MESA) and the default display; asks for an OpenGL 4.5
+// core context, falling back to 4.3. GL entry points come through libepoxy.
+#include <memory>
+#include <string>
+
+namespace mesolab::gpu {
+
+struct GlInfo {
+    std::string vendor, renderer, version, glsl_version, platform;  // platform: "egl-device", "egl-surfaceless", "egl-default", "glfw"
+};
+
+// Query GL strings of the current context.
+GlInfo query_gl_info(const std::string& platform);
+
+class HeadlessContext {
+public:
+    // Throws std::runtime_error with a message that says what failed (and that `--backend cpu`
+    // works without GL) when no context can be made.
+    static std::unique_ptr<HeadlessContext> create();
+    ~HeadlessContext();
+    HeadlessContext(const HeadlessContext&) = delete;
+    HeadlessContext& operator=(const HeadlessContext&) = delete;
+
+    void make_current();
+    const GlInfo& info() const { return info_; }
+
+private:
+    HeadlessContext() = default;
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+    GlInfo info_;
+};
+}  // namespace mesolab::gpu

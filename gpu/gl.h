@@ -1,0 +1,89 @@
+#pragma once
+// Thin RAII wrappers over OpenGL 4.3+ core objects, and shader programs built from the .glsl
+// files embedded into the binary at build time (see shaders.h).
+#include <epoxy/gl.h>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace mesolab::gpu {
+
+// Move-only owner of one GL name.
+template <void (*Delete)(GLuint)>
+class GlName {
+public:
+    GlName() = default;
+    explicit GlName(GLuint id) : id_(id) {}
+    ~GlName() { reset(); }
+    GlName(GlName&& o) noexcept : id_(o.id_) { o.id_ = 0; }
+    GlName& operator=(GlName&& o) noexcept { if (this != &o) { reset(); id_ = o.id_; o.id_ = 0; } return *this; }
+    GlName(const GlName&) = delete;
+    GlName& operator=(const GlName&) = delete;
+    GLuint get() const { return id_; }
+    explicit operator bool() const { return id_ != 0; }
+    void reset() { if (id_) Delete(id_); id_ = 0; }
+private:
+    GLuint id_ = 0;
+};
+void delete_buffer(GLuint);
+void delete_texture(GLuint);
+void delete_framebuffer(GLuint);
+void delete_vertex_array(GLuint);
+void delete_program(GLuint);
+void delete_query(GLuint);
+using Buffer = GlName<delete_buffer>;
+using Texture = GlName<delete_texture>;
+using Framebuffer = GlName<delete_framebuffer>;
+using VertexArray = GlName<delete_vertex_array>;
+using Query = GlName<delete_query>;
+
+// A linked program. Sources are looked up by embedded name (e.g. "basic/basic.frag"); a line
+// `#include "common.glsl"` is replaced by the embedded file of that name (recursively, once).
+// `defines` lines ("NAME VALUE") are inserted after #version. Compile/link errors throw
+// std::runtime_error with the file name and the driver's log.
+class Program {
+public:
+    Program() = default;
+    static Program graphics(const std::string& vert, const std::string& frag, const std::vector<std::string>& defines = {});
+    static Program compute(const std::string& comp, const std::vector<std::string>& defines = {});
+    GLuint id() const { return id_.get(); }
+    void use() const { glUseProgram(id_.get()); }
+    GLint uniform(const char* name) const { return glGetUniformLocation(id_.get(), name); }
+    explicit operator bool() const { return bool(id_); }
+private:
+    GlName<delete_program> id_;
+};
+
+// Framebuffer with N RGBA32F colour attachments and a 32-bit float depth buffer.
+class RenderTarget {
+public:
+    void resize(int width, int height, int color_attachments);
+    void bind() const;  // binds the FBO, sets the viewport and draw buffers
+    GLuint fbo() const { return fbo_.get(); }
+    GLuint color(int i) const { return color_[size_t(i)].get(); }
+    int width() const { return width_; }
+    int height() const { return height_; }
+    int attachments() const { return int(color_.size()); }
+    // Read attachment i as float RGBA, top row first (flips GL's bottom-up order).
+    std::vector<float> read_rgba(int i) const;
+private:
+    int width_ = 0, height_ = 0;
+    Framebuffer fbo_;
+    std::vector<Texture> color_;
+    Texture depth_;
+};
+
+// GPU timer (GL_TIME_ELAPSED). begin/end around GL work; elapsed_ms() waits for the result.
+class GpuTimer {
+public:
+    void begin();
+    void end();
+    double elapsed_ms();  // blocks until available; 0 if never begun
+private:
+    Query query_;
+    bool pending_ = false;
+};
+
+// Throws std::runtime_error naming `where` if glGetError() reports an error.
+void check_gl(const char* where);
+}  // namespace mesolab::gpu

@@ -1,0 +1,226 @@
+#include "gpu/renderer.h"
+#include "core/error.h"
+#include "core/profile.h"
+#include "core/scene_stages.h"
+
+#include <glm/gtc/type_ptr.hpp>
+#include <algorithm>
+
+namespace mesolab::gpu {
+
+struct Renderer::Impl {
+    Program background;
+    std::map<std::string, std::unique_ptr<TechniquePass>> passes;
+    // Uploaded meshes, valid while `geometry` is the evaluated scene.geometry result.
+    std::shared_ptr<const SceneGeometry> geometry;
+    std::vector<GpuMesh> meshes;
+    // Textures by owner (the shared image keeps the key's address from being reused).
+    struct Tex {
+        Texture tex;
+        std::shared_ptr<const Image> keep;
+    };
+    std::map<const void*, Tex> textures;
+    GpuTimer timer;
+};
+
+Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
+    impl_->background = Program::graphics("shaders/fullscreen.vert", "shaders/background.frag");
+    std::map<std::string, PassFactory> factories;
+    register_gpu_passes(factories);
+    for (auto& [name, make] : factories) impl_->passes[name] = make();
+}
+
+Renderer::~Renderer() = default;
+
+// [SECTION] Resources
+const GpuMesh& Renderer::mesh(const Evaluation& ev, int object) {
+    auto geo = ev.get<SceneGeometry>("scene.geometry");
+    if (!geo) throw std::logic_error("gpu::Renderer: scene.geometry was not evaluated");
+    if (geo != impl_->geometry) {
+        // The tessellation changed: rebuild every vertex buffer.
+        PROFILE_SCOPE("upload.meshes");
+        impl_->meshes.clear();
+        impl_->meshes.resize(geo->meshes.size());
+        for (size_t i = 0; i < geo->meshes.size(); ++i) {
+            const TriMesh& m = geo->meshes[i];
+            GpuMesh& g = impl_->meshes[i];
+            std::vector<float> interleaved;
+            interleaved.reserve(m.vertex_count() * 11);
+            for (size_t v = 0; v < m.vertex_count(); ++v) {
+                const vec3 t = v < m.tangent.size() ? m.tangent[v] : vec3(0.f);
+                const vec2 uv = v < m.uv.size() ? m.uv[v] : vec2(0.f);
+                for (float x : {m.position[v].x, m.position[v].y, m.position[v].z, m.normal[v].x, m.normal[v].y, m.normal[v].z, t.x, t.y, t.z, uv.x, uv.y})
+                    interleaved.push_back(x);
+            }
+            GLuint ids[3];
+            glGenVertexArrays(1, &ids[0]);
+            glGenBuffers(2, &ids[1]);
+            g.vao = VertexArray(ids[0]);
+            g.vbo = Buffer(ids[1]);
+            g.ibo = Buffer(ids[2]);
+            glBindVertexArray(g.vao.get());
+            glBindBuffer(GL_ARRAY_BUFFER, g.vbo.get());
+            glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(interleaved.size() * sizeof(float)), interleaved.data(), GL_STATIC_DRAW);
+            glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.ibo.get());
+            glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(m.index.size() * sizeof(uint32_t)), m.index.data(), GL_STATIC_DRAW);
+            const GLsizei stride = 11 * sizeof(float);
+            const int sizes[4] = {3, 3, 3, 2}, offsets[4] = {0, 3, 6, 9};
+            for (GLuint a = 0; a < 4; ++a) {
+                glEnableVertexAttribArray(a);
+                glVertexAttribPointer(a, sizes[a], GL_FLOAT, GL_FALSE, stride, reinterpret_cast<const void*>(size_t(offsets[a]) * sizeof(float)));
+            }
+            glBindVertexArray(0);
+            g.index_count = GLsizei(m.index.size());
+        }
+        impl_->geometry = geo;
+        check_gl("mesh upload");
+    }
+    return impl_->meshes.at(size_t(object));
+}
+
+GLuint Renderer::texture(const Image& img, const void* owner_key, bool repeat) {
+    auto it = impl_->textures.find(owner_key);
+    if (it != impl_->textures.end()) return it->second.tex.get();
+    PROFILE_SCOPE("upload.texture");
+    GLuint id = 0;
+    glGenTextures(1, &id);
+    glBindTexture(GL_TEXTURE_2D, id);
+    std::vector<float> rgba(size_t(img.width) * size_t(img.height) * 4, 1.f);
+    for (size_t i = 0; i < size_t(img.width) * size_t(img.height); ++i)
+        for (int c = 0; c < 4; ++c) {
+            const int src = img.channels >= 3 ? std::min(c, img.channels - 1) : 0;
+            if (c < 3 || img.channels == 4) rgba[i * 4 + size_t(c)] = img.data[i * size_t(img.channels) + size_t(src)];
+        }
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, img.width, img.height, 0, GL_RGBA, GL_FLOAT, rgba.data());
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, repeat ? GL_REPEAT : GL_CLAMP_TO_EDGE);
+    check_gl("texture upload");
+    impl_->textures[owner_key].tex = Texture(id);
+    return id;
+}
+
+GLuint Renderer::texture(const std::shared_ptr<const Image>& img, bool repeat) {
+    const GLuint id = texture(*img, img.get(), repeat);
+    impl_->textures[img.get()].keep = img;
+    return id;
+}
+
+void Renderer::draw_buffers(const std::vector<std::string>& aovs) const {
+    std::vector<GLenum> bufs(layout_.size(), GL_NONE);
+    for (size_t i = 0; i < layout_.size(); ++i)
+        if (std::find(aovs.begin(), aovs.end(), layout_[i].name) != aovs.end()) bufs[i] = GLenum(GL_COLOR_ATTACHMENT0 + i);
+    glDrawBuffers(GLsizei(bufs.size()), bufs.data());
+}
+
+void Renderer::set_camera_uniforms(const Program& p, const FrameCamera& cam, const mat4& model) const {
+    const mat3 nm = glm::transpose(glm::inverse(mat3(model)));
+    const mat4 vp = cam.raster.proj * cam.raster.view;
+    glUniformMatrix4fv(p.uniform("u_model"), 1, GL_FALSE, glm::value_ptr(model));
+    glUniformMatrix3fv(p.uniform("u_normal_matrix"), 1, GL_FALSE, glm::value_ptr(nm));
+    glUniformMatrix4fv(p.uniform("u_view_proj"), 1, GL_FALSE, glm::value_ptr(vp));
+    glUniform1i(p.uniform("u_texture_mode"), cam.texture_mode ? 1 : 0);
+    glUniform3fv(p.uniform("u_eye"), 1, glm::value_ptr(cam.eye));
+    glUniform3fv(p.uniform("u_view_dir"), 1, glm::value_ptr(cam.view_dir));
+}
+
+void Renderer::set_lighting_uniforms(const Program& p, const Lighting& L, int env_unit) {
+    constexpr int kMaxLights = 8;
+    if (L.lights.size() > size_t(kMaxLights))
+        throw InputError("the GPU path supports up to " + std::to_string(kMaxLights) + " lights, the scene has " + std::to_string(L.lights.size()) +
+                         " (use --backend cpu)");
+    const int n = int(L.lights.size());
+    glUniform1i(p.uniform("u_light_count"), n);
+    for (int i = 0; i < n; ++i) {
+        const Light& l = L.lights[size_t(i)];
+        const std::string idx = "[" + std::to_string(i) + "]";
+        glUniform1i(p.uniform(("u_light_point" + idx).c_str()), l.point ? 1 : 0);
+        glUniform3fv(p.uniform(("u_light_dir" + idx).c_str()), 1, glm::value_ptr(l.direction));
+        glUniform3fv(p.uniform(("u_light_pos" + idx).c_str()), 1, glm::value_ptr(l.position));
+        glUniform3fv(p.uniform(("u_light_radiance" + idx).c_str()), 1, glm::value_ptr(l.radiance));
+    }
+    glUniform3fv(p.uniform("u_env_color"), 1, glm::value_ptr(L.env.color));
+    glUniform1f(p.uniform("u_env_intensity"), L.env.intensity);
+    glUniform1i(p.uniform("u_env_lighting"), L.env_lighting ? 1 : 0);
+    glUniform1i(p.uniform("u_env_has_sh"), L.sh ? 1 : 0);
+    if (L.sh) glUniform3fv(p.uniform("u_env_sh"), 9, glm::value_ptr(L.sh->c[0]));
+    glUniform1i(p.uniform("u_env_has_map"), L.env.map ? 1 : 0);
+    glActiveTexture(GLenum(GL_TEXTURE0 + env_unit));
+    glBindTexture(GL_TEXTURE_2D, L.env.map ? texture(L.env.map, false) : 0);
+    glUniform1i(p.uniform("u_env_map"), env_unit);
+}
+
+GLuint Renderer::aov_texture(const std::string& name) const {
+    for (size_t i = 0; i < layout_.size(); ++i)
+        if (layout_[i].name == name) return target_.color(int(i));
+    return 0;
+}
+
+// [SECTION] Frame
+void Renderer::render(const Scene& s, const Evaluation& ev, int width, int height) {
+    PROFILE_SCOPE("frame.gpu");
+    if (width < 1 || height < 1 || width > 16384 || height > 16384)
+        throw InputError("frame size " + std::to_string(width) + "x" + std::to_string(height) + " is out of range (1..16384 per side)");
+    layout_ = Registry::instance().aovs(s);
+    target_.resize(width, height, int(layout_.size()));
+    const FrameCamera cam = make_camera(s, world_bounds(s, ev), width, height);
+    const Lighting lighting = make_lighting(s, ev);
+
+    impl_->timer.begin();
+    target_.bind();
+    std::vector<std::string> all;
+    for (const auto& a : layout_) all.push_back(a.name);
+    draw_buffers(all);
+    glDisable(GL_BLEND);
+    glDisable(GL_CULL_FACE);
+    glDisable(GL_SCISSOR_TEST);
+    glClearColor(0.f, 0.f, 0.f, 0.f);
+    glClearDepth(1.0);
+    glDepthMask(GL_TRUE);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+
+    if (!cam.texture_mode) {
+        // Background: the environment through each pixel; objects overwrite it.
+        glDisable(GL_DEPTH_TEST);
+        draw_buffers({"radiance"});
+        impl_->background.use();
+        glUniformMatrix4fv(impl_->background.uniform("u_inv_view_proj"), 1, GL_FALSE, glm::value_ptr(cam.inv_view_proj));
+        set_lighting_uniforms(impl_->background, lighting, 0);
+        GLuint vao = 0;
+        glGenVertexArrays(1, &vao);
+        glBindVertexArray(vao);
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+        glBindVertexArray(0);
+        glDeleteVertexArrays(1, &vao);
+    }
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    for (const Technique* t : Registry::instance().techniques()) {
+        DrawContext ctx{s, ev, cam, lighting, {}, *this, cam.raster.proj * cam.raster.view};
+        for (size_t i = 0; i < s.objects.size(); ++i)
+            if (s.objects[i].technique == t->name()) ctx.objects.push_back(int(i));
+        if (ctx.objects.empty()) continue;
+        auto it = impl_->passes.find(t->name());
+        if (it == impl_->passes.end()) throw std::logic_error("technique " + t->name() + " has no GPU pass");
+        it->second->draw(ctx);
+    }
+    impl_->timer.end();
+    last_gpu_ms_ = impl_->timer.elapsed_ms();
+    Profiler::global().record("frame.gpu/gpu", last_gpu_ms_, Device::Gpu);
+    check_gl("Renderer::render");
+}
+
+Frame Renderer::read_frame() const {
+    PROFILE_SCOPE("frame.gpu.readback");
+    Frame f = make_frame(layout_, target_.width(), target_.height());
+    for (size_t i = 0; i < layout_.size(); ++i) {
+        const std::vector<float> rgba = target_.read_rgba(int(i));
+        Image& img = f.aov(layout_[i].name);
+        for (size_t p = 0; p < size_t(f.width) * size_t(f.height); ++p)
+            for (int c = 0; c < img.channels; ++c) img.data[p * size_t(img.channels) + size_t(c)] = rgba[p * 4 + size_t(c)];
+    }
+    return f;
+}
+}  // namespace mesolab::gpu

@@ -1,0 +1,766 @@
+// Meshes (procedural primitives, OpenMesh loading) and the CPU rasteriser.
+#include "core/error.h"
+#include "core/mesh.h"
+#include "core/raster.h"
+
+#include <gtest/gtest.h>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <unistd.h>
+
+using namespace mesolab;
+
+namespace {
+
+// [SECTION] Test helpers
+struct TempDir {
+    std::filesystem::path path;
+    TempDir() {
+        static int counter = 0;
+        path = std::filesystem::temp_directory_path() /
+               ("mesolab_mesh_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+        std::filesystem::create_directories(path);
+    }
+    ~TempDir() {
+        std::error_code ec;
+        std::filesystem::remove_all(path, ec);
+    }
+    std::string write(const std::string& name, const std::string& text) const {
+        const std::string p = (path / name).string();
+        std::ofstream(p, std::ios::binary) << text;
+        return p;
+    }
+};
+
+double triangle_area(const TriMesh& m, size_t t) {
+    const vec3 a = m.position[m.index[3 * t]], b = m.position[m.index[3 * t + 1]], c = m.position[m.index[3 * t + 2]];
+    return 0.5 * double(glm::length(glm::cross(b - a, c - a)));
+}
+
+double uv_area(const TriMesh& m, size_t t) {  // signed, positive when counter-clockwise in uv
+    const vec2 a = m.uv[m.index[3 * t]], b = m.uv[m.index[3 * t + 1]], c = m.uv[m.index[3 * t + 2]];
+    return 0.5 * (double(b.x - a.x) * double(c.y - a.y) - double(c.x - a.x) * double(b.y - a.y));
+}
+
+double surface_area(const TriMesh& m) {
+    double a = 0.0;
+    for (size_t t = 0; t < m.triangle_count(); ++t) a += triangle_area(m, t);
+    return a;
+}
+
+// A mesh holding only triangle `t` of `m` (same vertex arrays).
+TriMesh single_triangle(const TriMesh& m, size_t t) {
+    TriMesh s = m;
+    s.index.assign(m.index.begin() + std::ptrdiff_t(3 * t), m.index.begin() + std::ptrdiff_t(3 * t + 3));
+    return s;
+}
+
+// A mesh from explicit triangles (positions only; normal +z, tangent +x, uv = xy).
+TriMesh soup(const std::vector<vec3>& positions, const std::vector<uint32_t>& index) {
+    TriMesh m;
+    m.position = positions;
+    m.index = index;
+    for (const vec3& p : positions) {
+        m.normal.push_back(vec3(0.f, 0.f, 1.f));
+        m.tangent.push_back(vec3(1.f, 0.f, 0.f));
+        m.uv.push_back(vec2(p.x, p.y));
+    }
+    m.has_uv = true;
+    return m;
+}
+
+// Camera whose clip space equals object space (identity view and projection).
+RasterCamera identity_camera(int w, int h) {
+    RasterCamera cam;
+    cam.width = w;
+    cam.height = h;
+    return cam;
+}
+
+RasterCamera perspective_camera(int w, int h, vec3 eye, vec3 target, float fovy_deg = 40.f, float near = 0.1f,
+                                float far = 100.f) {
+    RasterCamera cam;
+    cam.width = w;
+    cam.height = h;
+    cam.view = glm::lookAt(eye, target, vec3(0.f, 0.f, 1.f));
+    cam.proj = glm::perspective(radians(fovy_deg), float(w) / float(h), near, far);
+    return cam;
+}
+
+GBuffer render(const TriMesh& m, const RasterCamera& cam, mat4 model = mat4(1.f), int id = 1) {
+    GBuffer g;
+    rasterize({DrawItem{&m, model, id}}, cam, g);
+    return g;
+}
+
+size_t covered(const GBuffer& g) {
+    size_t n = 0;
+    for (int32_t o : g.object) n += o >= 0;
+    return n;
+}
+
+// Window position (GL, y up) of world point p.
+vec2 window_of(const RasterCamera& cam, vec3 p) {
+    const vec4 c = cam.proj * cam.view * vec4(p, 1.f);
+    return {(c.x / c.w + 1.f) * 0.5f * float(cam.width), (c.y / c.w + 1.f) * 0.5f * float(cam.height)};
+}
+
+// World-space ray through the centre of image pixel (x, row).
+void pixel_ray(const RasterCamera& cam, int x, int row, glm::dvec3& origin, glm::dvec3& dir) {
+    const glm::dmat4 inv = glm::inverse(glm::dmat4(cam.proj) * glm::dmat4(cam.view));
+    const double xn = (x + 0.5) / cam.width * 2.0 - 1.0;
+    const double yn = (cam.height - 1 - row + 0.5) / cam.height * 2.0 - 1.0;
+    glm::dvec4 a = inv * glm::dvec4(xn, yn, -1.0, 1.0), b = inv * glm::dvec4(xn, yn, 1.0, 1.0);
+    origin = glm::dvec3(a) / a.w;
+    dir = glm::normalize(glm::dvec3(b) / b.w - origin);
+}
+
+bool all_finite(const GBuffer& g) {
+    for (size_t i = 0; i < g.depth.size(); ++i) {
+        if (!std::isfinite(g.depth[i]) || g.depth[i] < 0.f || g.depth[i] > 1.f) return false;
+        for (int k = 0; k < 3; ++k)
+            if (!std::isfinite(g.position[i][k]) || !std::isfinite(g.normal[i][k]) || !std::isfinite(g.tangent[i][k]))
+                return false;
+        if (!std::isfinite(g.uv[i].x) || !std::isfinite(g.uv[i].y)) return false;
+    }
+    return true;
+}
+
+const Primitive kPrimitives[] = {Primitive::Sphere, Primitive::Plane, Primitive::Torus, Primitive::Cylinder};
+const char* name_of(Primitive p) {
+    switch (p) {
+        case Primitive::Sphere: return "sphere";
+        case Primitive::Plane: return "plane";
+        case Primitive::Torus: return "torus";
+        case Primitive::Cylinder: return "cylinder";
+    }
+    return "?";
+}
+}  // namespace
+
+// [SECTION] Procedural primitives
+TEST(Primitives, ConsistentArraysUnitFramesAndUvTiling) {
+    for (Primitive p : kPrimitives)
+        for (int res : {3, 4, 7, 16, 64}) {
+            SCOPED_TRACE(std::string(name_of(p)) + " resolution " + std::to_string(res));
+            const TriMesh m = make_primitive(p, res);
+            ASSERT_TRUE(m.has_uv);
+            ASSERT_GT(m.triangle_count(), 0u);
+            ASSERT_EQ(m.normal.size(), m.vertex_count());
+            ASSERT_EQ(m.tangent.size(), m.vertex_count());
+            ASSERT_EQ(m.uv.size(), m.vertex_count());
+            for (uint32_t i : m.index) ASSERT_LT(i, m.vertex_count());
+            for (size_t v = 0; v < m.vertex_count(); ++v) {
+                EXPECT_NEAR(glm::length(m.normal[v]), 1.f, 1e-5f);
+                EXPECT_NEAR(glm::length(m.tangent[v]), 1.f, 1e-5f);
+                EXPECT_NEAR(glm::dot(m.normal[v], m.tangent[v]), 0.f, 1e-5f);
+                EXPECT_GE(m.uv[v].x, 0.f);
+                EXPECT_LE(m.uv[v].x, 1.f);
+                EXPECT_GE(m.uv[v].y, 0.f);
+                EXPECT_LE(m.uv[v].y, 1.f);
+            }
+            double total_uv = 0.0;
+            for (size_t t = 0; t < m.triangle_count(); ++t) {
+                const double a = uv_area(m, t);
+                EXPECT_GT(a, 0.0) << "triangle " << t;
+                total_uv += a;
+            }
+            EXPECT_NEAR(total_uv, 1.0, 1e-6);
+        }
+}
+
+TEST(Primitives, CounterClockwiseFromOutside) {
+    for (Primitive p : kPrimitives) {
+        SCOPED_TRACE(name_of(p));
+        const TriMesh m = make_primitive(p, 24);
+        size_t degenerate = 0;
+        for (size_t t = 0; t < m.triangle_count(); ++t) {
+            const uint32_t i0 = m.index[3 * t], i1 = m.index[3 * t + 1], i2 = m.index[3 * t + 2];
+            const vec3 n_geo = glm::cross(m.position[i1] - m.position[i0], m.position[i2] - m.position[i0]);
+            if (glm::length(n_geo) < 1e-9f) {
+                ++degenerate;
+                continue;
+            }
+            EXPECT_GT(glm::dot(n_geo, m.normal[i0] + m.normal[i1] + m.normal[i2]), 0.f) << "triangle " << t;
+            // The tangent follows +u: dP/du of the triangle points the same way.
+            const vec2 d1 = m.uv[i1] - m.uv[i0], d2 = m.uv[i2] - m.uv[i0];
+            const vec3 dpdu = ((m.position[i1] - m.position[i0]) * d2.y - (m.position[i2] - m.position[i0]) * d1.y) /
+                              (d1.x * d2.y - d2.x * d1.y);
+            EXPECT_GT(glm::dot(dpdu, m.tangent[i0] + m.tangent[i1] + m.tangent[i2]), 0.f) << "triangle " << t;
+        }
+        // Only the sphere's pole rows hold zero-area triangles: one per cell.
+        EXPECT_EQ(degenerate, p == Primitive::Sphere ? size_t(2 * 24) : size_t(0));
+    }
+}
+
+TEST(Primitives, SphereGeometry) {
+    const TriMesh m = make_primitive(Primitive::Sphere, 32);
+    EXPECT_EQ(m.vertex_count(), size_t(33 * 17));
+    for (size_t v = 0; v < m.vertex_count(); ++v) {
+        EXPECT_NEAR(glm::length(m.position[v]), 1.f, 1e-6f);
+        EXPECT_GT(glm::dot(m.normal[v], m.position[v]), 0.99f);  // outward (normal = position)
+        // v = 0 at the south pole, 1 at the north pole; u = azimuth / 2pi from +x.
+        EXPECT_NEAR(m.position[v].z, -std::cos(kPi * m.uv[v].y), 1e-5f);
+        if (std::abs(m.position[v].z) < 0.999f && m.uv[v].x > 0.f && m.uv[v].x < 1.f) {
+            float phi = std::atan2(m.position[v].y, m.position[v].x);
+            if (phi < 0.f) phi += 2.f * kPi;
+            EXPECT_NEAR(phi / (2.f * kPi), m.uv[v].x, 1e-5f);
+        }
+    }
+    // Pole vertices: the tangent is the limit direction of dP/du for their u column.
+    for (size_t v = 0; v < m.vertex_count(); ++v)
+        if (m.uv[v].y == 0.f || m.uv[v].y == 1.f) {
+            const float phi = 2.f * kPi * m.uv[v].x;
+            EXPECT_NEAR(m.tangent[v].x, -std::sin(phi), 1e-5f);
+            EXPECT_NEAR(m.tangent[v].y, std::cos(phi), 1e-5f);
+            EXPECT_EQ(m.tangent[v].z, 0.f);
+        }
+}
+
+TEST(Primitives, SeamVerticesCoincide) {
+    for (Primitive p : kPrimitives) {
+        SCOPED_TRACE(name_of(p));
+        const TriMesh m = make_primitive(p, 12);
+        for (size_t a = 0; a < m.vertex_count(); ++a)
+            if (m.uv[a].x == 0.f)
+                for (size_t b = 0; b < m.vertex_count(); ++b)
+                    if (m.uv[b].x == 1.f && m.uv[b].y == m.uv[a].y && p != Primitive::Plane) {
+                        EXPECT_EQ(m.position[a], m.position[b]);  // bit-identical: no cracks
+                        EXPECT_EQ(m.normal[a], m.normal[b]);
+                    }
+    }
+}
+
+TEST(Primitives, SurfaceAreaConverges) {
+    struct Case {
+        Primitive p;
+        double exact;
+    };
+    const double r = 0.35;
+    const Case cases[] = {{Primitive::Sphere, 4.0 * M_PI},
+                          {Primitive::Torus, 4.0 * M_PI * M_PI * r},  // (2 pi R)(2 pi r), R = 1
+                          {Primitive::Plane, 4.0},
+                          {Primitive::Cylinder, 4.0 * M_PI}};
+    for (const Case& c : cases) {
+        SCOPED_TRACE(name_of(c.p));
+        double previous_error = 1e9;
+        for (int res : {8, 16, 32, 64, 128, 256}) {
+            const double error = std::abs(surface_area(make_primitive(c.p, res, float(r))) / c.exact - 1.0);
+            // Second-order convergence: relative error below 25 / res^2 (flat facets).
+            EXPECT_LT(error, 25.0 / (res * res)) << "resolution " << res;
+            if (c.p != Primitive::Plane) { EXPECT_LT(error, previous_error) << "resolution " << res; }
+            previous_error = error;
+        }
+    }
+}
+
+TEST(Primitives, TorusAreaIsFourPiSquaredRr) {
+    // Area of a torus with major radius R and minor radius r: (2 pi R)(2 pi r) = 4 pi^2 R r.
+    const double r = 0.25;
+    const double area = surface_area(make_primitive(Primitive::Torus, 512, float(r)));
+    EXPECT_NEAR(area / (4.0 * M_PI * M_PI * 1.0 * r), 1.0, 1e-4);
+}
+
+TEST(Primitives, InvalidParametersAreInputErrors) {
+    for (int res : {-1, 0, 2, 16385}) {
+        try {
+            make_primitive(Primitive::Sphere, res);
+            ADD_FAILURE() << "resolution " << res << " accepted";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("geometry.resolution"), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find("[3, 16384]"), std::string::npos) << e.what();
+        }
+    }
+    EXPECT_NO_THROW(make_primitive(Primitive::Plane, 3));
+    EXPECT_THROW(make_primitive(Primitive::Torus, 8, 0.f), InputError);
+    EXPECT_THROW(make_primitive(Primitive::Torus, 8, 1.f), InputError);
+    EXPECT_THROW(make_primitive(Primitive::Torus, 8, std::nanf("")), InputError);
+    EXPECT_NO_THROW(make_primitive(Primitive::Sphere, 8, 5.f));  // ratio only matters for the torus
+}
+
+TEST(Primitives, TransformAndBounds) {
+    TriMesh m = make_primitive(Primitive::Sphere, 16);
+    const TriMesh original = m;
+    transform_mesh(m, 2.f, vec3(1.f, 2.f, 3.f));
+    const Bounds b = bounds(m);
+    EXPECT_NEAR(b.lo.z, 1.f, 1e-6f);
+    EXPECT_NEAR(b.hi.z, 5.f, 1e-6f);
+    EXPECT_NEAR(b.hi.x, 3.f, 1e-6f);
+    EXPECT_EQ(m.normal, original.normal);
+    EXPECT_EQ(m.tangent, original.tangent);
+    const Bounds empty = bounds(TriMesh{});
+    EXPECT_EQ(empty.lo, vec3(0.f));
+    EXPECT_EQ(empty.hi, vec3(0.f));
+}
+
+// [SECTION] Texture-space rasterisation
+TEST(Raster, TextureModePlaneCoversEveryPixelWithPixelCentreUv) {
+    const TriMesh plane = make_primitive(Primitive::Plane, 8);
+    for (ivec2 size : {ivec2(256, 128), ivec2(64, 64), ivec2(200, 40)}) {
+        RasterCamera cam = identity_camera(size.x, size.y);
+        cam.texture_space = true;
+        const GBuffer g = render(plane, cam, mat4(1.f), 7);
+        ASSERT_EQ(g.width, size.x);
+        ASSERT_EQ(g.height, size.y);
+        for (int y = 0; y < g.height; ++y)
+            for (int x = 0; x < g.width; ++x) {
+                const size_t i = g.index(x, y);
+                ASSERT_EQ(g.object[i], 7) << x << "," << y;
+                const vec2 uv((x + 0.5f) / float(g.width), 1.f - (y + 0.5f) / float(g.height));
+                EXPECT_NEAR(g.uv[i].x, uv.x, 1e-5f) << x << "," << y;
+                EXPECT_NEAR(g.uv[i].y, uv.y, 1e-5f) << x << "," << y;
+                EXPECT_NEAR(g.position[i].x, 2.f * uv.x - 1.f, 2e-5f);
+                EXPECT_NEAR(g.position[i].y, 2.f * uv.y - 1.f, 2e-5f);
+                EXPECT_EQ(g.normal[i], vec3(0.f, 0.f, 1.f));
+                EXPECT_EQ(g.tangent[i], vec3(1.f, 0.f, 0.f));
+                EXPECT_EQ(g.depth[i], 0.5f);
+            }
+    }
+}
+
+TEST(Raster, TextureModeCoversEveryPixelExactlyOnceForEveryPrimitive) {
+    // The primitives tile the uv square, so in texture mode each pixel is covered by exactly
+    // one triangle: rendering the triangles one at a time, the counts must all be 1.
+    for (Primitive p : kPrimitives) {
+        SCOPED_TRACE(name_of(p));
+        const TriMesh m = make_primitive(p, 6);
+        RasterCamera cam = identity_camera(48, 40);
+        cam.texture_space = true;
+        std::vector<int> count(size_t(48 * 40), 0);
+        for (size_t t = 0; t < m.triangle_count(); ++t) {
+            const GBuffer g = render(single_triangle(m, t), cam);
+            for (size_t i = 0; i < count.size(); ++i) count[i] += g.object[i] >= 0;
+        }
+        for (size_t i = 0; i < count.size(); ++i) ASSERT_EQ(count[i], 1) << "pixel " << i;
+        const GBuffer all = render(m, cam);
+        EXPECT_EQ(covered(all), count.size());
+        EXPECT_TRUE(all_finite(all));
+    }
+}
+
+TEST(Raster, EqualDepthKeepsTheFirstDrawnItem) {
+    const TriMesh plane = make_primitive(Primitive::Plane, 4);
+    RasterCamera cam = identity_camera(32, 32);
+    cam.texture_space = true;
+    GBuffer g;
+    rasterize({DrawItem{&plane, mat4(1.f), 1}, DrawItem{&plane, mat4(1.f), 2}}, cam, g);
+    for (int32_t o : g.object) ASSERT_EQ(o, 1);
+}
+
+// [SECTION] Fill rule: shared edges
+TEST(Raster, SharedEdgesCoverEachPixelExactlyOnce) {
+    std::mt19937 rng(1234);
+    std::uniform_real_distribution<float> coord(-1.2f, 1.2f);
+    const int w = 37, h = 29;
+    const RasterCamera cam = identity_camera(w, h);
+    for (int trial = 0; trial < 300; ++trial) {
+        // A quad (a, b, c, d), split along a-c; on every third trial the diagonal and the
+        // corners sit exactly on pixel centres or pixel corners to exercise ties.
+        std::vector<vec3> q(4);
+        for (vec3& p : q) {
+            p = vec3(coord(rng), coord(rng), 0.f);
+            if (trial % 3 == 0) {
+                p.x = (std::round((p.x + 1.f) * 0.5f * w * 2.f) / 2.f) / (0.5f * w) - 1.f;
+                p.y = (std::round((p.y + 1.f) * 0.5f * h * 2.f) / 2.f) / (0.5f * h) - 1.f;
+            }
+        }
+        const TriMesh first = soup(q, {0, 1, 2}), second = soup(q, {0, 2, 3}), both = soup(q, {0, 1, 2, 0, 2, 3});
+        const GBuffer g1 = render(first, cam), g2 = render(second, cam), g12 = render(both, cam);
+        for (size_t i = 0; i < g1.object.size(); ++i) {
+            const bool c1 = g1.object[i] >= 0, c2 = g2.object[i] >= 0;
+            // Pixels on both sides of the diagonal: a convex quad's diagonal is inside it, so
+            // one triangle lies on each side and no pixel centre may be counted twice.
+            const vec2 d1 = vec2(q[2] - q[0]), e1 = vec2(q[1] - q[0]), e3 = vec2(q[3] - q[0]);
+            const bool opposite_sides = (d1.x * e1.y - d1.y * e1.x) * (d1.x * e3.y - d1.y * e3.x) < 0.f;
+            if (opposite_sides) { ASSERT_FALSE(c1 && c2) << "trial " << trial << " pixel " << i; }
+            ASSERT_EQ(g12.object[i] >= 0, c1 || c2) << "trial " << trial << " pixel " << i;
+        }
+    }
+}
+
+TEST(Raster, FanAroundAPixelCentreCoversItOnce) {
+    // Eight triangles around a vertex exactly at a pixel centre, with spokes through pixel
+    // centres: the centre pixel and every pixel on a spoke belong to exactly one triangle.
+    const int w = 32, h = 32;
+    const RasterCamera cam = identity_camera(w, h);
+    auto ndc = [&](float px, float py) { return vec3(px / (0.5f * w) - 1.f, py / (0.5f * h) - 1.f, 0.f); };
+    std::vector<vec3> ring;
+    for (int k = 0; k < 8; ++k) {
+        const int dx[] = {10, 10, 0, -10, -10, -10, 0, 10}, dy[] = {0, 10, 10, 10, 0, -10, -10, -10};
+        ring.push_back(ndc(16.5f + float(dx[k]), 16.5f + float(dy[k])));
+    }
+    std::vector<int> count(size_t(w * h), 0);
+    for (int k = 0; k < 8; ++k) {
+        const GBuffer g = render(soup({ndc(16.5f, 16.5f), ring[size_t(k)], ring[size_t((k + 1) % 8)]}, {0, 1, 2}), cam);
+        for (size_t i = 0; i < count.size(); ++i) count[i] += g.object[i] >= 0;
+    }
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const int gx = x, gy = h - 1 - y;  // GL window pixel
+            const bool inside = std::abs(gx - 16) < 10 && std::abs(gy - 16) < 10;
+            if (inside) { EXPECT_EQ(count[size_t(y * w + x)], 1) << gx << "," << gy; }
+            EXPECT_LE(count[size_t(y * w + x)], 1) << gx << "," << gy;
+        }
+}
+
+TEST(Raster, PerspectiveGridCoversEachPixelOnceIncludingNearPlaneClips) {
+    // A tessellated ground plane seen in perspective, once wholly in front of the camera and
+    // once crossing the near plane (clipped triangles share new vertices along shared edges).
+    TriMesh plane = make_primitive(Primitive::Plane, 6);
+    transform_mesh(plane, 4.f, vec3(0.f));
+    struct View {
+        vec3 eye, target;
+    };
+    const View views[] = {{vec3(1.3f, -9.f, 6.f), vec3(0.3f, 0.2f, 0.f)},   // whole plane visible
+                          {vec3(0.37f, -3.1f, 0.6f), vec3(0.5f, 4.f, -0.4f)}};  // camera above the plane's middle
+    for (const View& v : views) {
+        const RasterCamera cam = perspective_camera(96, 64, v.eye, v.target, 60.f, 0.5f, 50.f);
+        std::vector<int> count(size_t(96 * 64), 0);
+        for (size_t t = 0; t < plane.triangle_count(); ++t) {
+            const GBuffer g = render(single_triangle(plane, t), cam);
+            ASSERT_TRUE(all_finite(g));
+            for (size_t i = 0; i < count.size(); ++i) count[i] += g.object[i] >= 0;
+        }
+        const GBuffer all = render(plane, cam);
+        size_t interior = 0;
+        for (int row = 0; row < 64; ++row)
+            for (int x = 0; x < 96; ++x) {
+                const size_t i = all.index(x, row);
+                ASSERT_LE(count[i], 1) << x << "," << row;
+                ASSERT_EQ(count[i] == 1, all.object[i] >= 0) << x << "," << row;
+                // Pixels whose ray meets the plane well inside its extent and beyond the near
+                // plane must be covered.
+                glm::dvec3 o, d;
+                pixel_ray(cam, x, row, o, d);
+                if (d.z >= -1e-9) continue;
+                const double t = -o.z / d.z;
+                const glm::dvec3 hit = o + d * t;
+                const double depth_along_view = glm::dot(hit - glm::dvec3(v.eye), glm::normalize(glm::dvec3(v.target - v.eye)));
+                if (std::abs(hit.x) < 3.95 && std::abs(hit.y) < 3.95 && depth_along_view > 0.55) {
+                    ++interior;
+                    ASSERT_EQ(count[i], 1) << x << "," << row;
+                }
+            }
+        EXPECT_GT(interior, size_t(500));
+    }
+}
+
+// [SECTION] Perspective rendering
+TEST(Raster, SphereSilhouetteAndPerspectiveCorrectAttributes) {
+    const TriMesh sphere = make_primitive(Primitive::Sphere, 128);
+    const float distance = 3.f, fovy = 40.f;
+    const RasterCamera cam = perspective_camera(512, 512, vec3(distance, 0.f, 0.f), vec3(0.f), fovy, 0.1f, 100.f);
+    const GBuffer g = render(sphere, cam, mat4(1.f), 3);
+    ASSERT_TRUE(all_finite(g));
+    // Silhouette: a cone of half-angle asin(1/d) around the view axis, a disk on the image.
+    const double r_px = std::tan(std::asin(1.0 / distance)) / std::tan(double(radians(fovy)) / 2.0) * 256.0;
+    const double expected = M_PI * r_px * r_px;
+    EXPECT_NEAR(double(covered(g)) / expected, 1.0, 0.02);
+
+    const mat4 clip_from_world = cam.proj * cam.view;
+    for (int row = 0; row < 512; ++row)
+        for (int x = 0; x < 512; ++x) {
+            const size_t i = g.index(x, row);
+            if (g.object[i] < 0) continue;
+            ASSERT_EQ(g.object[i], 3);
+            const vec3 p = g.position[i];
+            EXPECT_NEAR(glm::length(p), 1.f, 2e-3f);
+            EXPECT_NEAR(glm::length(g.normal[i]), 1.f, 1e-5f);
+            EXPECT_GT(glm::dot(g.normal[i], p), 0.99f);
+            EXPECT_GT(glm::dot(g.normal[i], glm::normalize(vec3(distance, 0.f, 0.f) - p)), -0.06f);  // front side
+            // The interpolated position projects onto the pixel centre (perspective-correct),
+            // and its depth is the stored depth (screen-linear depth over a planar triangle).
+            const vec2 wpos = window_of(cam, p);
+            EXPECT_NEAR(wpos.x, x + 0.5f, 0.02f);
+            EXPECT_NEAR(wpos.y, 511 - row + 0.5f, 0.02f);
+            const vec4 c = clip_from_world * vec4(p, 1.f);
+            EXPECT_NEAR((c.z / c.w + 1.f) * 0.5f, g.depth[i], 2e-6f);
+        }
+}
+
+TEST(Raster, DepthTestKeepsTheNearerPlane) {
+    const TriMesh plane = make_primitive(Primitive::Plane, 3);
+    const RasterCamera cam = perspective_camera(64, 64, vec3(0.f, 0.f, 5.f), vec3(0.f), 50.f, 0.1f, 20.f);
+    // Camera looks down -z from z=5; a plane at z=0.5 (id 2, nearer) half covers one at z=0 (id 1).
+    const mat4 low(1.f);
+    const mat4 high = glm::translate(mat4(1.f), vec3(1.f, 0.f, 0.5f));
+    for (bool near_first : {false, true}) {
+        std::vector<DrawItem> items{DrawItem{&plane, low, 1}, DrawItem{&plane, high, 2}};
+        if (near_first) std::swap(items[0], items[1]);
+        GBuffer g;
+        rasterize(items, cam, g);
+        size_t near_count = 0, far_count = 0;
+        for (int row = 0; row < 64; ++row)
+            for (int x = 0; x < 64; ++x) {
+                const size_t i = g.index(x, row);
+                if (g.object[i] < 0) continue;
+                const vec3 p = g.position[i];
+                // Where the high plane can be seen (its footprint), it must win.
+                glm::dvec3 o, d;
+                pixel_ray(cam, x, row, o, d);
+                const glm::dvec3 hit = o + d * ((0.5 - o.z) / d.z);
+                const bool on_high = hit.x > 0.0 && hit.x < 2.0 && std::abs(hit.y) < 1.0;
+                if (std::abs(hit.x) < 1e-2 || std::abs(hit.x - 2.0) < 1e-2 || std::abs(std::abs(hit.y) - 1.0) < 1e-2) continue;
+                if (on_high) {
+                    EXPECT_EQ(g.object[i], 2) << x << "," << row;
+                    EXPECT_NEAR(p.z, 0.5f, 1e-5f);
+                    ++near_count;
+                } else {
+                    EXPECT_EQ(g.object[i], 1) << x << "," << row;
+                    EXPECT_NEAR(p.z, 0.f, 1e-5f);
+                    ++far_count;
+                }
+            }
+        EXPECT_GT(near_count, size_t(200));
+        EXPECT_GT(far_count, size_t(200));
+    }
+}
+
+TEST(Raster, NearPlaneCrossingProducesNoNaN) {
+    // A large ground plane under the camera (many triangles cross the near plane and lie
+    // partly behind the camera) and a sphere around the camera (every pixel covered).
+    TriMesh ground = make_primitive(Primitive::Plane, 16);
+    transform_mesh(ground, 50.f, vec3(0.f));
+    const RasterCamera cam = perspective_camera(160, 120, vec3(0.f, 0.f, 1.f), vec3(0.f, 10.f, 0.9f), 70.f, 0.05f, 200.f);
+    const GBuffer g = render(ground, cam);
+    ASSERT_TRUE(all_finite(g));
+    size_t lower_half = 0;
+    for (int row = 0; row < 120; ++row)
+        for (int x = 0; x < 160; ++x) {
+            const size_t i = g.index(x, row);
+            if (row >= 64) {
+                EXPECT_GE(g.object[i], 0) << x << "," << row;  // below the horizon: ground
+                ++lower_half;
+            }
+            if (g.object[i] >= 0) {
+                EXPECT_NEAR(g.position[i].z, 0.f, 1e-4f);
+                EXPECT_NEAR(g.normal[i].z, 1.f, 1e-6f);
+                EXPECT_GT(g.position[i].y, 0.f);  // in front of the camera only
+            }
+        }
+    EXPECT_GT(lower_half, 0u);
+
+    const TriMesh sphere = make_primitive(Primitive::Sphere, 24);
+    for (vec3 eye : {vec3(0.f), vec3(0.3f, -1.2f, 0.4f)}) {
+        const RasterCamera inside = perspective_camera(80, 60, eye, eye + vec3(0.3f, 1.f, -0.2f), 90.f, 0.01f, 10.f);
+        const GBuffer s = render(sphere, inside, glm::scale(mat4(1.f), vec3(2.f)));
+        ASSERT_TRUE(all_finite(s));
+        EXPECT_EQ(covered(s), size_t(80 * 60));
+        for (size_t i = 0; i < s.position.size(); ++i) EXPECT_NEAR(glm::length(s.position[i]), 2.f, 0.05f);
+    }
+
+    // A triangle with one vertex behind the camera and one beside it, before the near plane.
+    const RasterCamera c2 = perspective_camera(40, 40, vec3(0.f), vec3(0.f, 1.f, 0.f), 60.f, 0.1f, 10.f);
+    const TriMesh tri = soup({vec3(0.2f, 0.f, -0.3f), vec3(-1.f, 5.f, -1.f), vec3(1.f, -5.f, -0.5f)}, {0, 1, 2});
+    const GBuffer t = render(tri, c2);
+    EXPECT_TRUE(all_finite(t));
+    EXPECT_GT(covered(t), 0u);
+}
+
+TEST(Raster, ModelMatrixTransformsNormalsAndTangents) {
+    const TriMesh plane = make_primitive(Primitive::Plane, 3);
+    // Non-uniform scale then rotation: normals use the inverse transpose.
+    const mat4 model = glm::rotate(mat4(1.f), 0.6f, vec3(1.f, 0.f, 0.f)) * glm::scale(mat4(1.f), vec3(3.f, 1.f, 0.5f));
+    const RasterCamera cam = perspective_camera(64, 64, vec3(0.f, -4.f, 6.f), vec3(0.f), 60.f);
+    const GBuffer g = render(plane, cam, model);
+    const vec3 n = glm::normalize(glm::transpose(glm::inverse(mat3(model))) * vec3(0.f, 0.f, 1.f));
+    const vec3 t = glm::normalize(mat3(model) * vec3(1.f, 0.f, 0.f));
+    ASSERT_GT(covered(g), 100u);
+    for (size_t i = 0; i < g.object.size(); ++i)
+        if (g.object[i] >= 0) {
+            EXPECT_NEAR(glm::distance(g.normal[i], n), 0.f, 1e-5f);
+            EXPECT_NEAR(glm::distance(g.tangent[i], t), 0.f, 1e-5f);
+        }
+}
+
+TEST(Raster, MissingTangentsStayZeroAndEmptySceneIsClear) {
+    TriMesh plane = make_primitive(Primitive::Plane, 3);
+    plane.tangent.clear();
+    RasterCamera cam = identity_camera(16, 8);
+    cam.texture_space = true;
+    GBuffer g = render(plane, cam);
+    EXPECT_EQ(covered(g), size_t(16 * 8));
+    for (const vec3& t : g.tangent) EXPECT_EQ(t, vec3(0.f));
+
+    rasterize({}, cam, g);  // reuses and clears the buffers
+    EXPECT_EQ(covered(g), 0u);
+    for (size_t i = 0; i < g.depth.size(); ++i) {
+        EXPECT_EQ(g.depth[i], 1.f);
+        EXPECT_EQ(g.object[i], -1);
+        EXPECT_EQ(g.normal[i], vec3(0.f));
+    }
+}
+
+TEST(Raster, SphereTiming) {
+    // Not a pass/fail benchmark (the machine is shared): prints the time of a 512x512 render
+    // of a 128x64 sphere, reusing the G-buffer as an interactive caller would.
+    const TriMesh sphere = make_primitive(Primitive::Sphere, 128);
+    const RasterCamera cam = perspective_camera(512, 512, vec3(3.f, 0.f, 0.f), vec3(0.f), 40.f);
+    GBuffer g;
+    rasterize({DrawItem{&sphere, mat4(1.f), 0}}, cam, g);
+    double best = 1e9;
+    for (int i = 0; i < 20; ++i) {
+        const auto t0 = std::chrono::steady_clock::now();
+        rasterize({DrawItem{&sphere, mat4(1.f), 0}}, cam, g);
+        best = std::min(best, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    }
+    std::printf("[ timing   ] 512x512 sphere 128x64: best %.2f ms\n", best);
+    EXPECT_GT(covered(g), 0u);
+}
+
+// [SECTION] Mesh files
+TEST(LoadMesh, ObjWithoutNormalsOrUv) {
+    TempDir dir;
+    const std::string path = dir.write("quad.obj",
+                                       "# quad and a degenerate triangle\n"
+                                       "v 0 0 0\nv 2 0 0\nv 2 1 0\nv 0 1 0\nv 4 0 0\nv 5 0 0\nv 6 0 0\n"
+                                       "f 1 2 3 4\nf 5 6 7\n");
+    const TriMesh m = load_mesh(path);
+    EXPECT_FALSE(m.has_uv);
+    EXPECT_EQ(m.triangle_count(), 3u);
+    ASSERT_EQ(m.vertex_count(), 7u);
+    EXPECT_EQ(m.uv.size(), m.vertex_count());
+    EXPECT_EQ(m.tangent.size(), m.vertex_count());
+    for (size_t v = 0; v < m.vertex_count(); ++v) {
+        EXPECT_NEAR(glm::length(m.normal[v]), 1.f, 1e-6f);
+        EXPECT_NEAR(glm::length(m.tangent[v]), 1.f, 1e-6f);
+        EXPECT_NEAR(glm::dot(m.normal[v], m.tangent[v]), 0.f, 1e-6f);
+        if (m.position[v].x <= 2.f) { EXPECT_EQ(m.normal[v], vec3(0.f, 0.f, 1.f)); }  // counter-clockwise quad
+    }
+    const Bounds b = bounds(m);
+    EXPECT_EQ(b.lo, vec3(0.f));
+    EXPECT_EQ(b.hi, vec3(6.f, 1.f, 0.f));
+}
+
+TEST(LoadMesh, ObjWithNormalsAndUvSeams) {
+    TempDir dir;
+    // Two triangles sharing the edge 1-3, with different uvs on each side of it (a seam), and a
+    // normal given in the file (not the geometric one).
+    const std::string path = dir.write("seam.obj",
+                                       "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                       "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvt 0.5 0.5\n"
+                                       "vn 0 1 1\n"
+                                       "f 1/1/1 2/2/1 3/3/1\n"
+                                       "f 1/5/1 3/3/1 4/4/1\n");
+    const TriMesh m = load_mesh(path);
+    EXPECT_TRUE(m.has_uv);
+    EXPECT_EQ(m.triangle_count(), 2u);
+    EXPECT_EQ(m.vertex_count(), 5u);  // vertex 1 is split by its two uvs
+    const vec3 n = glm::normalize(vec3(0.f, 1.f, 1.f));
+    for (size_t v = 0; v < m.vertex_count(); ++v) {
+        EXPECT_NEAR(glm::distance(m.normal[v], n), 0.f, 1e-6f);
+        EXPECT_NEAR(glm::length(m.tangent[v]), 1.f, 1e-6f);
+        EXPECT_NEAR(glm::dot(m.normal[v], m.tangent[v]), 0.f, 1e-6f);
+    }
+    // Corner uvs as written.
+    for (size_t t = 0; t < m.triangle_count(); ++t)
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t i = m.index[3 * t + size_t(k)];
+            const vec3 p = m.position[i];
+            if (t == 0) { EXPECT_EQ(m.uv[i], vec2(p.x, p.y)); }
+            if (t == 1 && p == vec3(0.f)) { EXPECT_EQ(m.uv[i], vec2(0.5f, 0.5f)); }
+        }
+    // First triangle: uv = xy, so dP/du = +x, orthogonalised against n.
+    const uint32_t i0 = m.index[0];
+    EXPECT_GT(m.tangent[i0].x, 0.99f);
+}
+
+TEST(LoadMesh, PolygonsOffAndPly) {
+    TempDir dir;
+    const std::string obj = dir.write("pentagon.obj", "v 0 0 0\nv 1 0 0\nv 1.5 1 0\nv 0.5 2 0\nv -0.5 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0.5 1\nvt 0 1\nf 1/1 2/2 3/3 4/4 5/5\n");
+    const TriMesh pentagon = load_mesh(obj);
+    EXPECT_EQ(pentagon.triangle_count(), 3u);
+    EXPECT_TRUE(pentagon.has_uv);
+    EXPECT_NEAR(surface_area(pentagon), 2.5, 1e-6);
+
+    const std::string off = dir.write("tetra.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+    const TriMesh tetra = load_mesh(off);
+    EXPECT_EQ(tetra.triangle_count(), 4u);
+    EXPECT_EQ(tetra.vertex_count(), 4u);
+    const vec3 centre(0.25f);
+    for (size_t v = 0; v < tetra.vertex_count(); ++v) EXPECT_GT(glm::dot(tetra.normal[v], tetra.position[v] - centre), 0.f);
+
+    const std::string ply = dir.write("tri.ply",
+                                      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                      "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                                      "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    const TriMesh tri = load_mesh(ply);
+    EXPECT_EQ(tri.triangle_count(), 1u);
+    EXPECT_EQ(tri.normal[0], vec3(0.f, 0.f, 1.f));
+}
+
+TEST(LoadMesh, ErrorsNameTheFile) {
+    TempDir dir;
+    auto expect_error = [](const std::string& path, const std::string& phrase) {
+        try {
+            load_mesh(path);
+            ADD_FAILURE() << path << " loaded";
+        } catch (const InputError& e) {
+            const std::string what = e.what();
+            EXPECT_EQ(what.rfind(path + ": ", 0), 0u) << what;
+            EXPECT_NE(what.find(phrase), std::string::npos) << what;
+        }
+    };
+    expect_error((dir.path / "missing.obj").string(), "no such file");
+    expect_error(dir.write("model.xyz", "v 0 0 0\n"), "could not be read as a mesh (OBJ, OFF, PLY, STL, OM expected)");
+    expect_error(dir.write("broken.ply", "this is not a ply file\n\x01\x02"), "could not be read as a mesh");
+    expect_error(dir.path.string(), "could not be read as a mesh");
+    expect_error(dir.write("points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n"), "mesh has no triangles");
+    expect_error(dir.write("empty.obj", ""), "mesh has no triangles");
+    expect_error(dir.write("nan.obj", "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n"), "vertex 2 has a non-finite coordinate");
+    expect_error(dir.write("inf.obj", "v 0 0 0\nv 1e39 0 0\nv 0 1 0\nf 1 2 3\n"), "vertex 1 has a non-finite coordinate");
+    // Binary PLY carries the NaN through OpenMesh's reader.
+    std::string ply = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    const float xyz[9] = {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, std::numeric_limits<float>::quiet_NaN(), 0.f};
+    ply.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
+    const unsigned char count = 3;
+    const int32_t face[3] = {0, 1, 2};
+    ply.append(reinterpret_cast<const char*>(&count), 1);
+    ply.append(reinterpret_cast<const char*>(face), sizeof face);
+    expect_error(dir.write("nan.ply", ply), "vertex 2 has a non-finite coordinate");
+}
+
+TEST(LoadMesh, RendersLikeTheSameProceduralTriangles) {
+    // A loaded OBJ quad and the equivalent plane produce the same texture-mode G-buffer.
+    TempDir dir;
+    const std::string path = dir.write("plane.obj", "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+                                                    "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\n");
+    const TriMesh loaded = load_mesh(path);
+    const TriMesh plane = make_primitive(Primitive::Plane, 3);
+    RasterCamera cam = identity_camera(30, 30);
+    cam.texture_space = true;
+    const GBuffer a = render(loaded, cam), b = render(plane, cam);
+    ASSERT_EQ(covered(a), size_t(900));
+    for (size_t i = 0; i < a.uv.size(); ++i) {
+        EXPECT_NEAR(glm::distance(a.uv[i], b.uv[i]), 0.f, 1e-5f);
+        EXPECT_NEAR(glm::distance(a.position[i], b.position[i]), 0.f, 2e-5f);
+        EXPECT_NEAR(glm::distance(a.normal[i], b.normal[i]), 0.f, 1e-6f);
+        EXPECT_NEAR(glm::distance(a.tangent[i], b.tangent[i]), 0.f, 1e-5f);
+    }
+}
+
+// [SECTION] Key suggestions
+TEST(NearestKey, LevenshteinCaseInsensitiveWithThreshold) {
+    const std::vector<std::string> keys{"geometry.resolution", "geometry.type", "camera.distance", "basic.kd"};
+    EXPECT_EQ(nearest_key("geometry.resolutoin", keys), "geometry.resolution");
+    EXPECT_EQ(nearest_key("GEOMETRY.TYPE", keys), "geometry.type");
+    EXPECT_EQ(nearest_key("basic.ks", keys), "basic.kd");
+    EXPECT_EQ(nearest_key("lights", keys), "");
+    EXPECT_EQ(nearest_key("x", {}), "");
+    // Threshold max(2, size/3): "kd" -> "ks" (1) and "abcd" -> "ab" (2) suggest, 3 edits do not.
+    EXPECT_EQ(nearest_key("abcd", {"ab"}), "ab");
+    EXPECT_EQ(nearest_key("abcd", {"a"}), "");
+    // 12 characters allow 4 edits, not 5.
+    EXPECT_EQ(nearest_key("abcdefghijkl", {"abcdefghWXYZ"}), "abcdefghWXYZ");
+    EXPECT_EQ(nearest_key("abcdefghijkl", {"abcdefgVWXYZ"}), "");
+    // Ties go to the first candidate.
+    EXPECT_EQ(nearest_key("cat", {"bat", "cut", "car"}), "bat");
+}
