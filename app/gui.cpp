@@ -1,6 +1,1472 @@
-// Placeholder replaced by the GUI implementation.
+// mesolab gui: the main window. GLFW + OpenGL 4.5/4.3 core + Dear ImGui 1.86.
+//
+// [SECTION] Overview
+//  - One working Scene, edited by the panels (widgets generated from the declarations), the
+//    viewport's camera interaction, preset loading and scripts.
+//  - After the UI of each frame, a changed scene is compared with the last completed evaluation
+//    by the cache keys of its frame stages. Equal keys (light, camera, material colour...) only
+//    redraw: the frame is rendered at once from the last Evaluation, no stage runs. Otherwise the
+//    stage graph is evaluated on a worker thread with a snapshot of the scene; a newer edit
+//    cancels it and starts again. Meanwhile the last completed frame stays on screen.
+//  - Rendering happens on the main thread with gpu::Renderer at the size of the viewport; the
+//    display pass (gpu/display.h) turns the chosen AOV into an RGBA8 texture for ImGui::Image.
+//  - Scripted mode (--script FILE, or --frames N with screenshots) drives the same loop without
+//    vsync and exits with 0, 2 (bad input) or 1 (internal failure).
 #include "app/commands.h"
+#include "app/workbench.h"
 #include "core/error.h"
+#include "core/image.h"
+#include "core/profile.h"
+#include "core/render.h"
+#include "core/scene.h"
+#include "core/stage.h"
+#include "core/technique.h"
+#include "gpu/context.h"
+#include "gpu/display.h"
+#include "gpu/renderer.h"
+#include "panels/app_panels.h"
+#include "panels/panel.h"
+
+#include <epoxy/gl.h>
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+#include <imgui.h>
+#include <imgui_internal.h>  // ErrorCheckEndFrameRecover: keep running after an exception mid-frame
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <deque>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <optional>
+#include <sstream>
+#include <stop_token>
+#include <thread>
+
+namespace fs = std::filesystem;
+
 namespace mesolab {
-int run_gui(const GuiOptions&) { throw InputError("gui: not built yet"); }
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+// Longest a scripted run waits for one evaluation (or a window resize) before giving up.
+constexpr double kScriptWaitCapS = 600.0;
+constexpr double kResizeWaitCapS = 10.0;
+
+// [SECTION] Small helpers
+std::string timestamp() {
+    const std::time_t t = std::time(nullptr);
+    std::tm tm{};
+    localtime_r(&t, &tm);
+    char buf[32];
+    std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", &tm);
+    return buf;
+}
+
+std::string file_safe(const std::string& name) {
+    std::string r;
+    for (char c : name) r += (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.') ? c : '_';
+    return r.empty() ? "untitled" : r;
+}
+
+std::string trim(const std::string& s) {
+    const auto b = s.find_first_not_of(" \t\r\n");
+    if (b == std::string::npos) return "";
+    const auto e = s.find_last_not_of(" \t\r\n");
+    return s.substr(b, e - b + 1);
+}
+
+ImTextureID texture_id(GLuint tex) { return reinterpret_cast<ImTextureID>(static_cast<intptr_t>(tex)); }
+
+// [SECTION] Stage keys of a scene's frame stages
+using StageKeys = std::vector<std::pair<std::string, uint64_t>>;
+
+StageKeys stage_keys(const Scene& s) {
+    Registry& reg = Registry::instance();
+    StageKeys keys;
+    for (const auto& name : reg.frame_stages(s)) keys.emplace_back(name, reg.stages().key(s, name));
+    return keys;
+}
+
+// [SECTION] Background evaluation
+// One worker thread evaluates the latest submitted snapshot. Submitting while a job runs sets its
+// cancel flag (StageContext::progress then throws Cancelled) and queues the new snapshot.
+class Evaluator {
+public:
+    struct Outcome {
+        enum class Kind { Done, Failed, Cancelled } kind = Kind::Done;
+        uint64_t id = 0;
+        Evaluation eval;
+        Scene scene;
+        StageKeys keys;
+        std::string error, stage;  // Failed: the message; the last stage that reported progress
+        bool input_error = false;
+        double ms = 0;
+    };
+    struct Progress {
+        std::string stage;
+        double fraction = 0, seconds = 0;
+        bool running = false;
+    };
+
+    Evaluator() : thread_([this](std::stop_token st) { loop(st); }) {}
+    ~Evaluator() { cancel_.store(true); }  // the jthread member (declared last) stops and joins first
+
+    uint64_t submit(Scene s, StageKeys keys) {
+        std::lock_guard lock(mutex_);
+        pending_ = Job{++next_id_, std::move(s), std::move(keys)};
+        cancel_.store(true);  // the running job, if any, gives way
+        cv_.notify_one();
+        return next_id_;
+    }
+    void cancel() {
+        std::lock_guard lock(mutex_);
+        pending_.reset();
+        cancel_.store(true);
+    }
+    // No job pending or running and every outcome collected.
+    bool idle() const {
+        std::lock_guard lock(mutex_);
+        return !pending_ && !running_ && outcomes_.empty();
+    }
+    bool busy() const {
+        std::lock_guard lock(mutex_);
+        return pending_.has_value() || running_;
+    }
+    std::optional<Outcome> poll() {
+        std::lock_guard lock(mutex_);
+        if (outcomes_.empty()) return std::nullopt;
+        Outcome o = std::move(outcomes_.front());
+        outcomes_.pop_front();
+        return o;
+    }
+    Progress progress() const {
+        std::lock_guard lock(mutex_);
+        return {stage_, fraction_, running_ ? seconds_since(started_) : 0.0, running_ || pending_.has_value()};
+    }
+
+private:
+    struct Job {
+        uint64_t id = 0;
+        Scene scene;
+        StageKeys keys;
+    };
+
+    void loop(std::stop_token st) {
+        for (;;) {
+            Job job;
+            {
+                std::unique_lock lock(mutex_);
+                if (!cv_.wait(lock, st, [&] { return pending_.has_value(); })) return;  // stop requested
+                job = std::move(*pending_);
+                pending_.reset();
+                running_ = true;
+                cancel_.store(false);
+                stage_ = "starting";
+                fraction_ = 0;
+                started_ = Clock::now();
+            }
+            Outcome out;
+            out.id = job.id;
+            out.keys = std::move(job.keys);
+            const auto t0 = Clock::now();
+            const ProgressFn progress = [this](const std::string& stage, double f) {
+                std::lock_guard lock(mutex_);
+                stage_ = stage;
+                fraction_ = f;
+            };
+            try {
+                Registry& reg = Registry::instance();
+                out.eval = reg.stages().evaluate(job.scene, reg.frame_stages(job.scene), progress, &cancel_);
+            } catch (const Cancelled&) {
+                out.kind = Outcome::Kind::Cancelled;
+            } catch (const InputError& e) {
+                out.kind = Outcome::Kind::Failed;
+                out.input_error = true;
+                out.error = e.what();
+            } catch (const std::exception& e) {
+                out.kind = Outcome::Kind::Failed;
+                out.error = e.what();
+            }
+            out.ms = ms_since(t0);
+            out.scene = std::move(job.scene);
+            std::lock_guard lock(mutex_);
+            out.stage = stage_;
+            running_ = false;
+            outcomes_.push_back(std::move(out));
+        }
+    }
+
+    mutable std::mutex mutex_;
+    std::condition_variable_any cv_;
+    std::optional<Job> pending_;
+    bool running_ = false;
+    uint64_t next_id_ = 0;
+    std::atomic<bool> cancel_{false};
+    std::string stage_;
+    double fraction_ = 0;
+    Clock::time_point started_{};
+    std::deque<Outcome> outcomes_;
+    std::jthread thread_;  // last: stops before the members it uses go
+};
+
+// [SECTION] Scripts
+struct ScriptCommand {
+    std::string where;  // "FILE:LINE" for messages
+    std::string verb, arg;
+    int n = 0, w = 0, h = 0;  // frames N; size WxH
+    // Run state
+    bool started = false, requested = false;
+    int remaining = 0;
+    Clock::time_point t0{};
+};
+
+const char* const kScriptVerbs = "load PRESET, set KEY=VALUE, frames N, wait, screenshot PATH, window-screenshot PATH, size WxH, quit";
+
+std::vector<ScriptCommand> parse_script(const std::string& path) {
+    std::ifstream in(path);
+    if (!fs::is_regular_file(path) || !in) throw InputError(path + ": cannot read the script (no such file?)");
+    std::vector<ScriptCommand> cmds;
+    std::string line;
+    for (int no = 1; std::getline(in, line); ++no) {
+        line = trim(line);
+        if (line.empty() || line[0] == '#') continue;
+        ScriptCommand c;
+        c.where = path + ":" + std::to_string(no);
+        const auto sp = line.find_first_of(" \t");
+        c.verb = line.substr(0, sp);
+        c.arg = sp == std::string::npos ? "" : trim(line.substr(sp));
+        auto bad = [&](const std::string& msg) { return InputError(c.where + ": " + msg); };
+        if (c.verb == "load" || c.verb == "screenshot" || c.verb == "window-screenshot") {
+            if (c.arg.empty()) throw bad("'" + c.verb + "' needs a path");
+        } else if (c.verb == "set") {
+            if (c.arg.find('=') == std::string::npos) throw bad("'set' expects KEY=VALUE, got '" + c.arg + "'");
+        } else if (c.verb == "frames") {
+            size_t used = 0;
+            long v = -1;
+            try {
+                v = std::stol(c.arg, &used);
+            } catch (const std::exception&) {
+            }
+            if (c.arg.empty() || used != c.arg.size() || v < 0 || v > 1000000) throw bad("'frames' expects a count 0..1000000, got '" + c.arg + "'");
+            c.n = int(v);
+        } else if (c.verb == "size") {
+            try {
+                parse_size(c.arg, c.w, c.h);
+            } catch (const InputError&) {
+                throw bad("'size' expects WxH within 1..16384 per side (e.g. 1600x900), got '" + c.arg + "'");
+            }
+        } else if (c.verb == "wait" || c.verb == "quit") {
+            if (!c.arg.empty()) throw bad("'" + c.verb + "' takes no argument, got '" + c.arg + "'");
+        } else {
+            throw bad("unknown command '" + c.verb + "' (commands: " + kScriptVerbs + "; '#' starts a comment line)");
+        }
+        cmds.push_back(std::move(c));
+    }
+    return cmds;
+}
+
+// --frames N [--screenshot P] [--window-screenshot P] as a script.
+std::vector<ScriptCommand> frames_script(const GuiOptions& o) {
+    std::vector<ScriptCommand> cmds;
+    auto add = [&](std::string verb, std::string arg, int n = 0) {
+        ScriptCommand c;
+        c.where = "--frames";
+        c.verb = std::move(verb);
+        c.arg = std::move(arg);
+        c.n = n;
+        cmds.push_back(std::move(c));
+    };
+    add("frames", "", std::max(0, o.frames - 1));
+    add("wait", "");
+    add("frames", "", 1);  // the last frame counts once the evaluation is done
+    if (!o.screenshot.empty()) add("screenshot", o.screenshot);
+    if (!o.window_screenshot.empty()) add("window-screenshot", o.window_screenshot);
+    add("quit", "");
+    return cmds;
+}
+
+// [SECTION] GLFW, window and ImGui lifetimes
+std::string g_glfw_error;
+
+struct GlfwLibrary {
+    GlfwLibrary() {
+        glfwSetErrorCallback([](int code, const char* text) { g_glfw_error = std::string(text ? text : "") + " (GLFW error " + std::to_string(code) + ")"; });
+        if (!glfwInit())
+            throw InputError("gui: there is no display to open a window on (" + (g_glfw_error.empty() ? std::string("glfwInit failed") : g_glfw_error) +
+                             "). Render headless with `mesolab capture PRESET` instead, or run the window under a virtual display: "
+                             "`xvfb-run -a mesolab gui ...`");
+    }
+    ~GlfwLibrary() { glfwTerminate(); }
+    GlfwLibrary(const GlfwLibrary&) = delete;
+    GlfwLibrary& operator=(const GlfwLibrary&) = delete;
+};
+
+struct Window {
+    GLFWwindow* handle = nullptr;
+    int gl_major = 0, gl_minor = 0;
+    Window(int w, int h) {
+        for (auto [major, minor] : {std::pair{4, 5}, std::pair{4, 3}}) {
+            glfwDefaultWindowHints();
+            glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, major);
+            glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, minor);
+            glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+            glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+            handle = glfwCreateWindow(w, h, "mesolab", nullptr, nullptr);
+            if (handle) {
+                gl_major = major;
+                gl_minor = minor;
+                break;
+            }
+        }
+        if (!handle)
+            throw InputError("gui: cannot open a window with an OpenGL 4.3 core context (" + g_glfw_error +
+                             "). Render headless with `mesolab capture PRESET` instead");
+        glfwMakeContextCurrent(handle);
+    }
+    ~Window() {
+        if (handle) glfwDestroyWindow(handle);
+    }
+    Window(const Window&) = delete;
+    Window& operator=(const Window&) = delete;
+};
+
+void setup_style() {
+    ImGuiIO& io = ImGui::GetIO();
+    // DejaVu Sans when installed (fonts-dejavu-core), otherwise ImGui's built-in font.
+    for (const char* f : {"/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf", "/usr/share/fonts/TTF/DejaVuSans.ttf"}) {
+        std::error_code ec;
+        if (fs::is_regular_file(f, ec) && io.Fonts->AddFontFromFileTTF(f, 15.0f)) break;
+    }
+    if (io.Fonts->Fonts.empty()) io.Fonts->AddFontDefault();
+
+    ImGui::StyleColorsDark();
+    ImGuiStyle& s = ImGui::GetStyle();
+    s.WindowPadding = ImVec2(10, 8);
+    s.FramePadding = ImVec2(6, 3);
+    s.ItemSpacing = ImVec2(8, 5);
+    s.ItemInnerSpacing = ImVec2(5, 4);
+    s.IndentSpacing = 14;
+    s.ScrollbarSize = 12;
+    s.GrabMinSize = 9;
+    s.WindowRounding = 0;
+    s.ChildRounding = 3;
+    s.FrameRounding = 3;
+    s.PopupRounding = 3;
+    s.ScrollbarRounding = 3;
+    s.GrabRounding = 3;
+    s.TabRounding = 3;
+    s.WindowBorderSize = 1;
+    s.FrameBorderSize = 0;
+    s.WindowTitleAlign = ImVec2(0.0f, 0.5f);
+    s.WindowMenuButtonPosition = ImGuiDir_Right;
+
+    ImVec4* c = s.Colors;
+    const ImVec4 bg(0.105f, 0.110f, 0.120f, 1.f), panel(0.135f, 0.140f, 0.152f, 1.f), frame(0.190f, 0.196f, 0.212f, 1.f);
+    const ImVec4 accent(0.259f, 0.522f, 0.957f, 1.f), accent_hi(0.349f, 0.600f, 0.980f, 1.f);
+    c[ImGuiCol_Text] = ImVec4(0.90f, 0.91f, 0.93f, 1.f);
+    c[ImGuiCol_TextDisabled] = ImVec4(0.52f, 0.54f, 0.58f, 1.f);
+    c[ImGuiCol_WindowBg] = panel;
+    c[ImGuiCol_ChildBg] = ImVec4(0, 0, 0, 0);
+    c[ImGuiCol_PopupBg] = ImVec4(0.150f, 0.155f, 0.168f, 0.98f);
+    c[ImGuiCol_Border] = ImVec4(0.230f, 0.236f, 0.255f, 1.f);
+    c[ImGuiCol_FrameBg] = frame;
+    c[ImGuiCol_FrameBgHovered] = ImVec4(0.235f, 0.243f, 0.263f, 1.f);
+    c[ImGuiCol_FrameBgActive] = ImVec4(0.270f, 0.280f, 0.305f, 1.f);
+    c[ImGuiCol_TitleBg] = bg;
+    c[ImGuiCol_TitleBgActive] = ImVec4(0.125f, 0.130f, 0.142f, 1.f);
+    c[ImGuiCol_TitleBgCollapsed] = bg;
+    c[ImGuiCol_MenuBarBg] = bg;
+    c[ImGuiCol_ScrollbarBg] = ImVec4(0, 0, 0, 0);
+    c[ImGuiCol_CheckMark] = accent_hi;
+    c[ImGuiCol_SliderGrab] = accent;
+    c[ImGuiCol_SliderGrabActive] = accent_hi;
+    c[ImGuiCol_Button] = ImVec4(0.215f, 0.222f, 0.242f, 1.f);
+    c[ImGuiCol_ButtonHovered] = ImVec4(0.275f, 0.285f, 0.312f, 1.f);
+    c[ImGuiCol_ButtonActive] = accent;
+    c[ImGuiCol_Header] = ImVec4(0.190f, 0.198f, 0.218f, 1.f);
+    c[ImGuiCol_HeaderHovered] = ImVec4(0.245f, 0.255f, 0.282f, 1.f);
+    c[ImGuiCol_HeaderActive] = ImVec4(0.259f, 0.522f, 0.957f, 0.55f);
+    c[ImGuiCol_Separator] = c[ImGuiCol_Border];
+    c[ImGuiCol_ResizeGrip] = ImVec4(0, 0, 0, 0);
+    c[ImGuiCol_Tab] = frame;
+    c[ImGuiCol_TableHeaderBg] = ImVec4(0.165f, 0.172f, 0.188f, 1.f);
+    c[ImGuiCol_TableRowBgAlt] = ImVec4(1.f, 1.f, 1.f, 0.025f);
+    c[ImGuiCol_PlotHistogram] = accent;
+    c[ImGuiCol_TextSelectedBg] = ImVec4(0.259f, 0.522f, 0.957f, 0.35f);
+    c[ImGuiCol_ModalWindowDimBg] = ImVec4(0.f, 0.f, 0.f, 0.45f);
+}
+
+struct ImGuiSession {
+    ImGuiSession(GLFWwindow* w) {
+        IMGUI_CHECKVERSION();
+        ImGui::CreateContext();
+        ImGui::GetIO().IniFilename = nullptr;  // deterministic layout, no imgui.ini next to the user's files
+        ImGui::GetIO().LogFilename = nullptr;
+        setup_style();
+        if (!ImGui_ImplGlfw_InitForOpenGL(w, true)) throw std::runtime_error("ImGui GLFW backend failed to initialise");
+        if (!ImGui_ImplOpenGL3_Init("#version 430")) throw std::runtime_error("ImGui OpenGL3 backend failed to initialise");
+    }
+    ~ImGuiSession() {
+        ImGui_ImplOpenGL3_Shutdown();
+        ImGui_ImplGlfw_Shutdown();
+        ImGui::DestroyContext();
+    }
+    ImGuiSession(const ImGuiSession&) = delete;
+    ImGuiSession& operator=(const ImGuiSession&) = delete;
+};
+
+// [SECTION] The application
+class Gui {
+public:
+    Gui(const GuiOptions& o, GLFWwindow* window, std::vector<ScriptCommand> script, bool scripted, std::optional<Scene> initial,
+        std::string initial_file, std::string initial_error);
+    int run();
+
+private:
+    enum class Modal { None, Open, SaveAs, Close };
+    enum class ErrorOrigin { Action, Evaluation, Render };
+
+    // Frame phases
+    void wait_or_poll();
+    void handle_drops();
+    void poll_evaluator();
+    void step_script();
+    bool run_command(ScriptCommand& c);
+    void build_ui();
+    void after_ui();
+    void present();
+
+    // UI pieces
+    void layout_windows();
+    void menu_bar();
+    void viewport_window();
+    void viewport_overlays(ImVec2 p0, ImVec2 size);
+    void camera_input(ImVec2 size);
+    void side_windows();
+    void timings_window();
+    void status_bar();
+    void modals();
+    void shortcuts();
+    void handle(const panels::PresetRequest& r);
+
+    // Actions (throw InputError; callers report)
+    void load(const std::string& path);
+    void save_to(const std::string& path);
+    void paste();
+    void screenshot_viewport(const std::string& path);
+    void capture_window(const std::string& path);
+    std::string screenshot_path(bool window) const;
+
+    // State changes
+    void on_scene_changed();
+    void render_now();
+    void update_display();
+    bool settled() const;
+    bool modified() const { return !(scene_ == saved_scene_); }
+    void report(const std::string& msg, bool input_error, ErrorOrigin origin);
+    template <class F>
+    void attempt(F&& f, ErrorOrigin origin = ErrorOrigin::Action);
+    void toast(std::string text);
+    void update_title();
+
+    GuiOptions opts_;
+    GLFWwindow* window_;
+    bool scripted_;
+    std::unique_ptr<gpu::Renderer> renderer_;
+    std::unique_ptr<gpu::DisplayPass> display_;
+    std::string gl_renderer_;
+    Evaluator evaluator_;
+
+    // Scene
+    Scene scene_, prev_scene_, saved_scene_;
+    std::string current_file_;
+    int selected_object_ = 0;
+    bool scene_pending_ = true;  // first frame: evaluate the initial scene
+    panels::PanelRegistry technique_panels_;
+    panels::PresetBrowser presets_;
+
+    // Evaluation
+    std::optional<Evaluation> eval_;
+    StageKeys eval_keys_, inflight_keys_, failed_keys_;
+    uint64_t wanted_id_ = 0;
+    std::vector<StageRun> shown_runs_;
+    std::string eval_note_;
+    double last_eval_ms_ = 0;
+
+    // Rendering and display
+    Scene render_scene_, rendered_scene_;
+    bool need_render_ = false, have_frame_ = false, display_stale_ = false;
+    ivec2 view_size_{0, 0}, rendered_view_{0, 0}, frame_px_{0, 0};
+    std::string aov_ = "radiance";
+    float exposure_ev_ = 0.f;
+    double last_render_ms_ = 0;
+
+    // UI
+    std::string error_;
+    int error_count_ = 0;
+    std::string toast_;
+    Clock::time_point toast_t0_{};
+    Modal open_modal_ = Modal::None;
+    char modal_path_[1024] = "";
+    bool close_confirmed_ = false, quit_ = false;
+    ImVec2 last_display_{0, 0};
+    bool relayout_ = true;
+    std::string tech_windows_;  // techniques with a window, to re-lay out when it changes
+    std::vector<std::string> dropped_;
+    std::string title_;
+    int busy_frames_ = 3;
+    std::vector<std::string> pending_loads_;
+
+    // Window screenshot: taken after ImGui drew, `settle` frames after the request.
+    std::string window_shot_path_;
+    int window_shot_settle_ = 0;
+    bool window_shot_done_ = false;
+    std::string window_shot_error_;
+
+    // Script
+    std::vector<ScriptCommand> script_;
+    size_t pc_ = 0;
+    std::optional<std::string> script_error_;
+    bool script_input_error_ = false;
+};
+
+Gui::Gui(const GuiOptions& o, GLFWwindow* window, std::vector<ScriptCommand> script, bool scripted, std::optional<Scene> initial,
+         std::string initial_file, std::string initial_error)
+    : opts_(o), window_(window), scripted_(scripted), script_(std::move(script)) {
+    renderer_ = std::make_unique<gpu::Renderer>();
+    display_ = std::make_unique<gpu::DisplayPass>();
+    gl_renderer_ = gpu::query_gl_info("glfw").renderer;
+    panels::register_technique_panels(technique_panels_);
+    scene_ = initial ? std::move(*initial) : default_scene();
+    saved_scene_ = scene_;
+    prev_scene_ = scene_;
+    current_file_ = initial ? initial_file : "";
+    if (!initial_error.empty()) report(initial_error, true, ErrorOrigin::Action);
+    glfwSetWindowUserPointer(window_, this);
+    glfwSetDropCallback(window_, [](GLFWwindow* w, int count, const char** paths) {
+        auto* self = static_cast<Gui*>(glfwGetWindowUserPointer(w));
+        for (int i = 0; i < count; ++i) self->dropped_.emplace_back(paths[i]);
+    });
+    glfwSwapInterval(scripted_ ? 0 : 1);
+    update_title();
+}
+
+// [SECTION] Errors and notifications
+void Gui::report(const std::string& msg, bool input_error, ErrorOrigin origin) {
+    if (scripted_) {
+        if (!script_error_) {
+            const std::string where = pc_ < script_.size() ? script_[pc_].where + ": " : "";
+            script_error_ = where + msg;
+            script_input_error_ = input_error;
+        }
+        return;
+    }
+    std::fprintf(stderr, "mesolab: %s%s\n", origin == ErrorOrigin::Evaluation ? "evaluation failed: " : "", msg.c_str());
+    error_ = msg;
+    ++error_count_;
+}
+
+template <class F>
+void Gui::attempt(F&& f, ErrorOrigin origin) {
+    try {
+        f();
+    } catch (const InputError& e) {
+        report(e.what(), true, origin);
+    } catch (const std::exception& e) {
+        report(e.what(), false, origin);
+    }
+}
+
+void Gui::toast(std::string text) {
+    toast_ = std::move(text);
+    toast_t0_ = Clock::now();
+}
+
+void Gui::update_title() {
+    const std::string t = "mesolab - " + (current_file_.empty() ? std::string("untitled") : current_file_) + (modified() ? " *" : "");
+    if (t != title_) {
+        title_ = t;
+        glfwSetWindowTitle(window_, t.c_str());
+    }
+}
+
+// [SECTION] Actions
+void Gui::load(const std::string& path) {
+    Scene s = load_preset(path);  // InputError names the file; the old scene stays
+    scene_ = s;
+    saved_scene_ = std::move(s);
+    current_file_ = path;
+    selected_object_ = 0;
+    std::strncpy(presets_.save_as, path.c_str(), sizeof presets_.save_as - 1);
+    if (!scripted_) toast("Loaded " + path);
+}
+
+void Gui::save_to(const std::string& path) {
+    if (path.empty()) throw InputError("save: no file name given");
+    save_preset(scene_, path);
+    // Reload, so that relative paths are rebased onto the new file's folder.
+    Scene s = load_preset(path);
+    scene_ = s;
+    saved_scene_ = std::move(s);
+    current_file_ = path;
+    presets_.rescan();
+    toast("Saved " + path);
+}
+
+void Gui::paste() {
+    const char* text = ImGui::GetClipboardText();
+    if (!text || !*text) throw InputError("clipboard: empty (copy a preset's JSON first)");
+    json j;
+    try {
+        j = json::parse(text);
+    } catch (const json::parse_error& e) {
+        throw InputError(std::string("clipboard: invalid JSON (") + e.what() + ")");
+    }
+    const std::string base = scene_.base_dir.empty() ? fs::current_path().string() : scene_.base_dir;
+    scene_ = scene_from_json(j, "clipboard", base);
+    current_file_.clear();
+    selected_object_ = 0;
+    toast("Pasted a preset from the clipboard (untitled)");
+}
+
+std::string Gui::screenshot_path(bool window) const {
+    return "screenshots/" + file_safe(scene_.name) + (window ? "-window-" : "-") + timestamp() + ".png";
+}
+
+void Gui::screenshot_viewport(const std::string& path) {
+    if (!have_frame_) throw InputError("screenshot " + path + ": no frame rendered yet");
+    const Frame f = renderer_->read_frame();
+    write_png_srgb(path, f.aov("radiance"));
+}
+
+void Gui::capture_window(const std::string& path) {
+    int w = 0, h = 0;
+    glfwGetFramebufferSize(window_, &w, &h);
+    if (w < 1 || h < 1) throw InputError("window-screenshot " + path + ": the window has no area");
+    std::vector<uint8_t> px(size_t(w) * size_t(h) * 4);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+    glReadBuffer(GL_BACK);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, px.data());
+    gpu::check_gl("window screenshot");
+    for (size_t i = 3; i < px.size(); i += 4) px[i] = 255;  // the default framebuffer's alpha is meaningless
+    write_png_rgba8(path, w, h, px.data(), true);
+}
+
+void Gui::handle(const panels::PresetRequest& r) {
+    using K = panels::PresetRequest::Kind;
+    switch (r.kind) {
+        case K::None: break;
+        case K::Load: attempt([&] { load(r.path); }); break;
+        case K::Save:
+            if (current_file_.empty()) {
+                open_modal_ = Modal::SaveAs;
+                std::strncpy(modal_path_, presets_.save_as, sizeof modal_path_ - 1);
+            } else {
+                attempt([&] { save_to(current_file_); });
+            }
+            break;
+        case K::SaveAs: attempt([&] { save_to(r.path); }); break;
+        case K::Copy:
+            ImGui::SetClipboardText(scene_to_text(scene_).c_str());
+            toast("Copied the preset JSON to the clipboard");
+            break;
+        case K::Paste: attempt([&] { paste(); }); break;
+    }
+}
+
+// [SECTION] Scene changes: redraw or evaluate
+void Gui::on_scene_changed() {
+    StageKeys keys = stage_keys(scene_);
+    if (eval_ && keys == eval_keys_) {
+        // Only redraw-cost edits since the last completed evaluation: no stage runs.
+        if (evaluator_.busy()) evaluator_.cancel();  // an older edit's evaluation is not needed any more
+        inflight_keys_.clear();
+        eval_note_.clear();
+        render_scene_ = scene_;
+        need_render_ = true;
+        return;
+    }
+    if (evaluator_.busy() && keys == inflight_keys_) return;  // the running evaluation computes exactly this
+    if (!evaluator_.busy() && keys == failed_keys_) return;   // these inputs just failed; the error is shown
+    inflight_keys_ = keys;
+    wanted_id_ = evaluator_.submit(scene_, std::move(keys));
+}
+
+void Gui::poll_evaluator() {
+    while (auto o = evaluator_.poll()) {
+        if (o->id != wanted_id_) continue;  // superseded by a newer edit
+        inflight_keys_.clear();
+        using K = Evaluator::Outcome::Kind;
+        if (o->kind == K::Done) {
+            eval_ = std::move(o->eval);
+            eval_keys_ = o->keys;
+            failed_keys_.clear();
+            shown_runs_ = eval_->runs;
+            eval_note_.clear();
+            last_eval_ms_ = o->ms;
+            // Edits made meanwhile that only cost a redraw are shown at once.
+            render_scene_ = stage_keys(scene_) == o->keys ? scene_ : std::move(o->scene);
+            need_render_ = true;
+            if (!error_.empty() && !scripted_) error_.clear();
+        } else if (o->kind == K::Failed) {
+            failed_keys_ = o->keys;
+            eval_note_ = "The last evaluation failed" + (o->stage.empty() || o->stage == "starting" ? std::string() : " after " + o->stage) + ": " + o->error +
+                         (have_frame_ ? "  (showing the last good frame)" : "");
+            report(o->error, o->input_error, ErrorOrigin::Evaluation);
+        } else {
+            eval_note_ = "Evaluation cancelled; showing the last completed frame. Edit a parameter or use Re-evaluate to start again.";
+        }
+    }
+}
+
+void Gui::render_now() {
+    need_render_ = false;
+    rendered_view_ = view_size_;
+    const ivec2 req{std::max(16, view_size_.x), std::max(16, view_size_.y)};
+    const ivec2 size = frame_size(render_scene_, *eval_, req);
+    const auto t0 = Clock::now();
+    renderer_->render(render_scene_, *eval_, size.x, size.y);
+    last_render_ms_ = ms_since(t0);
+    rendered_scene_ = render_scene_;
+    frame_px_ = size;
+    have_frame_ = true;
+    update_display();
+}
+
+void Gui::update_display() {
+    display_stale_ = false;
+    const auto layout = Registry::instance().aovs(rendered_scene_);
+    auto it = std::find_if(layout.begin(), layout.end(), [&](const AovDecl& a) { return a.name == aov_; });
+    if (it == layout.end()) it = layout.begin();  // radiance
+    const GLuint tex = renderer_->aov_texture(it->name);
+    const bool normal = it->name == "normal";
+    display_->run(tex, frame_px_.x, frame_px_.y, normal ? gpu::DisplayMode::Normal : gpu::DisplayMode::Color, it->channels,
+                  it->name == "radiance" ? std::exp2(exposure_ev_) : 1.f);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+bool Gui::settled() const {
+    return evaluator_.idle() && !scene_pending_ && scene_ == prev_scene_ && !need_render_ && !display_stale_ && have_frame_ &&
+           rendered_view_ == view_size_;
+}
+
+// [SECTION] Frame loop
+void Gui::wait_or_poll() {
+    const bool toast_on = !toast_.empty() && seconds_since(toast_t0_) < 4.0;
+    if (scripted_ || busy_frames_ > 0 || evaluator_.busy() || toast_on || need_render_ || ImGui::IsAnyMouseDown() || !window_shot_path_.empty()) {
+        glfwPollEvents();
+        if (busy_frames_ > 0) --busy_frames_;
+    } else {
+        glfwWaitEventsTimeout(0.5);  // idle: wake on input, or twice a second (text cursor)
+        busy_frames_ = 2;            // let ImGui settle after an event
+    }
+}
+
+void Gui::handle_drops() {
+    if (dropped_.empty()) return;
+    std::vector<std::string> paths;
+    paths.swap(dropped_);
+    for (const auto& p : paths) {
+        if (fs::path(p).extension() == ".json") {
+            attempt([&] { load(p); });
+            return;
+        }
+    }
+    report("dropped " + paths.front() + ": not a preset (drop a .json file)", true, ErrorOrigin::Action);
+}
+
+void Gui::step_script() {
+    while (pc_ < script_.size() && !script_error_) {
+        ScriptCommand& c = script_[pc_];
+        if (!c.started) {
+            c.started = true;
+            c.t0 = Clock::now();
+            c.remaining = c.n;
+        }
+        bool done = false;
+        try {
+            done = run_command(c);
+        } catch (const InputError& e) {
+            report(e.what(), true, ErrorOrigin::Action);
+            return;
+        } catch (const std::exception& e) {
+            report(e.what(), false, ErrorOrigin::Action);
+            return;
+        }
+        if (!done) {
+            const double cap = c.verb == "size" ? kResizeWaitCapS : kScriptWaitCapS;
+            if (seconds_since(c.t0) > cap) {
+                report("'" + c.verb + "' gave up after " + std::to_string(int(cap)) + " s (evaluation or window resize did not finish)", false, ErrorOrigin::Action);
+            }
+            return;
+        }
+        if (quit_) return;
+        ++pc_;
+    }
+    if (pc_ >= script_.size()) quit_ = true;
+}
+
+// Returns true when the command is complete, false to be called again next frame.
+bool Gui::run_command(ScriptCommand& c) {
+    if (c.verb == "load") {
+        std::string path = c.arg;
+        std::error_code ec;
+        // Relative to the working directory, else to the script's folder.
+        if (fs::path(path).is_relative() && !fs::exists(path, ec) && !opts_.script.empty()) {
+            const fs::path alt = fs::path(opts_.script).parent_path() / path;
+            if (fs::exists(alt, ec)) path = alt.string();
+        }
+        load(path);
+        return true;
+    }
+    if (c.verb == "set") {
+        apply_set(scene_, c.arg);
+        return true;
+    }
+    if (c.verb == "frames") {
+        if (c.remaining <= 0) return true;
+        --c.remaining;
+        return false;
+    }
+    if (c.verb == "wait") return settled();
+    if (c.verb == "screenshot") {
+        if (!settled()) return false;
+        screenshot_viewport(c.arg);
+        return true;
+    }
+    if (c.verb == "window-screenshot") {
+        if (!c.requested) {
+            if (!settled()) return false;
+            c.requested = true;
+            window_shot_path_ = c.arg;
+            window_shot_settle_ = 2;  // let the panels show the final values
+            window_shot_done_ = false;
+            return false;
+        }
+        if (!window_shot_error_.empty()) throw InputError(window_shot_error_);
+        return window_shot_done_;
+    }
+    if (c.verb == "size") {
+        if (!c.requested) {
+            c.requested = true;
+            glfwSetWindowSize(window_, c.w, c.h);
+            return false;
+        }
+        int w = 0, h = 0;
+        glfwGetFramebufferSize(window_, &w, &h);
+        return w == c.w && h == c.h;
+    }
+    if (c.verb == "quit") {
+        quit_ = true;
+        return true;
+    }
+    throw std::logic_error("script command " + c.verb);
+}
+
+int Gui::run() {
+    while (!quit_) {
+        wait_or_poll();
+        const auto t0 = Clock::now();
+        if (glfwWindowShouldClose(window_)) {
+            if (scripted_) {
+                if (!script_error_) report("the window was closed before the script finished", false, ErrorOrigin::Action);
+                break;
+            }
+            if (modified() && !close_confirmed_) {
+                glfwSetWindowShouldClose(window_, GLFW_FALSE);
+                open_modal_ = Modal::Close;
+            } else {
+                break;
+            }
+        }
+        handle_drops();
+        poll_evaluator();
+        if (scripted_) step_script();
+        if (script_error_ || quit_) break;
+        build_ui();
+        after_ui();
+        present();
+        Profiler::global().record("gui.frame", ms_since(t0));
+        if (script_error_) break;
+    }
+    if (script_error_) {
+        if (script_input_error_) throw InputError(*script_error_);
+        throw std::runtime_error(*script_error_);
+    }
+    return 0;
+}
+
+void Gui::build_ui() {
+    const auto t0 = Clock::now();
+    ImGui_ImplOpenGL3_NewFrame();
+    ImGui_ImplGlfw_NewFrame();
+    ImGui::NewFrame();
+    try {
+        layout_windows();
+        menu_bar();
+        viewport_window();
+        side_windows();
+        timings_window();
+        status_bar();
+        modals();
+        shortcuts();
+    } catch (const std::exception& e) {
+        // Close whatever the exception left open, then carry on with the next frame.
+        ImGui::ErrorCheckEndFrameRecover([](void*, const char*, ...) {}, nullptr);
+        report(e.what(), dynamic_cast<const InputError*>(&e) != nullptr, ErrorOrigin::Action);
+    }
+    ImGui::Render();
+    Profiler::global().record("gui.ui", ms_since(t0));
+}
+
+void Gui::after_ui() {
+    if (scene_pending_ || !(scene_ == prev_scene_)) {
+        scene_pending_ = false;
+        prev_scene_ = scene_;
+        attempt([&] { on_scene_changed(); });
+    }
+    if (eval_ && (need_render_ || rendered_view_ != view_size_)) {
+        attempt([&] { render_now(); }, ErrorOrigin::Render);
+    } else if (have_frame_ && display_stale_) {
+        attempt([&] { update_display(); }, ErrorOrigin::Render);
+    }
+    update_title();
+}
+
+void Gui::present() {
+    const auto t0 = Clock::now();
+    int w = 0, h = 0;
+    glfwGetFramebufferSize(window_, &w, &h);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glViewport(0, 0, w, h);
+    glClearColor(0.08f, 0.085f, 0.095f, 1.f);
+    glClear(GL_COLOR_BUFFER_BIT);
+    ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+    if (!window_shot_path_.empty() && window_shot_settle_-- <= 0) {
+        const std::string path = window_shot_path_;
+        window_shot_path_.clear();
+        try {
+            capture_window(path);
+            window_shot_done_ = true;
+            if (!scripted_) toast("Saved " + path);
+        } catch (const std::exception& e) {
+            window_shot_error_ = e.what();
+            if (!scripted_) report(e.what(), true, ErrorOrigin::Action);
+        }
+    }
+    glfwSwapBuffers(window_);
+    Profiler::global().record("gui.draw", ms_since(t0));
+}
+
+// [SECTION] Layout
+void Gui::layout_windows() {
+    const ImVec2 ds = ImGui::GetIO().DisplaySize;
+    std::string techs;
+    for (const auto& e : technique_panels_.entries)
+        if (scene_.uses_technique(e.technique)) techs += e.technique + ";";
+    if (ds.x != last_display_.x || ds.y != last_display_.y || techs != tech_windows_) relayout_ = true;
+    last_display_ = ds;
+    tech_windows_ = techs;
+}
+
+namespace layout {
+struct Rects {
+    ImVec2 view_pos, view_size, timings_pos, timings_size;
+    float side_x, side_w, top, body_h;
+};
+Rects compute(ImVec2 ds) {
+    Rects r;
+    const float bar = ImGui::GetFrameHeight();
+    r.top = bar;
+    r.body_h = std::max(100.f, ds.y - 2.f * bar);
+    r.side_w = std::clamp(ds.x * 0.27f, std::min(340.f, ds.x * 0.5f), 520.f);
+    r.side_x = ds.x - r.side_w;
+    const float timings_h = std::clamp(r.body_h * 0.27f, std::min(150.f, r.body_h * 0.4f), 340.f);
+    r.view_pos = ImVec2(0, r.top);
+    r.view_size = ImVec2(r.side_x, r.body_h - timings_h);
+    r.timings_pos = ImVec2(0, r.top + r.body_h - timings_h);
+    r.timings_size = ImVec2(r.side_x, timings_h);
+    return r;
+}
+}  // namespace layout
+
+void Gui::menu_bar() {
+    if (!ImGui::BeginMainMenuBar()) return;
+    if (ImGui::BeginMenu("File")) {
+        if (ImGui::MenuItem("Open preset...", "Ctrl+O")) open_modal_ = Modal::Open;
+        if (ImGui::MenuItem("Save", "Ctrl+S")) handle({panels::PresetRequest::Kind::Save, current_file_});
+        if (ImGui::MenuItem("Save as...", "Ctrl+Shift+S")) {
+            open_modal_ = Modal::SaveAs;
+            std::strncpy(modal_path_, presets_.save_as, sizeof modal_path_ - 1);
+        }
+        ImGui::Separator();
+        if (ImGui::MenuItem("Copy preset JSON to clipboard")) handle({panels::PresetRequest::Kind::Copy, ""});
+        if (ImGui::MenuItem("Paste preset JSON from clipboard")) handle({panels::PresetRequest::Kind::Paste, ""});
+        ImGui::Separator();
+        if (ImGui::MenuItem("Quit", "Ctrl+Q")) glfwSetWindowShouldClose(window_, GLFW_TRUE);
+        ImGui::EndMenu();
+    }
+    if (ImGui::BeginMenu("View")) {
+        ImGui::TextDisabled("AOV shown");
+        for (const auto& a : Registry::instance().aovs(have_frame_ ? rendered_scene_ : scene_)) {
+            if (ImGui::MenuItem(a.name.c_str(), nullptr, aov_ == a.name)) {
+                aov_ = a.name;
+                display_stale_ = true;
+            }
+            if (ImGui::IsItemHovered() && !a.help.empty()) ImGui::SetTooltip("%s", a.help.c_str());
+        }
+        ImGui::Separator();
+        ImGui::SetNextItemWidth(ImGui::GetFontSize() * 9.f);
+        if (ImGui::SliderFloat("Exposure (EV)", &exposure_ev_, -8.f, 8.f, "%+.1f")) display_stale_ = true;
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("Display only: scales the radiance shown; screenshots keep the rendered values");
+        if (ImGui::MenuItem("Reset exposure", nullptr, false, exposure_ev_ != 0.f)) {
+            exposure_ev_ = 0.f;
+            display_stale_ = true;
+        }
+        ImGui::Separator();
+        if (ImGui::MenuItem("Reset layout")) relayout_ = true;
+        ImGui::EndMenu();
+    }
+    if (ImGui::BeginMenu("Screenshot")) {
+        if (ImGui::MenuItem("Viewport", "F12", false, have_frame_)) {
+            attempt([&] {
+                const std::string p = screenshot_path(false);
+                screenshot_viewport(p);
+                toast("Saved " + p);
+            });
+        }
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("The radiance AOV of the current frame, 8-bit sRGB PNG, in screenshots/");
+        if (ImGui::MenuItem("Window", "Shift+F12")) {
+            window_shot_path_ = screenshot_path(true);
+            window_shot_settle_ = 1;  // next frame, once this menu is closed
+        }
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("The whole window with its panels, PNG, in screenshots/");
+        ImGui::EndMenu();
+    }
+    const char* version = version_string();
+    const float w = ImGui::CalcTextSize(version).x + ImGui::CalcTextSize("mesolab ").x;
+    ImGui::SameLine(ImGui::GetWindowWidth() - w - ImGui::GetStyle().WindowPadding.x * 2.f);
+    ImGui::TextDisabled("mesolab %s", version);
+    ImGui::EndMainMenuBar();
+}
+
+void Gui::viewport_window() {
+    const layout::Rects r = layout::compute(ImGui::GetIO().DisplaySize);
+    const ImGuiCond cond = relayout_ ? ImGuiCond_Always : ImGuiCond_FirstUseEver;
+    ImGui::SetNextWindowPos(r.view_pos, cond);
+    ImGui::SetNextWindowSize(r.view_size, cond);
+    ImGui::PushStyleVar(ImGuiStyleVar_WindowPadding, ImVec2(0, 0));
+    const bool open = ImGui::Begin("Viewport", nullptr, ImGuiWindowFlags_NoScrollbar | ImGuiWindowFlags_NoScrollWithMouse | ImGuiWindowFlags_NoCollapse);
+    ImGui::PopStyleVar();
+    if (open) {
+        const ImVec2 p0 = ImGui::GetCursorScreenPos();
+        const ImVec2 avail = ImGui::GetContentRegionAvail();
+        if (avail.x >= 1.f && avail.y >= 1.f) {
+            view_size_ = {std::max(16, int(avail.x)), std::max(16, int(avail.y))};
+            ImDrawList* dl = ImGui::GetWindowDrawList();
+            dl->AddRectFilled(p0, ImVec2(p0.x + avail.x, p0.y + avail.y), IM_COL32(22, 23, 26, 255));
+            if (have_frame_ && display_->valid()) {
+                // Fit the frame (texture mode may have its own size), centred, aspect kept.
+                const float sx = avail.x / float(frame_px_.x), sy = avail.y / float(frame_px_.y);
+                const float s = std::min(sx, sy);
+                const ImVec2 size(std::floor(float(frame_px_.x) * s), std::floor(float(frame_px_.y) * s));
+                ImGui::SetCursorScreenPos(ImVec2(std::floor(p0.x + (avail.x - size.x) * 0.5f), std::floor(p0.y + (avail.y - size.y) * 0.5f)));
+                ImGui::Image(texture_id(display_->texture()), size, ImVec2(0, 1), ImVec2(1, 0));  // GL rows are bottom-up
+            } else {
+                const char* msg = evaluator_.busy() ? "Evaluating stages..." : "No frame yet";
+                const ImVec2 ts = ImGui::CalcTextSize(msg);
+                dl->AddText(ImVec2(p0.x + (avail.x - ts.x) * 0.5f, p0.y + (avail.y - ts.y) * 0.5f), IM_COL32(150, 153, 160, 255), msg);
+            }
+            ImGui::SetCursorScreenPos(p0);
+            camera_input(avail);
+            viewport_overlays(p0, avail);
+        }
+    }
+    ImGui::End();
+}
+
+void Gui::camera_input(ImVec2 size) {
+    ImGui::InvisibleButton("##viewport_input", size, ImGuiButtonFlags_MouseButtonLeft | ImGuiButtonFlags_MouseButtonRight | ImGuiButtonFlags_MouseButtonMiddle);
+    const bool hovered = ImGui::IsItemHovered(), active = ImGui::IsItemActive();
+    ImGuiIO& io = ImGui::GetIO();
+    ParamTable& cam = scene_.camera;
+    const bool texture_mode = cam.get_string("mode") == "texture";
+    const ImVec2 d = io.MouseDelta;
+    if (active && (d.x != 0.f || d.y != 0.f)) {
+        if (ImGui::IsMouseDown(ImGuiMouseButton_Left)) {
+            // Orbit: THETA from +z (clamped off the poles), PHI around z.
+            vec2 o = cam.get_vec2("orbit");
+            const float theta = std::clamp(o.x - 0.35f * d.y, 0.5f, 179.5f);
+            float phi = std::fmod(o.y - 0.35f * d.x, 360.f);
+            if (phi > 180.f) phi -= 360.f;
+            if (phi < -180.f) phi += 360.f;
+            cam.set("orbit", std::array<double, 2>{theta, phi});
+        } else if (!texture_mode && (ImGui::IsMouseDown(ImGuiMouseButton_Right) || ImGui::IsMouseDown(ImGuiMouseButton_Middle))) {
+            // Pan the target in the view plane, one pixel = one pixel's footprint at the target.
+            const vec2 o = cam.get_vec2("orbit");
+            const vec3 dir = direction_from_degrees(o.x, o.y);  // target -> eye
+            const vec3 up0 = std::fabs(dir.z) > 0.999f ? vec3(0.f, 1.f, 0.f) : vec3(0.f, 0.f, 1.f);  // as make_camera
+            const vec3 right = glm::normalize(glm::cross(up0, dir));
+            const vec3 up = glm::cross(dir, right);
+            const float dist = float(cam.get_float("distance"));
+            const float px = 2.f * dist * std::tan(radians(float(cam.get_float("fov"))) * 0.5f) / std::max(1.f, size.y);
+            const vec3 t = cam.get_vec3("target") - right * (d.x * px) + up * (d.y * px);
+            auto clampc = [](float v) { return std::clamp(double(v), -1e6, 1e6); };
+            cam.set("target", std::array<double, 3>{clampc(t.x), clampc(t.y), clampc(t.z)});
+        }
+    }
+    if (hovered && io.MouseWheel != 0.f && !texture_mode) {
+        const double dist = cam.get_float("distance") * std::pow(1.1, -double(io.MouseWheel));
+        const ParamDecl* dd = cam.group().find("distance");
+        cam.set("distance", std::clamp(dist, dd->min, dd->max));
+    }
+    if (hovered && !active && !io.WantTextInput) ImGui::SetMouseCursor(ImGuiMouseCursor_Hand);
+}
+
+void Gui::viewport_overlays(ImVec2 p0, ImVec2 size) {
+    ImDrawList* dl = ImGui::GetWindowDrawList();
+    const float pad = 8.f;
+    float y = p0.y + pad;
+
+    // Error bar: the last error, the frame behind it stays the last good one.
+    if (!error_.empty()) {
+        const float w = size.x - 2.f * pad;
+        const float wrap = w - 150.f;
+        const float text_h = std::min(ImGui::CalcTextSize(error_.c_str(), nullptr, false, wrap).y, ImGui::GetTextLineHeight() * 6.f);
+        const float h = text_h + ImGui::GetStyle().WindowPadding.y * 2.f + 2.f;
+        ImGui::SetCursorScreenPos(ImVec2(p0.x + pad, y));
+        ImGui::PushStyleColor(ImGuiCol_ChildBg, IM_COL32(110, 32, 32, 235));
+        ImGui::PushStyleColor(ImGuiCol_Border, IM_COL32(200, 70, 60, 255));
+        ImGui::PushStyleVar(ImGuiStyleVar_WindowPadding, ImVec2(10, 6));
+        if (ImGui::BeginChild("##error_bar", ImVec2(w, h), true, ImGuiWindowFlags_NoScrollbar)) {
+            ImGui::PushTextWrapPos(wrap);
+            ImGui::TextUnformatted(error_.c_str());
+            ImGui::PopTextWrapPos();
+            ImGui::SameLine(w - 140.f);
+            ImGui::SetCursorPosY(ImGui::GetStyle().WindowPadding.y);
+            if (error_count_ > 1) {
+                ImGui::TextDisabled("x%d", error_count_);
+                ImGui::SameLine();
+            }
+            if (ImGui::SmallButton("Copy")) ImGui::SetClipboardText(error_.c_str());
+            ImGui::SameLine();
+            if (ImGui::SmallButton("Dismiss")) {
+                error_.clear();
+                error_count_ = 0;
+            }
+        }
+        ImGui::EndChild();
+        ImGui::PopStyleVar();
+        ImGui::PopStyleColor(2);
+        y += h + pad;
+    }
+
+    // Progress of a running evaluation, with Cancel.
+    const Evaluator::Progress pr = evaluator_.progress();
+    if (pr.running) {
+        ImGui::SetCursorScreenPos(ImVec2(p0.x + pad, y));
+        ImGui::PushStyleColor(ImGuiCol_ChildBg, IM_COL32(28, 30, 34, 230));
+        const float h = ImGui::GetFrameHeight() * 2.f + ImGui::GetStyle().WindowPadding.y * 2.f + ImGui::GetStyle().ItemSpacing.y;
+        if (ImGui::BeginChild("##progress", ImVec2(std::min(380.f, size.x - 2.f * pad), h), true, ImGuiWindowFlags_NoScrollbar)) {
+            ImGui::Text("Evaluating  %s", pr.stage.c_str());
+            ImGui::SameLine(ImGui::GetContentRegionMax().x - ImGui::CalcTextSize("00.0 s").x);
+            ImGui::TextDisabled("%.1f s", pr.seconds);
+            char label[32];
+            std::snprintf(label, sizeof label, "%.0f%%", 100.0 * pr.fraction);
+            ImGui::ProgressBar(float(pr.fraction), ImVec2(-ImGui::CalcTextSize("Cancel").x - 24.f, 0), label);
+            ImGui::SameLine();
+            if (ImGui::Button("Cancel")) {
+                evaluator_.cancel();
+                inflight_keys_.clear();
+                eval_note_ = "Evaluation cancelled; showing the last completed frame. Edit a parameter or use Re-evaluate to start again.";
+            }
+        }
+        ImGui::EndChild();
+        ImGui::PopStyleColor();
+    }
+
+    // Frame info, top right.
+    if (have_frame_) {
+        char info[160];
+        std::snprintf(info, sizeof info, "%dx%d  %s  %.1f ms", frame_px_.x, frame_px_.y, aov_.c_str(), last_render_ms_);
+        const ImVec2 ts = ImGui::CalcTextSize(info);
+        const ImVec2 a(p0.x + size.x - ts.x - pad - 8.f, p0.y + pad + (error_.empty() ? 0.f : y - p0.y - pad));
+        dl->AddRectFilled(ImVec2(a.x - 6.f, a.y - 3.f), ImVec2(a.x + ts.x + 6.f, a.y + ts.y + 3.f), IM_COL32(15, 16, 18, 170), 3.f);
+        dl->AddText(a, IM_COL32(200, 203, 210, 255), info);
+    }
+
+    // Toast, bottom left, fading out.
+    if (!toast_.empty()) {
+        const double t = seconds_since(toast_t0_);
+        if (t > 4.0) {
+            toast_.clear();
+        } else {
+            const float alpha = float(std::clamp(4.0 - t, 0.0, 1.0));
+            const ImVec2 ts = ImGui::CalcTextSize(toast_.c_str());
+            const ImVec2 a(p0.x + pad + 6.f, p0.y + size.y - pad - ts.y - 6.f);
+            dl->AddRectFilled(ImVec2(a.x - 8.f, a.y - 5.f), ImVec2(a.x + ts.x + 8.f, a.y + ts.y + 5.f), IM_COL32(40, 90, 170, int(220 * alpha)), 4.f);
+            dl->AddText(a, IM_COL32(255, 255, 255, int(255 * alpha)), toast_.c_str());
+        }
+    }
+}
+
+void Gui::side_windows() {
+    const layout::Rects r = layout::compute(ImGui::GetIO().DisplaySize);
+    const ImGuiCond cond = relayout_ ? ImGuiCond_Always : ImGuiCond_FirstUseEver;
+    std::vector<const panels::PanelEntry*> techs;
+    for (const auto& e : technique_panels_.entries)
+        if (scene_.uses_technique(e.technique)) techs.push_back(&e);
+    const float scene_h = std::floor(r.body_h * (techs.empty() ? 0.68f : 0.5f));
+    const float tech_total = techs.empty() ? 0.f : std::floor(r.body_h * 0.24f);
+    const float presets_h = r.body_h - scene_h - tech_total;
+    float y = r.top;
+
+    panels::Dirty dirty;
+    panels::PanelContext ctx{scene_, dirty, eval_ ? &*eval_ : nullptr, selected_object_};
+
+    ImGui::SetNextWindowPos(ImVec2(r.side_x, y), cond);
+    ImGui::SetNextWindowSize(ImVec2(r.side_w, scene_h), cond);
+    if (ImGui::Begin("Scene")) panels::scene_panel(ctx, current_file_.empty() ? nullptr : &saved_scene_);
+    ImGui::End();
+    y += scene_h;
+    selected_object_ = ctx.object;
+
+    for (const panels::PanelEntry* e : techs) {
+        const float h = std::floor(tech_total / float(techs.size()));
+        ImGui::SetNextWindowPos(ImVec2(r.side_x, y), cond);
+        ImGui::SetNextWindowSize(ImVec2(r.side_w, h), cond);
+        y += h;
+        const std::string title = e->title + "###technique." + e->technique;
+        if (ImGui::Begin(title.c_str())) {
+            ImGui::PushItemWidth(-ImGui::GetFontSize() * 8.5f);
+            e->draw(ctx);
+            ImGui::PopItemWidth();
+        }
+        ImGui::End();
+    }
+
+    ImGui::SetNextWindowPos(ImVec2(r.side_x, y), cond);
+    ImGui::SetNextWindowSize(ImVec2(r.side_w, presets_h), cond);
+    panels::PresetRequest req;
+    if (ImGui::Begin("Presets")) req = panels::presets_panel(presets_, current_file_, modified());
+    ImGui::End();
+    handle(req);
+}
+
+void Gui::timings_window() {
+    const layout::Rects r = layout::compute(ImGui::GetIO().DisplaySize);
+    const ImGuiCond cond = relayout_ ? ImGuiCond_Always : ImGuiCond_FirstUseEver;
+    ImGui::SetNextWindowPos(r.timings_pos, cond);
+    ImGui::SetNextWindowSize(r.timings_size, cond);
+    if (ImGui::Begin("Timings")) {
+        if (ImGui::Button("Re-evaluate")) {
+            // Picks up edits of files on disk (their size and time are in the keys).
+            failed_keys_.clear();
+            StageKeys keys = stage_keys(scene_);
+            if (!eval_ || keys != eval_keys_) {
+                inflight_keys_ = keys;
+                wanted_id_ = evaluator_.submit(scene_, std::move(keys));
+            } else {
+                toast("Up to date: every stage key matches the last evaluation");
+            }
+        }
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("Evaluate the stage graph again if any key changed (e.g. an input file was edited)");
+        ImGui::SameLine();
+        if (eval_) ImGui::TextDisabled("last evaluation %.1f ms, render %.2f ms", last_eval_ms_, last_render_ms_);
+        ImGui::SameLine();
+        panels::timings_panel(shown_runs_, eval_note_);
+    }
+    ImGui::End();
+    relayout_ = false;
+}
+
+void Gui::status_bar() {
+    const ImVec2 ds = ImGui::GetIO().DisplaySize;
+    const float h = ImGui::GetFrameHeight();
+    ImGui::SetNextWindowPos(ImVec2(0, ds.y - h));
+    ImGui::SetNextWindowSize(ImVec2(ds.x, h));
+    ImGui::PushStyleVar(ImGuiStyleVar_WindowPadding, ImVec2(8, 3));
+    ImGui::PushStyleVar(ImGuiStyleVar_WindowBorderSize, 0.f);
+    ImGui::PushStyleColor(ImGuiCol_WindowBg, IM_COL32(26, 28, 31, 255));
+    const ImGuiWindowFlags flags = ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoSavedSettings |
+                                   ImGuiWindowFlags_NoFocusOnAppearing | ImGuiWindowFlags_NoBringToFrontOnFocus | ImGuiWindowFlags_NoNav;
+    if (ImGui::Begin("##status", nullptr, flags)) {
+        ImGui::TextUnformatted(current_file_.empty() ? "untitled" : current_file_.c_str());
+        if (modified()) {
+            ImGui::SameLine();
+            ImGui::TextColored(ImVec4(0.95f, 0.7f, 0.3f, 1.f), "(modified)");
+        }
+        ImGui::SameLine(0, 24);
+        const Evaluator::Progress pr = evaluator_.progress();
+        if (pr.running) ImGui::TextColored(ImVec4(0.45f, 0.7f, 1.f, 1.f), "evaluating %s %.0f%%", pr.stage.c_str(), 100.0 * pr.fraction);
+        else if (!failed_keys_.empty()) ImGui::TextColored(ImVec4(0.92f, 0.4f, 0.35f, 1.f), "evaluation failed");
+        else if (eval_) ImGui::TextDisabled("up to date");
+        TimingStat fs{};
+        char right[256];
+        const bool have = Profiler::global().find("gui.frame", fs);
+        std::snprintf(right, sizeof right, "frame %.1f ms  |  %.0f fps  |  %s", have ? fs.median : 0.0, double(ImGui::GetIO().Framerate), gl_renderer_.c_str());
+        ImGui::SameLine(ds.x - ImGui::CalcTextSize(right).x - 12.f);
+        ImGui::TextDisabled("%s", right);
+    }
+    ImGui::End();
+    ImGui::PopStyleColor();
+    ImGui::PopStyleVar(2);
+}
+
+void Gui::modals() {
+    if (open_modal_ == Modal::Open) ImGui::OpenPopup("Open preset");
+    if (open_modal_ == Modal::SaveAs) ImGui::OpenPopup("Save preset as");
+    if (open_modal_ == Modal::Close) ImGui::OpenPopup("Unsaved changes");
+    open_modal_ = Modal::None;
+    const ImVec2 centre(ImGui::GetIO().DisplaySize.x * 0.5f, ImGui::GetIO().DisplaySize.y * 0.5f);
+
+    ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
+    ImGui::SetNextWindowSize(ImVec2(560, 420), ImGuiCond_Appearing);
+    if (ImGui::BeginPopupModal("Open preset")) {
+        panels::PresetRequest r = panels::preset_list(presets_, ImGui::GetContentRegionAvail().y - ImGui::GetFrameHeightWithSpacing() * 2.f);
+        ImGui::SetNextItemWidth(-1);
+        const bool enter = ImGui::InputTextWithHint("##open_path", "path/to/preset.json (or pick one above)", modal_path_, sizeof modal_path_, ImGuiInputTextFlags_EnterReturnsTrue);
+        std::string path = modal_path_;
+        if (path.empty() && presets_.selected >= 0 && presets_.selected < int(presets_.files.size())) path = presets_.files[size_t(presets_.selected)];
+        if (r.kind == panels::PresetRequest::Kind::Load) path = r.path;
+        const bool go = ImGui::Button("Open", ImVec2(120, 0)) || enter || r.kind == panels::PresetRequest::Kind::Load;
+        ImGui::SameLine();
+        if (ImGui::Button("Cancel", ImVec2(120, 0))) ImGui::CloseCurrentPopup();
+        if (go && !path.empty()) {
+            bool ok = true;
+            try {
+                load(path);
+            } catch (const std::exception& e) {
+                ok = false;
+                report(e.what(), true, ErrorOrigin::Action);
+            }
+            if (ok) {
+                modal_path_[0] = 0;
+                ImGui::CloseCurrentPopup();
+            }
+        }
+        ImGui::EndPopup();
+    }
+
+    ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
+    if (ImGui::BeginPopupModal("Save preset as", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
+        ImGui::TextUnformatted("Path of the preset file (relative to the working directory):");
+        ImGui::SetNextItemWidth(480);
+        if (ImGui::IsWindowAppearing()) ImGui::SetKeyboardFocusHere();
+        const bool enter = ImGui::InputText("##save_path", modal_path_, sizeof modal_path_, ImGuiInputTextFlags_EnterReturnsTrue);
+        const bool exists = fs::exists(modal_path_);
+        if (exists) ImGui::TextColored(ImVec4(0.95f, 0.7f, 0.3f, 1.f), "The file exists and will be replaced.");
+        if (ImGui::Button("Save", ImVec2(120, 0)) || enter) {
+            bool ok = true;
+            try {
+                save_to(modal_path_);
+            } catch (const std::exception& e) {
+                ok = false;
+                report(e.what(), true, ErrorOrigin::Action);
+            }
+            if (ok) ImGui::CloseCurrentPopup();
+        }
+        ImGui::SameLine();
+        if (ImGui::Button("Cancel", ImVec2(120, 0))) ImGui::CloseCurrentPopup();
+        ImGui::EndPopup();
+    }
+
+    ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
+    if (ImGui::BeginPopupModal("Unsaved changes", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
+        ImGui::Text("%s has unsaved changes.", current_file_.empty() ? "The scene" : current_file_.c_str());
+        ImGui::Spacing();
+        if (ImGui::Button(current_file_.empty() ? "Save as..." : "Save and quit", ImVec2(140, 0))) {
+            ImGui::CloseCurrentPopup();
+            if (current_file_.empty()) {
+                open_modal_ = Modal::SaveAs;
+                std::strncpy(modal_path_, presets_.save_as, sizeof modal_path_ - 1);
+            } else {
+                attempt([&] {
+                    save_to(current_file_);
+                    close_confirmed_ = true;
+                    glfwSetWindowShouldClose(window_, GLFW_TRUE);
+                });
+            }
+        }
+        ImGui::SameLine();
+        if (ImGui::Button("Discard and quit", ImVec2(140, 0))) {
+            close_confirmed_ = true;
+            glfwSetWindowShouldClose(window_, GLFW_TRUE);
+            ImGui::CloseCurrentPopup();
+        }
+        ImGui::SameLine();
+        if (ImGui::Button("Cancel", ImVec2(100, 0))) ImGui::CloseCurrentPopup();
+        ImGui::EndPopup();
+    }
+}
+
+void Gui::shortcuts() {
+    ImGuiIO& io = ImGui::GetIO();
+    if (io.WantTextInput) return;
+    if (io.KeyCtrl && ImGui::IsKeyPressed(GLFW_KEY_O, false)) open_modal_ = Modal::Open;
+    if (io.KeyCtrl && !io.KeyShift && ImGui::IsKeyPressed(GLFW_KEY_S, false)) handle({panels::PresetRequest::Kind::Save, current_file_});
+    if (io.KeyCtrl && io.KeyShift && ImGui::IsKeyPressed(GLFW_KEY_S, false)) {
+        open_modal_ = Modal::SaveAs;
+        std::strncpy(modal_path_, presets_.save_as, sizeof modal_path_ - 1);
+    }
+    if (io.KeyCtrl && ImGui::IsKeyPressed(GLFW_KEY_Q, false)) glfwSetWindowShouldClose(window_, GLFW_TRUE);
+    if (ImGui::IsKeyPressed(GLFW_KEY_F12, false)) {
+        if (io.KeyShift) {
+            window_shot_path_ = screenshot_path(true);
+            window_shot_settle_ = 0;
+        } else if (have_frame_) {
+            attempt([&] {
+                const std::string p = screenshot_path(false);
+                screenshot_viewport(p);
+                toast("Saved " + p);
+            });
+        }
+    }
+}
+}  // namespace
+
+// [SECTION] Entry point
+int run_gui(const GuiOptions& o) {
+    int w = 0, h = 0;
+    parse_size(o.size, w, h);
+    if (!o.script.empty() && o.frames > 0) throw InputError("gui: --script and --frames cannot be combined");
+    if ((!o.screenshot.empty() || !o.window_screenshot.empty()) && o.frames <= 0)
+        throw InputError("gui: --screenshot and --window-screenshot need --frames N (or use a --script)");
+    if (o.frames < 0) throw InputError("gui: --frames must be positive");
+    const bool scripted = !o.script.empty() || o.frames > 0;
+    std::vector<ScriptCommand> script = !o.script.empty() ? parse_script(o.script) : o.frames > 0 ? frames_script(o) : std::vector<ScriptCommand>{};
+
+    // The preset first: bad input fails before a window opens (scripted), or shows in it.
+    std::optional<Scene> initial;
+    std::string initial_error;
+    if (!o.preset.empty()) {
+        try {
+            initial = load_preset(o.preset);
+        } catch (const InputError& e) {
+            if (scripted) throw;
+            initial_error = e.what();
+        }
+    }
+
+    GlfwLibrary glfw;
+    Window window(w, h);
+    ImGuiSession imgui(window.handle);
+    Gui gui(o, window.handle, std::move(script), scripted, std::move(initial), o.preset, initial_error);
+    return gui.run();
+}
 }  // namespace mesolab

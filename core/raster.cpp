@@ -20,7 +20,7 @@ namespace {
 constexpr int kSubPixelBits = 8;               // window positions snap to 1/256 pixel, as GPUs do
 constexpr int64_t kSubPixel = int64_t(1) << kSubPixelBits;
 constexpr int64_t kHalfPixel = kSubPixel / 2;  // pixel centres are at (x+0.5, y+0.5)
-constexpr int kTileSize = 64;
+constexpr int kTileW = 128, kTileH = 32;  // wide tiles: long runs of G-buffer writes
 constexpr int kMaxImageSize = 1 << 16;
 constexpr float kMinClipW = 1e-6f;  // w > epsilon after clipping, whatever the projection
 // Window coordinates stay within +-2^20 pixels (guard band), so fixed-point coordinates fit in
@@ -254,14 +254,14 @@ void setup_triangles(const TriMesh& m, const ShadedVertices& sv, uint32_t item, 
 namespace {
 
 // Scan-convert `t` inside the pixel rectangle [x0,x1]x[y0,y1] (GL window coordinates), with a
-// LESS depth test against the tile's depth and triangle-id buffers (row stride kTileSize,
+// LESS depth test against the tile's depth and triangle-id buffers (row stride kTileW,
 // origin (tx, ty)).
 // The visible triangle's screen-space barycentrics (vertices 1 and 2) are kept per pixel.
 struct TileBuffers {
     std::vector<float> depth;
     std::vector<int32_t> tri_id;
     std::vector<vec2> lambda;
-    TileBuffers() : depth(size_t(kTileSize) * kTileSize), tri_id(depth.size()), lambda(depth.size()) {}
+    TileBuffers() : depth(size_t(kTileW) * kTileH), tri_id(depth.size()), lambda(depth.size()) {}
 };
 
 void scan_triangle(const ScreenTriangle& t, int32_t id, int x0, int x1, int y0, int y1, int tx, int ty,
@@ -279,19 +279,20 @@ void scan_triangle(const ScreenTriangle& t, int32_t id, int x0, int x1, int y0, 
     const double dz1 = double(t.z[1]) - double(t.z[0]), dz2 = double(t.z[2]) - double(t.z[0]);
     for (int y = y0; y <= y1; ++y) {
         int64_t e0 = e_row[0], e1 = e_row[1], e2 = e_row[2];
-        const size_t row = size_t(y - ty) * kTileSize;
+        const size_t row = size_t(y - ty) * kTileW;
         float* depth_row = buf.depth.data() + row;
         for (int x = x0; x <= x1; ++x) {
             // Window depth, linear in screen space; evaluated before the coverage test so that
             // one (hard to predict) branch decides both.
+            if ((e0 | e1 | e2) >= 0) {
             const double l1 = double(e1 - bias[1]) * t.inv_area2, l2 = double(e2 - bias[2]) * t.inv_area2;
             const float z = float(double(t.z[0]) + l1 * dz1 + l2 * dz2);
             const size_t p = size_t(x - tx);
-            if (((e0 | e1 | e2) >= 0) & (z < depth_row[p])) {
+            if (z < depth_row[p]) {
                 depth_row[p] = z;
                 buf.tri_id[row + p] = id;
                 buf.lambda[row + p] = vec2(float(l1), float(l2));
-            }
+            }}
             e0 += step_x[0];
             e1 += step_x[1];
             e2 += step_x[2];
@@ -402,13 +403,13 @@ void rasterize(const std::vector<DrawItem>& items, const RasterCamera& cam, GBuf
     if (tris.size() > size_t(INT32_MAX)) throw std::length_error("rasterize: too many triangles");
 
     // Bin triangles into tiles (counting sort; every bin stays in submission order).
-    const int tiles_x = (width + kTileSize - 1) / kTileSize, tiles_y = (height + kTileSize - 1) / kTileSize;
+    const int tiles_x = (width + kTileW - 1) / kTileW, tiles_y = (height + kTileH - 1) / kTileH;
     const size_t n_tiles = size_t(tiles_x) * size_t(tiles_y);
     std::vector<uint32_t>& bin_start = scratch.bin_start;
     bin_start.assign(n_tiles + 1, 0);
     auto for_each_tile = [&](const ScreenTriangle& t, auto&& f) {
-        for (int ty = t.py0 / kTileSize; ty <= t.py1 / kTileSize; ++ty)
-            for (int tx = t.px0 / kTileSize; tx <= t.px1 / kTileSize; ++tx) f(size_t(ty) * size_t(tiles_x) + size_t(tx));
+        for (int ty = t.py0 / kTileH; ty <= t.py1 / kTileH; ++ty)
+            for (int tx = t.px0 / kTileW; tx <= t.px1 / kTileW; ++tx) f(size_t(ty) * size_t(tiles_x) + size_t(tx));
     };
     for (const ScreenTriangle* t : tris) for_each_tile(*t, [&](size_t tile) { ++bin_start[tile + 1]; });
     for (size_t i = 0; i < n_tiles; ++i) bin_start[i + 1] += bin_start[i];
@@ -423,8 +424,8 @@ void rasterize(const std::vector<DrawItem>& items, const RasterCamera& cam, GBuf
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n_tiles, 1), [&](const tbb::blocked_range<size_t>& r) {
         TileBuffers buf;
         for (size_t tile = r.begin(); tile != r.end(); ++tile) {
-            const int tx = int(tile % size_t(tiles_x)) * kTileSize, ty = int(tile / size_t(tiles_x)) * kTileSize;
-            const int tx1 = std::min(tx + kTileSize, width) - 1, ty1 = std::min(ty + kTileSize, height) - 1;
+            const int tx = int(tile % size_t(tiles_x)) * kTileW, ty = int(tile / size_t(tiles_x)) * kTileH;
+            const int tx1 = std::min(tx + kTileW, width) - 1, ty1 = std::min(ty + kTileH, height) - 1;
             std::fill(buf.depth.begin(), buf.depth.end(), 1.f);
             std::fill(buf.tri_id.begin(), buf.tri_id.end(), -1);
             for (uint32_t b = bin_start[tile]; b < bin_start[tile + 1]; ++b) {
@@ -435,7 +436,7 @@ void rasterize(const std::vector<DrawItem>& items, const RasterCamera& cam, GBuf
             }
             const size_t span = size_t(tx1 - tx + 1);
             for (int y = ty; y <= ty1; ++y) {
-                const size_t local_row = size_t(y - ty) * kTileSize;
+                const size_t local_row = size_t(y - ty) * kTileW;
                 const size_t o_row = out.index(tx, height - 1 - y);  // image row 0 is the top
                 std::copy_n(buf.depth.begin() + std::ptrdiff_t(local_row), span, out.depth.begin() + std::ptrdiff_t(o_row));
                 std::fill_n(out.object.begin() + std::ptrdiff_t(o_row), span, -1);

@@ -4,6 +4,17 @@
 // coordinates, perspective-correct attribute interpolation, depth = NDC z interpolated linearly
 // in screen space with a LESS test, no face culling, a top-left fill rule. Image row 0 is the
 // top of the image (GL window row height-1). Parallel over tiles (TBB).
+// Details: triangles are clipped in homogeneous clip space against the near and far planes
+// (-w <= z <= w, as GL does without depth clamp), w > 1e-6 and a guard band far outside the
+// viewport; window positions snap to 1/256 pixel (8 sub-pixel bits, like GPUs) and coverage uses
+// exact integer edge functions, so a pixel centre on an edge shared by two triangles belongs to
+// exactly one of them ("top" and "left" as seen in GL's y-up window space). Triangles are drawn
+// in submission order (items, then index order): at equal depth the first one drawn stays.
+// Like a vertex shader, world normal = normalize(mat3(transpose(inverse(model))) * n) and
+// world tangent = normalize(mat3(model) * t) per vertex; both are interpolated and normalised
+// again per pixel (0 where they interpolate to 0, e.g. a mesh without tangents). Texture mode
+// still fills position/normal/tangent with world-space values through `model`.
+// Throws std::invalid_argument for an index out of range or an image over 65536 pixels a side.
 #include "core/math.h"
 #include "core/mesh.h"
 #include <cstdint>

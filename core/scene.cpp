@@ -50,9 +50,7 @@ ParamTable parse_table(const ParamGroup& g, const json& j, const std::string& so
         const ParamDecl* d = g.find(it.key());
         if (!d) fail(source, key, "unknown key" + suggestion(it.key(), g.names()) + "; " + g.name() + " parameters are: " + list_text(g.names()));
         const std::string where = source + ": " + key + (key == g.name() + "." + d->name ? "" : " (" + g.name() + "." + d->name + ")");
-        Value v = value_from_json(*d, it.value(), where);
-        check_path(*d, v, base_dir, source, key);
-        t.set(d->name, v);
+        t.set(d->name, value_from_json(*d, it.value(), where));
         given.push_back(d);
     }
     for (const ParamDecl* d : given)
@@ -60,6 +58,7 @@ ParamTable parse_table(const ParamGroup& g, const json& j, const std::string& so
             fail(source, path + "." + d->name,
                  "not used when " + g.name() + "." + d->used_when_key + " is '" + value_to_text(*g.find(d->used_when_key), t.get(d->used_when_key)) +
                      "' (it applies to " + d->used_when_key + " = " + list_text(d->used_when_values) + "); remove it");
+    for (const ParamDecl* d : given) check_path(*d, t.get(d->name), base_dir, source, path + "." + d->name);
     return t;
 }
 

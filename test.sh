@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# mesolab test suite. Installs missing Debian packages, builds, runs every test (GoogleTest
+# under CTest; the GUI smoke test under xvfb-run), then builds and runs the whole suite again
+# with AddressSanitizer + UndefinedBehaviorSanitizer. `./test.sh --quick` skips the sanitizer pass.
+set -euo pipefail
+cd "$(dirname "$0")"
+source .ci/setup.sh
+ensure_packages
+jobs="$(nproc 2>/dev/null || echo 2)"
+
+build build
+echo "== tests (Release)"
+ctest --test-dir build --output-on-failure -j "$jobs" --timeout 600
+
+if [ "${1:-}" != "--quick" ]; then
+  build build-sanitize -DMESOLAB_SANITIZE=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo
+  echo "== tests (AddressSanitizer + UndefinedBehaviorSanitizer)"
+  ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1" \
+  UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1" \
+    ctest --test-dir build-sanitize --output-on-failure -j "$jobs" --timeout 900
+fi
+echo "== all tests passed"

@@ -1,0 +1,152 @@
+// The stage graph runs only what an enabled effect needs, caches by declared inputs, and
+// invalidates exactly what depends on a change.
+#include "core/error.h"
+#include "core/scene.h"
+#include "core/stage.h"
+#include "core/technique.h"
+#include "support/cli.h"
+
+#include <gtest/gtest.h>
+#include <atomic>
+#include <map>
+
+using namespace mesolab;
+
+namespace {
+
+// A private graph: geometry <- shade(light) ; env <- envlight (effect environment).
+struct Counting {
+    std::map<std::string, int> runs;
+    StageGraph g;
+    Counting() {
+        auto counter = [this](const char* name) {
+            return [this, name](StageContext& ctx) {
+                ++runs[name];
+                ctx.progress(0.5);
+                return stage_result(std::string(name));
+            };
+        };
+        g.add({.name = "t.geometry", .params = {"geometry.resolution"}, .run = counter("t.geometry")});
+        g.add({.name = "t.shade", .params = {"light.*", "basic.kd"}, .inputs = {"t.geometry"}, .run = counter("t.shade")});
+        g.add({.name = "t.env", .params = {"env.map"}, .run = counter("t.env")});
+        g.add({.name = "t.envlight", .inputs = {"t.env"}, .effects = {"environment"}, .run = counter("t.envlight")});
+    }
+    Evaluation eval(const Scene& s) { return g.evaluate(s, {"t.shade", "t.envlight"}); }
+};
+
+StageStatus status(const Evaluation& e, const std::string& n) { return e.run(n)->status; }
+}  // namespace
+
+TEST(StageGraph, RunsOnceThenCaches) {
+    Counting c;
+    Scene s = default_scene("basic");
+    Evaluation e = c.eval(s);
+    EXPECT_EQ(status(e, "t.geometry"), StageStatus::Ran);
+    EXPECT_EQ(status(e, "t.shade"), StageStatus::Ran);
+    EXPECT_EQ(status(e, "t.env"), StageStatus::Ran);
+    EXPECT_EQ(status(e, "t.envlight"), StageStatus::Ran);
+    e = c.eval(s);
+    for (const auto& r : e.runs) EXPECT_EQ(r.status, StageStatus::Cached) << r.name;
+    EXPECT_EQ(c.runs["t.geometry"], 1);
+    EXPECT_EQ(*e.get<std::string>("t.shade"), "t.shade");
+}
+
+TEST(StageGraph, ChangeRecomputesExactlyItsDependents) {
+    Counting c;
+    Scene s = default_scene("basic");
+    c.eval(s);
+    apply_set(s, "light.direction=10,20");  // shade reads light.*; geometry does not
+    Evaluation e = c.eval(s);
+    EXPECT_EQ(status(e, "t.geometry"), StageStatus::Cached);
+    EXPECT_EQ(status(e, "t.shade"), StageStatus::Ran);
+    EXPECT_EQ(status(e, "t.envlight"), StageStatus::Cached);
+    apply_set(s, "geometry.resolution=17");  // geometry and everything downstream
+    e = c.eval(s);
+    EXPECT_EQ(status(e, "t.geometry"), StageStatus::Ran);
+    EXPECT_EQ(status(e, "t.shade"), StageStatus::Ran);
+    EXPECT_EQ(status(e, "t.env"), StageStatus::Cached);
+    apply_set(s, "camera.distance=7");  // nobody reads it
+    e = c.eval(s);
+    for (const auto& r : e.runs) EXPECT_EQ(r.status, StageStatus::Cached) << r.name;
+    apply_set(s, "geometry.resolution=64");  // back to a cached setting
+    e = c.eval(s);
+    EXPECT_EQ(status(e, "t.geometry"), StageStatus::Cached);
+    EXPECT_EQ(c.runs["t.geometry"], 2);
+}
+
+TEST(StageGraph, DisabledEffectSkipsItsStagesAndTheirUpstream) {
+    Counting c;
+    Scene s = default_scene("basic");
+    apply_set(s, "effects.environment=false");
+    Evaluation e = c.eval(s);
+    EXPECT_EQ(status(e, "t.envlight"), StageStatus::Skipped);
+    EXPECT_NE(e.run("t.envlight")->reason.find("effects.environment is off"), std::string::npos);
+    EXPECT_EQ(e.run("t.env"), nullptr);  // not even visited: nothing enabled needs it
+    EXPECT_EQ(c.runs["t.env"], 0);
+    EXPECT_EQ(c.runs["t.envlight"], 0);
+    EXPECT_EQ(e.get<std::string>("t.envlight"), nullptr);
+    EXPECT_EQ(c.g.key(s, "t.envlight"), 0u);
+}
+
+TEST(StageGraph, CancellationAndProgress) {
+    Counting c;
+    Scene s = default_scene("basic");
+    std::atomic<bool> cancel{true};
+    EXPECT_THROW(c.g.evaluate(s, {"t.shade"}, {}, &cancel), Cancelled);
+    EXPECT_EQ(c.g.cache_entries(), 0u);
+    cancel = false;
+    std::vector<std::string> seen;
+    c.g.evaluate(s, {"t.shade"}, [&](const std::string& n, double) { seen.push_back(n); }, &cancel);
+    EXPECT_FALSE(seen.empty());
+    EXPECT_EQ(seen.front(), "t.geometry");
+}
+
+TEST(StageGraph, FailingStageReportsAndIsNotCached) {
+    StageGraph g;
+    int calls = 0;
+    g.add({.name = "x.fail", .run = [&](StageContext&) -> std::any {
+               ++calls;
+               throw InputError("bad file");
+           }});
+    Scene s = default_scene("basic");
+    EXPECT_THROW(g.evaluate(s, {"x.fail"}), InputError);
+    EXPECT_THROW(g.evaluate(s, {"x.fail"}), InputError);
+    EXPECT_EQ(calls, 2);
+}
+
+TEST(StageGraph, DeclarationErrorsAreCaught) {
+    StageGraph g;
+    g.add({.name = "a", .run = [](StageContext&) { return std::any(); }});
+    EXPECT_THROW(g.add({.name = "a", .run = [](StageContext&) { return std::any(); }}), std::logic_error);
+    EXPECT_THROW(g.add({.name = "b", .inputs = {"nope"}, .run = [](StageContext&) { return std::any(); }}), std::logic_error);
+}
+
+// The real graph: moving the light or the camera recomputes nothing; files invalidate by content.
+TEST(FrameStages, LightAndCameraNeverRecompute) {
+    StageGraph& g = Registry::instance().stages();
+    Scene s = default_scene("basic");
+    std::map<std::string, uint64_t> before;
+    for (const auto& st : Registry::instance().frame_stages(s)) before[st] = g.key(s, st);
+    for (const char* set : {"light.direction=80,170", "light.intensity=9", "light.color=1,0,0", "camera.orbit=10,10", "camera.distance=50",
+                            "camera.mode=texture", "env.color=1,1,1", "env.intensity=3", "basic.kd=0.1,0.1,0.1", "geometry.scale=2"}) {
+        Scene t = s;
+        apply_set(t, set);
+        for (const auto& [st, k] : before) EXPECT_EQ(g.key(t, st), k) << set << " changed " << st;
+    }
+    Scene t = s;
+    apply_set(t, "geometry.resolution=12");
+    EXPECT_NE(g.key(t, "scene.geometry"), before["scene.geometry"]);
+    EXPECT_EQ(g.key(t, "env.map"), before["env.map"]);
+}
+
+TEST(FrameStages, EditingAReferencedFileInvalidates) {
+    using namespace mesolab::test;
+    TempDir dir("filekey");
+    write_file(dir / "m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    write_file(dir / "p.json", R"({"schema":1,"objects":[{"geometry":{"type":"mesh","path":"m.obj"},"material":{"technique":"basic"}}]})");
+    const Scene s = load_preset(dir / "p.json");
+    StageGraph& g = Registry::instance().stages();
+    const uint64_t k0 = g.key(s, "scene.geometry");
+    write_file(dir / "m.obj", "v 0 0 0\nv 2 0 0\nv 0 1 0\nv 5 5 5\nf 1 2 3\n");
+    EXPECT_NE(g.key(s, "scene.geometry"), k0);
+}
