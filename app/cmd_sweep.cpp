@@ -109,6 +109,7 @@ int run_sweep(const SweepOptions& o) {
         apply_set(s, key, v);
         std::vector<double> times;
         Image img;
+        wb.render(s, req);  // untimed warm-up: first-touch allocations, GPU resources
         for (int r = 0; r < o.repeat; ++r) {
             wb.stages().clear_cache();  // the cost of this setting includes its stages
             RenderResult res = wb.render(s, req);

@@ -89,6 +89,8 @@ std::string trim(const std::string& s) {
     return s.substr(b, e - b + 1);
 }
 
+void ignore_imgui_log(void*, const char*, ...) {}
+
 ImTextureID texture_id(GLuint tex) { return reinterpret_cast<ImTextureID>(static_cast<intptr_t>(tex)); }
 
 // [SECTION] Stage keys of a scene's frame stages
@@ -927,7 +929,7 @@ void Gui::build_ui() {
         shortcuts();
     } catch (const std::exception& e) {
         // Close whatever the exception left open, then carry on with the next frame.
-        ImGui::ErrorCheckEndFrameRecover([](void*, const char*, ...) {}, nullptr);
+        ImGui::ErrorCheckEndFrameRecover(ignore_imgui_log, nullptr);
         report(e.what(), dynamic_cast<const InputError*>(&e) != nullptr, ErrorOrigin::Action);
     }
     ImGui::Render();

@@ -234,7 +234,7 @@ std::optional<size_t> first_nonfinite_obj_vertex(const std::string& path) {
             char* end = nullptr;
             const double x = std::strtod(s, &end);
             if (end == s) break;  // fewer than three numbers: OpenMesh's business
-            if (!std::isfinite(float(x))) return vertex;
+            if (!(std::abs(x) <= double(std::numeric_limits<float>::max()))) return vertex;  // nan, inf, overflow
             s = end;
         }
         ++vertex;
@@ -315,7 +315,8 @@ TriMesh load_mesh(const std::string& path) {
     std::vector<std::vector<uint32_t>> outputs_of(n_file_vertices);  // output vertices per file vertex
     std::vector<int> file_vertex_of;
     auto output_vertex = [&](const Corner& c) {
-        const vec2 uv = c.uv.value_or(vec2(0.f));
+        vec2 uv = c.uv.value_or(vec2(0.f));
+        if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) uv = vec2(0.f);
         for (uint32_t o : outputs_of[size_t(c.vertex)])
             if (m.uv[o] == uv) return o;
         const uint32_t o = uint32_t(m.position.size());

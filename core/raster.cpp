@@ -253,10 +253,8 @@ void setup_triangles(const TriMesh& m, const ShadedVertices& sv, uint32_t item, 
 // [SECTION] Scan conversion and G-buffer resolve
 namespace {
 
-// Scan-convert `t` inside the pixel rectangle [x0,x1]x[y0,y1] (GL window coordinates), with a
-// LESS depth test against the tile's depth and triangle-id buffers (row stride kTileW,
-// origin (tx, ty)).
-// The visible triangle's screen-space barycentrics (vertices 1 and 2) are kept per pixel.
+// Visibility buffers of one tile (row stride kTileW): depth, the visible triangle and its
+// screen-space barycentrics (lambda_1, lambda_2) at the pixel centre.
 struct TileBuffers {
     std::vector<float> depth;
     std::vector<int32_t> tri_id;
@@ -264,6 +262,9 @@ struct TileBuffers {
     TileBuffers() : depth(size_t(kTileW) * kTileH), tri_id(depth.size()), lambda(depth.size()) {}
 };
 
+// Scan-convert `t` inside the pixel rectangle [x0,x1]x[y0,y1] (GL window coordinates) of the
+// tile with origin (tx, ty), with a LESS depth test. Edge functions step incrementally in exact
+// integer arithmetic.
 void scan_triangle(const ScreenTriangle& t, int32_t id, int x0, int x1, int y0, int y1, int tx, int ty,
                    TileBuffers& buf) {
     std::array<int64_t, 3> e_row, step_x, step_y, bias;
@@ -282,17 +283,17 @@ void scan_triangle(const ScreenTriangle& t, int32_t id, int x0, int x1, int y0, 
         const size_t row = size_t(y - ty) * kTileW;
         float* depth_row = buf.depth.data() + row;
         for (int x = x0; x <= x1; ++x) {
-            // Window depth, linear in screen space; evaluated before the coverage test so that
-            // one (hard to predict) branch decides both.
             if ((e0 | e1 | e2) >= 0) {
-            const double l1 = double(e1 - bias[1]) * t.inv_area2, l2 = double(e2 - bias[2]) * t.inv_area2;
-            const float z = float(double(t.z[0]) + l1 * dz1 + l2 * dz2);
-            const size_t p = size_t(x - tx);
-            if (z < depth_row[p]) {
-                depth_row[p] = z;
-                buf.tri_id[row + p] = id;
-                buf.lambda[row + p] = vec2(float(l1), float(l2));
-            }}
+                // Window depth, linear in screen space.
+                const double l1 = double(e1 - bias[1]) * t.inv_area2, l2 = double(e2 - bias[2]) * t.inv_area2;
+                const float z = float(double(t.z[0]) + l1 * dz1 + l2 * dz2);
+                const size_t p = size_t(x - tx);
+                if (z < depth_row[p]) {
+                    depth_row[p] = z;
+                    buf.tri_id[row + p] = id;
+                    buf.lambda[row + p] = vec2(float(l1), float(l2));
+                }
+            }
             e0 += step_x[0];
             e1 += step_x[1];
             e2 += step_x[2];
