@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -263,8 +262,8 @@ struct TileBuffers {
 };
 
 // Scan-convert `t` inside the pixel rectangle [x0,x1]x[y0,y1] (GL window coordinates) of the
-// tile with origin (tx, ty), with a LESS depth test. Edge functions step incrementally in exact
-// integer arithmetic.
+// tile with origin (tx, ty), with a LESS depth test. The covered span of each row comes from
+// the exact integer edge functions (stepped incrementally), so no pixel is tested twice.
 void scan_triangle(const ScreenTriangle& t, int32_t id, int x0, int x1, int y0, int y1, int tx, int ty,
                    TileBuffers& buf) {
     std::array<int64_t, 3> e_row, step_x, step_y, bias;
@@ -278,27 +277,37 @@ void scan_triangle(const ScreenTriangle& t, int32_t id, int x0, int x1, int y0, 
         e_row[k] += bias[k];  // covered iff every biased edge function is >= 0
     }
     const double dz1 = double(t.z[1]) - double(t.z[0]), dz2 = double(t.z[2]) - double(t.z[0]);
-    for (int y = y0; y <= y1; ++y) {
-        int64_t e0 = e_row[0], e1 = e_row[1], e2 = e_row[2];
+    const int64_t last = x1 - x0;
+    for (int y = y0; y <= y1; ++y, e_row[0] += step_y[0], e_row[1] += step_y[1], e_row[2] += step_y[2]) {
+        // Covered span [n_lo, n_hi] of this row (n = x - x0): each edge function is affine in n,
+        // so every edge bounds n from one side; exact integer arithmetic.
+        int64_t n_lo = 0, n_hi = last;
+        for (size_t k = 0; k < 3; ++k) {
+            const int64_t e = e_row[k], s = step_x[k];
+            if (s > 0) {
+                if (e < 0) n_lo = std::max(n_lo, (-e + s - 1) / s);
+            } else if (s < 0) {
+                if (e < 0) n_hi = -1;
+                else if (e + s * last < 0) n_hi = std::min(n_hi, e / -s);
+            } else if (e < 0) {
+                n_hi = -1;
+            }
+        }
+        if (n_lo > n_hi) continue;
         const size_t row = size_t(y - ty) * kTileW;
         float* depth_row = buf.depth.data() + row;
-        for (int x = x0; x <= x1; ++x) {
-            if ((e0 | e1 | e2) >= 0) {
-                // Window depth, linear in screen space.
-                const double l1 = double(e1 - bias[1]) * t.inv_area2, l2 = double(e2 - bias[2]) * t.inv_area2;
-                const float z = float(double(t.z[0]) + l1 * dz1 + l2 * dz2);
-                const size_t p = size_t(x - tx);
-                if (z < depth_row[p]) {
-                    depth_row[p] = z;
-                    buf.tri_id[row + p] = id;
-                    buf.lambda[row + p] = vec2(float(l1), float(l2));
-                }
+        int64_t e1 = e_row[1] + step_x[1] * n_lo - bias[1], e2 = e_row[2] + step_x[2] * n_lo - bias[2];
+        for (int64_t n = n_lo; n <= n_hi; ++n, e1 += step_x[1], e2 += step_x[2]) {
+            // Window depth, linear in screen space.
+            const double l1 = double(e1) * t.inv_area2, l2 = double(e2) * t.inv_area2;
+            const float z = float(double(t.z[0]) + l1 * dz1 + l2 * dz2);
+            const size_t p = size_t(x0 + n - tx);
+            if (z < depth_row[p]) {
+                depth_row[p] = z;
+                buf.tri_id[row + p] = id;
+                buf.lambda[row + p] = vec2(float(l1), float(l2));
             }
-            e0 += step_x[0];
-            e1 += step_x[1];
-            e2 += step_x[2];
         }
-        for (size_t k = 0; k < 3; ++k) e_row[k] += step_y[k];
     }
 }
 
@@ -440,16 +449,17 @@ void rasterize(const std::vector<DrawItem>& items, const RasterCamera& cam, GBuf
                 const size_t local_row = size_t(y - ty) * kTileW;
                 const size_t o_row = out.index(tx, height - 1 - y);  // image row 0 is the top
                 std::copy_n(buf.depth.begin() + std::ptrdiff_t(local_row), span, out.depth.begin() + std::ptrdiff_t(o_row));
-                std::fill_n(out.object.begin() + std::ptrdiff_t(o_row), span, -1);
-                // Zero bytes are 0.f: plain memset, much faster than element-wise stores.
-                std::memset(static_cast<void*>(out.position.data() + o_row), 0, span * sizeof(vec3));
-                std::memset(static_cast<void*>(out.normal.data() + o_row), 0, span * sizeof(vec3));
-                std::memset(static_cast<void*>(out.tangent.data() + o_row), 0, span * sizeof(vec3));
-                std::memset(static_cast<void*>(out.uv.data() + o_row), 0, span * sizeof(vec2));
                 for (size_t x = 0; x < span; ++x) {
                     const size_t local = local_row + x, o = o_row + x;
                     const int32_t id = buf.tri_id[local];
-                    if (id < 0) continue;
+                    if (id < 0) {
+                        out.object[o] = -1;
+                        out.position[o] = vec3(0.f);
+                        out.normal[o] = vec3(0.f);
+                        out.tangent[o] = vec3(0.f);
+                        out.uv[o] = vec2(0.f);
+                        continue;
+                    }
                     const ScreenTriangle& t = *tris[size_t(id)];
                     const vec3 beta = source_barycentrics(t, buf.lambda[local]);
                     const VertexAttributes* attr = shaded[t.item].attr.data();

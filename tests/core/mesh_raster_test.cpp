@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -133,6 +134,8 @@ bool all_finite(const GBuffer& g) {
     return true;
 }
 
+constexpr double kPiD = 3.14159265358979323846;
+
 const Primitive kPrimitives[] = {Primitive::Sphere, Primitive::Plane, Primitive::Torus, Primitive::Cylinder};
 const char* name_of(Primitive p) {
     switch (p) {
@@ -244,10 +247,10 @@ TEST(Primitives, SurfaceAreaConverges) {
         double exact;
     };
     const double r = 0.35;
-    const Case cases[] = {{Primitive::Sphere, 4.0 * M_PI},
-                          {Primitive::Torus, 4.0 * M_PI * M_PI * r},  // (2 pi R)(2 pi r), R = 1
+    const Case cases[] = {{Primitive::Sphere, 4.0 * kPiD},
+                          {Primitive::Torus, 4.0 * kPiD * kPiD * r},  // (2 pi R)(2 pi r), R = 1
                           {Primitive::Plane, 4.0},
-                          {Primitive::Cylinder, 4.0 * M_PI}};
+                          {Primitive::Cylinder, 4.0 * kPiD}};
     for (const Case& c : cases) {
         SCOPED_TRACE(name_of(c.p));
         double previous_error = 1e9;
@@ -266,7 +269,7 @@ TEST(Primitives, TorusAreaIsFourPiSquaredRr) {
     // Area of a torus with major radius R and minor radius r: (2 pi R)(2 pi r) = 4 pi^2 R r.
     const double r = 0.25;
     const double area = surface_area(make_primitive(Primitive::Torus, 512, float(r)));
-    EXPECT_NEAR(area / (4.0 * M_PI * M_PI * 1.0 * r), 1.0, 1e-4);
+    EXPECT_NEAR(area / (4.0 * kPiD * kPiD * 1.0 * r), 1.0, 1e-4);
 }
 
 TEST(Primitives, InvalidParametersAreInputErrors) {
@@ -361,6 +364,7 @@ TEST(Raster, SharedEdgesCoverEachPixelExactlyOnce) {
     std::uniform_real_distribution<float> coord(-1.2f, 1.2f);
     const int w = 37, h = 29;
     const RasterCamera cam = identity_camera(w, h);
+    int convex_trials = 0;
     for (int trial = 0; trial < 300; ++trial) {
         // A quad (a, b, c, d), split along a-c; on every third trial the diagonal and the
         // corners sit exactly on pixel centres or pixel corners to exercise ties.
@@ -374,16 +378,35 @@ TEST(Raster, SharedEdgesCoverEachPixelExactlyOnce) {
         }
         const TriMesh first = soup(q, {0, 1, 2}), second = soup(q, {0, 2, 3}), both = soup(q, {0, 1, 2, 0, 2, 3});
         const GBuffer g1 = render(first, cam), g2 = render(second, cam), g12 = render(both, cam);
-        for (size_t i = 0; i < g1.object.size(); ++i) {
-            const bool c1 = g1.object[i] >= 0, c2 = g2.object[i] >= 0;
-            // Pixels on both sides of the diagonal: a convex quad's diagonal is inside it, so
-            // one triangle lies on each side and no pixel centre may be counted twice.
-            const vec2 d1 = vec2(q[2] - q[0]), e1 = vec2(q[1] - q[0]), e3 = vec2(q[3] - q[0]);
-            const bool opposite_sides = (d1.x * e1.y - d1.y * e1.x) * (d1.x * e3.y - d1.y * e3.x) < 0.f;
-            if (opposite_sides) { ASSERT_FALSE(c1 && c2) << "trial " << trial << " pixel " << i; }
-            ASSERT_EQ(g12.object[i] >= 0, c1 || c2) << "trial " << trial << " pixel " << i;
-        }
+        // Window positions (GL, y up) of the corners, in double.
+        std::array<glm::dvec2, 4> wq;
+        for (size_t k = 0; k < 4; ++k) wq[k] = {(double(q[k].x) + 1.0) * 0.5 * w, (double(q[k].y) + 1.0) * 0.5 * h};
+        auto cross = [](glm::dvec2 a, glm::dvec2 b) { return a.x * b.y - a.y * b.x; };
+        // With b and d on opposite sides of the diagonal a-c, the triangles do not overlap.
+        const bool opposite_sides = cross(wq[2] - wq[0], wq[1] - wq[0]) * cross(wq[2] - wq[0], wq[3] - wq[0]) < 0.0;
+        // Convex quad: the union is the quad, so pixel centres clearly inside it are covered.
+        const bool convex = opposite_sides && cross(wq[3] - wq[1], wq[0] - wq[1]) * cross(wq[3] - wq[1], wq[2] - wq[1]) < 0.0;
+        const double orientation = cross(wq[1] - wq[0], wq[2] - wq[0]) > 0.0 ? 1.0 : -1.0;
+        convex_trials += convex;
+        for (int row = 0; row < h; ++row)
+            for (int x = 0; x < w; ++x) {
+                const size_t i = g1.index(x, row);
+                const bool c1 = g1.object[i] >= 0, c2 = g2.object[i] >= 0;
+                if (opposite_sides) { ASSERT_FALSE(c1 && c2) << "trial " << trial << " pixel " << x << "," << row; }
+                ASSERT_EQ(g12.object[i] >= 0, c1 || c2) << "trial " << trial << " pixel " << x << "," << row;
+                if (!convex) continue;
+                // Distance of the pixel centre inside each outer edge (positive inside).
+                const glm::dvec2 p(x + 0.5, h - 1 - row + 0.5);
+                double inside = 1e9;
+                for (size_t k = 0; k < 4; ++k) {
+                    const glm::dvec2 a = wq[k], b = wq[(k + 1) % 4];
+                    inside = std::min(inside, orientation * cross(b - a, p - a) / glm::length(b - a));
+                }
+                if (inside > 0.01) { ASSERT_TRUE(c1 || c2) << "crack: trial " << trial << " pixel " << x << "," << row; }
+                if (inside < -0.01) { ASSERT_FALSE(c1 || c2) << "trial " << trial << " pixel " << x << "," << row; }
+            }
     }
+    EXPECT_GT(convex_trials, 50);
 }
 
 TEST(Raster, FanAroundAPixelCentreCoversItOnce) {
@@ -462,7 +485,7 @@ TEST(Raster, SphereSilhouetteAndPerspectiveCorrectAttributes) {
     ASSERT_TRUE(all_finite(g));
     // Silhouette: a cone of half-angle asin(1/d) around the view axis, a disk on the image.
     const double r_px = std::tan(std::asin(1.0 / distance)) / std::tan(double(radians(fovy)) / 2.0) * 256.0;
-    const double expected = M_PI * r_px * r_px;
+    const double expected = kPiD * r_px * r_px;
     EXPECT_NEAR(double(covered(g)) / expected, 1.0, 0.02);
 
     const mat4 clip_from_world = cam.proj * cam.view;
@@ -567,6 +590,38 @@ TEST(Raster, NearPlaneCrossingProducesNoNaN) {
     const GBuffer t = render(tri, c2);
     EXPECT_TRUE(all_finite(t));
     EXPECT_GT(covered(t), 0u);
+}
+
+TEST(Raster, FarPlaneClipsLikeGL) {
+    // A plane tilted away from the camera, partly beyond the far plane: what lies beyond it is
+    // clipped (GL without depth clamp), what lies before it is drawn.
+    TriMesh plane = make_primitive(Primitive::Plane, 4);
+    transform_mesh(plane, 3.f, vec3(0.f));
+    const vec3 eye(0.f, -4.f, 3.f), target(0.f);
+    const float far = 5.5f;
+    const RasterCamera cam = perspective_camera(64, 64, eye, target, 60.f, 0.1f, far);
+    const GBuffer g = render(plane, cam);
+    ASSERT_TRUE(all_finite(g));
+    const glm::dvec3 forward = glm::normalize(glm::dvec3(target - eye));
+    size_t drawn = 0, clipped = 0;
+    for (int row = 0; row < 64; ++row)
+        for (int x = 0; x < 64; ++x) {
+            const size_t i = g.index(x, row);
+            glm::dvec3 o, d;
+            pixel_ray(cam, x, row, o, d);
+            const glm::dvec3 hit = o + d * (-o.z / d.z);
+            const double view_depth = glm::dot(hit - glm::dvec3(eye), forward);
+            if (std::abs(hit.x) > 2.95 || std::abs(hit.y) > 2.95 || std::abs(view_depth - far) < 0.02) continue;
+            if (view_depth < far) {
+                EXPECT_GE(g.object[i], 0) << x << "," << row;
+                ++drawn;
+            } else {
+                EXPECT_EQ(g.object[i], -1) << x << "," << row;
+                ++clipped;
+            }
+        }
+    EXPECT_GT(drawn, size_t(200));
+    EXPECT_GT(clipped, size_t(50));
 }
 
 TEST(Raster, ModelMatrixTransformsNormalsAndTangents) {
