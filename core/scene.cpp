@@ -128,13 +128,31 @@ Target resolve_key(Scene& s, const std::string& key) {
 }  // namespace
 
 // [SECTION] Scene helpers
+// Tables are equal when every value is; paths compare by the file they name, so a preset saved
+// into another folder (its relative paths rebased) equals the original.
+static bool tables_equal(const Scene& sa, const ParamTable& a, const Scene& sb, const ParamTable& b) {
+    if (!(a.valid() && b.valid() && &a.group() == &b.group())) return a.valid() == b.valid() && !a.valid();
+    for (const auto& d : a.group().decls()) {
+        if (d.type == ParamType::Path) {
+            if (sa.resolve(a.get_string(d.name)) != sb.resolve(b.get_string(d.name))) return false;
+        } else if (a.get(d.name) != b.get(d.name)) {
+            return false;
+        }
+    }
+    return true;
+}
+
 bool Scene::operator==(const Scene& o) const {
-    if (schema != o.schema || name != o.name || description != o.description || !(camera == o.camera) || !(env == o.env) ||
-        !(effects == o.effects) || lights != o.lights || objects.size() != o.objects.size())
+    if (schema != o.schema || name != o.name || description != o.description || !tables_equal(*this, camera, o, o.camera) ||
+        !tables_equal(*this, env, o, o.env) || !tables_equal(*this, effects, o, o.effects) || lights.size() != o.lights.size() ||
+        objects.size() != o.objects.size())
         return false;
+    for (size_t i = 0; i < lights.size(); ++i)
+        if (!tables_equal(*this, lights[i], o, o.lights[i])) return false;
     for (size_t i = 0; i < objects.size(); ++i) {
         const auto &a = objects[i], &b = o.objects[i];
-        if (a.name != b.name || a.technique != b.technique || !(a.geometry == b.geometry) || !(a.material == b.material)) return false;
+        if (a.name != b.name || a.technique != b.technique || !tables_equal(*this, a.geometry, o, b.geometry) || !tables_equal(*this, a.material, o, b.material))
+            return false;
     }
     return true;
 }

@@ -3,15 +3,25 @@
 #include <epoxy/egl.h>
 #include <epoxy/gl.h>
 
+#include <dlfcn.h>
+#include <link.h>
+
 #include <cstdlib>
 #include <map>
 #include <mutex>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
 
-// Platform order can be narrowed for debugging with MESOLAB_EGL_PLATFORM=device|surfaceless|default
-// (comma-separated list allowed); unset means all three, in that order.
+// Notes beyond context.h:
+//  * MESOLAB_EGL_PLATFORM=device|surfaceless|default (comma-separated list allowed) narrows the
+//    platforms tried, for debugging; unset means all three, in that order.
+//  * The shared objects the first successful create() loads (the vendor's EGL/GL driver, e.g.
+//    Mesa's swrast_dri.so and libLLVM) stay loaded until exit (RTLD_NODELETE), although
+//    eglTerminate() would unload them. Re-creating a context is then cheap, and LeakSanitizer
+//    does not report the driver's static allocations as leaks with unresolvable stacks (memory
+//    reachable only from an unloaded library's globals; no suppression can match those frames).
 
 namespace mesolab::gpu {
 
@@ -72,6 +82,27 @@ void release_display(EGLDisplay d) {
     if (--it->second == 0) {
         g_display_refs.erase(it);
         eglTerminate(d);
+    }
+}
+
+// Paths of all shared objects in the process.
+std::set<std::string> loaded_objects() {
+    std::set<std::string> names;
+    dl_iterate_phdr(
+        [](dl_phdr_info* info, size_t, void* data) {
+            if (info->dlpi_name && *info->dlpi_name) static_cast<std::set<std::string>*>(data)->insert(info->dlpi_name);
+            return 0;
+        },
+        &names);
+    return names;
+}
+
+// Marks every shared object loaded since `before` as never to be unloaded.
+void pin_new_objects(const std::set<std::string>& before) {
+    for (const std::string& name : loaded_objects()) {
+        if (before.count(name)) continue;
+        if (void* handle = dlopen(name.c_str(), RTLD_LAZY | RTLD_NOLOAD | RTLD_NODELETE))
+            dlclose(handle);  // drops the reference dlopen just added; the NODELETE flag stays
     }
 }
 
@@ -165,6 +196,7 @@ GlInfo query_gl_info(const std::string& platform) {
 std::unique_ptr<HeadlessContext> HeadlessContext::create() {
     std::unique_ptr<HeadlessContext> ctx(new HeadlessContext());
     std::vector<std::string> failures;
+    const std::set<std::string> objects_before = loaded_objects();
 
     // Tries one display; on success ctx holds it and info is filled.
     auto attempt = [&](const std::string& label, const std::string& platform, auto get_display) {
@@ -177,6 +209,7 @@ std::unique_ptr<HeadlessContext> HeadlessContext::create() {
         }
         ctx->impl_ = std::move(impl);
         ctx->info_ = query_gl_info(platform);
+        pin_new_objects(objects_before);
         return true;
     };
 

@@ -28,6 +28,19 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
     std::map<std::string, PassFactory> factories;
     register_gpu_passes(factories);
     for (auto& [name, make] : factories) impl_->passes[name] = make();
+    // Warm-up draw: Mesa's llvmpipe answers a GL_TIME_ELAPSED query begun before a context's
+    // first draw with the system uptime, which would poison the first frame's GPU timing.
+    RenderTarget warm;
+    warm.resize(1, 1, 1);
+    warm.bind();
+    impl_->background.use();
+    GLuint vao = 0;
+    glGenVertexArrays(1, &vao);
+    glBindVertexArray(vao);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glBindVertexArray(0);
+    glDeleteVertexArrays(1, &vao);
+    glFinish();
 }
 
 Renderer::~Renderer() = default;
