@@ -171,6 +171,7 @@ int run_bench(const BenchOptions& o) {
             out << "\n";
         }
     }
+    if (o.profile) print_profile();
     if (o.out.empty()) {
         std::fputs(out.str().c_str(), stdout);
     } else {

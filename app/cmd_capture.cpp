@@ -83,6 +83,17 @@ json sidecar(const Scene& s, const std::string& file, const RenderResult& r, con
 }
 }  // namespace
 
+void print_profile() {
+    std::fprintf(stderr, "\n%-44s %-4s %10s %10s %10s %10s %6s\n", "scope", "dev", "last ms", "median", "min", "max", "n");
+    for (const auto& s : Profiler::global().stats()) {
+        // Indent by depth so the hierarchy reads at a glance.
+        const size_t depth = size_t(std::count(s.path.begin(), s.path.end(), '/'));
+        const std::string name = std::string(2 * depth, ' ') + s.path.substr(s.path.rfind('/') == std::string::npos ? 0 : s.path.rfind('/') + 1);
+        std::fprintf(stderr, "%-44s %-4s %10.3f %10.3f %10.3f %10.3f %6zu\n", name.c_str(), s.device == Device::Gpu ? "gpu" : "cpu", s.last, s.median,
+                     s.min, s.max, s.count);
+    }
+}
+
 // [SECTION] capture
 int run_capture(const CaptureOptions& o) {
     int w = 0, h = 0;

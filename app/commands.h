@@ -13,6 +13,7 @@ struct CaptureOptions {
     std::string backend = "gpu";
     std::vector<std::string> sets;
     std::vector<std::string> aovs;
+    bool profile = false;
 };
 int run_capture(const CaptureOptions& o);
 
@@ -22,6 +23,7 @@ struct BenchOptions {
     int repeat = 5;
     std::string out;
     std::string backend = "both";  // cpu|gpu|both
+    bool profile = false;
 };
 int run_bench(const BenchOptions& o);
 
@@ -53,6 +55,8 @@ struct GuiOptions {
 int run_gui(const GuiOptions& o);
 
 // Helpers shared by the commands.
+// The profiler's hierarchy (PROFILE_SCOPE paths) as a table on stderr.
+void print_profile();
 void parse_size(const std::string& s, int& w, int& h);  // "WxH", InputError otherwise
 std::vector<std::string> expand_presets(const std::vector<std::string>& args);  // folders -> *.json
 }  // namespace mesolab

@@ -39,6 +39,7 @@ int main(int argc, char** argv) {
     c->add_option("--size", cap.size, "Frame size WxH (texture mode may use the technique's native size)")->capture_default_str();
     c->add_option("--backend", cap.backend, "gpu (EGL, headless) or cpu")->capture_default_str();
     c->add_option("--set", cap.sets, "Override a parameter: KEY=VALUE (repeatable), e.g. camera.distance=4");
+    c->add_flag("--profile", cap.profile, "Print the scoped CPU/GPU timing hierarchy at the end");
     c->add_option("--aov", cap.aovs, "Also write this AOV as 32-bit float EXR (repeatable): radiance, normal, ...");
 
     BenchOptions bench;
@@ -48,6 +49,7 @@ int main(int argc, char** argv) {
     b->add_option("--repeat", bench.repeat, "Runs per cell (median, min, max)")->capture_default_str();
     b->add_option("-o,--output", bench.out, "Write to FILE instead of standard output");
     b->add_option("--backend", bench.backend, "cpu, gpu or both")->capture_default_str();
+    b->add_flag("--profile", bench.profile, "Print the scoped CPU/GPU timing hierarchy at the end");
 
     SweepOptions sweep;
     auto* s = app.add_subcommand("sweep", "Accuracy vs time: render a preset at each value of a knob, measure time and error against a reference");

@@ -51,6 +51,8 @@ void register_technique_panels(PanelRegistry& r);
 void help_marker(const char* text);
 // One widget for one declared parameter; returns true and marks `dirty` when edited.
 bool param_widget(const ParamDecl& d, ParamTable& t, Dirty& dirty, const char* id_suffix = "");
+// Screen rectangle (min x, min y, max x, max y) of the last parameter widget drawn (tests).
+void last_widget_rect(float out[4]);
 // Widgets for every used parameter of a table.
 bool param_table_widgets(ParamTable& t, Dirty& dirty, const char* id_suffix = "");
 }  // namespace mesolab::panels

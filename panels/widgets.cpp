@@ -20,6 +20,8 @@ void help_marker(const char* text) {
 }
 
 namespace {
+float g_last_rect[4] = {0, 0, 0, 0};
+
 std::string tooltip(const ParamGroup& g, const ParamDecl& d) {
     std::string s = g.name() + "." + d.name + "\n" + d.help;
     const std::string range = describe_range(d);
@@ -102,12 +104,18 @@ bool param_widget(const ParamDecl& d, ParamTable& t, Dirty& dirty, const char* i
             break;
         }
     }
+    const ImVec2 rmin = ImGui::GetItemRectMin(), rmax = ImGui::GetItemRectMax();
+    g_last_rect[0] = rmin.x, g_last_rect[1] = rmin.y, g_last_rect[2] = rmax.x, g_last_rect[3] = rmax.y;
     help_marker(tooltip(t.group(), d).c_str());
     if (changed) {
         t.set(d.name, v);
         dirty.mark(d.cost);
     }
     return changed;
+}
+
+void last_widget_rect(float out[4]) {
+    for (int i = 0; i < 4; ++i) out[i] = g_last_rect[i];
 }
 
 bool param_table_widgets(ParamTable& t, Dirty& dirty, const char* id_suffix) {
