@@ -48,7 +48,6 @@
 #include <fstream>
 #include <mutex>
 #include <optional>
-#include <sstream>
 #include <stop_token>
 #include <thread>
 
@@ -65,6 +64,8 @@ double ms_since(Clock::time_point t) { return std::chrono::duration<double, std:
 // Longest a scripted run waits for one evaluation (or a window resize) before giving up.
 constexpr double kScriptWaitCapS = 600.0;
 constexpr double kResizeWaitCapS = 10.0;
+// Frame time above which drags render the viewport at a reduced size.
+constexpr double kInteractiveBudgetMs = 40.0;
 
 // [SECTION] Small helpers
 std::string timestamp() {
@@ -87,6 +88,14 @@ std::string trim(const std::string& s) {
     if (b == std::string::npos) return "";
     const auto e = s.find_last_not_of(" \t\r\n");
     return s.substr(b, e - b + 1);
+}
+
+// Copy into a fixed text buffer of an ImGui input, truncating, always terminated.
+template <size_t N>
+void copy_text(char (&dst)[N], std::string_view src) {
+    const size_t n = std::min(src.size(), N - 1);
+    std::memcpy(dst, src.data(), n);
+    dst[n] = 0;
 }
 
 void ignore_imgui_log(void*, const char*, ...) {}
@@ -125,7 +134,12 @@ public:
     };
 
     Evaluator() : thread_([this](std::stop_token st) { loop(st); }) {}
-    ~Evaluator() { cancel_.store(true); }  // the jthread member (declared last) stops and joins first
+    ~Evaluator() {  // then the jthread member (declared last) stops and joins, first of all members
+        std::lock_guard lock(mutex_);
+        pending_.reset();
+        stopping_ = true;
+        cancel_.store(true);
+    }
 
     uint64_t submit(Scene s, StageKeys keys) {
         std::lock_guard lock(mutex_);
@@ -176,8 +190,8 @@ private:
                 job = std::move(*pending_);
                 pending_.reset();
                 running_ = true;
-                cancel_.store(false);
-                stage_ = "starting";
+                cancel_.store(stopping_);
+                stage_.clear();
                 fraction_ = 0;
                 started_ = Clock::now();
             }
@@ -215,7 +229,7 @@ private:
     mutable std::mutex mutex_;
     std::condition_variable_any cv_;
     std::optional<Job> pending_;
-    bool running_ = false;
+    bool running_ = false, stopping_ = false;
     uint64_t next_id_ = 0;
     std::atomic<bool> cancel_{false};
     std::string stage_;
@@ -475,7 +489,7 @@ private:
 
     // State changes
     void on_scene_changed();
-    void render_now();
+    void render_now(bool interacting);
     void update_display();
     bool settled() const;
     bool modified() const { return !(scene_ == saved_scene_); }
@@ -508,6 +522,7 @@ private:
     std::vector<StageRun> shown_runs_;
     std::string eval_note_;
     double last_eval_ms_ = 0;
+    bool eval_cancelled_ = false;  // the frame on screen is older than the scene
 
     // Rendering and display
     Scene render_scene_, rendered_scene_;
@@ -515,11 +530,14 @@ private:
     ivec2 view_size_{0, 0}, rendered_view_{0, 0}, frame_px_{0, 0};
     std::string aov_ = "radiance";
     float exposure_ev_ = 0.f;
-    double last_render_ms_ = 0;
+    double last_render_ms_ = 0, full_render_ms_ = 0;
+    bool reduced_frame_ = false;  // drawn at a reduced size during a drag
 
     // UI
     std::string error_;
+    ErrorOrigin error_origin_ = ErrorOrigin::Action;
     int error_count_ = 0;
+    panels::Dirty dirty_;  // what this frame's edits cost (panels and camera)
     std::string toast_;
     Clock::time_point toast_t0_{};
     Modal open_modal_ = Modal::None;
@@ -527,11 +545,11 @@ private:
     bool close_confirmed_ = false, quit_ = false;
     ImVec2 last_display_{0, 0};
     bool relayout_ = true;
+    bool image_covers_ = false;  // last frame's image filled the viewport window
     std::string tech_windows_;  // techniques with a window, to re-lay out when it changes
     std::vector<std::string> dropped_;
     std::string title_;
     int busy_frames_ = 3;
-    std::vector<std::string> pending_loads_;
 
     // Window screenshot: taken after ImGui drew, `settle` frames after the request.
     std::string window_shot_path_;
@@ -579,6 +597,7 @@ void Gui::report(const std::string& msg, bool input_error, ErrorOrigin origin) {
     }
     std::fprintf(stderr, "mesolab: %s%s\n", origin == ErrorOrigin::Evaluation ? "evaluation failed: " : "", msg.c_str());
     error_ = msg;
+    error_origin_ = origin;
     ++error_count_;
 }
 
@@ -613,7 +632,8 @@ void Gui::load(const std::string& path) {
     saved_scene_ = std::move(s);
     current_file_ = path;
     selected_object_ = 0;
-    std::strncpy(presets_.save_as, path.c_str(), sizeof presets_.save_as - 1);
+    scene_pending_ = true;  // the same values from another folder may resolve other files
+    copy_text(presets_.save_as, path);
     if (!scripted_) toast("Loaded " + path);
 }
 
@@ -625,6 +645,7 @@ void Gui::save_to(const std::string& path) {
     scene_ = s;
     saved_scene_ = std::move(s);
     current_file_ = path;
+    scene_pending_ = true;
     presets_.rescan();
     toast("Saved " + path);
 }
@@ -640,6 +661,7 @@ void Gui::paste() {
     }
     const std::string base = scene_.base_dir.empty() ? fs::current_path().string() : scene_.base_dir;
     scene_ = scene_from_json(j, "clipboard", base);
+    scene_pending_ = true;
     current_file_.clear();
     selected_object_ = 0;
     toast("Pasted a preset from the clipboard (untitled)");
@@ -677,7 +699,7 @@ void Gui::handle(const panels::PresetRequest& r) {
         case K::Save:
             if (current_file_.empty()) {
                 open_modal_ = Modal::SaveAs;
-                std::strncpy(modal_path_, presets_.save_as, sizeof modal_path_ - 1);
+                copy_text(modal_path_, presets_.save_as);
             } else {
                 attempt([&] { save_to(current_file_); });
             }
@@ -697,15 +719,18 @@ void Gui::on_scene_changed() {
     if (eval_ && keys == eval_keys_) {
         // Only redraw-cost edits since the last completed evaluation: no stage runs.
         if (evaluator_.busy()) evaluator_.cancel();  // an older edit's evaluation is not needed any more
+        wanted_id_ = 0;                               // and its outcome is ignored
         inflight_keys_.clear();
         eval_note_.clear();
+        eval_cancelled_ = false;
         render_scene_ = scene_;
         need_render_ = true;
         return;
     }
-    if (evaluator_.busy() && keys == inflight_keys_) return;  // the running evaluation computes exactly this
+    if (!evaluator_.idle() && keys == inflight_keys_) return;  // the running evaluation computes exactly this
     if (!evaluator_.busy() && keys == failed_keys_) return;   // these inputs just failed; the error is shown
     inflight_keys_ = keys;
+    eval_cancelled_ = false;
     wanted_id_ = evaluator_.submit(scene_, std::move(keys));
 }
 
@@ -724,26 +749,34 @@ void Gui::poll_evaluator() {
             // Edits made meanwhile that only cost a redraw are shown at once.
             render_scene_ = stage_keys(scene_) == o->keys ? scene_ : std::move(o->scene);
             need_render_ = true;
-            if (!error_.empty() && !scripted_) error_.clear();
+            if (!error_.empty() && error_origin_ == ErrorOrigin::Evaluation) error_.clear();  // fixed by this edit
         } else if (o->kind == K::Failed) {
             failed_keys_ = o->keys;
-            eval_note_ = "The last evaluation failed" + (o->stage.empty() || o->stage == "starting" ? std::string() : " after " + o->stage) + ": " + o->error +
+            eval_note_ = "The last evaluation failed" + (o->stage.empty() ? std::string() : " (last progress from " + o->stage + ")") + ": " + o->error +
                          (have_frame_ ? "  (showing the last good frame)" : "");
             report(o->error, o->input_error, ErrorOrigin::Evaluation);
         } else {
+            eval_cancelled_ = true;
             eval_note_ = "Evaluation cancelled; showing the last completed frame. Edit a parameter or use Re-evaluate to start again.";
         }
     }
 }
 
-void Gui::render_now() {
+void Gui::render_now(bool interacting) {
     need_render_ = false;
     rendered_view_ = view_size_;
-    const ivec2 req{std::max(16, view_size_.x), std::max(16, view_size_.y)};
+    // While a widget or the camera is being dragged, a slow renderer (llvmpipe) draws fewer
+    // pixels to keep up; the full-size frame follows when the drag ends.
+    float scale = 1.f;
+    if (interacting && !scripted_ && full_render_ms_ > kInteractiveBudgetMs)
+        scale = float(std::clamp(std::sqrt(kInteractiveBudgetMs / full_render_ms_), 0.25, 1.0));
+    const ivec2 req{std::max(16, int(float(view_size_.x) * scale)), std::max(16, int(float(view_size_.y) * scale))};
     const ivec2 size = frame_size(render_scene_, *eval_, req);
     const auto t0 = Clock::now();
     renderer_->render(render_scene_, *eval_, size.x, size.y);
     last_render_ms_ = ms_since(t0);
+    reduced_frame_ = scale < 1.f;
+    if (!reduced_frame_) full_render_ms_ = last_render_ms_;
     rendered_scene_ = render_scene_;
     frame_px_ = size;
     have_frame_ = true;
@@ -763,7 +796,7 @@ void Gui::update_display() {
 }
 
 bool Gui::settled() const {
-    return evaluator_.idle() && !scene_pending_ && scene_ == prev_scene_ && !need_render_ && !display_stale_ && have_frame_ &&
+    return evaluator_.idle() && !scene_pending_ && scene_ == prev_scene_ && !need_render_ && !display_stale_ && have_frame_ && !reduced_frame_ &&
            rendered_view_ == view_size_;
 }
 
@@ -918,6 +951,7 @@ void Gui::build_ui() {
     ImGui_ImplOpenGL3_NewFrame();
     ImGui_ImplGlfw_NewFrame();
     ImGui::NewFrame();
+    dirty_ = {};
     try {
         layout_windows();
         menu_bar();
@@ -937,13 +971,14 @@ void Gui::build_ui() {
 }
 
 void Gui::after_ui() {
-    if (scene_pending_ || !(scene_ == prev_scene_)) {
+    if (scene_pending_ || dirty_.any() || !(scene_ == prev_scene_)) {
         scene_pending_ = false;
         prev_scene_ = scene_;
         attempt([&] { on_scene_changed(); });
     }
-    if (eval_ && (need_render_ || rendered_view_ != view_size_)) {
-        attempt([&] { render_now(); }, ErrorOrigin::Render);
+    const bool interacting = ImGui::IsAnyItemActive();
+    if (eval_ && (need_render_ || rendered_view_ != view_size_ || (reduced_frame_ && !interacting))) {
+        attempt([&] { render_now(interacting); }, ErrorOrigin::Render);
     } else if (have_frame_ && display_stale_) {
         attempt([&] { update_display(); }, ErrorOrigin::Render);
     }
@@ -1014,7 +1049,7 @@ void Gui::menu_bar() {
         if (ImGui::MenuItem("Save", "Ctrl+S")) handle({panels::PresetRequest::Kind::Save, current_file_});
         if (ImGui::MenuItem("Save as...", "Ctrl+Shift+S")) {
             open_modal_ = Modal::SaveAs;
-            std::strncpy(modal_path_, presets_.save_as, sizeof modal_path_ - 1);
+            copy_text(modal_path_, presets_.save_as);
         }
         ImGui::Separator();
         if (ImGui::MenuItem("Copy preset JSON to clipboard")) handle({panels::PresetRequest::Kind::Copy, ""});
@@ -1073,23 +1108,29 @@ void Gui::viewport_window() {
     ImGui::SetNextWindowPos(r.view_pos, cond);
     ImGui::SetNextWindowSize(r.view_size, cond);
     ImGui::PushStyleVar(ImGuiStyleVar_WindowPadding, ImVec2(0, 0));
-    const bool open = ImGui::Begin("Viewport", nullptr, ImGuiWindowFlags_NoScrollbar | ImGuiWindowFlags_NoScrollWithMouse | ImGuiWindowFlags_NoCollapse);
+    // When the frame covers the whole window, skip its background: on llvmpipe every full layer
+    // of blended pixels costs milliseconds.
+    const ImGuiWindowFlags bg = image_covers_ ? ImGuiWindowFlags_NoBackground : 0;
+    const bool open = ImGui::Begin("Viewport", nullptr, ImGuiWindowFlags_NoScrollbar | ImGuiWindowFlags_NoScrollWithMouse | ImGuiWindowFlags_NoCollapse | bg);
     ImGui::PopStyleVar();
+    image_covers_ = false;
     if (open) {
         const ImVec2 p0 = ImGui::GetCursorScreenPos();
         const ImVec2 avail = ImGui::GetContentRegionAvail();
         if (avail.x >= 1.f && avail.y >= 1.f) {
             view_size_ = {std::max(16, int(avail.x)), std::max(16, int(avail.y))};
             ImDrawList* dl = ImGui::GetWindowDrawList();
-            dl->AddRectFilled(p0, ImVec2(p0.x + avail.x, p0.y + avail.y), IM_COL32(22, 23, 26, 255));
             if (have_frame_ && display_->valid()) {
                 // Fit the frame (texture mode may have its own size), centred, aspect kept.
                 const float sx = avail.x / float(frame_px_.x), sy = avail.y / float(frame_px_.y);
                 const float s = std::min(sx, sy);
                 const ImVec2 size(std::floor(float(frame_px_.x) * s), std::floor(float(frame_px_.y) * s));
+                image_covers_ = size.x >= avail.x - 1.f && size.y >= avail.y - 1.f;
+                if (!image_covers_) dl->AddRectFilled(p0, ImVec2(p0.x + avail.x, p0.y + avail.y), IM_COL32(22, 23, 26, 255));
                 ImGui::SetCursorScreenPos(ImVec2(std::floor(p0.x + (avail.x - size.x) * 0.5f), std::floor(p0.y + (avail.y - size.y) * 0.5f)));
                 ImGui::Image(texture_id(display_->texture()), size, ImVec2(0, 1), ImVec2(1, 0));  // GL rows are bottom-up
             } else {
+                dl->AddRectFilled(p0, ImVec2(p0.x + avail.x, p0.y + avail.y), IM_COL32(22, 23, 26, 255));
                 const char* msg = evaluator_.busy() ? "Evaluating stages..." : "No frame yet";
                 const ImVec2 ts = ImGui::CalcTextSize(msg);
                 dl->AddText(ImVec2(p0.x + (avail.x - ts.x) * 0.5f, p0.y + (avail.y - ts.y) * 0.5f), IM_COL32(150, 153, 160, 255), msg);
@@ -1118,6 +1159,7 @@ void Gui::camera_input(ImVec2 size) {
             if (phi > 180.f) phi -= 360.f;
             if (phi < -180.f) phi += 360.f;
             cam.set("orbit", std::array<double, 2>{theta, phi});
+            dirty_.mark(cam.group().find("orbit")->cost);
         } else if (!texture_mode && (ImGui::IsMouseDown(ImGuiMouseButton_Right) || ImGui::IsMouseDown(ImGuiMouseButton_Middle))) {
             // Pan the target in the view plane, one pixel = one pixel's footprint at the target.
             const vec2 o = cam.get_vec2("orbit");
@@ -1130,12 +1172,14 @@ void Gui::camera_input(ImVec2 size) {
             const vec3 t = cam.get_vec3("target") - right * (d.x * px) + up * (d.y * px);
             auto clampc = [](float v) { return std::clamp(double(v), -1e6, 1e6); };
             cam.set("target", std::array<double, 3>{clampc(t.x), clampc(t.y), clampc(t.z)});
+            dirty_.mark(cam.group().find("target")->cost);
         }
     }
     if (hovered && io.MouseWheel != 0.f && !texture_mode) {
         const double dist = cam.get_float("distance") * std::pow(1.1, -double(io.MouseWheel));
         const ParamDecl* dd = cam.group().find("distance");
         cam.set("distance", std::clamp(dist, dd->min, dd->max));
+        dirty_.mark(dd->cost);
     }
     if (hovered && !active && !io.WantTextInput) ImGui::SetMouseCursor(ImGuiMouseCursor_Hand);
 }
@@ -1185,7 +1229,8 @@ void Gui::viewport_overlays(ImVec2 p0, ImVec2 size) {
         ImGui::PushStyleColor(ImGuiCol_ChildBg, IM_COL32(28, 30, 34, 230));
         const float h = ImGui::GetFrameHeight() * 2.f + ImGui::GetStyle().WindowPadding.y * 2.f + ImGui::GetStyle().ItemSpacing.y;
         if (ImGui::BeginChild("##progress", ImVec2(std::min(380.f, size.x - 2.f * pad), h), true, ImGuiWindowFlags_NoScrollbar)) {
-            ImGui::Text("Evaluating  %s", pr.stage.c_str());
+            if (pr.stage.empty()) ImGui::TextUnformatted("Evaluating stages");
+            else ImGui::Text("Evaluating stages  %s %s", pr.fraction >= 1.0 ? "done:" : "in", pr.stage.c_str());
             ImGui::SameLine(ImGui::GetContentRegionMax().x - ImGui::CalcTextSize("00.0 s").x);
             ImGui::TextDisabled("%.1f s", pr.seconds);
             char label[32];
@@ -1195,6 +1240,7 @@ void Gui::viewport_overlays(ImVec2 p0, ImVec2 size) {
             if (ImGui::Button("Cancel")) {
                 evaluator_.cancel();
                 inflight_keys_.clear();
+                eval_cancelled_ = true;
                 eval_note_ = "Evaluation cancelled; showing the last completed frame. Edit a parameter or use Re-evaluate to start again.";
             }
         }
@@ -1205,7 +1251,7 @@ void Gui::viewport_overlays(ImVec2 p0, ImVec2 size) {
     // Frame info, top right.
     if (have_frame_) {
         char info[160];
-        std::snprintf(info, sizeof info, "%dx%d  %s  %.1f ms", frame_px_.x, frame_px_.y, aov_.c_str(), last_render_ms_);
+        std::snprintf(info, sizeof info, "%dx%d%s  %s  %.1f ms", frame_px_.x, frame_px_.y, reduced_frame_ ? " (preview)" : "", aov_.c_str(), last_render_ms_);
         const ImVec2 ts = ImGui::CalcTextSize(info);
         const ImVec2 a(p0.x + size.x - ts.x - pad - 8.f, p0.y + pad + (error_.empty() ? 0.f : y - p0.y - pad));
         dl->AddRectFilled(ImVec2(a.x - 6.f, a.y - 3.f), ImVec2(a.x + ts.x + 6.f, a.y + ts.y + 3.f), IM_COL32(15, 16, 18, 170), 3.f);
@@ -1233,13 +1279,12 @@ void Gui::side_windows() {
     std::vector<const panels::PanelEntry*> techs;
     for (const auto& e : technique_panels_.entries)
         if (scene_.uses_technique(e.technique)) techs.push_back(&e);
-    const float scene_h = std::floor(r.body_h * (techs.empty() ? 0.68f : 0.5f));
-    const float tech_total = techs.empty() ? 0.f : std::floor(r.body_h * 0.24f);
+    const float scene_h = std::floor(r.body_h * (techs.empty() ? 0.66f : 0.48f));
+    const float tech_total = techs.empty() ? 0.f : std::floor(r.body_h * 0.22f);
     const float presets_h = r.body_h - scene_h - tech_total;
     float y = r.top;
 
-    panels::Dirty dirty;
-    panels::PanelContext ctx{scene_, dirty, eval_ ? &*eval_ : nullptr, selected_object_};
+    panels::PanelContext ctx{scene_, dirty_, eval_ ? &*eval_ : nullptr, selected_object_};
 
     ImGui::SetNextWindowPos(ImVec2(r.side_x, y), cond);
     ImGui::SetNextWindowSize(ImVec2(r.side_w, scene_h), cond);
@@ -1282,6 +1327,7 @@ void Gui::timings_window() {
             StageKeys keys = stage_keys(scene_);
             if (!eval_ || keys != eval_keys_) {
                 inflight_keys_ = keys;
+                eval_cancelled_ = false;
                 wanted_id_ = evaluator_.submit(scene_, std::move(keys));
             } else {
                 toast("Up to date: every stage key matches the last evaluation");
@@ -1315,8 +1361,9 @@ void Gui::status_bar() {
         }
         ImGui::SameLine(0, 24);
         const Evaluator::Progress pr = evaluator_.progress();
-        if (pr.running) ImGui::TextColored(ImVec4(0.45f, 0.7f, 1.f, 1.f), "evaluating %s %.0f%%", pr.stage.c_str(), 100.0 * pr.fraction);
+        if (pr.running) ImGui::TextColored(ImVec4(0.45f, 0.7f, 1.f, 1.f), "evaluating stages %.1f s", pr.seconds);
         else if (!failed_keys_.empty()) ImGui::TextColored(ImVec4(0.92f, 0.4f, 0.35f, 1.f), "evaluation failed");
+        else if (eval_cancelled_) ImGui::TextColored(ImVec4(0.9f, 0.67f, 0.3f, 1.f), "evaluation cancelled: the frame is out of date");
         else if (eval_) ImGui::TextDisabled("up to date");
         TimingStat fs{};
         char right[256];
@@ -1340,15 +1387,17 @@ void Gui::modals() {
     ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
     ImGui::SetNextWindowSize(ImVec2(560, 420), ImGuiCond_Appearing);
     if (ImGui::BeginPopupModal("Open preset")) {
-        panels::PresetRequest r = panels::preset_list(presets_, ImGui::GetContentRegionAvail().y - ImGui::GetFrameHeightWithSpacing() * 2.f);
+        const bool appearing = ImGui::IsWindowAppearing();
+        panels::PresetRequest r = panels::preset_list(presets_, ImGui::GetContentRegionAvail().y - ImGui::GetFrameHeightWithSpacing() * 3.f);
         ImGui::SetNextItemWidth(-1);
+        if (appearing) ImGui::SetKeyboardFocusHere();
         const bool enter = ImGui::InputTextWithHint("##open_path", "path/to/preset.json (or pick one above)", modal_path_, sizeof modal_path_, ImGuiInputTextFlags_EnterReturnsTrue);
         std::string path = modal_path_;
         if (path.empty() && presets_.selected >= 0 && presets_.selected < int(presets_.files.size())) path = presets_.files[size_t(presets_.selected)];
         if (r.kind == panels::PresetRequest::Kind::Load) path = r.path;
         const bool go = ImGui::Button("Open", ImVec2(120, 0)) || enter || r.kind == panels::PresetRequest::Kind::Load;
         ImGui::SameLine();
-        if (ImGui::Button("Cancel", ImVec2(120, 0))) ImGui::CloseCurrentPopup();
+        if (ImGui::Button("Cancel", ImVec2(120, 0)) || ImGui::IsKeyPressed(GLFW_KEY_ESCAPE, false)) ImGui::CloseCurrentPopup();
         if (go && !path.empty()) {
             bool ok = true;
             try {
@@ -1384,7 +1433,7 @@ void Gui::modals() {
             if (ok) ImGui::CloseCurrentPopup();
         }
         ImGui::SameLine();
-        if (ImGui::Button("Cancel", ImVec2(120, 0))) ImGui::CloseCurrentPopup();
+        if (ImGui::Button("Cancel", ImVec2(120, 0)) || ImGui::IsKeyPressed(GLFW_KEY_ESCAPE, false)) ImGui::CloseCurrentPopup();
         ImGui::EndPopup();
     }
 
@@ -1396,7 +1445,7 @@ void Gui::modals() {
             ImGui::CloseCurrentPopup();
             if (current_file_.empty()) {
                 open_modal_ = Modal::SaveAs;
-                std::strncpy(modal_path_, presets_.save_as, sizeof modal_path_ - 1);
+                copy_text(modal_path_, presets_.save_as);
             } else {
                 attempt([&] {
                     save_to(current_file_);
@@ -1412,7 +1461,7 @@ void Gui::modals() {
             ImGui::CloseCurrentPopup();
         }
         ImGui::SameLine();
-        if (ImGui::Button("Cancel", ImVec2(100, 0))) ImGui::CloseCurrentPopup();
+        if (ImGui::Button("Cancel", ImVec2(100, 0)) || ImGui::IsKeyPressed(GLFW_KEY_ESCAPE, false)) ImGui::CloseCurrentPopup();
         ImGui::EndPopup();
     }
 }
@@ -1424,7 +1473,7 @@ void Gui::shortcuts() {
     if (io.KeyCtrl && !io.KeyShift && ImGui::IsKeyPressed(GLFW_KEY_S, false)) handle({panels::PresetRequest::Kind::Save, current_file_});
     if (io.KeyCtrl && io.KeyShift && ImGui::IsKeyPressed(GLFW_KEY_S, false)) {
         open_modal_ = Modal::SaveAs;
-        std::strncpy(modal_path_, presets_.save_as, sizeof modal_path_ - 1);
+        copy_text(modal_path_, presets_.save_as);
     }
     if (io.KeyCtrl && ImGui::IsKeyPressed(GLFW_KEY_Q, false)) glfwSetWindowShouldClose(window_, GLFW_TRUE);
     if (ImGui::IsKeyPressed(GLFW_KEY_F12, false)) {

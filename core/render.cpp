@@ -142,7 +142,10 @@ Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height) {
     const FrameCamera cam = make_camera(s, world_bounds(s, ev), width, height);
     const Lighting lighting = make_lighting(s, ev);
 
-    GBuffer gb;
+    // The G-buffer is reused between frames of a thread: first-touch of ~50 bytes per pixel
+    // costs more than the rasterisation of a simple scene.
+    thread_local GBuffer tls_gbuffer;
+    GBuffer& gb = tls_gbuffer;  // lambdas on worker threads must see this thread's buffer
     {
         PROFILE_SCOPE("raster");
         std::vector<DrawItem> items;

@@ -42,7 +42,7 @@ PresetRequest preset_list(PresetBrowser& b, float height) {
     PresetRequest req;
     if (ImGui::GetTime() - b.last_scan > 2.0) b.rescan();
     ImGui::SetNextItemWidth(-ImGui::GetFrameHeight() - ImGui::GetStyle().ItemSpacing.x);
-    ImGui::InputTextWithHint("##filter", "Filter presets", b.filter, sizeof b.filter);
+    ImGui::InputTextWithHint("##filter", "Filter presets (or drop a .json on the window)", b.filter, sizeof b.filter);
     ImGui::SameLine();
     if (ImGui::Button("R", ImVec2(ImGui::GetFrameHeight(), 0))) b.rescan();
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("Rescan %s/", b.root.c_str());
@@ -59,8 +59,10 @@ PresetRequest preset_list(PresetBrowser& b, float height) {
             }
             if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s\nDouble-click to load", f.c_str());
         }
+        ImGui::PushTextWrapPos(0.f);
         if (b.files.empty()) ImGui::TextDisabled("No preset under %s/ (relative to the working directory)", b.root.c_str());
         else if (!shown) ImGui::TextDisabled("No preset matches the filter");
+        ImGui::PopTextWrapPos();
     }
     ImGui::EndChild();
     return req;
@@ -77,7 +79,7 @@ PresetRequest presets_panel(PresetBrowser& b, const std::string& current_file, b
     }
 
     const float list_h = std::max(ImGui::GetTextLineHeightWithSpacing() * 3.f,
-                                  ImGui::GetContentRegionAvail().y - ImGui::GetFrameHeightWithSpacing() * 4.f - ImGui::GetStyle().ItemSpacing.y);
+                                  ImGui::GetContentRegionAvail().y - ImGui::GetFrameHeightWithSpacing() * 3.f);
     PresetRequest picked = preset_list(b, list_h);
     if (picked.kind != PresetRequest::Kind::None) req = picked;
 
@@ -103,7 +105,6 @@ PresetRequest presets_panel(PresetBrowser& b, const std::string& current_file, b
     const bool enter = ImGui::InputText("##save_as", b.save_as, sizeof b.save_as, ImGuiInputTextFlags_EnterReturnsTrue);
     ImGui::SameLine();
     if (ImGui::Button("Save as") || enter) req = {PresetRequest::Kind::SaveAs, b.save_as};
-    ImGui::TextDisabled("Drop a preset file on the window to load it.");
     return req;
 }
 }  // namespace mesolab::panels

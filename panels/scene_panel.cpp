@@ -41,9 +41,12 @@ void scene_panel(PanelContext& ctx, const Scene* reference) {
                 ctx.dirty.mark(Cost::Redraw);
             }
             ImGui::EndDisabled();
+            if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled)) ImGui::SetTooltip("Back to the camera of the loaded preset");
             ImGui::SameLine();
         }
-        ImGui::TextDisabled("drag: orbit   right/middle-drag: pan   wheel: zoom");
+        ImGui::TextDisabled("(?)");
+        if (ImGui::IsItemHovered())
+            ImGui::SetTooltip("In the viewport:\n  left-drag          orbit (theta, phi)\n  right/middle-drag  pan the target\n  wheel              zoom (distance x 1.1 per notch)");
         ImGui::PopID();
     }
 

@@ -48,9 +48,10 @@ void stages_table(const std::vector<StageRun>& runs) {
     if (!ImGui::BeginTable("##stages", 4, kTableFlags)) return;
     ImGui::TableSetupScrollFreeze(0, 1);
     ImGui::TableSetupColumn("Stage", ImGuiTableColumnFlags_WidthStretch);
-    ImGui::TableSetupColumn("Status");
-    ImGui::TableSetupColumn("ms");
-    ImGui::TableSetupColumn("Paper ms");
+    const float num = ImGui::CalcTextSize("00000.00").x;
+    ImGui::TableSetupColumn("Status", ImGuiTableColumnFlags_WidthFixed, ImGui::CalcTextSize("cancelled (?)").x);
+    ImGui::TableSetupColumn("ms", ImGuiTableColumnFlags_WidthFixed, num);
+    ImGui::TableSetupColumn("Paper ms", ImGuiTableColumnFlags_WidthFixed, ImGui::CalcTextSize("Paper ms").x);
     ImGui::TableHeadersRow();
     for (const StageRun& r : runs) {
         ImGui::TableNextRow();
@@ -96,14 +97,12 @@ void profiler_table(const std::vector<TimingStat>& stats) {
     if (!ImGui::BeginTable("##profiler", 9, kTableFlags)) return;
     ImGui::TableSetupScrollFreeze(0, 1);
     ImGui::TableSetupColumn("Path", ImGuiTableColumnFlags_WidthStretch);
-    ImGui::TableSetupColumn("Dev");
-    ImGui::TableSetupColumn("Last");
-    ImGui::TableSetupColumn("Median");
-    ImGui::TableSetupColumn("Min");
-    ImGui::TableSetupColumn("Max");
-    ImGui::TableSetupColumn("n");
-    ImGui::TableSetupColumn("Paper");
-    ImGui::TableSetupColumn("Ratio");
+    const float num = ImGui::CalcTextSize("00000.00").x;
+    ImGui::TableSetupColumn("Dev", ImGuiTableColumnFlags_WidthFixed, ImGui::CalcTextSize("GPU").x);
+    for (const char* c : {"Last", "Median", "Min", "Max"}) ImGui::TableSetupColumn(c, ImGuiTableColumnFlags_WidthFixed, num);
+    ImGui::TableSetupColumn("n", ImGuiTableColumnFlags_WidthFixed, ImGui::CalcTextSize("000").x);
+    ImGui::TableSetupColumn("Paper", ImGuiTableColumnFlags_WidthFixed, num);
+    ImGui::TableSetupColumn("Ratio", ImGuiTableColumnFlags_WidthFixed, ImGui::CalcTextSize("x0.000").x);
     ImGui::TableHeadersRow();
     for (const TimingStat& s : stats) {
         ImGui::TableNextRow();

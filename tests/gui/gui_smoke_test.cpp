@@ -65,7 +65,14 @@ protected:
         const std::string inner = q(MESOLAB_BINARY) + " gui " + args + " >/dev/null 2>" + q(err.string()) + "; echo $? >" + q(status.string());
         const std::string cmd = "cd " + q(dir_.string()) + " && timeout 600 xvfb-run -a -s " + q("-screen 0 1600x1000x24") + " sh -c " + q(inner) +
                                 " >" + q((dir_ / "xvfb.txt").string()) + " 2>&1";
-        const int rc = std::system(cmd.c_str());
+        // `xvfb-run -a` instances started at the same moment (ctest -j) may race for a display
+        // number; one of them then fails before running anything. Try again in that case.
+        int rc = 0;
+        for (int attempt = 0; attempt < 3; ++attempt) {
+            rc = std::system(cmd.c_str());
+            if (fs::exists(status)) break;
+            ::sleep(1);
+        }
         Result r;
         r.err = slurp(err);
         const std::string st = slurp(status);
