@@ -155,6 +155,7 @@ Evaluation StageGraph::evaluate(const Scene& scene, const std::vector<std::strin
                 }
         }
         StageContext ctx(scene, ev, d.name, progress, cancel);
+        if (progress) progress(d.name, 0.0);  // lets a UI name the stage that is running
         std::any result;
         try {
             if (cancel && cancel->load()) throw Cancelled();
@@ -165,12 +166,14 @@ Evaluation StageGraph::evaluate(const Scene& scene, const std::vector<std::strin
             run.ms = ms_since();
             ev.runs.push_back(run);
             throw;
+        } catch (const InputError& e) {
+            run.status = StageStatus::Failed;
+            run.reason = e.what();
+            throw InputError("stage " + d.name + ": " + e.what());  // bad input stays exit status 2
         } catch (const std::exception& e) {
             run.status = StageStatus::Failed;
             run.reason = e.what();
-            run.ms = ms_since();
-            ev.runs.push_back(run);
-            throw;
+            throw std::runtime_error("stage " + d.name + ": " + e.what());
         }
         run.status = StageStatus::Ran;
         run.ms = ms_since();

@@ -148,11 +148,11 @@ void Renderer::set_lighting_uniforms(const Program& p, const Lighting& L, int en
     glUniform1i(p.uniform("u_light_count"), n);
     for (int i = 0; i < n; ++i) {
         const Light& l = L.lights[size_t(i)];
-        const std::string idx = "[" + std::to_string(i) + "]";
-        glUniform1i(p.uniform(("u_light_point" + idx).c_str()), l.point ? 1 : 0);
-        glUniform3fv(p.uniform(("u_light_dir" + idx).c_str()), 1, glm::value_ptr(l.direction));
-        glUniform3fv(p.uniform(("u_light_pos" + idx).c_str()), 1, glm::value_ptr(l.position));
-        glUniform3fv(p.uniform(("u_light_radiance" + idx).c_str()), 1, glm::value_ptr(l.radiance));
+        auto at = [i](const char* array) { return std::string(array).append("[").append(std::to_string(i)).append("]"); };
+        glUniform1i(p.uniform(at("u_light_point").c_str()), l.point ? 1 : 0);
+        glUniform3fv(p.uniform(at("u_light_dir").c_str()), 1, glm::value_ptr(l.direction));
+        glUniform3fv(p.uniform(at("u_light_pos").c_str()), 1, glm::value_ptr(l.position));
+        glUniform3fv(p.uniform(at("u_light_radiance").c_str()), 1, glm::value_ptr(l.radiance));
     }
     glUniform3fv(p.uniform("u_env_color"), 1, glm::value_ptr(L.env.color));
     glUniform1f(p.uniform("u_env_intensity"), L.env.intensity);
