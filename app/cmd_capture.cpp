@@ -152,6 +152,7 @@ int run_capture(const CaptureOptions& o) {
         std::printf("%-28s %4dx%-4d %-6s stages %7.2f ms (%d ran, %d cached, %d skipped)  render %7.2f ms  -> %s\n", s.name.c_str(), r.frame.width,
                     r.frame.height, req.backend == Backend::Cpu ? "cpu" : "gpu", r.stages_ms, ran, cached, skipped, r.render_ms, png.c_str());
     }
+    if (o.profile) print_profile();
     return 0;
 }
 }  // namespace mesolab

@@ -1,6 +1,7 @@
 #include "core/param.h"
 #include "core/error.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -75,6 +76,12 @@ const char* to_string(Cost c) {
         case Cost::Recompute: return "recompute";
     }
     return "?";
+}
+
+bool ParamDecl::is_file(const Value& v) const {
+    if (type != ParamType::Path) return false;
+    const auto& s = std::get<std::string>(v);
+    return !s.empty() && std::find(choices.begin(), choices.end(), s) == choices.end();
 }
 
 // [SECTION] ParamGroup
@@ -164,7 +171,8 @@ bool ParamTable::is_used(const ParamDecl& d) const {
 // [SECTION] Validation and conversions
 std::string describe_range(const ParamDecl& d) {
     if (d.type == ParamType::Enum) return choices_text(d);
-    if (d.type == ParamType::Bool || d.type == ParamType::Path) return "";
+    if (d.type == ParamType::Path) return d.choices.empty() ? "" : choices_text(d) + " or a file";
+    if (d.type == ParamType::Bool) return "";
     auto b = [](double v) { return std::isinf(v) ? std::string(v < 0 ? "-inf" : "inf") : fmt_double(v); };
     return "[" + b(d.min) + ", " + b(d.max) + "]";
 }
@@ -329,7 +337,7 @@ std::string value_to_text(const ParamDecl& d, const Value& v) {
 
 std::string value_canonical(const ParamDecl& d, const Value& v, const std::string& base_dir) {
     std::string s = d.name + "=" + value_to_text(d, v);
-    if (d.type == ParamType::Path && !std::get<std::string>(v).empty()) {
+    if (d.is_file(v)) {
         namespace fs = std::filesystem;
         fs::path p = std::get<std::string>(v);
         if (p.is_relative() && !base_dir.empty()) p = fs::path(base_dir) / p;
@@ -349,6 +357,7 @@ json group_schema(const ParamGroup& g) {
         p["type"] = to_string(d.type);
         p["default"] = value_to_json(d, d.def);
         if (d.type == ParamType::Enum) p["choices"] = d.choices;
+        if (d.type == ParamType::Path && !d.choices.empty()) p["builtins"] = d.choices;
         if (std::isfinite(d.min)) p["min"] = d.min;
         if (std::isfinite(d.max)) p["max"] = d.max;
         if (!d.unit.empty()) p["unit"] = d.unit;

@@ -42,7 +42,7 @@ struct ParamDecl {
     std::string unit;
     std::string help;
     Cost cost = Cost::Redraw;
-    std::vector<std::string> choices;  // Enum values
+    std::vector<std::string> choices;  // Enum values; for Path: built-in names accepted instead of a file
     Accuracy accuracy = Accuracy::None;
     std::optional<Value> reference;    // the converged setting of this knob, for sweeps
     bool log_scale = false;            // widget hint: logarithmic slider
@@ -58,6 +58,9 @@ struct ParamDecl {
     ParamDecl& costs(Cost c) { cost = c; return *this; }
     ParamDecl& log() { log_scale = true; return *this; }
     ParamDecl& more_accurate(Accuracy a, std::optional<Value> ref = std::nullopt) { accuracy = a; reference = std::move(ref); return *this; }
+    ParamDecl& builtins(std::vector<std::string> names) { choices = std::move(names); return *this; }
+    // A Path value that names a file (not one of the built-in names, not empty).
+    bool is_file(const Value& v) const;
     ParamDecl& used_when(std::string key, std::vector<std::string> values) { used_when_key = std::move(key); used_when_values = std::move(values); return *this; }
 };
 

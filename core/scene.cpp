@@ -29,9 +29,8 @@ std::string list_text(const std::vector<std::string>& v) {
 
 // Path values must name an existing file; relative paths are relative to base_dir.
 void check_path(const ParamDecl& d, const Value& v, const std::string& base_dir, const std::string& source, const std::string& key) {
-    if (d.type != ParamType::Path) return;
+    if (!d.is_file(v)) return;
     const auto& p = std::get<std::string>(v);
-    if (p.empty()) return;
     fs::path full = p;
     if (full.is_relative() && !base_dir.empty()) full = fs::path(base_dir) / full;
     std::error_code ec;
@@ -133,7 +132,7 @@ Target resolve_key(Scene& s, const std::string& key) {
 static bool tables_equal(const Scene& sa, const ParamTable& a, const Scene& sb, const ParamTable& b) {
     if (!(a.valid() && b.valid() && &a.group() == &b.group())) return a.valid() == b.valid() && !a.valid();
     for (const auto& d : a.group().decls()) {
-        if (d.type == ParamType::Path) {
+        if (d.is_file(a.get(d.name)) || d.is_file(b.get(d.name))) {
             if (sa.resolve(a.get_string(d.name)) != sb.resolve(b.get_string(d.name))) return false;
         } else if (a.get(d.name) != b.get(d.name)) {
             return false;
@@ -335,9 +334,8 @@ void save_preset(const Scene& s, const std::string& path) {
     const fs::path dir = fs::absolute(path).lexically_normal().parent_path();
     auto rebase = [&](ParamTable& t) {
         for (const auto& d : t.group().decls()) {
-            if (d.type != ParamType::Path) continue;
+            if (!d.is_file(t.get(d.name))) continue;
             const std::string& p = t.get_string(d.name);
-            if (p.empty()) continue;
             fs::path full = s.resolve(p);
             t.set(d.name, fs::path(full).lexically_proximate(dir).string());
         }
@@ -361,7 +359,7 @@ void apply_set(Scene& s, const std::string& key, const std::string& value) {
     const ParamDecl* d = g.find(t.param);
     if (!d) throw InputError("--set " + key + ": unknown key" + suggestion(key, public_keys(s)) + "; " + g.name() + " parameters are: " + list_text(g.names()));
     Value v = value_from_text(*d, value, "--set " + key);
-    if (d->type == ParamType::Path && !value.empty()) {
+    if (d->is_file(v)) {
         // A path typed on the command line is relative to the working folder.
         const fs::path abs = fs::absolute(value).lexically_normal();
         if (!fs::is_regular_file(abs)) throw InputError("--set " + key + ": file '" + value + "' not found");

@@ -87,6 +87,10 @@ const StageDecl* StageGraph::find(const std::string& name) const {
 }
 
 bool StageGraph::enabled(const Scene& scene, const StageDecl& d, std::string* reason) const {
+    if (d.when && !d.when(scene)) {
+        if (reason) *reason = "not needed unless " + d.when_text;
+        return false;
+    }
     if (d.effects.empty()) return true;
     for (const auto& e : d.effects)
         if (scene.effects.group().find(e) && scene.effect(e)) return true;

@@ -37,6 +37,9 @@ struct StageDecl {
     std::vector<std::string> params;   // public keys or "group.*"
     std::vector<std::string> inputs;   // upstream stage names
     std::vector<std::string> effects;  // empty: needed whenever downstream needs it
+    // Also needed only when this holds (e.g. microgeom.shadows == ellipse); `when_text` says so.
+    std::function<bool(const Scene&)> when;
+    std::string when_text;
     std::optional<PaperFigure> paper;
     // Returns the result as std::shared_ptr<const T> wrapped in std::any (or an empty any).
     std::function<std::any(StageContext&)> run;

@@ -93,11 +93,24 @@ bool param_widget(const ParamDecl& d, ParamTable& t, Dirty& dirty, const char* i
             break;
         }
         case ParamType::Path: {
-            // Edited as text; applied on Enter. A missing file is shown, not applied.
+            // Built-in names (e.g. procedural heightfields) in a combo; a file path as text,
+            // applied on Enter. A missing file is reported by the stage that reads it.
+            const std::string cur = std::get<std::string>(v);
+            if (!d.choices.empty()) {
+                if (ImGui::BeginCombo(label.c_str(), cur.c_str())) {
+                    for (const auto& c : d.choices)
+                        if (ImGui::Selectable(c.c_str(), c == cur) && c != cur) {
+                            v = c;
+                            changed = true;
+                        }
+                    ImGui::EndCombo();
+                }
+            }
             char buf[1024];
-            std::strncpy(buf, std::get<std::string>(v).c_str(), sizeof buf - 1);
+            std::strncpy(buf, d.is_file(t.get(d.name)) || d.choices.empty() ? cur.c_str() : "", sizeof buf - 1);
             buf[sizeof buf - 1] = 0;
-            if (ImGui::InputText(label.c_str(), buf, sizeof buf, ImGuiInputTextFlags_EnterReturnsTrue)) {
+            const std::string text_label = d.choices.empty() ? label : "file##" + t.group().name() + d.name + id_suffix;
+            if (ImGui::InputTextWithHint(text_label.c_str(), "path (Enter to apply)", buf, sizeof buf, ImGuiInputTextFlags_EnterReturnsTrue)) {
                 v = std::string(buf);
                 changed = true;
             }

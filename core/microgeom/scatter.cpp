@@ -1,0 +1,146 @@
+#include "core/microgeom/scatter.h"
+
+#include <tbb/parallel_for.h>
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+namespace mesolab::microgeom {
+
+// [SECTION] Look-ups
+template <class T>
+T sample_bilinear(const std::vector<T>& tex, int w, int h, bool periodic, float c, float r) {
+    const float c0f = std::floor(c), r0f = std::floor(r);
+    const float fc = c - c0f, fr = r - r0f;
+    auto wrap = [&](int i, int n) { return periodic ? ((i % n) + n) % n : std::clamp(i, 0, n - 1); };
+    const int c0 = wrap(int(c0f), w), c1 = wrap(int(c0f) + 1, w), r0 = wrap(int(r0f), h), r1 = wrap(int(r0f) + 1, h);
+    auto at = [&](int x, int y) { return tex[size_t(y) * size_t(w) + size_t(x)]; };
+    return (at(c0, r0) * (1.f - fc) + at(c1, r0) * fc) * (1.f - fr) + (at(c0, r1) * (1.f - fc) + at(c1, r1) * fc) * fr;
+}
+template vec3 sample_bilinear<vec3>(const std::vector<vec3>&, int, int, bool, float, float);
+template float sample_bilinear<float>(const std::vector<float>&, int, int, bool, float, float);
+
+namespace {
+// Nearest texel of a packed hit (secondary bounces).
+size_t nearest_texel(uint32_t packed, int w, int h) {
+    const vec2 t = Visibility::decode(packed);
+    const int x = std::clamp(int(std::lround(t.x)) % w, 0, w - 1), y = std::clamp(int(std::lround(t.y)) % h, 0, h - 1);
+    return size_t(y) * size_t(w) + size_t(x);
+}
+}  // namespace
+
+// [SECTION] Shadows and masking
+float visibility_fraction(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, int x, int y, vec3 w) {
+    if (glm::dot(hf.normal(x, y), w) <= 0.f) return 0.f;
+    vec3 bary;
+    const auto& tri = dirs.triangles[size_t(dirs.locate(w, bary))];
+    float v = 0.f;
+    for (int k = 0; k < 3; ++k) v += bary[k] * (vis.at(tri[size_t(k)], x, y) == Visibility::kNoHit ? 1.f : 0.f);
+    return v;
+}
+
+std::vector<float> visibility_texture(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, vec3 w) {
+    std::vector<float> out(size_t(hf.width) * size_t(hf.height));
+    vec3 bary;
+    const auto& tri = dirs.triangles[size_t(dirs.locate(w, bary))];
+    tbb::parallel_for(0, hf.height, [&](int y) {
+        for (int x = 0; x < hf.width; ++x) {
+            float v = 0.f;
+            if (glm::dot(hf.normal(x, y), w) > 0.f)
+                for (int k = 0; k < 3; ++k) v += bary[k] * (vis.at(tri[size_t(k)], x, y) == Visibility::kNoHit ? 1.f : 0.f);
+            out[hf.index(x, y)] = v;
+        }
+    });
+    return out;
+}
+
+// [SECTION] Dependent-test scattering
+ScatterResult scatter(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, const ScatterSettings& s,
+                      const std::function<void(double)>& progress) {
+    const int W = hf.width, H = hf.height, N = dirs.size();
+    const size_t T = size_t(W) * size_t(H);
+    ScatterResult out;
+    out.width = W;
+    out.height = H;
+    out.E_indirect.assign(T, vec3(0.f));
+
+    // Normals once (the quadrature weights need them per texel and direction).
+    std::vector<vec3> n(T);
+    tbb::parallel_for(0, H, [&](int y) {
+        for (int x = 0; x < W; ++x) n[hf.index(x, y)] = hf.normal(x, y);
+    });
+
+    // Direct light with exact shadows.
+    const bool has_light = s.light_E.x > 0.f || s.light_E.y > 0.f || s.light_E.z > 0.f;
+    out.shadow = has_light && s.shadows ? visibility_texture(hf, dirs, vis, s.light_dir) : std::vector<float>(T, 1.f);
+    out.direct.assign(T, vec3(0.f));
+    for (size_t p = 0; p < T; ++p) {
+        const float cos_l = std::max(0.f, glm::dot(n[p], s.light_dir));
+        if (cos_l <= 0.f) out.shadow[p] = 0.f;
+        if (has_light) out.direct[p] = hf.albedo[p] * kInvPi * s.light_E * cos_l * out.shadow[p];
+    }
+
+    // Environment radiance per direction (constant across texels: the dependent tests).
+    std::vector<vec3> L_env(size_t(N), vec3(0.f));
+    if (s.env)
+        for (int j = 0; j < N; ++j) L_env[size_t(j)] = s.env->radiance(dirs.d[size_t(j)]);
+
+    // Direction subsets per bounce: all, or M random (seeded, identical for every texel).
+    std::mt19937 rng(s.seed);
+    auto subset = [&]() {
+        std::vector<int> J;
+        if (s.all_directions || s.paths >= N) {
+            J.resize(size_t(N));
+            for (int j = 0; j < N; ++j) J[size_t(j)] = j;
+        } else {
+            for (int m = 0; m < s.paths; ++m) J.push_back(int(rng() % uint32_t(N)));
+        }
+        return J;
+    };
+
+    // Gather: E(p) = pi * sum_j w_j(p) L_in,j(p). `primary` selects bilinear hit look-ups.
+    auto gather = [&](const std::vector<vec3>* L_prev, const std::vector<int>& J, bool primary) {
+        std::vector<vec3> E(T, vec3(0.f));
+        tbb::parallel_for(0, H, [&](int y) {
+            for (int x = 0; x < W; ++x) {
+                const size_t p = hf.index(x, y);
+                vec3 sum(0.f);
+                float wsum = 0.f;
+                for (int j : J) {
+                    const float c = glm::dot(n[p], dirs.d[size_t(j)]);
+                    if (c <= 0.f) continue;
+                    const float w = c * dirs.solid_angle[size_t(j)];
+                    wsum += w;
+                    const uint32_t hit = vis.at(j, x, y);
+                    if (hit == Visibility::kNoHit) {
+                        sum += w * L_env[size_t(j)];
+                    } else if (hit != Visibility::kBelow && L_prev) {
+                        if (primary) {
+                            const vec2 t = Visibility::decode(hit);
+                            sum += w * sample_bilinear(*L_prev, W, H, hf.periodic, t.x, t.y);
+                        } else {
+                            sum += w * (*L_prev)[nearest_texel(hit, W, H)];
+                        }
+                    }
+                }
+                E[p] = wsum > 0.f ? kPi * sum / wsum : vec3(0.f);
+            }
+        });
+        return E;
+    };
+
+    // E^0: the environment alone; L^k = L_d + rho/pi E^k; E^k gathers L^{k-1}. Depth K keeps
+    // E^K: light that reflected at most K times inside the heightfield before reaching p.
+    // Only the final gather (at the viewer's texel) looks hits up bilinearly.
+    const int K = std::clamp(s.depth, 0, 8);
+    std::vector<vec3> E = gather(nullptr, subset(), K == 0);
+    for (int k = 1; k <= K; ++k) {
+        std::vector<vec3> L(T);
+        for (size_t p = 0; p < T; ++p) L[p] = out.direct[p] + hf.albedo[p] * kInvPi * E[p];
+        E = gather(&L, subset(), k == K);
+        if (progress) progress(double(k) / double(K));
+    }
+    out.E_indirect = std::move(E);
+    return out;
+}
+}  // namespace mesolab::microgeom

@@ -1,0 +1,65 @@
+#pragma once
+// Shadows and light scattering in a heightfield with the Method of Dependent Tests
+// (Heidrich et al. 2000, §3.1-§3.2, Fig. 4; shadows §4).
+//
+// The micro-BRDF is Lambertian with per-texel albedo rho(p) for every bounce (a Blinn-Phong
+// lobe, where enabled, is added to the direct term seen by the viewer only). Radiance leaving a
+// texel is then view-independent and one bounce is one whole-texture pass over the same
+// direction set for every texel (the dependent tests):
+//   L_d(q)   = rho(q)/pi * E_light * max(0, n_q . l) * V(q, l)                      direct
+//   E^k(p)   = pi * sum_{j in J_k} w_j(p) * L_in,j(p)                                 gathered irradiance
+//   L_in,j(p)= L^{k-1}(S_j[p]) on a hit, L_env(d_j) when S_j says no hit, 0 below p's tangent plane
+//   L^k(q)   = L_d(q) + rho(q)/pi * E^k(q)                                            direct added at every scattering point
+// with E^0 gathering the environment alone (L^{-1} = 0), depth K keeping E^K, and w_j(p) = max(0, n_p . d_j) Omega_j / sum_j max(0, n_p . d_j) Omega_j the
+// per-texel quadrature weights over the direction set (Omega_j: the direction's share of the
+// sphere), normalised so that a white furnace conserves energy exactly. J_k is either all N
+// directions or a random subset of M directions per bounce (the same for every texel).
+// The final gather looks S_j[p] up bilinearly (primary hits); inner bounces use the nearest
+// texel (secondary hits), as in the paper.
+//
+// Shadows (§4, exact variant): V(p, l) interpolates the visibility of the three directions of
+// the spherical triangle containing l with its barycentric weights. Masking uses the same data
+// with the view direction.
+#include "core/env.h"
+#include "core/microgeom/directions.h"
+#include "core/microgeom/heightfield.h"
+#include "core/microgeom/visibility.h"
+#include <atomic>
+#include <functional>
+#include <vector>
+
+namespace mesolab::microgeom {
+
+// Fraction of direction w reaching texel (x, y) (0..1): exact interpolation over the 3 nearest
+// directions of the triangulation. Directions below the texel's tangent plane give 0.
+float visibility_fraction(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, int x, int y, vec3 w);
+
+// Per-texel fractions for one direction (shadow texture for the light, masking for the view).
+std::vector<float> visibility_texture(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, vec3 w);
+
+struct ScatterSettings {
+    vec3 light_dir{0.f, 0.f, 1.f};   // local frame, unit, towards the light
+    vec3 light_E{0.f};               // irradiance at normal incidence (RGB); 0 = no direct light
+    bool shadows = true;             // V(q, l) in the direct term; false: V = 1
+    const Environment* env = nullptr;  // radiance where S_j says no hit (null: black)
+    int depth = 2;                   // bounces of interreflected light (0..8)
+    bool all_directions = true;      // J_k = all N, or `paths` random directions per bounce
+    int paths = 64;
+    uint32_t seed = 1;
+};
+
+struct ScatterResult {
+    int width = 0, height = 0;
+    std::vector<vec3> E_indirect;  // irradiance at each texel from scattering and the environment
+    std::vector<float> shadow;     // V(p, l) * [n_p . l > 0]
+    std::vector<vec3> direct;      // L_d(p): direct radiance (Lambert part)
+};
+
+ScatterResult scatter(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, const ScatterSettings& s,
+                      const std::function<void(double)>& progress = {});
+
+// Bilinear, wrapping (periodic) or clamped look-up of a per-texel quantity at continuous texel
+// coordinates (c, r) (texel (x, y) at (x, y)).
+template <class T>
+T sample_bilinear(const std::vector<T>& tex, int w, int h, bool periodic, float c, float r);
+}  // namespace mesolab::microgeom
