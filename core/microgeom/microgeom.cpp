@@ -91,7 +91,7 @@ public:
         p.add_bool("periodic", true).costs(Cost::Recompute).doc("Wrap-around visibility across the borders (tileable fields)");
         p.add_float("vgroove_angle", 90.0).range(1.0, 179.0).in("degrees").costs(Cost::Recompute).doc("vgrooves: opening angle of the V");
         p.add_float("rms_slope", 0.5).range(0.0, 10.0).costs(Cost::Recompute).doc("gaussian: RMS slope");
-        p.add_float("correlation", 4.0).range(0.5, 1024.0).in("texels").costs(Cost::Recompute).doc("gaussian: correlation length");
+        p.add_float("correlation", 4.0).range(0.5, 64.0).in("texels").costs(Cost::Recompute).doc("gaussian: correlation length");
         p.add_int("seed", 1).range(0, 2147483647).costs(Cost::Recompute).doc("gaussian: random seed");
         p.add_color("albedo", {0.8, 0.8, 0.8}).costs(Cost::Recompute)
             .doc("Albedo of the micro-surface (Lambert); procedural fields modulate it (triangles: red/white faces, bricks: brick and mortar)");
@@ -306,8 +306,10 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
                     if (!shadows) {
                         V = 1.f;
                     } else {
-                        const vec3 l_loc = to_local(wi);
-                        for (int k = 0; k < 4; ++k) V += wts[k] * visibility_fraction(hf, dirs, vis, tx[k & 1], ty[k >> 1], l_loc);
+                        const vec3 l_loc = glm::normalize(to_local(wi));
+                        vec3 bary;
+                        const auto& tri = dirs.triangles[size_t(dirs.locate(l_loc, bary))];
+                        for (int k = 0; k < 4; ++k) V += wts[k] * visibility_fraction(hf, vis, tri, bary, tx[k & 1], ty[k >> 1], l_loc);
                     }
                 }
                 if (li == 0) shadow0 = V;

@@ -39,6 +39,13 @@ float visibility_fraction(const Heightfield& hf, const DirectionSet& dirs, const
     return v;
 }
 
+float visibility_fraction(const Heightfield& hf, const Visibility& vis, const std::array<int, 3>& tri, vec3 bary, int x, int y, vec3 w) {
+    if (glm::dot(hf.normal(x, y), w) <= 0.f) return 0.f;
+    float v = 0.f;
+    for (int k = 0; k < 3; ++k) v += bary[k] * (vis.at(tri[size_t(k)], x, y) == Visibility::kNoHit ? 1.f : 0.f);
+    return v;
+}
+
 std::vector<float> visibility_texture(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, vec3 w) {
     std::vector<float> out(size_t(hf.width) * size_t(hf.height));
     vec3 bary;

@@ -34,6 +34,10 @@ namespace mesolab::microgeom {
 // directions of the triangulation. Directions below the texel's tangent plane give 0.
 float visibility_fraction(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, int x, int y, vec3 w);
 
+// The same with the spherical triangle of w located once (tri, bary from DirectionSet::locate),
+// for callers that query several texels with one direction.
+float visibility_fraction(const Heightfield& hf, const Visibility& vis, const std::array<int, 3>& tri, vec3 bary, int x, int y, vec3 w);
+
 // Per-texel fractions for one direction (shadow texture for the light, masking for the view).
 std::vector<float> visibility_texture(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, vec3 w);
 

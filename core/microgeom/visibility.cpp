@@ -30,8 +30,9 @@
 // over its stretch through the block is compared with the block's [min, max]; if the ray stays
 // strictly above (or strictly below) the block, the block is skipped at once and the sign of f at
 // the far side is known; otherwise the walk descends a level, down to single cells. After every
-// step it climbs one level again (the "maximum mipmap" traversal). A ray above the global maximum
-// going up (or below the global minimum going down) can never meet the surface again: no hit.
+// skip it climbs one level again, and after a cell it returns to level 1 when it enters a new
+// 2 x 2 block (the "maximum mipmap" traversal). A ray above the global maximum going up (or
+// below the global minimum going down) can never meet the surface again: no hit.
 //
 // Periodic fields wrap: the walk keeps its cell indices in [0, W) x [0, H) and shifts the ray
 // origin by whole periods when it crosses a border (exact in double). A ray that stays between the
@@ -189,14 +190,21 @@ inline Origin to_texel(const Field& F, vec3 p) {
     return {double(p.x) / F.s - 0.5, double(F.H) - 0.5 - double(p.y) / F.s, double(p.z) / F.s};
 }
 
+// floor() as an int without a libm call (baseline x86-64 has no inline floor); v is clamped to
+// a safe range first.
+inline int floor_int(double v) {
+    v = std::clamp(v, -1e9, 1e9);
+    const int i = int(v);
+    return i - (double(i) > v);
+}
+
+// v modulo n into [0, n); v is near the range already (the walk keeps it within a period).
 inline double wrap(double v, int n) {
-    v -= std::floor(v / n) * n;
+    if (v >= n || v < 0) v -= double(floor_int(v / n)) * n;
     if (v >= n) v -= n;  // rounding of v slightly below 0
     if (v < 0) v = 0;
     return v;
 }
-
-inline int floor_int(double v) { return int(std::floor(v)); }
 
 // Surface height at (u, v) of a cell, triangle A (u >= v) or B.
 inline double surf(const std::array<float, 4>& h, double u, double v, bool A) {
@@ -229,9 +237,8 @@ bool walk(const Field& F, const RayDir& R, Origin o, double& hit_c, double& hit_
     };
 
     if (F.periodic) {
-        const double sc = std::floor(c0 / Wc) * Wc, sr = std::floor(r0 / Hc) * Hc;
-        c0 -= sc;
-        r0 -= sr;
+        if (c0 < 0 || c0 >= Wc) c0 -= std::floor(c0 / Wc) * Wc;
+        if (r0 < 0 || r0 >= Hc) r0 -= std::floor(r0 / Hc) * Hc;
         i = std::clamp(floor_int(c0), 0, Wc - 1);
         j = std::clamp(floor_int(r0), 0, Hc - 1);
     } else {
@@ -350,16 +357,12 @@ bool walk(const Field& F, const RayDir& R, Origin o, double& hit_c, double& hit_
             f_known = true;
             t = tout;
             const bool sx = tx <= ty, sy = ty <= tx;
-#ifdef ASCEND_NEW_PARENT
             const int oi = i, oj = j;
-#endif
             if (sx) i += dc > 0 ? 1 : -1;
             if (sy) j += dr > 0 ? 1 : -1;
-#ifdef ASCEND_NEW_PARENT
-            L = ((oi ^ i) | (oj ^ j)) > 1 || (i >> 1) != (oi >> 1) || (j >> 1) != (oj >> 1) ? std::min(1, F.top) : 0;
-#else
-            L = std::min(1, F.top);
-#endif
+            // Climb back to level 1 only on entering a new 2 x 2 block: within the same block
+            // the level-1 test has just failed from an earlier t.
+            L = (i >> 1) != (oi >> 1) || (j >> 1) != (oj >> 1) ? std::min(1, F.top) : 0;
         }
         // Wrap (periodic) or leave (non-periodic).
         if (i < 0 || i >= Wc) {
@@ -376,16 +379,16 @@ bool walk(const Field& F, const RayDir& R, Origin o, double& hit_c, double& hit_
     return false;
 }
 
-// Pack a hit for the texture: quantise to 1/16 texel and wrap the quantised value (periodic) so
-// that a hit just below W does not round up to W.
+// Pack a hit for the texture (as Visibility::encode): quantise to 1/16 texel and wrap the
+// quantised value (periodic) so that a hit just below W does not round up to W.
 uint32_t pack_hit(const Field& F, double c, double r) {
-    long qc = std::lround(c * 16.0), qr = std::lround(r * 16.0);
+    int qc = floor_int(c * 16.0 + 0.5), qr = floor_int(r * 16.0 + 0.5);
     if (F.periodic) {
-        const long nc = 16L * F.W, nr = 16L * F.H;
-        qc = ((qc % nc) + nc) % nc;
-        qr = ((qr % nr) + nr) % nr;
+        const int nc = 16 * F.W, nr = 16 * F.H;
+        if (qc >= nc) qc -= nc;
+        if (qr >= nr) qr -= nr;
     }
-    return Visibility::encode(float(qc) / 16.f, float(qr) / 16.f);
+    return (uint32_t(std::clamp(qc, 0, 65535)) << 16) | uint32_t(std::clamp(qr, 0, 65535));
 }
 }  // namespace
 

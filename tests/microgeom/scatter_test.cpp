@@ -1,0 +1,160 @@
+// Scattering in micro-geometry: furnace tests (energy conservation), the flat-field analytic
+// case, and hard cases that must stay finite.
+#include "app/workbench.h"
+#include "core/error.h"
+#include "core/image.h"
+#include "core/microgeom/microgeom.h"
+#include "core/scene.h"
+#include "support/cli.h"
+
+#include <gtest/gtest.h>
+#include <cmath>
+
+using namespace mesolab;
+using namespace mesolab::microgeom;
+using namespace mesolab::test;
+
+namespace {
+
+// A procedural field with the same albedo everywhere (the procedural colour rules replaced).
+Heightfield field(const char* name, int res, float albedo) {
+    ProceduralParams p;
+    p.name = name;
+    p.resolution = res;
+    Heightfield hf = make_procedural(p);
+    hf.albedo.assign(hf.albedo.size(), vec3(albedo));
+    return hf;
+}
+
+// Mean outgoing radiance rho/pi * E over the texels, for a white constant environment.
+double furnace(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, int depth) {
+    Environment env;
+    env.color = vec3(1.f);
+    ScatterSettings s;
+    s.env = &env;
+    s.depth = depth;
+    const ScatterResult r = scatter(hf, dirs, vis, s);
+    double sum = 0;
+    for (size_t p = 0; p < r.E_indirect.size(); ++p) sum += double(hf.albedo[p].x * kInvPi * r.E_indirect[p].x);
+    return sum / double(r.E_indirect.size());
+}
+}  // namespace
+
+TEST(Furnace, WhiteHeightfieldsConvergeToOne) {
+    const DirectionSet dirs = make_direction_set(100);
+    for (const char* name : {"bricks", "bumps", "triangles", "vgrooves"}) {
+        SCOPED_TRACE(name);
+        const Heightfield hf = field(name, 48, 1.f);
+        const Visibility vis = compute_visibility(hf, dirs);
+        const double l0 = furnace(hf, dirs, vis, 0), l8 = furnace(hf, dirs, vis, 8);
+        EXPECT_LT(l0, 0.999) << "occlusion must darken depth 0";
+        EXPECT_NEAR(l8, 1.0, 0.01) << "depth 0 gave " << l0;
+    }
+}
+
+TEST(Furnace, GreyHeightfieldStaysBelowOneAndGrowsWithDepth) {
+    const DirectionSet dirs = make_direction_set(100);
+    const Heightfield hf = field("bricks", 48, 0.6f);
+    const Visibility vis = compute_visibility(hf, dirs);
+    double prev = 0;
+    for (int k = 0; k <= 8; ++k) {
+        const double l = furnace(hf, dirs, vis, k);
+        EXPECT_LT(l, 1.0);
+        EXPECT_GE(l, prev - 1e-9) << "depth " << k;
+        prev = l;
+    }
+}
+
+TEST(FlatField, NoShadowsNoIndirectAnalyticLambert) {
+    // Flat plane, texture mode, one directional light and a constant environment.
+    Scene s = default_scene("microgeom");
+    for (const char* set : {"camera.mode=texture", "camera.orbit=0,0", "geometry.type=plane", "microgeom.heightfield=flat", "microgeom.resolution=32",
+                            "microgeom.albedo=0.5,0.4,0.3", "light.direction=40,25", "light.intensity=2", "env.color=0.2,0.1,0.05", "microgeom.depth=3"})
+        apply_set(s, set);
+    Workbench wb;
+    RenderRequest req;
+    req.backend = Backend::Cpu;
+    const Frame f = wb.render(s, req).frame;
+    ASSERT_EQ(f.width, 32);
+    const vec3 rho(0.5f, 0.4f, 0.3f), env(0.2f, 0.1f, 0.05f);
+    const vec3 want = rho * kInvPi * (2.f * std::cos(radians(40.f)) + kPi * env);
+    for (int y = 0; y < f.height; ++y)
+        for (int x = 0; x < f.width; ++x) {
+            for (int c = 0; c < 3; ++c) ASSERT_NEAR(f.aov("radiance").at(x, y)[c], want[c], 1e-5f) << x << "," << y;
+            ASSERT_FLOAT_EQ(f.aov("shadow").at(x, y)[0], 1.f);
+        }
+}
+
+TEST(HardCases, StayFinite) {
+    struct Case {
+        const char* sets[4];
+    };
+    const Case cases[] = {{{"light.direction=89.9,10", "camera.orbit=89.9,200", nullptr, nullptr}},
+                          {{"microgeom.directions=16", nullptr, nullptr, nullptr}},
+                          {{"microgeom.heightfield=flat", "microgeom.depth=8", nullptr, nullptr}},
+                          {{"microgeom.height_scale=10000", nullptr, nullptr, nullptr}},
+                          {{"microgeom.height_scale=0", nullptr, nullptr, nullptr}},
+                          {{"microgeom.sampling=random", "microgeom.paths=1", nullptr, nullptr}}};
+    Workbench wb;
+    for (const auto& c : cases) {
+        Scene s = default_scene("microgeom");
+        apply_set(s, "camera.mode=texture");
+        apply_set(s, "geometry.type=plane");
+        apply_set(s, "microgeom.resolution=24");
+        for (const char* set : c.sets)
+            if (set) apply_set(s, set);
+        RenderRequest req;
+        req.backend = Backend::Cpu;
+        const Frame f = wb.render(s, req).frame;
+        for (const auto& [name, img] : f.aovs)
+            for (float v : img.data) ASSERT_TRUE(std::isfinite(v)) << name << " with " << c.sets[0];
+        for (float v : f.aov("shadow").data) ASSERT_TRUE(v >= 0.f && v <= 1.f);
+    }
+}
+
+TEST(HardCases, SpikeOfOneTexel) {
+    TempDir dir("spike");
+    Image img(16, 16, 1, 0.f);
+    img.at(5, 7)[0] = 40.f;
+    write_exr(dir / "spike.exr", img);
+    Scene s = default_scene("microgeom");
+    apply_set(s, "camera.mode=texture");
+    apply_set(s, "geometry.type=plane");
+    apply_set(s, "microgeom.heightfield", dir / "spike.exr");
+    apply_set(s, "light.direction=60,0");
+    Workbench wb;
+    RenderRequest req;
+    req.backend = Backend::Cpu;
+    const Frame f = wb.render(s, req).frame;
+    // The spike casts a shadow towards -x: texels left of it, in its row, see less light.
+    EXPECT_LT(f.aov("shadow").at(3, 7)[0], 0.5f);
+    EXPECT_FLOAT_EQ(f.aov("shadow").at(5, 12)[0], 1.f);
+    for (float v : f.aov("radiance").data) ASSERT_TRUE(std::isfinite(v));
+}
+
+TEST(HardCases, NanInAnImageIsAClearError) {
+    TempDir dir("nanfield");
+    Image img(8, 8, 1, 0.f);
+    img.at(3, 2)[0] = std::nanf("");
+    write_exr(dir / "nan.exr", img);
+    write_file(dir / "p.json", R"({"schema":1,"camera":{"mode":"texture"},"objects":[{"geometry":{"type":"plane"},"material":{"technique":"microgeom","heightfield":"nan.exr"}}]})");
+    const CliResult r = run_mesolab("capture --backend cpu -o '" + (dir / "out") + "' '" + (dir / "p.json") + "'");
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find("nan.exr"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("NaN"), std::string::npos) << r.err;
+}
+
+TEST(Stages, MovingTheLightNeverRecomputesVisibility) {
+    Scene s = default_scene("microgeom");
+    apply_set(s, "microgeom.resolution=24");
+    StageGraph& g = Registry::instance().stages();
+    const uint64_t vis = g.key(s, "microgeom.visibility"), env = g.key(s, "microgeom.scatter_env");
+    apply_set(s, "light.direction=10,300");
+    apply_set(s, "microgeom.tiling=2");
+    apply_set(s, "camera.orbit=30,30");
+    EXPECT_EQ(g.key(s, "microgeom.visibility"), vis);
+    EXPECT_EQ(g.key(s, "microgeom.scatter_env"), env);
+    apply_set(s, "microgeom.depth=0");
+    EXPECT_EQ(g.key(s, "microgeom.scatter"), 0u) << "depth 0: the light's scattering stage is skipped";
+    EXPECT_EQ(g.key(s, "microgeom.visibility"), vis);
+}
