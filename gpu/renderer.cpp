@@ -122,9 +122,11 @@ GLuint Renderer::texture(const std::shared_ptr<const Image>& img, bool repeat) {
 }
 
 void Renderer::draw_buffers(const std::vector<std::string>& aovs) const {
-    std::vector<GLenum> bufs(layout_.size(), GL_NONE);
-    for (size_t i = 0; i < layout_.size(); ++i)
-        if (std::find(aovs.begin(), aovs.end(), layout_[i].name) != aovs.end()) bufs[i] = GLenum(GL_COLOR_ATTACHMENT0 + i);
+    // Fragment output location k writes the attachment of the AOV named aovs[k].
+    std::vector<GLenum> bufs(aovs.size(), GL_NONE);
+    for (size_t k = 0; k < aovs.size(); ++k)
+        for (size_t i = 0; i < layout_.size(); ++i)
+            if (layout_[i].name == aovs[k]) bufs[k] = GLenum(GL_COLOR_ATTACHMENT0 + i);
     glDrawBuffers(GLsizei(bufs.size()), bufs.data());
 }
 

@@ -61,7 +61,7 @@ public:
     // GL texture of an image (RGB(A) float, uploaded top row first at t = 0), cached per image.
     GLuint texture(const std::shared_ptr<const Image>& img, bool repeat = true);
     GLuint texture(const Image& img, const void* owner_key, bool repeat = true);
-    // Bind draw buffers so that the pass writes only the named AOVs (others untouched).
+    // Bind draw buffers: fragment output location k writes the AOV named aovs[k] (others untouched).
     void draw_buffers(const std::vector<std::string>& aovs) const;
     // Uniforms of shaders/lighting.glsl (lights, environment, SH) for program p.
     void set_lighting_uniforms(const Program& p, const Lighting& L, int env_texture_unit);

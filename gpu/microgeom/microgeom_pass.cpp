@@ -1,12 +1,201 @@
-// GPU pass of technique microgeom.
-#include "core/error.h"
+// GPU pass of technique microgeom: uploads the stages' results (S_i as a texture array, the
+// direction set with its triangulation, adjacency and a look-up grid, heightfield normals and
+// albedo, scattered irradiance) and shades with microgeom.frag.
+#include "core/microgeom/microgeom.h"
+#include "core/profile.h"
+#include "core/scene_stages.h"
 #include "gpu/renderer.h"
+
+#include <glm/gtc/type_ptr.hpp>
+#include <map>
 
 namespace mesolab::gpu {
 namespace {
+
+using namespace mesolab::microgeom;
+
+constexpr int kGridW = 64, kGridH = 32;
+
+GLuint make_buffer(const void* data, size_t bytes) {
+    GLuint id = 0;
+    glGenBuffers(1, &id);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, id);
+    glBufferData(GL_SHADER_STORAGE_BUFFER, GLsizeiptr(bytes), data, GL_STATIC_DRAW);
+    return id;
+}
+
+// RGBA32F texture from per-texel vec3 (nearest filtering: the shader fetches texels).
+GLuint make_rgb_texture(const std::vector<vec3>& v, int w, int h) {
+    std::vector<float> rgba(size_t(w) * size_t(h) * 4, 1.f);
+    for (size_t i = 0; i < v.size(); ++i)
+        for (int c = 0; c < 3; ++c) rgba[i * 4 + size_t(c)] = v[i][c];
+    GLuint id = 0;
+    glGenTextures(1, &id);
+    glBindTexture(GL_TEXTURE_2D, id);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, rgba.data());
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    return id;
+}
+
+// Resources of one (heightfield, directions, visibility) triple.
+struct Geometry {
+    std::shared_ptr<const void> keep_hf, keep_dirs, keep_vis;
+    Texture vis, normals, albedo;
+    Buffer dirs, tris, adj, grid;
+    int tri_count = 0;
+};
+
+struct Irradiance {
+    std::shared_ptr<const void> keep;
+    Texture tex;
+};
+
 class MicrogeomPass final : public TechniquePass {
 public:
-    void draw(DrawContext&) override { throw InputError("microgeom: the GPU pass is not implemented yet; use --backend cpu"); }
+    MicrogeomPass() : program_(Program::graphics("shaders/mesh.vert", "microgeom/microgeom.frag")) {}
+
+    void draw(DrawContext& ctx) override {
+        PROFILE_SCOPE("microgeom.draw");
+        auto hfs = ctx.eval.get<PerObject<Heightfield>>("microgeom.heightfield");
+        auto dirss = ctx.eval.get<PerObject<DirectionSet>>("microgeom.directions");
+        auto viss = ctx.eval.get<PerObject<Visibility>>("microgeom.visibility");
+        auto envs = ctx.eval.get<PerObject<LightScatter>>("microgeom.scatter_env");
+        auto lights = ctx.eval.get<PerObject<LightScatter>>("microgeom.scatter");
+        prune();
+        // Upload first: creating a texture binds it to the active unit, which must not disturb
+        // the units bound below.
+        for (int i : ctx.objects) {
+            geometry(hfs->items[size_t(i)], dirss->items[size_t(i)], viss->items[size_t(i)]);
+            if (envs && envs->get(i)) irradiance(envs->items[size_t(i)], *hfs->get(i));
+            if (lights && lights->get(i)) irradiance(lights->items[size_t(i)], *hfs->get(i));
+        }
+        program_.use();
+        ctx.renderer.draw_buffers({"radiance", "normal", "direct", "indirect", "shadow"});
+        ctx.renderer.set_lighting_uniforms(program_, ctx.lighting, 0);
+        for (int i : ctx.objects) {
+            const SceneObject& o = ctx.scene.objects[size_t(i)];
+            const ParamTable& m = o.material;
+            const Heightfield& hf = *hfs->get(i);
+            Geometry& g = geometry(hfs->items[size_t(i)], dirss->items[size_t(i)], viss->items[size_t(i)]);
+            ctx.renderer.set_camera_uniforms(program_, ctx.camera, object_to_world(o));
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, g.dirs.get());
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, g.tris.get());
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, g.adj.get());
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, g.grid.get());
+            const LightScatter* es = envs ? envs->get(i) : nullptr;
+            const LightScatter* ls = lights ? lights->get(i) : nullptr;
+            const GLuint e_env = es ? irradiance(envs->items[size_t(i)], hf) : 0, e_light = ls ? irradiance(lights->items[size_t(i)], hf) : 0;
+            bind(1, GL_TEXTURE_2D_ARRAY, g.vis.get(), "u_vis");
+            bind(2, GL_TEXTURE_2D, g.normals.get(), "u_normals");
+            bind(3, GL_TEXTURE_2D, g.albedo.get(), "u_albedo");
+            bind(4, GL_TEXTURE_2D, e_env, "u_E_env");
+            bind(5, GL_TEXTURE_2D, e_light, "u_E_light");
+            glUniform2i(program_.uniform("u_size"), hf.width, hf.height);
+            glUniform2i(program_.uniform("u_grid"), kGridW, kGridH);
+            glUniform1i(program_.uniform("u_tri_count"), g.tri_count);
+            glUniform1f(program_.uniform("u_tiling"), float(m.get_float("tiling")));
+            glUniform1i(program_.uniform("u_has_env"), es ? 1 : 0);
+            glUniform1i(program_.uniform("u_has_light_scatter"), ls ? 1 : 0);
+            glUniform1i(program_.uniform("u_light_planar"), ls && ls->planar ? 1 : 0);
+            glUniform1i(program_.uniform("u_shadows"), m.get_string("shadows") != "none" ? 1 : 0);
+            const bool phong = m.get_string("brdf") == "blinn-phong";
+            glUniform1i(program_.uniform("u_phong"), phong ? 1 : 0);
+            const vec3 ks = m.get_vec3("ks");
+            glUniform3fv(program_.uniform("u_ks"), 1, glm::value_ptr(ks));
+            glUniform1f(program_.uniform("u_shininess"), float(m.get_float("shininess")));
+            const GpuMesh& mesh = ctx.renderer.mesh(ctx.eval, i);
+            glBindVertexArray(mesh.vao.get());
+            glDrawElements(GL_TRIANGLES, mesh.index_count, GL_UNSIGNED_INT, nullptr);
+        }
+        glBindVertexArray(0);
+        check_gl("microgeom.draw");
+    }
+
+private:
+    void bind(int unit, GLenum target, GLuint tex, const char* name) {
+        glActiveTexture(GLenum(GL_TEXTURE0 + unit));
+        glBindTexture(target, tex);
+        glUniform1i(program_.uniform(name), unit);
+    }
+
+    // Drop resources whose stage results are no longer cached anywhere but here.
+    void prune() {
+        for (auto it = geometry_.begin(); it != geometry_.end();)
+            it = it->second.keep_vis.use_count() == 1 ? geometry_.erase(it) : std::next(it);
+        for (auto it = irradiance_.begin(); it != irradiance_.end();)
+            it = it->second.keep.use_count() == 1 ? irradiance_.erase(it) : std::next(it);
+    }
+
+    Geometry& geometry(const std::shared_ptr<const Heightfield>& hf, const std::shared_ptr<const DirectionSet>& dirs,
+                       const std::shared_ptr<const Visibility>& vis) {
+        auto it = geometry_.find(vis.get());
+        if (it != geometry_.end() && it->second.keep_hf == hf && it->second.keep_dirs == dirs) return it->second;
+        PROFILE_SCOPE("microgeom.upload");
+        Geometry g;
+        g.keep_hf = hf;
+        g.keep_dirs = dirs;
+        g.keep_vis = vis;
+        // S_i: one R32UI layer per direction.
+        GLuint id = 0;
+        glGenTextures(1, &id);
+        glBindTexture(GL_TEXTURE_2D_ARRAY, id);
+        glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+        glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_R32UI, vis->width, vis->height, vis->count, 0, GL_RED_INTEGER, GL_UNSIGNED_INT, vis->hit.data());
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        g.vis = Texture(id);
+        std::vector<vec3> normals(hf->h.size());
+        for (int y = 0; y < hf->height; ++y)
+            for (int x = 0; x < hf->width; ++x) normals[hf->index(x, y)] = hf->normal(x, y);
+        g.normals = Texture(make_rgb_texture(normals, hf->width, hf->height));
+        g.albedo = Texture(make_rgb_texture(hf->albedo, hf->width, hf->height));
+        // Directions, triangles, adjacency (neighbour across the edge opposite corner k), grid.
+        std::vector<vec4> d;
+        for (const vec3& v : dirs->d) d.emplace_back(v, 0.f);
+        std::vector<glm::ivec4> tris, adj(dirs->triangles.size(), glm::ivec4(-1));
+        std::map<std::pair<int, int>, int> edge;
+        for (size_t t = 0; t < dirs->triangles.size(); ++t) {
+            const auto& v = dirs->triangles[t];
+            tris.emplace_back(v[0], v[1], v[2], 0);
+            for (int k = 0; k < 3; ++k) edge[{v[size_t((k + 1) % 3)], v[size_t((k + 2) % 3)]}] = int(t);
+        }
+        for (size_t t = 0; t < dirs->triangles.size(); ++t) {
+            const auto& v = dirs->triangles[t];
+            for (int k = 0; k < 3; ++k) {
+                auto e = edge.find({v[size_t((k + 2) % 3)], v[size_t((k + 1) % 3)]});
+                adj[t][k] = e == edge.end() ? int(t) : e->second;
+            }
+        }
+        std::vector<int> grid(size_t(kGridW) * kGridH);
+        for (int gy = 0; gy < kGridH; ++gy)
+            for (int gx = 0; gx < kGridW; ++gx) {
+                const float theta = (float(gy) + 0.5f) / float(kGridH) * kPi, phi = (float(gx) + 0.5f) / float(kGridW) * 2.f * kPi;
+                vec3 bary;
+                grid[size_t(gy) * kGridW + size_t(gx)] = dirs->locate({std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)}, bary);
+            }
+        g.dirs = Buffer(make_buffer(d.data(), d.size() * sizeof(vec4)));
+        g.tris = Buffer(make_buffer(tris.data(), tris.size() * sizeof(glm::ivec4)));
+        g.adj = Buffer(make_buffer(adj.data(), adj.size() * sizeof(glm::ivec4)));
+        g.grid = Buffer(make_buffer(grid.data(), grid.size() * sizeof(int)));
+        g.tri_count = int(tris.size());
+        check_gl("microgeom.upload");
+        return geometry_[vis.get()] = std::move(g);
+    }
+
+    GLuint irradiance(const std::shared_ptr<const LightScatter>& s, const Heightfield& hf) {
+        auto it = irradiance_.find(s.get());
+        if (it != irradiance_.end()) return it->second.tex.get();
+        Irradiance r;
+        r.keep = s;
+        r.tex = Texture(make_rgb_texture(s->result.E_indirect, hf.width, hf.height));
+        return (irradiance_[s.get()] = std::move(r)).tex.get();
+    }
+
+    Program program_;
+    std::map<const void*, Geometry> geometry_;
+    std::map<const void*, Irradiance> irradiance_;
 };
 }  // namespace
 

@@ -223,6 +223,29 @@ TEST(MicrogeomVisibility, ComputeVisibilityMatchesBruteForce) {
     }
 }
 
+TEST(MicrogeomVisibility, ProceduralFieldsMatchBruteForce) {
+    const DirectionSet dirs = random_directions(12, 15);
+    for (const char* name : {"bricks", "vgrooves"}) {
+        ProceduralParams p;
+        p.name = name;
+        p.resolution = 16;
+        const Heightfield f = make_procedural(p);
+        const Visibility vis = compute_visibility(f, dirs);
+        int bad = 0;
+        for (int i = 0; i < dirs.size(); ++i)
+            for (int y = 0; y < f.height; ++y)
+                for (int x = 0; x < f.width; ++x) {
+                    vec2 hit(0);
+                    const uint32_t want = expected_entry(f, dirs.d[size_t(i)], x, y, hit), got = vis.at(i, x, y);
+                    const bool ok = want == 0u ? got < Visibility::kBelow &&
+                                                     glm::all(glm::lessThanEqual(texel_delta(f, Visibility::decode(got), hit), vec2(1.f / 32.f + 1e-3f)))
+                                               : got == want;
+                    if (!ok && bad++ < 3) ADD_FAILURE() << name << " dir " << i << " texel (" << x << ", " << y << "): got " << got << " want " << want;
+                }
+        EXPECT_EQ(bad, 0) << name;
+    }
+}
+
 TEST(MicrogeomVisibility, PeriodicWrapHitsTheFarSide) {
     // A tall wall at column 1; a ray from column W-2 going +x leaves the right edge and must hit
     // the wall's slope just after re-entering at the left edge.
@@ -258,6 +281,26 @@ TEST(MicrogeomVisibility, PeriodicWrapHitsTheFarSide) {
         ASSERT_TRUE(trace(g, local_point(g, start, 4, 2.0), local_dir(-1, 0, 0.0), hit)) << start;
         EXPECT_NEAR(hit.x, 1.8, 1e-4) << start;
         EXPECT_NEAR(hit.y, 4.0, 1e-4) << start;
+    }
+}
+
+TEST(MicrogeomVisibility, PeriodicReachIsCapped) {
+    // A horizontal ray at height 1 drifting slowly towards a wall (right slope z = 10 (2 - c) meets
+    // z = 1 at c = 1.9) wraps round the rows many times: found within the documented reach of
+    // 4 (W + H) = 176 texels of horizontal travel, reported as no hit beyond it.
+    const Heightfield f = make_field(24, 20, true, [](int x, int) { return x == 1 ? 10.f : 0.f; });
+    for (double travel : {30.0, 150.0, 200.0}) {
+        const double a = std::asin(1.1 / travel);
+        const vec3 o = local_point(f, 3.0, 5.0, 1.0), d = local_dir(-std::sin(a), std::cos(a), 0.0);
+        vec2 hit(-1), ref(-1);
+        const bool h = trace(f, o, d, hit);
+        EXPECT_EQ(h, trace_brute_force(f, o, d, ref)) << travel;
+        EXPECT_EQ(h, travel < 176) << travel;
+        if (h) {
+            EXPECT_NEAR(hit.x, 1.9, 1e-3) << travel;
+            EXPECT_NEAR(hit.y, std::fmod(5.0 + travel * std::cos(a), 20.0), 1e-2) << travel;
+            EXPECT_LT(texel_distance(f, hit, ref), 1e-3) << travel;
+        }
     }
 }
 

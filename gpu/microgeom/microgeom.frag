@@ -1,0 +1,152 @@
+#version 430 core
+// Technique microgeom, bump level of detail: the GLSL twin of MicrogeomTechnique::shade_cpu
+// (core/microgeom/microgeom.cpp). Exact shadows from the visibility textures S_i (a texture
+// array, one layer per direction), the spherical triangle of the light located with a grid
+// guess and a walk across edges (the same triangle and barycentrics as DirectionSet::locate),
+// scattered light from the stages' irradiance textures. All look-ups are texelFetch with the
+// CPU's bilinear weights, so the two paths agree to rounding.
+#include "common.glsl"
+#include "camera.glsl"
+#include "lighting.glsl"
+
+in vec3 v_position;
+in vec3 v_normal;
+in vec3 v_tangent;
+in vec2 v_uv;
+
+layout(std430, binding = 0) readonly buffer Dirs { vec4 dirs[]; };
+layout(std430, binding = 1) readonly buffer Tris { ivec4 tris[]; };
+layout(std430, binding = 2) readonly buffer Adj { ivec4 adj[]; };   // neighbour across the edge opposite corner k
+layout(std430, binding = 3) readonly buffer Grid { int grid[]; };   // lat-long guess of the containing triangle
+
+uniform usampler2DArray u_vis;  // S_i: 0xFFFFFFFF = no hit
+uniform sampler2D u_normals;    // heightfield normals (local frame), rgb
+uniform sampler2D u_albedo;
+uniform sampler2D u_E_env;      // microgeom.scatter_env: irradiance, rgb
+uniform sampler2D u_E_light;    // microgeom.scatter: irradiance per unit light irradiance, rgb
+uniform ivec2 u_size;           // heightfield texels
+uniform ivec2 u_grid;           // grid cells (phi, theta)
+uniform int u_tri_count;
+uniform float u_tiling;
+uniform int u_has_env, u_has_light_scatter, u_light_planar, u_shadows, u_phong;
+uniform vec3 u_ks;
+uniform float u_shininess;
+
+layout(location = 0) out vec4 o_radiance;
+layout(location = 1) out vec4 o_normal;
+layout(location = 2) out vec4 o_direct;
+layout(location = 3) out vec4 o_indirect;
+layout(location = 4) out vec4 o_shadow;
+
+// Cone coordinates of w in triangle t; barycentrics once normalised.
+vec3 cone(int t, vec3 w) {
+    ivec4 v = tris[t];
+    vec3 a = dirs[v.x].xyz, b = dirs[v.y].xyz, c = dirs[v.z].xyz;
+    return vec3(dot(cross(b, c), w), dot(cross(c, a), w), dot(cross(a, b), w));
+}
+
+int locate(vec3 w, out vec3 bary) {
+    vec2 ll = latlong_uv(w);
+    ivec2 cell = clamp(ivec2(ll * vec2(u_grid)), ivec2(0), u_grid - 1);
+    int t = grid[cell.y * u_grid.x + cell.x];
+    vec3 c = cone(t, w);
+    for (int step = 0; step < 64 && min(c.x, min(c.y, c.z)) < -1e-7; ++step) {
+        int k = c.x <= c.y && c.x <= c.z ? 0 : (c.y <= c.z ? 1 : 2);
+        t = adj[t][k];
+        c = cone(t, w);
+    }
+    if (min(c.x, min(c.y, c.z)) < -1e-7) {  // not expected: the best triangle overall
+        float best = -1e30;
+        for (int f = 0; f < u_tri_count; ++f) {
+            vec3 cf = cone(f, w);
+            float m = min(cf.x, min(cf.y, cf.z));
+            if (m > best) { best = m; t = f; c = cf; }
+        }
+    }
+    c = max(c, vec3(0.0));
+    float sum = c.x + c.y + c.z;
+    bary = sum > 0.0 ? c / sum : vec3(1.0 / 3.0);
+    return t;
+}
+
+ivec2 wrap(ivec2 t) { return ((t % u_size) + u_size) % u_size; }
+vec3 fetch_rgb(sampler2D s, ivec2 t) { return texelFetch(s, wrap(t), 0).rgb; }
+
+// Fraction of direction w (local) reaching texel t, given w's triangle and barycentrics.
+float visible(ivec2 t, int tri, vec3 bary, vec3 w) {
+    t = wrap(t);
+    if (dot(texelFetch(u_normals, t, 0).xyz, w) <= 0.0) return 0.0;
+    ivec4 v = tris[tri];
+    float f = 0.0;
+    f += bary.x * (texelFetch(u_vis, ivec3(t, v.x), 0).r == 0xFFFFFFFFu ? 1.0 : 0.0);
+    f += bary.y * (texelFetch(u_vis, ivec3(t, v.y), 0).r == 0xFFFFFFFFu ? 1.0 : 0.0);
+    f += bary.z * (texelFetch(u_vis, ivec3(t, v.z), 0).r == 0xFFFFFFFFu ? 1.0 : 0.0);
+    return f;
+}
+
+void main() {
+    vec3 p = v_position;
+    vec3 wo = camera_wo(p);
+    vec3 N = normalize(v_normal);
+    if (dot(N, wo) < 0.0) N = -N;
+    vec3 T = v_tangent - N * dot(v_tangent, N);
+    T = dot(T, T) > 1e-12 ? normalize(T) : (abs(N.x) < 0.9 ? normalize(cross(N, vec3(1, 0, 0))) : normalize(cross(N, vec3(0, 1, 0))));
+    vec3 B = cross(N, T);
+    float tiling = u_texture_mode != 0 ? 1.0 : u_tiling;
+    float c = v_uv.x * float(u_size.x) * tiling - 0.5, r = (1.0 - v_uv.y) * float(u_size.y) * tiling - 0.5;
+    float c0 = floor(c), r0 = floor(r), fc = c - c0, fr = r - r0;
+    ivec2 t00 = ivec2(int(c0), int(r0));
+    ivec2 tk[4] = ivec2[4](t00, t00 + ivec2(1, 0), t00 + ivec2(0, 1), t00 + ivec2(1, 1));
+    float wk[4] = float[4]((1.0 - fc) * (1.0 - fr), fc * (1.0 - fr), (1.0 - fc) * fr, fc * fr);
+
+    vec3 n_loc = vec3(0.0), albedo = vec3(0.0), E_env = vec3(0.0), E_light = vec3(0.0);
+    for (int k = 0; k < 4; ++k) {
+        n_loc += wk[k] * fetch_rgb(u_normals, tk[k]);
+        albedo += wk[k] * fetch_rgb(u_albedo, tk[k]);
+        if (u_has_env != 0) E_env += wk[k] * fetch_rgb(u_E_env, tk[k]);
+        if (u_has_light_scatter != 0) E_light += wk[k] * fetch_rgb(u_E_light, tk[k]);
+    }
+    n_loc = normalize(n_loc);
+    vec3 n = normalize(T * n_loc.x + B * n_loc.y + N * n_loc.z);
+
+    vec3 direct = vec3(0.0);
+    float shadow0 = 0.0;
+    for (int i = 0; i < u_light_count; ++i) {
+        vec3 wi, E;
+        light_sample(i, p, wi, E);
+        float cos_i = dot(n, wi);
+        float V = 0.0;
+        if (cos_i > 0.0) {
+            if (u_shadows == 0) {
+                V = 1.0;
+            } else {
+                vec3 l_loc = normalize(vec3(dot(wi, T), dot(wi, B), dot(wi, N)));
+                vec3 bary;
+                int tri = locate(l_loc, bary);
+                for (int k = 0; k < 4; ++k) V += wk[k] * visible(tk[k], tri, bary, l_loc);
+            }
+        }
+        if (i == 0) shadow0 = V;
+        if (cos_i <= 0.0 || V <= 0.0) continue;
+        vec3 f = albedo / PI;
+        if (u_phong != 0) {
+            vec3 h = normalize(wo + wi);
+            f += u_ks * (u_shininess + 8.0) / (8.0 * PI) * pow(max(0.0, dot(n, h)), u_shininess);
+        }
+        direct += f * E * cos_i * V;
+    }
+
+    vec3 E_ind = E_env;
+    if (u_has_light_scatter != 0 && u_light_count > 0) {
+        vec3 wi, E;
+        light_sample(0, p, wi, E);
+        float scale = u_light_planar != 0 ? 1.0 : max(0.0, dot(N, wi));
+        E_ind += E_light * E * scale;
+    }
+    vec3 indirect = albedo / PI * E_ind;
+    o_radiance = vec4(direct + indirect, 1.0);
+    o_normal = vec4(n, 1.0);
+    o_direct = vec4(direct, 1.0);
+    o_indirect = vec4(indirect, 1.0);
+    o_shadow = vec4(shadow0, 0.0, 0.0, 1.0);
+}
