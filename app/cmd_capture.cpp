@@ -67,6 +67,7 @@ json sidecar(const Scene& s, const std::string& file, const RenderResult& r, con
         st["status"] = to_string(run.status);
         st["ms"] = run.ms;
         if (!run.reason.empty()) st["reason"] = run.reason;
+        if (!run.warnings.empty()) st["warnings"] = run.warnings;
         stages.push_back(st);
     }
     j["stages"] = stages;
@@ -144,6 +145,8 @@ int run_capture(const CaptureOptions& o) {
         written.push_back(side);
         write_text_atomic(side, sidecar(s, files[i], r, written).dump(2) + "\n");
         int ran = 0, cached = 0, skipped = 0;
+        for (const auto& run : r.eval.runs)
+            for (const auto& w : run.warnings) std::fprintf(stderr, "mesolab: warning: %s: stage %s: %s\n", files[i].c_str(), run.name.c_str(), w.c_str());
         for (const auto& run : r.eval.runs) {
             ran += run.status == StageStatus::Ran;
             cached += run.status == StageStatus::Cached;

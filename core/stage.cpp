@@ -149,9 +149,10 @@ Evaluation StageGraph::evaluate(const Scene& scene, const std::vector<std::strin
             std::lock_guard lock(mutex_);
             auto& entries = cache_[d.name];
             for (auto it = entries.begin(); it != entries.end(); ++it)
-                if (it->first == run.key) {
+                if (it->key == run.key) {
                     entries.splice(entries.begin(), entries, it);  // most recently used first
-                    ev.results[d.name] = entries.front().second;
+                    ev.results[d.name] = entries.front().result;
+                    run.warnings = entries.front().warnings;
                     run.status = StageStatus::Cached;
                     run.ms = ms_since();
                     ev.runs.push_back(run);
@@ -181,11 +182,12 @@ Evaluation StageGraph::evaluate(const Scene& scene, const std::vector<std::strin
         }
         run.status = StageStatus::Ran;
         run.ms = ms_since();
+        run.warnings = ctx.warnings;
         if (progress) progress(d.name, 1.0);
         {
             std::lock_guard lock(mutex_);
             auto& entries = cache_[d.name];
-            entries.emplace_front(run.key, result);
+            entries.push_front({run.key, result, run.warnings});
             while (entries.size() > cache_capacity_per_stage) entries.pop_back();
         }
         ev.results[d.name] = std::move(result);

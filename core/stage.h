@@ -54,6 +54,7 @@ struct StageRun {
     double ms = 0;         // time to compute (Ran) or look up (Cached)
     uint64_t key = 0;
     std::string reason;    // why skipped ("effects.environment is off") or the error
+    std::vector<std::string> warnings;  // results that are valid but need the user's attention (kept with the cached result)
 };
 
 using ProgressFn = std::function<void(const std::string& stage, double fraction)>;
@@ -82,6 +83,9 @@ public:
     // Report progress in [0,1]; throws Cancelled when cancellation was requested.
     void progress(double fraction) const;
     bool cancelled() const { return cancel_ && cancel_->load(std::memory_order_relaxed); }
+    // A warning shown with the stage (capture prints it, the sidecar and the GUI list it).
+    void warn(std::string message) { warnings.push_back(std::move(message)); }
+    std::vector<std::string> warnings;
     const std::string& name() const { return name_; }
 
 private:
@@ -120,7 +124,12 @@ private:
     uint64_t key_rec(const Scene& scene, const StageDecl& d, std::map<std::string, uint64_t>& memo) const;
     std::vector<StageDecl> stages_;
     mutable std::mutex mutex_;
-    std::map<std::string, std::list<std::pair<uint64_t, std::any>>> cache_;  // most recent first
+    struct Entry {
+        uint64_t key = 0;
+        std::any result;
+        std::vector<std::string> warnings;
+    };
+    std::map<std::string, std::list<Entry>> cache_;  // most recent first
 };
 
 // Hash of the values behind a parameter pattern ("basic.kd", "geometry.*", "light.*") over

@@ -76,6 +76,12 @@ void stages_table(const std::vector<StageRun>& runs) {
             ImGui::SameLine(0, 2);
             ImGui::TextDisabled("(?)");
         }
+        for (const auto& w : r.warnings) {
+            // Warnings (e.g. curvature folding the direction triangulation) stay visible.
+            ImGui::SameLine(0, 4);
+            ImGui::TextColored(ImVec4(1.f, 0.75f, 0.2f, 1.f), "warning");
+            if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", w.c_str());
+        }
         ImGui::TableNextColumn();
         if (r.status == StageStatus::Ran || r.status == StageStatus::Cached || r.status == StageStatus::Failed) right_aligned(ms_format(r.ms), r.ms);
         ImGui::TableNextColumn();

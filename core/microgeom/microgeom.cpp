@@ -46,6 +46,9 @@ PerObject<T> per_object(const Scene& s, const std::vector<std::string>& keys, co
 
 const std::vector<std::string> kFieldKeys{"heightfield", "resolution", "height_scale", "periodic", "vgroove_angle", "rms_slope", "correlation", "seed", "albedo"};
 const std::vector<std::string> kScatterKeys{"depth", "sampling", "paths", "scatter_seed", "shadows"};
+const std::vector<std::string> kCurvatureKeys{"curvature_u", "curvature_v"};
+
+bool curved(const SceneObject& o) { return o.material.get_float("curvature_u") != 0.0 || o.material.get_float("curvature_v") != 0.0; }
 
 std::vector<std::string> with(std::vector<std::string> a, const std::vector<std::string>& b) {
     a.insert(a.end(), b.begin(), b.end());
@@ -103,8 +106,13 @@ public:
             .doc("Directions gathered per bounce: all N (deterministic quadrature) or a random subset (dependent tests)");
         p.add_int("paths", 64).range(1, 4096).costs(Cost::Recompute).used_when("sampling", {"random"}).doc("Random directions per bounce");
         p.add_int("scatter_seed", 1).range(0, 2147483647).costs(Cost::Recompute).used_when("sampling", {"random"}).doc("Seed of the random subsets");
-        p.add_enum("shadows", {"none", "exact"}, "exact").costs(Cost::Recompute)
-            .doc("none, or exact: the visibility of the 3 directions of the spherical triangle containing the light, interpolated");
+        p.add_float("curvature_u", 0.0).range(-360.0, 360.0).in("degrees").costs(Cost::Recompute)
+            .doc("Curvature of the base geometry along u, as the total bend across the field (+ convex, - concave): bends the "
+                 "scattering directions and reweights paths by the triangle-fan area importance (§5); S_i are not recomputed");
+        p.add_float("curvature_v", 0.0).range(-360.0, 360.0).in("degrees").costs(Cost::Recompute).doc("Curvature along v (see curvature_u)");
+        p.add_enum("shadows", {"none", "exact", "ellipse"}, "exact").costs(Cost::Recompute)
+            .doc("none; exact: the visibility of the 3 directions of the spherical triangle containing the light, interpolated; "
+                 "ellipse: the paper's per-texel ellipse fitted to the unshadowed directions (§4)");
         p.add_enum("brdf", {"lambert", "blinn-phong"}, "lambert").doc("Micro-BRDF seen by the viewer for direct light");
         p.add_color("ks", {0.04, 0.04, 0.04}).used_when("brdf", {"blinn-phong"}).doc("Specular albedo of the normalised Blinn-Phong lobe");
         p.add_float("shininess", 32.0).range(1.0, 10000.0).log().used_when("brdf", {"blinn-phong"}).doc("Blinn-Phong exponent");
@@ -113,7 +121,8 @@ public:
         effects_.push_back({"indirect", true, "Light scattered inside micro-geometry (microgeom.depth bounces)"});
         aovs_ = {{"direct", 3, "Direct light reflected towards the eye (with shadows)"},
                  {"indirect", 3, "Scattered and environment light reflected towards the eye"},
-                 {"shadow", 1, "Fraction of the first light reaching each point (0..1)"}};
+                 {"shadow", 1, "Fraction of the first light reaching each point (0..1)"},
+                 {"folded", 1, "1 where the curvature folds the direction triangulation over (visibility would change; §5)"}};
     }
 
     void declare_stages(StageGraph& g) const override {
@@ -162,11 +171,72 @@ public:
                    }
                    return stage_result(std::move(out));
                }});
+        // Curved base: fan-area importance of the bent directions (never recomputes S_i).
+        g.add({.name = "microgeom.importance",
+               .help = "Bend the directions by the base curvature and weight them by the relative triangle-fan area (§5)",
+               .params = keys(kCurvatureKeys),
+               .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility"},
+               .when = [](const Scene& s) {
+                   for (const auto& o : s.objects)
+                       if (o.technique == "microgeom" && curved(o)) return true;
+                   return false;
+               },
+               .when_text = "microgeom.curvature_u or curvature_v is not 0",
+               .run = [](StageContext& ctx) {
+                   auto hf = ctx.input<PerObject<Heightfield>>("microgeom.heightfield");
+                   auto dirs = ctx.input<PerObject<DirectionSet>>("microgeom.directions");
+                   auto vis = ctx.input<PerObject<Visibility>>("microgeom.visibility");
+                   PerObject<Importance> out;
+                   out.items.resize(ctx.scene.objects.size());
+                   for (size_t i = 0; i < out.items.size(); ++i) {
+                       const SceneObject& o = ctx.scene.objects[i];
+                       const Heightfield* h = hf->get(int(i));
+                       if (!h || !curved(o)) continue;
+                       const Bending b = Bending::from_degrees(float(o.material.get_float("curvature_u")), float(o.material.get_float("curvature_v")), h->width, h->height);
+                       auto imp = std::make_shared<Importance>(compute_importance(*h, *dirs->get(int(i)), *vis->get(int(i)), b, [&](double f) { ctx.progress(f); }));
+                       if (imp->folded_count > 0) {
+                           char msg[256];
+                           std::snprintf(msg, sizeof msg, "%s: the curvature folds the direction triangulation over at %zu of %zu texels (%.1f%%): visibility would change there; "
+                                         "see the 'folded' AOV, or reduce microgeom.curvature_u/v", o.name.c_str(), imp->folded_count, size_t(h->width) * size_t(h->height),
+                                         100.0 * double(imp->folded_count) / double(size_t(h->width) * size_t(h->height)));
+                           ctx.warn(msg);
+                       }
+                       out.items[i] = std::move(imp);
+                   }
+                   return stage_result(std::move(out));
+               }});
+        // Per-texel ellipses (§4), only when they are the selected shadow method.
+        g.add({.name = "microgeom.ellipses",
+               .help = "Fit a per-texel ellipse to the projections of the unshadowed directions (covariance start, optimised)",
+               .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility"},
+               .when = [](const Scene& s) {
+                   for (const auto& o : s.objects)
+                       if (o.technique == "microgeom" && o.material.get_string("shadows") == "ellipse") return true;
+                   return false;
+               },
+               .when_text = "microgeom.shadows is ellipse",
+               .paper = PaperFigure{194e3, "Heidrich et al. 2000, Table 1: Bricks 128x128 shadow precompute (SGI Octane)"},
+               .run = [](StageContext& ctx) {
+                   auto hf = ctx.input<PerObject<Heightfield>>("microgeom.heightfield");
+                   auto dirs = ctx.input<PerObject<DirectionSet>>("microgeom.directions");
+                   auto vis = ctx.input<PerObject<Visibility>>("microgeom.visibility");
+                   PerObject<EllipseMap> out;
+                   out.items.resize(ctx.scene.objects.size());
+                   std::map<const void*, std::shared_ptr<const EllipseMap>> done;
+                   for (size_t i = 0; i < out.items.size(); ++i) {
+                       const Visibility* v = vis->get(int(i));
+                       if (!v || ctx.scene.objects[i].material.get_string("shadows") != "ellipse") continue;
+                       auto& slot = done[v];
+                       if (!slot) slot = std::make_shared<const EllipseMap>(fit_ellipses(*hf->get(int(i)), *dirs->get(int(i)), *v, [&](double f) { ctx.progress(f); }));
+                       out.items[i] = slot;
+                   }
+                   return stage_result(std::move(out));
+               }});
         // Environment light scattered: independent of the light.
         g.add({.name = "microgeom.scatter_env",
                .help = "Environment light gathered where S_i has no hit, scattered microgeom.depth times",
                .params = with(keys(kScatterKeys), {"env.*"}),
-               .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "env.map"},
+               .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "env.map"},
                .effects = {"environment"},
                .run = [](StageContext& ctx) {
                    return stage_result(scatter_all(ctx, /*environment=*/true));
@@ -175,7 +245,7 @@ public:
         g.add({.name = "microgeom.scatter",
                .help = "The first light scattered inside the heightfield (dependent tests)",
                .params = with(keys(kScatterKeys), {"light.*", "geometry.type"}),
-               .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility"},
+               .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "microgeom.ellipses"},
                .effects = {"indirect"},
                .when = [](const Scene& s) {
                    for (const auto& o : s.objects)
@@ -194,6 +264,8 @@ public:
         auto hf = ctx.input<PerObject<Heightfield>>("microgeom.heightfield");
         auto dirs = ctx.input<PerObject<DirectionSet>>("microgeom.directions");
         auto vis = ctx.input<PerObject<Visibility>>("microgeom.visibility");
+        auto imp = ctx.input<PerObject<Importance>>("microgeom.importance");
+        auto ell = ctx.input<PerObject<EllipseMap>>("microgeom.ellipses");
         Environment env;
         if (environment) {
             env.color = ctx.scene.env.get_vec3("color");
@@ -207,6 +279,8 @@ public:
             if (!hf->get(int(i))) continue;
             LightScatter ls;
             ScatterSettings st = scatter_settings(o.material);
+            st.importance = imp ? imp->get(int(i)) : nullptr;
+            st.ellipses = ell ? ell->get(int(i)) : nullptr;
             ls.planar = planar(o);
             ls.light_dir = first_light_local(ctx.scene, o);
             if (environment) {
@@ -222,7 +296,7 @@ public:
     }
 
     std::vector<std::string> frame_stages() const override {
-        return {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.scatter_env", "microgeom.scatter"};
+        return {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "microgeom.ellipses", "microgeom.scatter_env", "microgeom.scatter"};
     }
 
     std::optional<ivec2> texture_size(const Scene& s, const Evaluation& ev) const override {
@@ -249,6 +323,9 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
     Image& dir_img = ctx.frame.aov("direct");
     Image& ind_img = ctx.frame.aov("indirect");
     Image& sh_img = ctx.frame.aov("shadow");
+    Image& fold_img = ctx.frame.aov("folded");
+    auto imps = ctx.eval.get<PerObject<Importance>>("microgeom.importance");
+    auto ells = ctx.eval.get<PerObject<EllipseMap>>("microgeom.ellipses");
 
     tbb::parallel_for(0, gb.height, [&](int y) {
         for (int x = 0; x < gb.width; ++x) {
@@ -293,6 +370,7 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
             const vec3 ks = phong ? m.get_vec3("ks") : vec3(0.f);
             const float shininess = float(m.get_float("shininess"));
             const bool shadows = m.get_string("shadows") != "none";
+            const EllipseMap* ellipses = ells ? ells->get(obj) : nullptr;
 
             // Direct light: per pixel, exact shadows bilinear over the 4 texels.
             vec3 direct(0.f);
@@ -307,9 +385,16 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
                         V = 1.f;
                     } else {
                         const vec3 l_loc = glm::normalize(to_local(wi));
+                        if (ellipses) {
+                            for (int k = 0; k < 4; ++k) {
+                                const int ex = tx[k & 1], ey = ty[k >> 1];
+                                if (glm::dot(hf.normal(ex, ey), l_loc) > 0.f) V += wts[k] * ellipse_visibility(ellipses->at(ex, ey), l_loc, ellipses->edge);
+                            }
+                        } else {
                         vec3 bary;
                         const auto& tri = dirs.triangles[size_t(dirs.locate(l_loc, bary))];
                         for (int k = 0; k < 4; ++k) V += wts[k] * visibility_fraction(hf, vis, tri, bary, tx[k & 1], ty[k >> 1], l_loc);
+                        }
                     }
                 }
                 if (li == 0) shadow0 = V;
@@ -345,6 +430,11 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
             q = ind_img.at(x, y);
             q[0] = indirect.x, q[1] = indirect.y, q[2] = indirect.z;
             sh_img.at(x, y)[0] = shadow0;
+            const Importance* imp = imps ? imps->get(obj) : nullptr;
+            if (imp && !imp->folded.empty()) {
+                const int fx = ((int(std::floor(c + 0.5f)) % hf.width) + hf.width) % hf.width, fy = ((int(std::floor(r + 0.5f)) % hf.height) + hf.height) % hf.height;
+                fold_img.at(x, y)[0] = float(imp->folded[hf.index(fx, fy)]);
+            }
         }
     });
 }

@@ -79,7 +79,9 @@ ScatterResult scatter(const Heightfield& hf, const DirectionSet& dirs, const Vis
 
     // Direct light with exact shadows.
     const bool has_light = s.light_E.x > 0.f || s.light_E.y > 0.f || s.light_E.z > 0.f;
-    out.shadow = has_light && s.shadows ? visibility_texture(hf, dirs, vis, s.light_dir) : std::vector<float>(T, 1.f);
+    out.shadow = !(has_light && s.shadows) ? std::vector<float>(T, 1.f)
+                 : s.ellipses             ? ellipse_visibility_texture(*s.ellipses, hf, s.light_dir)
+                                          : visibility_texture(hf, dirs, vis, s.light_dir);
     out.direct.assign(T, vec3(0.f));
     for (size_t p = 0; p < T; ++p) {
         const float cos_l = std::max(0.f, glm::dot(n[p], s.light_dir));
@@ -116,7 +118,7 @@ ScatterResult scatter(const Heightfield& hf, const DirectionSet& dirs, const Vis
                 for (int j : J) {
                     const float c = glm::dot(n[p], dirs.d[size_t(j)]);
                     if (c <= 0.f) continue;
-                    const float w = c * dirs.solid_angle[size_t(j)];
+                    const float w = c * dirs.solid_angle[size_t(j)] * (s.importance ? s.importance->at(p, j) : 1.f);
                     wsum += w;
                     const uint32_t hit = vis.at(j, x, y);
                     if (hit == Visibility::kNoHit) {

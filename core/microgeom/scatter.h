@@ -21,7 +21,9 @@
 // the spherical triangle containing l with its barycentric weights. Masking uses the same data
 // with the view direction.
 #include "core/env.h"
+#include "core/microgeom/curvature.h"
 #include "core/microgeom/directions.h"
+#include "core/microgeom/ellipse.h"
 #include "core/microgeom/heightfield.h"
 #include "core/microgeom/visibility.h"
 #include <atomic>
@@ -50,6 +52,8 @@ struct ScatterSettings {
     bool all_directions = true;      // J_k = all N, or `paths` random directions per bounce
     int paths = 64;
     uint32_t seed = 1;
+    const Importance* importance = nullptr;  // curved base (§5): paths weighted by fan-area importance
+    const EllipseMap* ellipses = nullptr;    // shadows from the per-texel ellipses (§4) instead of the exact test
 };
 
 struct ScatterResult {

@@ -24,6 +24,12 @@ uniform sampler2D u_normals;    // heightfield normals (local frame), rgb
 uniform sampler2D u_albedo;
 uniform sampler2D u_E_env;      // microgeom.scatter_env: irradiance, rgb
 uniform sampler2D u_E_light;    // microgeom.scatter: irradiance per unit light irradiance, rgb
+uniform sampler2D u_folded;     // microgeom.importance: 1 where the curvature folds the triangulation
+uniform int u_has_folded;
+uniform int u_use_ellipse;      // microgeom.shadows == ellipse
+uniform float u_ellipse_edge;
+uniform sampler2D u_ellipse0;   // (cx, cy, cos angle, sin angle)
+uniform sampler2D u_ellipse1;   // (a, b, -, -)
 uniform ivec2 u_size;           // heightfield texels
 uniform ivec2 u_grid;           // grid cells (phi, theta)
 uniform int u_tri_count;
@@ -37,6 +43,7 @@ layout(location = 1) out vec4 o_normal;
 layout(location = 2) out vec4 o_direct;
 layout(location = 3) out vec4 o_indirect;
 layout(location = 4) out vec4 o_shadow;
+layout(location = 5) out vec4 o_folded;
 
 // Cone coordinates of w in triangle t; barycentrics once normalised.
 vec3 cone(int t, vec3 w) {
@@ -70,6 +77,17 @@ int locate(vec3 w, out vec3 bary) {
 }
 
 ivec2 wrap(ivec2 t) { return ((t % u_size) + u_size) % u_size; }
+
+// The paper's ellipse test (§4), as ellipse_visibility in core/microgeom/ellipse.cpp.
+float ellipse_vis(vec4 t0, vec4 t1, vec3 w, float edge) {
+    if (w.z <= 0.0) return 0.0;
+    vec2 p = w.xy - t0.xy;
+    vec2 uv = vec2(dot(t0.zw, p), dot(vec2(-t0.w, t0.z), p)) / t1.xy;
+    float q = dot(uv, uv);
+    if (edge <= 0.0) return q <= 1.0 ? 1.0 : 0.0;
+    float g = 2.0 * length(uv / t1.xy);
+    return clamp(0.5 - (q - 1.0) / (max(g, 1e-6) * edge), 0.0, 1.0);
+}
 vec3 fetch_rgb(sampler2D s, ivec2 t) { return texelFetch(s, wrap(t), 0).rgb; }
 
 // Fraction of direction w (local) reaching texel t, given w's triangle and barycentrics.
@@ -121,9 +139,17 @@ void main() {
                 V = 1.0;
             } else {
                 vec3 l_loc = normalize(vec3(dot(wi, T), dot(wi, B), dot(wi, N)));
-                vec3 bary;
-                int tri = locate(l_loc, bary);
-                for (int k = 0; k < 4; ++k) V += wk[k] * visible(tk[k], tri, bary, l_loc);
+                if (u_use_ellipse != 0) {
+                    for (int k = 0; k < 4; ++k) {
+                        ivec2 t = wrap(tk[k]);
+                        if (dot(texelFetch(u_normals, t, 0).xyz, l_loc) > 0.0)
+                            V += wk[k] * ellipse_vis(texelFetch(u_ellipse0, t, 0), texelFetch(u_ellipse1, t, 0), l_loc, u_ellipse_edge);
+                    }
+                } else {
+                    vec3 bary;
+                    int tri = locate(l_loc, bary);
+                    for (int k = 0; k < 4; ++k) V += wk[k] * visible(tk[k], tri, bary, l_loc);
+                }
             }
         }
         if (i == 0) shadow0 = V;
@@ -149,4 +175,6 @@ void main() {
     o_direct = vec4(direct, 1.0);
     o_indirect = vec4(indirect, 1.0);
     o_shadow = vec4(shadow0, 0.0, 0.0, 1.0);
+    float folded = u_has_folded != 0 ? texelFetch(u_folded, wrap(ivec2(int(floor(c + 0.5)), int(floor(r + 0.5)))), 0).r : 0.0;
+    o_folded = vec4(folded, 0.0, 0.0, 1.0);
 }

@@ -47,6 +47,11 @@ struct Geometry {
     int tri_count = 0;
 };
 
+struct Ellipses {
+    std::shared_ptr<const void> keep;
+    Texture t0, t1;
+};
+
 struct Irradiance {
     std::shared_ptr<const void> keep;
     Texture tex;
@@ -63,6 +68,8 @@ public:
         auto viss = ctx.eval.get<PerObject<Visibility>>("microgeom.visibility");
         auto envs = ctx.eval.get<PerObject<LightScatter>>("microgeom.scatter_env");
         auto lights = ctx.eval.get<PerObject<LightScatter>>("microgeom.scatter");
+        auto imps = ctx.eval.get<PerObject<Importance>>("microgeom.importance");
+        auto ells = ctx.eval.get<PerObject<EllipseMap>>("microgeom.ellipses");
         prune();
         // Upload first: creating a texture binds it to the active unit, which must not disturb
         // the units bound below.
@@ -70,9 +77,11 @@ public:
             geometry(hfs->items[size_t(i)], dirss->items[size_t(i)], viss->items[size_t(i)]);
             if (envs && envs->get(i)) irradiance(envs->items[size_t(i)], *hfs->get(i));
             if (lights && lights->get(i)) irradiance(lights->items[size_t(i)], *hfs->get(i));
+            if (imps && imps->get(i)) folded(imps->items[size_t(i)]);
+            if (ells && ells->get(i)) ellipses(ells->items[size_t(i)]);
         }
         program_.use();
-        ctx.renderer.draw_buffers({"radiance", "normal", "direct", "indirect", "shadow"});
+        ctx.renderer.draw_buffers({"radiance", "normal", "direct", "indirect", "shadow", "folded"});
         ctx.renderer.set_lighting_uniforms(program_, ctx.lighting, 0);
         for (int i : ctx.objects) {
             const SceneObject& o = ctx.scene.objects[size_t(i)];
@@ -92,6 +101,16 @@ public:
             bind(3, GL_TEXTURE_2D, g.albedo.get(), "u_albedo");
             bind(4, GL_TEXTURE_2D, e_env, "u_E_env");
             bind(5, GL_TEXTURE_2D, e_light, "u_E_light");
+            const Importance* imp = imps ? imps->get(i) : nullptr;
+            const bool has_folded = imp && !imp->folded.empty();
+            bind(6, GL_TEXTURE_2D, has_folded ? folded(imps->items[size_t(i)]) : 0, "u_folded");
+            glUniform1i(program_.uniform("u_has_folded"), has_folded ? 1 : 0);
+            const EllipseMap* em = ells ? ells->get(i) : nullptr;
+            const Ellipses* et = em ? &ellipses(ells->items[size_t(i)]) : nullptr;
+            bind(7, GL_TEXTURE_2D, et ? et->t0.get() : 0, "u_ellipse0");
+            bind(8, GL_TEXTURE_2D, et ? et->t1.get() : 0, "u_ellipse1");
+            glUniform1i(program_.uniform("u_use_ellipse"), em ? 1 : 0);
+            glUniform1f(program_.uniform("u_ellipse_edge"), em ? em->edge : 0.f);
             glUniform2i(program_.uniform("u_size"), hf.width, hf.height);
             glUniform2i(program_.uniform("u_grid"), kGridW, kGridH);
             glUniform1i(program_.uniform("u_tri_count"), g.tri_count);
@@ -126,6 +145,8 @@ private:
             it = it->second.keep_vis.use_count() == 1 ? geometry_.erase(it) : std::next(it);
         for (auto it = irradiance_.begin(); it != irradiance_.end();)
             it = it->second.keep.use_count() == 1 ? irradiance_.erase(it) : std::next(it);
+        for (auto it = ellipses_.begin(); it != ellipses_.end();)
+            it = it->second.keep.use_count() == 1 ? ellipses_.erase(it) : std::next(it);
     }
 
     Geometry& geometry(const std::shared_ptr<const Heightfield>& hf, const std::shared_ptr<const DirectionSet>& dirs,
@@ -193,7 +214,43 @@ private:
         return (irradiance_[s.get()] = std::move(r)).tex.get();
     }
 
+    GLuint folded(const std::shared_ptr<const Importance>& imp) {
+        auto it = irradiance_.find(imp.get());
+        if (it != irradiance_.end()) return it->second.tex.get();
+        std::vector<vec3> mask(imp->folded.size());
+        for (size_t k = 0; k < mask.size(); ++k) mask[k] = vec3(float(imp->folded[k]));
+        Irradiance r;
+        r.keep = imp;
+        r.tex = Texture(make_rgb_texture(mask, imp->width, imp->height));
+        return (irradiance_[imp.get()] = std::move(r)).tex.get();
+    }
+
+    const Ellipses& ellipses(const std::shared_ptr<const EllipseMap>& em) {
+        auto it = ellipses_.find(em.get());
+        if (it != ellipses_.end()) return it->second;
+        std::vector<float> rgba0(em->e.size() * 4), rgba1(em->e.size() * 4, 0.f);
+        for (size_t k = 0; k < em->e.size(); ++k) {
+            const Ellipse& e = em->e[k];
+            rgba0[k * 4 + 0] = e.centre.x, rgba0[k * 4 + 1] = e.centre.y, rgba0[k * 4 + 2] = std::cos(e.angle), rgba0[k * 4 + 3] = std::sin(e.angle);
+            rgba1[k * 4 + 0] = e.a, rgba1[k * 4 + 1] = e.b;
+        }
+        Ellipses r;
+        r.keep = em;
+        for (int i = 0; i < 2; ++i) {
+            GLuint id = 0;
+            glGenTextures(1, &id);
+            glBindTexture(GL_TEXTURE_2D, id);
+            glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+            glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, em->width, em->height, 0, GL_RGBA, GL_FLOAT, i == 0 ? rgba0.data() : rgba1.data());
+            glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+            glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+            (i == 0 ? r.t0 : r.t1) = Texture(id);
+        }
+        return ellipses_[em.get()] = std::move(r);
+    }
+
     Program program_;
+    std::map<const void*, Ellipses> ellipses_;
     std::map<const void*, Geometry> geometry_;
     std::map<const void*, Irradiance> irradiance_;
 };

@@ -1,0 +1,44 @@
+#pragma once
+// Visibility textures S_i (microgeom, Heidrich et al. 2000 §3) computed on the GPU by the compute
+// shader microgeom/visibility.comp: the same exact first hits as microgeom::compute_visibility
+// (core/microgeom/visibility.h: same origin lift, kBelow/kNoHit rules, periodic wrap and reach
+// cap, packing), walked in float instead of double. Results agree with the CPU except for rays
+// that graze the surface within float rounding (see tests/microgeom/visibility_gpu_test.cpp for
+// the measured agreement); hit points agree to well within the 1/16-texel packing.
+//
+// Needs a current OpenGL 4.3 core context (compute shaders, SSBOs); nothing beyond 4.3.
+// Host work: per-texel normals and lifted origins, per-cell heights, the min/max pyramid and
+// per-direction constants (all O(W H + N), in double as on the CPU), then one invocation per
+// (texel, direction), dispatched in batches of directions.
+#include "core/microgeom/directions.h"
+#include "core/microgeom/heightfield.h"
+#include "core/microgeom/visibility.h"
+#include "gpu/gl.h"
+
+namespace mesolab::gpu {
+
+// The compiled program; keep one around to avoid recompiling for every field. Must be used and
+// destroyed with the context it was created in current.
+class VisibilityProgram {
+public:
+    VisibilityProgram();  // compiles microgeom/visibility.comp (throws std::runtime_error on failure)
+
+    // All N textures, read back: same layout and encoding as microgeom::compute_visibility.
+    // Throws std::invalid_argument for a heightfield whose h has the wrong size (as the CPU does).
+    microgeom::Visibility compute(const microgeom::Heightfield& hf, const microgeom::DirectionSet& dirs) const;
+
+    // All N textures as a new R32UI GL_TEXTURE_2D_ARRAY (width x height x N, layer = direction,
+    // nearest filtering), as gpu/microgeom/microgeom_pass.cpp uploads S_i, filled on the GPU with
+    // no read-back. Empty (no texture) when W, H or N is 0. Throws std::runtime_error when N
+    // exceeds GL_MAX_ARRAY_TEXTURE_LAYERS. Leaves the texture bound to GL_TEXTURE_2D_ARRAY on the
+    // active unit restored to what it was.
+    Texture compute_texture(const microgeom::Heightfield& hf, const microgeom::DirectionSet& dirs) const;
+
+private:
+    Program program_;
+};
+
+// Needs a current GL context. Same layout and encoding as microgeom::compute_visibility.
+// Compiles the program for each call (~tens of ms on llvmpipe); use VisibilityProgram to reuse it.
+microgeom::Visibility compute_visibility_gpu(const microgeom::Heightfield& hf, const microgeom::DirectionSet& dirs);
+}  // namespace mesolab::gpu
