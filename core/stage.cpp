@@ -56,16 +56,16 @@ std::string param_fingerprint(const Scene& s, const std::string& pattern) {
     else if (group == "env") append_table(out, s, s.env, param);
     else if (group == "effects") append_table(out, s, s.effects, param);
     else if (group == "light") {
-        out += std::to_string(s.lights.size()) + ":";
+        out.append(std::to_string(s.lights.size())).append(":");
         for (const auto& l : s.lights) append_table(out, s, l, param);
     } else if (group == "geometry") {
-        out += std::to_string(s.objects.size()) + ":";
+        out.append(std::to_string(s.objects.size())).append(":");
         for (const auto& o : s.objects) append_table(out, s, o.geometry, param);
     } else {
         // A technique: every object using it, in order (the object index is part of the key).
         for (size_t i = 0; i < s.objects.size(); ++i)
             if (s.objects[i].technique == group) {
-                out += "#" + std::to_string(i) + ":";
+                out.append("#").append(std::to_string(i)).append(":");
                 append_table(out, s, s.objects[i].material, param);
             }
     }

@@ -9,6 +9,11 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+// GCC 12 reports -Wmaybe-uninitialized inside libstdc++'s <regex> automaton (GCC bug 105562),
+// not in this file's code.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
 #include <regex>
 #include <set>
 #include <stdexcept>

@@ -26,9 +26,9 @@ TEST(PresetFuzz, MutationsLoadOrFailCleanly) {
                 switch (rng() % 3) {
                     case 0: text[at] = alphabet[rng() % std::strlen(alphabet)]; break;
                     case 1: text.erase(at, 1 + rng() % 8); break;
-                    default: text.insert(at, 1, alphabet[rng() % std::strlen(alphabet)]); break;
+                    default: text.insert(text.begin() + std::ptrdiff_t(at), alphabet[rng() % std::strlen(alphabet)]); break;
                 }
-                if (text.empty()) text = "{";
+                if (text.empty()) text.push_back('{');
             }
             try {
                 const json j = json::parse(text);
