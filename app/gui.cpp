@@ -352,6 +352,7 @@ struct Window {
             throw InputError("gui: cannot open a window with an OpenGL 4.3 core context (" + g_glfw_error +
                              "). Render headless with `mesolab capture PRESET` instead");
         glfwMakeContextCurrent(handle);
+        gpu::pin_loaded_objects();  // the GL driver stays loaded after glfwTerminate (LeakSanitizer)
     }
     ~Window() {
         if (handle) glfwDestroyWindow(handle);

@@ -106,6 +106,12 @@ void pin_new_objects(const std::set<std::string>& before) {
     }
 }
 
+}  // namespace
+
+void pin_loaded_objects() { pin_new_objects({}); }
+
+namespace {
+
 bool platform_enabled(const char* name) {
     const char* env = std::getenv("MESOLAB_EGL_PLATFORM");
     if (!env || !*env) return true;

@@ -12,6 +12,11 @@ struct GlInfo {
     std::string vendor, renderer, version, glsl_version, platform;  // platform: "egl-device", "egl-surfaceless", "egl-default", "glfw"
 };
 
+// Keep every shared object loaded now (e.g. the GL driver a GLFW window loaded) until exit, so
+// that unloading it at glfwTerminate() does not turn its static allocations into leaks with
+// unresolvable stacks under LeakSanitizer (see context.cpp).
+void pin_loaded_objects();
+
 // Query GL strings of the current context.
 GlInfo query_gl_info(const std::string& platform);
 
