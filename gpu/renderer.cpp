@@ -21,6 +21,13 @@ struct Renderer::Impl {
     };
     std::map<const void*, Tex> textures;
     GpuTimer timer;
+    VertexArray empty_vao;  // attribute-less draws (the full-screen triangle)
+
+    void draw_fullscreen_triangle() const {
+        glBindVertexArray(empty_vao.get());
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+        glBindVertexArray(0);
+    }
 };
 
 Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
@@ -28,18 +35,16 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
     std::map<std::string, PassFactory> factories;
     register_gpu_passes(factories);
     for (auto& [name, make] : factories) impl_->passes[name] = make();
+    GLuint vao = 0;
+    glGenVertexArrays(1, &vao);
+    impl_->empty_vao = VertexArray(vao);
     // Warm-up draw: Mesa's llvmpipe answers a GL_TIME_ELAPSED query begun before a context's
     // first draw with the system uptime, which would poison the first frame's GPU timing.
     RenderTarget warm;
     warm.resize(1, 1, 1);
     warm.bind();
     impl_->background.use();
-    GLuint vao = 0;
-    glGenVertexArrays(1, &vao);
-    glBindVertexArray(vao);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-    glBindVertexArray(0);
-    glDeleteVertexArrays(1, &vao);
+    impl_->draw_fullscreen_triangle();
     glFinish();
 }
 
@@ -203,12 +208,7 @@ void Renderer::render(const Scene& s, const Evaluation& ev, int width, int heigh
         impl_->background.use();
         glUniformMatrix4fv(impl_->background.uniform("u_inv_view_proj"), 1, GL_FALSE, glm::value_ptr(cam.inv_view_proj));
         set_lighting_uniforms(impl_->background, lighting, 0);
-        GLuint vao = 0;
-        glGenVertexArrays(1, &vao);
-        glBindVertexArray(vao);
-        glDrawArrays(GL_TRIANGLES, 0, 3);
-        glBindVertexArray(0);
-        glDeleteVertexArrays(1, &vao);
+        impl_->draw_fullscreen_triangle();
     }
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
