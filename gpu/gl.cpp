@@ -1,6 +1,8 @@
 #include "gpu/gl.h"
 #include "gpu/shaders.h"
 
+#include <limits>
+
 #include <dlfcn.h>
 #include <epoxy/egl.h>
 
@@ -383,14 +385,15 @@ std::vector<float> RenderTarget::read_rgba(int i) const {
     return pixels;
 }
 
-// [SECTION] GpuTimer (note: Mesa 22.3 llvmpipe loses the start of a GL_TIME_ELAPSED query begun
-// before the first draw of a scene and then reports roughly the system uptime)
+// [SECTION] GpuTimer
 void GpuTimer::begin() {
     if (!query_) {
         GLuint id = 0;
         glGenQueries(1, &id);
         query_ = Query(id);
     }
+    begin_wall_ = std::chrono::steady_clock::now();
+    read_ = false;
     glBeginQuery(GL_TIME_ELAPSED, query_.get());
 }
 
@@ -402,8 +405,15 @@ void GpuTimer::end() {
 
 double GpuTimer::elapsed_ms() {
     if (!query_ || !pending_) return 0.0;
+    if (read_) return result_ms_;
     GLuint64 ns = 0;
     glGetQueryObjectui64v(query_.get(), GL_QUERY_RESULT, &ns);  // waits for the GPU
-    return double(ns) * 1e-6;
+    const double wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin_wall_).count();
+    const double gpu_ms = double(ns) * 1e-6;
+    // The GPU work happened between begin() and now; allow 1 ms + 1% for clock granularity.
+    valid_ = gpu_ms <= wall_ms * 1.01 + 1.0;
+    result_ms_ = valid_ ? gpu_ms : std::numeric_limits<double>::quiet_NaN();
+    read_ = true;
+    return result_ms_;
 }
 }  // namespace mesolab::gpu

@@ -2,6 +2,8 @@
 // Thin RAII wrappers over OpenGL 4.3+ core objects, and shader programs built from the .glsl
 // files embedded into the binary at build time (see shaders.h).
 #include <epoxy/gl.h>
+
+#include <chrono>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -74,14 +76,24 @@ private:
 };
 
 // GPU timer (GL_TIME_ELAPSED). begin/end around GL work; elapsed_ms() waits for the result.
+// GPU time between begin() and end() from a GL_TIME_ELAPSED query. A driver's answer is checked
+// against the wall-clock time from begin() until the result was read, which bounds it: Mesa 22.3's
+// llvmpipe sometimes loses the start of the query (under load, or before a context's first draw)
+// and reports roughly the system uptime. Such an impossible answer is never passed on: elapsed_ms()
+// then returns NaN and valid() is false, so tables show a gap instead of a wrong figure.
 class GpuTimer {
 public:
     void begin();
     void end();
-    double elapsed_ms();  // blocks until available; 0 if never begun
+    double elapsed_ms();  // blocks until available; 0 if never begun; NaN if the driver's value is impossible
+    bool valid() const { return valid_; }
 private:
     Query query_;
     bool pending_ = false;
+    bool read_ = false;
+    bool valid_ = true;
+    double result_ms_ = 0;
+    std::chrono::steady_clock::time_point begin_wall_{};
 };
 
 // Throws std::runtime_error naming `where` if glGetError() reports an error.

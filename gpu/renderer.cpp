@@ -5,6 +5,7 @@
 
 #include <glm/gtc/type_ptr.hpp>
 #include <algorithm>
+#include <cmath>
 
 namespace mesolab::gpu {
 
@@ -223,7 +224,8 @@ void Renderer::render(const Scene& s, const Evaluation& ev, int width, int heigh
     }
     impl_->timer.end();
     last_gpu_ms_ = impl_->timer.elapsed_ms();
-    Profiler::global().record("frame.gpu/gpu", last_gpu_ms_, Device::Gpu);
+    // An impossible driver answer (NaN, see GpuTimer) is left out rather than recorded.
+    if (std::isfinite(last_gpu_ms_)) Profiler::global().record("frame.gpu/gpu", last_gpu_ms_, Device::Gpu);
     check_gl("Renderer::render");
 }
 
