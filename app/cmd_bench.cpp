@@ -20,6 +20,7 @@ struct Cell {
     std::string table, row, column, device;
     double median = 0, min = 0, max = 0;
     std::optional<double> paper;
+    std::string info;  // report columns (BenchColumn::info): the text, no timing
 };
 
 std::string fmt_ms(double ms) {
@@ -90,6 +91,13 @@ int run_bench(const BenchOptions& o) {
                     cells.push_back(c);
                     std::fprintf(stderr, "  %-10s %-22s %-22s %-4s %s\n", t.name.c_str(), row.name.c_str(), col.name.c_str(), device, fmt_ms(c.median).c_str());
                 };
+                if (col.info) {
+                    const Evaluation ev = graph.evaluate(scene, Registry::instance().frame_stages(scene));
+                    Cell c{t.name, row.name, col.name, "-", 0, 0, 0, std::nullopt, col.info(scene, ev)};
+                    std::fprintf(stderr, "  %-10s %-22s %-22s %s\n", t.name.c_str(), row.name.c_str(), col.name.c_str(), c.info.c_str());
+                    cells.push_back(c);
+                    continue;
+                }
                 if (!col.stage.empty()) {
                     // A stage from a cold cache; its upstream stays cached.
                     graph.evaluate(scene, {col.stage});
@@ -119,7 +127,8 @@ int run_bench(const BenchOptions& o) {
     if (o.format == "csv") {
         out << "table,row,column,device,median_ms,min_ms,max_ms,paper_ms,paper_over_ours\n";
         for (const auto& c : cells)
-            out << c.table << ",\"" << c.row << "\",\"" << c.column << "\"," << c.device << "," << c.median << "," << c.min << "," << c.max << ","
+            if (!c.info.empty()) out << c.table << ",\"" << c.row << "\",\"" << c.column << "\",info,,,,,\"" << c.info << "\"\n";
+            else out << c.table << ",\"" << c.row << "\",\"" << c.column << "\"," << c.device << "," << c.median << "," << c.min << "," << c.max << ","
                 << (c.paper ? std::to_string(*c.paper) : "") << "," << (c.paper ? std::to_string(*c.paper / c.median) : "") << "\n";
     } else if (o.format == "json") {
         json j;
@@ -128,7 +137,13 @@ int run_bench(const BenchOptions& o) {
         j["repeat"] = o.repeat;
         j["cells"] = json::array();
         for (const auto& c : cells) {
-            json x{{"table", c.table}, {"row", c.row}, {"column", c.column}, {"device", c.device}, {"median_ms", c.median}, {"min_ms", c.min}, {"max_ms", c.max}};
+            json x{{"table", c.table}, {"row", c.row}, {"column", c.column}};
+            if (!c.info.empty()) {
+                x["info"] = c.info;
+                j["cells"].push_back(x);
+                continue;
+            }
+            x["device"] = c.device, x["median_ms"] = c.median, x["min_ms"] = c.min, x["max_ms"] = c.max;
             if (c.paper) {
                 x["paper_ms"] = *c.paper;
                 x["paper_over_ours"] = *c.paper / c.median;
@@ -152,6 +167,10 @@ int run_bench(const BenchOptions& o) {
                     std::optional<double> paper;
                     for (const auto& c : cells) {
                         if (c.table != t.name || c.row != row.name || c.column != col.name) continue;
+                        if (!c.info.empty()) {
+                            cell = c.info;
+                            continue;
+                        }
                         cell += (cell.empty() ? "" : "<br>") + std::string(c.device == "gpu" ? "GPU " : "CPU ") + fmt_ms(c.median) + " [" + fmt_ms(c.min) + "–" +
                                 fmt_ms(c.max) + "]";
                         paper = c.paper;
@@ -159,7 +178,7 @@ int run_bench(const BenchOptions& o) {
                     if (paper) {
                         double best = 1e300;
                         for (const auto& c : cells)
-                            if (c.table == t.name && c.row == row.name && c.column == col.name) best = std::min(best, c.median);
+                            if (c.table == t.name && c.row == row.name && c.column == col.name && c.info.empty()) best = std::min(best, c.median);
                         char r[64];
                         std::snprintf(r, sizeof r, " (×%.3g faster)", *paper / best);
                         cell += "<br>paper " + fmt_ms(*paper) + r;

@@ -39,10 +39,21 @@ struct SweepOptions {
 };
 int run_sweep(const SweepOptions& o);
 
+struct ExportOptions {
+    std::string name;                  // a technique's export, e.g. btf
+    std::string preset;
+    std::string out;                   // output file
+    std::string object;                // scene object (default: the first using the technique)
+    std::vector<std::string> options;  // KEY=VALUE
+    std::vector<std::string> sets;
+};
+int run_export(const ExportOptions& o);
+
 int run_preset_validate(const std::vector<std::string>& files);
 int run_preset_schema(const std::string& technique, bool as_json);
 int run_preset_show(const std::string& file, const std::vector<std::string>& sets);
 int run_info();
+std::string export_names();  // "btf (microgeom), ..." for help texts
 
 struct GuiOptions {
     std::string preset;

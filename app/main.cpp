@@ -13,7 +13,7 @@ using namespace mesolab;
 
 int main(int argc, char** argv) {
     // `mesolab PRESET` and `mesolab` alone mean `mesolab gui ...`.
-    static const char* kCommands[] = {"gui", "capture", "bench", "sweep", "preset", "info", "-h", "--help", "--version"};
+    static const char* kCommands[] = {"gui", "capture", "bench", "sweep", "preset", "info", "export", "-h", "--help", "--version"};
     std::vector<char*> args(argv, argv + argc);
     bool known = argc > 1 && std::any_of(std::begin(kCommands), std::end(kCommands), [&](const char* c) { return std::strcmp(argv[1], c) == 0; });
     static char gui_word[] = "gui";
@@ -41,6 +41,15 @@ int main(int argc, char** argv) {
     c->add_option("--set", cap.sets, "Override a parameter: KEY=VALUE (repeatable), e.g. camera.distance=4");
     c->add_flag("--profile", cap.profile, "Print the scoped CPU/GPU timing hierarchy at the end");
     c->add_option("--aov", cap.aovs, "Also write this AOV as 32-bit float EXR (repeatable): radiance, normal, ...");
+
+    ExportOptions exp;
+    auto* x = app.add_subcommand("export", "Write a technique's data export for a preset's object (e.g. btf: microgeom's view x light grid of heightfield images, EXR)");
+    x->add_option("name", exp.name, "Export name: " + export_names())->required();
+    x->add_option("preset", exp.preset, "Preset file")->required();
+    x->add_option("-o,--output", exp.out, "Output file")->required();
+    x->add_option("--object", exp.object, "Scene object (default: the first that uses the export's technique)");
+    x->add_option("--option", exp.options, "Export option KEY=VALUE (repeatable), e.g. grid=4x8");
+    x->add_option("--set", exp.sets, "Override a parameter: KEY=VALUE (repeatable)");
 
     BenchOptions bench;
     auto* b = app.add_subcommand("bench", "Timing tables laid out like the papers' tables (all tables when none is named)");
@@ -102,6 +111,7 @@ int main(int argc, char** argv) {
         if (ps->parsed()) return run_preset_schema(schema_tech, schema_json);
         if (psh->parsed()) return run_preset_show(show_file, show_sets);
         if (info->parsed()) return run_info();
+        if (x->parsed()) return run_export(exp);
     } catch (const InputError& e) {
         tty_progress_done();
         std::fprintf(stderr, "mesolab: error: %s\n", e.what());

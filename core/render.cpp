@@ -104,12 +104,21 @@ bool ShadeContext::mine(size_t pixel) const {
     return o >= 0 && std::find(objects.begin(), objects.end(), o) != objects.end();
 }
 
+std::shared_ptr<const TriMesh> drawn_mesh(const Scene& s, const Evaluation& ev, int object) {
+    const Technique* t = Registry::instance().technique(s.objects.at(size_t(object)).technique);
+    if (t)
+        if (auto m = t->object_mesh(s, ev, object)) return m;
+    auto geo = ev.get<SceneGeometry>("scene.geometry");
+    if (!geo || size_t(object) >= geo->meshes.size()) return nullptr;
+    return std::shared_ptr<const TriMesh>(geo, &geo->meshes[size_t(object)]);
+}
+
 std::vector<Bounds> world_bounds(const Scene& s, const Evaluation& ev) {
     std::vector<Bounds> r;
     auto geo = ev.get<SceneGeometry>("scene.geometry");
     if (!geo) return r;
     for (size_t i = 0; i < s.objects.size() && i < geo->meshes.size(); ++i) {
-        const Bounds b = bounds(geo->meshes[i]);
+        const Bounds b = bounds(*drawn_mesh(s, ev, int(i)));
         const mat4 m = object_to_world(s.objects[i]);
         Bounds w{vec3(1e30f), vec3(-1e30f)};
         for (int k = 0; k < 8; ++k) {
@@ -149,7 +158,11 @@ Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height) {
     {
         PROFILE_SCOPE("raster");
         std::vector<DrawItem> items;
-        for (size_t i = 0; i < s.objects.size(); ++i) items.push_back({&geo->meshes[i], object_to_world(s.objects[i]), int(i)});
+        std::vector<std::shared_ptr<const TriMesh>> keep;
+        for (size_t i = 0; i < s.objects.size(); ++i) {
+            keep.push_back(drawn_mesh(s, ev, int(i)));
+            items.push_back({keep.back().get(), object_to_world(s.objects[i]), int(i)});
+        }
         rasterize(items, cam.raster, gb);
     }
     {

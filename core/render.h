@@ -82,6 +82,10 @@ ivec2 frame_size(const Scene& s, const Evaluation& ev, ivec2 requested);
 // under "frame.cpu/..." in the profiler.
 Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height);
 
+// The mesh drawn for an object (object space): its technique's object_mesh() if any, else the
+// scene.geometry tessellation. Both render paths and the camera bounds use this.
+std::shared_ptr<const TriMesh> drawn_mesh(const Scene& s, const Evaluation& ev, int object);
+
 // World-space bounds of the scene's objects (for camera planes).
 std::vector<Bounds> world_bounds(const Scene& s, const Evaluation& ev);
 }  // namespace mesolab

@@ -6,8 +6,11 @@
 // listed once, in the top-level CMakeLists.txt (MESOLAB_TECHNIQUES); each layer generates a
 // registration call per technique, so the app never names a technique.
 #include "core/bench.h"
+#include "core/mesh.h"
 #include "core/param.h"
 #include "core/stage.h"
+#include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -29,6 +32,18 @@ struct AovDecl {
     std::string help;
 };
 
+// A data export of a technique (`mesolab export NAME PRESET -o FILE`), e.g. microgeom's BTF.
+struct ExportDecl {
+    std::string name;
+    std::string help;
+    std::string options_help;           // "KEY=VALUE ...": what --option accepts
+    std::vector<std::string> stages;    // evaluated before run
+    // Writes `path` (atomically) for scene object `object`; unknown or bad options are
+    // InputErrors naming them. Returns a one-paragraph summary for the terminal.
+    std::function<std::string(const Scene&, const Evaluation&, int object, const std::map<std::string, std::string>& options,
+                              const std::string& path, const ProgressFn& progress)> run;
+};
+
 class Technique {
 public:
     Technique(std::string name, std::string title) : params_(std::move(name), std::move(title)) {}
@@ -47,6 +62,11 @@ public:
     virtual void shade_cpu(const ShadeContext& ctx) const = 0;
     // Texture-space resolution for camera.mode=texture when the technique has a native one.
     virtual std::optional<ivec2> texture_size(const Scene&, const Evaluation&) const { return std::nullopt; }
+    // Geometry drawn for `object` instead of scene.geometry's tessellation (a displaced level of
+    // detail, say), or null for the tessellation. Computed by stages listed in frame_stages().
+    virtual std::shared_ptr<const TriMesh> object_mesh(const Scene&, const Evaluation&, int /*object*/) const { return nullptr; }
+    // Data exports (mesolab export NAME).
+    virtual std::vector<ExportDecl> exports() const { return {}; }
     // Timing tables reproducing the paper's (bench NAME).
     virtual std::vector<BenchTable> bench_tables() const { return {}; }
 

@@ -12,9 +12,12 @@ namespace mesolab::gpu {
 struct Renderer::Impl {
     Program background;
     std::map<std::string, std::unique_ptr<TechniquePass>> passes;
-    // Uploaded meshes, valid while `geometry` is the evaluated scene.geometry result.
-    std::shared_ptr<const SceneGeometry> geometry;
-    std::vector<GpuMesh> meshes;
+    // Uploaded meshes per object, with the mesh they came from (kept alive: the key).
+    struct Mesh {
+        std::shared_ptr<const TriMesh> source;
+        GpuMesh gpu;
+    };
+    std::vector<Mesh> meshes;
     // Textures by owner (the shared image keeps the key's address from being reused).
     struct Tex {
         Texture tex;
@@ -52,49 +55,53 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
 Renderer::~Renderer() = default;
 
 // [SECTION] Resources
-const GpuMesh& Renderer::mesh(const Evaluation& ev, int object) {
-    auto geo = ev.get<SceneGeometry>("scene.geometry");
-    if (!geo) throw std::logic_error("gpu::Renderer: scene.geometry was not evaluated");
-    if (geo != impl_->geometry) {
-        // The tessellation changed: rebuild every vertex buffer.
+namespace {
+GpuMesh upload_mesh(const TriMesh& m) {
+    GpuMesh g;
+    std::vector<float> interleaved;
+    interleaved.reserve(m.vertex_count() * 11);
+    for (size_t v = 0; v < m.vertex_count(); ++v) {
+        const vec3 t = v < m.tangent.size() ? m.tangent[v] : vec3(0.f);
+        const vec2 uv = v < m.uv.size() ? m.uv[v] : vec2(0.f);
+        for (float x : {m.position[v].x, m.position[v].y, m.position[v].z, m.normal[v].x, m.normal[v].y, m.normal[v].z, t.x, t.y, t.z, uv.x, uv.y})
+            interleaved.push_back(x);
+    }
+    GLuint ids[3];
+    glGenVertexArrays(1, &ids[0]);
+    glGenBuffers(2, &ids[1]);
+    g.vao = VertexArray(ids[0]);
+    g.vbo = Buffer(ids[1]);
+    g.ibo = Buffer(ids[2]);
+    glBindVertexArray(g.vao.get());
+    glBindBuffer(GL_ARRAY_BUFFER, g.vbo.get());
+    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(interleaved.size() * sizeof(float)), interleaved.data(), GL_STATIC_DRAW);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.ibo.get());
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(m.index.size() * sizeof(uint32_t)), m.index.data(), GL_STATIC_DRAW);
+    const GLsizei stride = 11 * sizeof(float);
+    const int sizes[4] = {3, 3, 3, 2}, offsets[4] = {0, 3, 6, 9};
+    for (GLuint a = 0; a < 4; ++a) {
+        glEnableVertexAttribArray(a);
+        glVertexAttribPointer(a, sizes[a], GL_FLOAT, GL_FALSE, stride, reinterpret_cast<const void*>(size_t(offsets[a]) * sizeof(float)));
+    }
+    glBindVertexArray(0);
+    g.index_count = GLsizei(m.index.size());
+    return g;
+}
+}  // namespace
+
+const GpuMesh& Renderer::mesh(const Scene& s, const Evaluation& ev, int object) {
+    // One upload per object, redone when the drawn mesh changes (new tessellation or LOD).
+    std::shared_ptr<const TriMesh> m = drawn_mesh(s, ev, object);
+    if (!m) throw std::logic_error("gpu::Renderer: scene.geometry was not evaluated");
+    if (impl_->meshes.size() < s.objects.size()) impl_->meshes.resize(s.objects.size());
+    Impl::Mesh& slot = impl_->meshes[size_t(object)];
+    if (slot.source != m) {
         PROFILE_SCOPE("upload.meshes");
-        impl_->meshes.clear();
-        impl_->meshes.resize(geo->meshes.size());
-        for (size_t i = 0; i < geo->meshes.size(); ++i) {
-            const TriMesh& m = geo->meshes[i];
-            GpuMesh& g = impl_->meshes[i];
-            std::vector<float> interleaved;
-            interleaved.reserve(m.vertex_count() * 11);
-            for (size_t v = 0; v < m.vertex_count(); ++v) {
-                const vec3 t = v < m.tangent.size() ? m.tangent[v] : vec3(0.f);
-                const vec2 uv = v < m.uv.size() ? m.uv[v] : vec2(0.f);
-                for (float x : {m.position[v].x, m.position[v].y, m.position[v].z, m.normal[v].x, m.normal[v].y, m.normal[v].z, t.x, t.y, t.z, uv.x, uv.y})
-                    interleaved.push_back(x);
-            }
-            GLuint ids[3];
-            glGenVertexArrays(1, &ids[0]);
-            glGenBuffers(2, &ids[1]);
-            g.vao = VertexArray(ids[0]);
-            g.vbo = Buffer(ids[1]);
-            g.ibo = Buffer(ids[2]);
-            glBindVertexArray(g.vao.get());
-            glBindBuffer(GL_ARRAY_BUFFER, g.vbo.get());
-            glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(interleaved.size() * sizeof(float)), interleaved.data(), GL_STATIC_DRAW);
-            glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.ibo.get());
-            glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(m.index.size() * sizeof(uint32_t)), m.index.data(), GL_STATIC_DRAW);
-            const GLsizei stride = 11 * sizeof(float);
-            const int sizes[4] = {3, 3, 3, 2}, offsets[4] = {0, 3, 6, 9};
-            for (GLuint a = 0; a < 4; ++a) {
-                glEnableVertexAttribArray(a);
-                glVertexAttribPointer(a, sizes[a], GL_FLOAT, GL_FALSE, stride, reinterpret_cast<const void*>(size_t(offsets[a]) * sizeof(float)));
-            }
-            glBindVertexArray(0);
-            g.index_count = GLsizei(m.index.size());
-        }
-        impl_->geometry = geo;
+        slot.gpu = upload_mesh(*m);
+        slot.source = std::move(m);
         check_gl("mesh upload");
     }
-    return impl_->meshes.at(size_t(object));
+    return slot.gpu;
 }
 
 GLuint Renderer::texture(const Image& img, const void* owner_key, bool repeat) {

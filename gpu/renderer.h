@@ -57,7 +57,7 @@ public:
     double last_gpu_ms() const { return last_gpu_ms_; }
 
     // [SECTION] Services for technique passes
-    const GpuMesh& mesh(const Evaluation& ev, int object);
+    const GpuMesh& mesh(const Scene& s, const Evaluation& ev, int object);  // drawn_mesh(), uploaded
     // GL texture of an image (RGB(A) float, uploaded top row first at t = 0), cached per image.
     GLuint texture(const std::shared_ptr<const Image>& img, bool repeat = true);
     GLuint texture(const Image& img, const void* owner_key, bool repeat = true);

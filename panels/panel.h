@@ -51,6 +51,11 @@ void register_technique_panels(PanelRegistry& r);
 void help_marker(const char* text);
 // One widget for one declared parameter; returns true and marks `dirty` when edited.
 bool param_widget(const ParamDecl& d, ParamTable& t, Dirty& dirty, const char* id_suffix = "");
+// A direction parameter (vec2 THETA,PHI in degrees: theta from +z, phi from +x towards +y, like
+// light.direction and camera.orbit) as a disc: the upper hemisphere seen from above (+x right,
+// +y up, the rim is the horizon, rings every 30 degrees). Click or drag to set it; directions
+// below the horizon stay where they are unless dragged. Marks `dirty` with the declared cost.
+bool hemisphere_widget(const ParamDecl& d, ParamTable& t, Dirty& dirty, float diameter = 140.f, const char* id_suffix = "");
 // Screen rectangle (min x, min y, max x, max y) of the last parameter widget drawn (tests).
 void last_widget_rect(float out[4]);
 // Widgets for every used parameter of a table.

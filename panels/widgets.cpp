@@ -137,4 +137,61 @@ bool param_table_widgets(ParamTable& t, Dirty& dirty, const char* id_suffix) {
         if (t.is_used(d)) changed |= param_widget(d, t, dirty, id_suffix);
     return changed;
 }
+// [SECTION] Hemisphere widget
+bool hemisphere_widget(const ParamDecl& d, ParamTable& t, Dirty& dirty, float diameter, const char* id_suffix) {
+    if (d.type != ParamType::Vec2) return param_widget(d, t, dirty, id_suffix);
+    const vec2 td = t.get_vec2(d.name);
+    const float R = 0.5f * diameter;
+    const ImVec2 p0 = ImGui::GetCursorScreenPos(), c(p0.x + R, p0.y + R);
+    const std::string id = "##hemi" + t.group().name() + d.name + id_suffix;
+    ImGui::InvisibleButton(id.c_str(), ImVec2(diameter, diameter));
+    g_last_rect[0] = p0.x, g_last_rect[1] = p0.y, g_last_rect[2] = p0.x + diameter, g_last_rect[3] = p0.y + diameter;
+    bool changed = false;
+    if (ImGui::IsItemActive()) {  // pressed on the disc: follow the mouse while held
+        const ImVec2 m = ImGui::GetIO().MousePos;
+        float x = (m.x - c.x) / R, y = -(m.y - c.y) / R;
+        const float r = std::sqrt(x * x + y * y);
+        if (r > 1.f) x /= r, y /= r;
+        const double theta = std::asin(std::min(1.0, double(std::sqrt(x * x + y * y)))) * 180.0 / 3.14159265358979323846;
+        double phi = std::atan2(double(y), double(x)) * 180.0 / 3.14159265358979323846;
+        if (theta < 1e-6) phi = td.y;  // the zenith: keep the azimuth
+        const vec2 nv(float(std::round(theta * 100.0) / 100.0), float(std::round(phi * 100.0) / 100.0));
+        if (nv != td) {
+            t.set(d.name, std::array<double, 2>{double(nv.x), double(nv.y)});
+            dirty.mark(d.cost);
+            changed = true;
+        }
+    }
+    // Disc, rings at 30 and 60 degrees, axes, the direction.
+    ImDrawList* dl = ImGui::GetWindowDrawList();
+    const ImU32 rim = ImGui::GetColorU32(ImGuiCol_Border), fill = ImGui::GetColorU32(ImGuiCol_FrameBg), dot = ImGui::GetColorU32(ImGuiCol_SliderGrabActive);
+    dl->AddCircleFilled(c, R, fill, 48);
+    dl->AddCircle(c, R, rim, 48);
+    for (float deg : {30.f, 60.f}) dl->AddCircle(c, R * std::sin(deg * 3.14159265f / 180.f), rim, 48);
+    dl->AddLine(ImVec2(c.x - R, c.y), ImVec2(c.x + R, c.y), rim);
+    dl->AddLine(ImVec2(c.x, c.y - R), ImVec2(c.x, c.y + R), rim);
+    const vec2 now = t.get_vec2(d.name);
+    const float th = now.x * 3.14159265f / 180.f, ph = now.y * 3.14159265f / 180.f;
+    const bool below = std::cos(th) < 0.f;
+    const float rr = std::fabs(std::sin(th)) * R;
+    const ImVec2 q(c.x + rr * std::cos(ph), c.y - rr * std::sin(ph));
+    dl->AddLine(c, q, dot, 1.5f);
+    if (below) dl->AddCircle(q, 5.f, dot, 12, 2.f);
+    else dl->AddCircleFilled(q, 5.f, dot, 12);
+    ImGui::SameLine();
+    ImGui::BeginGroup();
+    ImGui::TextUnformatted(d.name.c_str());
+    ImGui::Text("theta %.1f", double(now.x));
+    ImGui::Text("phi %.1f", double(now.y));
+    if (below) ImGui::TextDisabled("below the horizon");
+    ImGui::EndGroup();
+    if (ImGui::IsItemHovered() || ImGui::IsItemActive()) {
+        ImGui::BeginTooltip();
+        ImGui::PushTextWrapPos(ImGui::GetFontSize() * 35.0f);
+        ImGui::TextUnformatted(tooltip(t.group(), d).c_str());
+        ImGui::PopTextWrapPos();
+        ImGui::EndTooltip();
+    }
+    return changed;
+}
 }  // namespace mesolab::panels

@@ -1,10 +1,18 @@
 #include "core/microgeom/microgeom.h"
 #include "core/error.h"
+#include "core/microgeom/goniometer.h"
+#include "core/microgeom/btf.h"
+#include "core/microgeom/lod.h"
+#include "core/scene_stages.h"
 #include "core/profile.h"
 #include "core/render.h"
 #include "core/technique.h"
 
+#include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
 #include <map>
 
 namespace mesolab::microgeom {
@@ -44,9 +52,18 @@ PerObject<T> per_object(const Scene& s, const std::vector<std::string>& keys, co
     return out;
 }
 
-const std::vector<std::string> kFieldKeys{"heightfield", "resolution", "height_scale", "periodic", "vgroove_angle", "rms_slope", "correlation", "seed", "albedo"};
+const std::vector<std::string> kFieldKeys{"heightfield", "resolution", "height_scale", "texel_size", "periodic", "vgroove_angle", "rms_slope", "correlation", "seed", "albedo", "albedo_map"};
 const std::vector<std::string> kScatterKeys{"depth", "sampling", "paths", "scatter_seed", "shadows"};
 const std::vector<std::string> kCurvatureKeys{"curvature_u", "curvature_v"};
+const std::vector<std::string> kBrdfKeys{"lod", "brdf_fit", "brdf_resolution", "brdf_samples", "sh_bands", "brdf", "ks", "shininess"};
+constexpr int kMaxDisplacementSegments = 2048;
+
+std::string lod(const SceneObject& o) { return o.material.get_string("lod"); }
+bool any_object(const Scene& s, bool (*pred)(const SceneObject&)) {
+    for (const auto& o : s.objects)
+        if (o.technique == "microgeom" && pred(o)) return true;
+    return false;
+}
 
 bool curved(const SceneObject& o) { return o.material.get_float("curvature_u") != 0.0 || o.material.get_float("curvature_v") != 0.0; }
 
@@ -81,6 +98,21 @@ vec3 first_light_local(const Scene& s, const SceneObject& o) {
     return wi;  // the plane's local frame is the world frame (u = +x, v = +y, n = +z)
 }
 
+// Per-texel albedo from an image, bilinear with wrap-around at the texel centres, times `tint`.
+void apply_albedo_map(Heightfield& hf, const std::string& path, vec3 tint) {
+    const Image img = read_image(path, /*srgb_to_linear_8bit=*/true, /*reject_nonfinite=*/true);
+    std::vector<vec3> rgb(size_t(img.width) * size_t(img.height));
+    for (size_t i = 0; i < rgb.size(); ++i)
+        for (int c = 0; c < 3; ++c) rgb[i][c] = img.data[i * size_t(img.channels) + size_t(img.channels >= 3 ? c : 0)];
+    for (int y = 0; y < hf.height; ++y)
+        for (int x = 0; x < hf.width; ++x) {
+            const float c = (float(x) + 0.5f) * float(img.width) / float(hf.width) - 0.5f, r = (float(y) + 0.5f) * float(img.height) / float(hf.height) - 0.5f;
+            const vec3 a = sample_bilinear(rgb, img.width, img.height, true, c, r) * tint;
+            if (!(a.x >= 0.f && a.y >= 0.f && a.z >= 0.f)) throw InputError(path + ": microgeom.albedo_map has a negative or non-finite albedo");
+            hf.albedo[hf.index(x, y)] = glm::min(a, vec3(1.f));
+        }
+}
+
 // [SECTION] The technique
 class MicrogeomTechnique final : public Technique {
 public:
@@ -91,6 +123,9 @@ public:
                  "(8/16-bit, float EXR/TIFF; first channel = height in texels before height_scale)");
         p.add_int("resolution", 128).range(8, 4096).costs(Cost::Recompute).in("texels").doc("Size of a procedural heightfield (texels per side)");
         p.add_float("height_scale", 1.0).range(0.0, 1e4).costs(Cost::Recompute).doc("Multiplies the heights (procedural heights are in texels)");
+        p.add_float("texel_size", 1.0).range(1e-6, 1e6).log().costs(Cost::Recompute)
+            .doc("Image heightfields: the grid spacing in the unit of the image's heights (e.g. 0.1 for heights in mm sampled every 0.1 mm); "
+                 "height in texels = value * height_scale / texel_size. Procedural heights are already in texels");
         p.add_bool("periodic", true).costs(Cost::Recompute).doc("Wrap-around visibility across the borders (tileable fields)");
         p.add_float("vgroove_angle", 90.0).range(1.0, 179.0).in("degrees").costs(Cost::Recompute).doc("vgrooves: opening angle of the V");
         p.add_float("rms_slope", 0.5).range(0.0, 10.0).costs(Cost::Recompute).doc("gaussian: RMS slope");
@@ -98,6 +133,9 @@ public:
         p.add_int("seed", 1).range(0, 2147483647).costs(Cost::Recompute).doc("gaussian: random seed");
         p.add_color("albedo", {0.8, 0.8, 0.8}).costs(Cost::Recompute)
             .doc("Albedo of the micro-surface (Lambert); procedural fields modulate it (triangles: red/white faces, bricks: brick and mortar)");
+        p.add_path("albedo_map", "").costs(Cost::Recompute)
+            .doc("Per-texel albedo image (8/16-bit sRGB or float linear), resampled bilinearly (wrapping) onto the heightfield's texels and "
+                 "multiplied by albedo; empty: the procedural rule");
         p.add_int("directions", 100).range(16, 1024).costs(Cost::Recompute).more_accurate(Accuracy::Higher, int64_t(1024))
             .doc("N: directions over the whole sphere for the visibility textures S_i (and their triangulation)");
         p.add_int("depth", 2).range(0, 8).costs(Cost::Recompute).more_accurate(Accuracy::Higher, int64_t(8))
@@ -113,10 +151,26 @@ public:
         p.add_enum("shadows", {"none", "exact", "ellipse"}, "exact").costs(Cost::Recompute)
             .doc("none; exact: the visibility of the 3 directions of the spherical triangle containing the light, interpolated; "
                  "ellipse: the paper's per-texel ellipse fitted to the unshadowed directions (§4)");
-        p.add_enum("brdf", {"lambert", "blinn-phong"}, "lambert").doc("Micro-BRDF seen by the viewer for direct light");
-        p.add_color("ks", {0.04, 0.04, 0.04}).used_when("brdf", {"blinn-phong"}).doc("Specular albedo of the normalised Blinn-Phong lobe");
-        p.add_float("shininess", 32.0).range(1.0, 10000.0).log().used_when("brdf", {"blinn-phong"}).doc("Blinn-Phong exponent");
-        p.add_float("tiling", 4.0).range(0.01, 1e4).log().doc("Repeats of the heightfield across the object's (u,v) (texture mode: always 1:1)");
+        p.add_float("ellipse_bend", 90.0).range(1.0, 360.0).in("degrees").costs(Cost::Recompute).used_when("shadows", {"ellipse"})
+            .doc("Curved bases with ellipse shadows (§5): ellipses are fitted once at 5 curvatures (flat, +-this bend along u, +-along v) and "
+                 "interpolated linearly for the current curvature, so moving the curvature sliders never refits; curvatures beyond it are clamped");
+        p.add_enum("brdf", {"lambert", "blinn-phong"}, "lambert").costs(Cost::Recompute).doc("Micro-BRDF seen by the viewer for direct light (recomputes only the simulated BRDF of lod = brdf)");
+        p.add_color("ks", {0.04, 0.04, 0.04}).costs(Cost::Recompute).used_when("brdf", {"blinn-phong"}).doc("Specular albedo of the normalised Blinn-Phong lobe");
+        p.add_float("shininess", 32.0).range(1.0, 10000.0).log().costs(Cost::Recompute).used_when("brdf", {"blinn-phong"}).doc("Blinn-Phong exponent");
+        p.add_float("tiling", 4.0).range(0.01, 1e4).log().costs(Cost::Recompute).doc("Repeats of the heightfield across the object's (u,v) (texture mode: always 1:1); recomputes only the displaced geometry of lod = geometry");
+        p.add_enum("lod", {"geometry", "bump", "brdf"}, "bump").costs(Cost::Recompute)
+            .doc("Level of detail: geometry (the base re-tessellated at one vertex per texel and displaced by the heights; parallax and "
+                 "silhouettes), bump (bump map with precomputed visibility), brdf (smooth surface with the heightfield's simulated BRDF "
+                 "from the virtual goniometer, §6)");
+        p.add_enum("brdf_fit", {"table", "sh"}, "table").costs(Cost::Recompute).used_when("lod", {"brdf"})
+            .doc("Simulated BRDF: a dense table of goniometer images (resolution^4), or a few hundred random images projected into "
+                 "spherical harmonics (the paper's suggestion), tabulated for rendering");
+        p.add_int("brdf_resolution", 8).range(2, 32).costs(Cost::Recompute).used_when("lod", {"brdf"}).more_accurate(Accuracy::Higher, int64_t(16))
+            .doc("Table nodes per angle (theta 0..90 degrees, phi 0..360) for the light and the view: the paper's 16^4 is 16");
+        p.add_int("brdf_samples", 300).range(1, 100000).costs(Cost::Recompute).used_when("brdf_fit", {"sh"}).more_accurate(Accuracy::Higher, int64_t(4000))
+            .doc("SH fit: random (light, view) goniometer images");
+        p.add_int("sh_bands", 3).range(1, 8).costs(Cost::Recompute).used_when("brdf_fit", {"sh"})
+            .doc("SH fit: bands per direction (bands^2 coefficients for the light times bands^2 for the view)");
 
         effects_.push_back({"indirect", true, "Light scattered inside micro-geometry (microgeom.depth bounces)"});
         aovs_ = {{"direct", 3, "Direct light reflected towards the eye (with shadows)"},
@@ -138,9 +192,13 @@ public:
                    return stage_result(per_object<Heightfield>(ctx.scene, kFieldKeys, [&](int i, const SceneObject& o) {
                        const ProceduralParams p = procedural_params(o.material);
                        const ParamDecl& d = *o.material.group().find("heightfield");
-                       if (!d.is_file(o.material.get("heightfield"))) return make_procedural(p);
                        (void)i;
-                       return load_heightfield(ctx.scene.resolve(p.name), p.height_scale, 1.f, p.periodic, p.albedo);
+                       Heightfield hf = d.is_file(o.material.get("heightfield"))
+                           ? load_heightfield(ctx.scene.resolve(p.name), p.height_scale / float(o.material.get_float("texel_size")), 1.f, p.periodic, p.albedo)
+                           : make_procedural(p);
+                       const std::string albedo_map = o.material.get_string("albedo_map");
+                       if (!albedo_map.empty()) apply_albedo_map(hf, ctx.scene.resolve(albedo_map), p.albedo);
+                       return hf;
                    }));
                }});
         g.add({.name = "microgeom.directions",
@@ -205,30 +263,132 @@ public:
                    }
                    return stage_result(std::move(out));
                }});
-        // Per-texel ellipses (§4), only when they are the selected shadow method.
-        g.add({.name = "microgeom.ellipses",
-               .help = "Fit a per-texel ellipse to the projections of the unshadowed directions (covariance start, optimised)",
+        // Per-texel ellipses (§4), only when they are the selected shadow method; on a curved base
+        // fitted once at 5 curvatures (§5) and interpolated for the current one.
+        g.add({.name = "microgeom.ellipses_curved",
+               .help = "Fit the per-texel ellipses at 5 base curvatures: flat, +-microgeom.ellipse_bend along u and along v (§5)",
+               .params = {"microgeom.ellipse_bend", "microgeom.shadows"},
                .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility"},
-               .when = [](const Scene& s) {
-                   for (const auto& o : s.objects)
-                       if (o.technique == "microgeom" && o.material.get_string("shadows") == "ellipse") return true;
-                   return false;
-               },
+               .when = [](const Scene& s) { return any_object(s, [](const SceneObject& o) { return o.material.get_string("shadows") == "ellipse" && curved(o); }); },
+               .when_text = "microgeom.shadows is ellipse on a curved base",
+               .run = [](StageContext& ctx) {
+                   auto hf = ctx.input<PerObject<Heightfield>>("microgeom.heightfield");
+                   auto dirs = ctx.input<PerObject<DirectionSet>>("microgeom.directions");
+                   auto vis = ctx.input<PerObject<Visibility>>("microgeom.visibility");
+                   PerObject<CurvedEllipses> out;
+                   out.items.resize(ctx.scene.objects.size());
+                   for (size_t i = 0; i < out.items.size(); ++i) {
+                       const SceneObject& o = ctx.scene.objects[i];
+                       const Visibility* v = vis->get(int(i));
+                       if (!v || o.material.get_string("shadows") != "ellipse" || !curved(o)) continue;
+                       out.items[i] = std::make_shared<const CurvedEllipses>(fit_curved_ellipses(*hf->get(int(i)), *dirs->get(int(i)), *v,
+                           float(o.material.get_float("ellipse_bend")), [&](double f) { ctx.progress(f); }));
+                   }
+                   return stage_result(std::move(out));
+               }});
+        g.add({.name = "microgeom.ellipses",
+               .help = "Fit a per-texel ellipse to the projections of the unshadowed directions (covariance start, optimised); on a curved base "
+                       "interpolate the 5 fits of microgeom.ellipses_curved",
+               .params = keys(kCurvatureKeys),
+               .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.ellipses_curved"},
+               .when = [](const Scene& s) { return any_object(s, [](const SceneObject& o) { return o.material.get_string("shadows") == "ellipse"; }); },
                .when_text = "microgeom.shadows is ellipse",
                .paper = PaperFigure{194e3, "Heidrich et al. 2000, Table 1: Bricks 128x128 shadow precompute (SGI Octane)"},
                .run = [](StageContext& ctx) {
                    auto hf = ctx.input<PerObject<Heightfield>>("microgeom.heightfield");
                    auto dirs = ctx.input<PerObject<DirectionSet>>("microgeom.directions");
                    auto vis = ctx.input<PerObject<Visibility>>("microgeom.visibility");
+                   auto curved_fits = ctx.input<PerObject<CurvedEllipses>>("microgeom.ellipses_curved");
                    PerObject<EllipseMap> out;
                    out.items.resize(ctx.scene.objects.size());
                    std::map<const void*, std::shared_ptr<const EllipseMap>> done;
                    for (size_t i = 0; i < out.items.size(); ++i) {
+                       const SceneObject& o = ctx.scene.objects[i];
                        const Visibility* v = vis->get(int(i));
-                       if (!v || ctx.scene.objects[i].material.get_string("shadows") != "ellipse") continue;
+                       if (!v || o.material.get_string("shadows") != "ellipse") continue;
+                       const Heightfield& h = *hf->get(int(i));
+                       if (const CurvedEllipses* c = curved_fits ? curved_fits->get(int(i)) : nullptr) {
+                           const float cu = float(o.material.get_float("curvature_u")), cv = float(o.material.get_float("curvature_v"));
+                           if (std::fabs(cu) > c->bend_deg || std::fabs(cv) > c->bend_deg)
+                               ctx.warn(o.name + ": the curvature exceeds microgeom.ellipse_bend (" + std::to_string(int(c->bend_deg)) +
+                                        " degrees): the ellipses are those of the largest fitted bend; raise ellipse_bend");
+                           out.items[i] = std::make_shared<const EllipseMap>(interpolate_ellipses(*c, Bending::from_degrees(cu, cv, h.width, h.height)));
+                           continue;
+                       }
                        auto& slot = done[v];
-                       if (!slot) slot = std::make_shared<const EllipseMap>(fit_ellipses(*hf->get(int(i)), *dirs->get(int(i)), *v, [&](double f) { ctx.progress(f); }));
+                       if (!slot) slot = std::make_shared<const EllipseMap>(fit_ellipses(h, *dirs->get(int(i)), *v, [&](double f) { ctx.progress(f); }));
                        out.items[i] = slot;
+                   }
+                   return stage_result(std::move(out));
+               }});
+        // Geometry level of detail: the base re-tessellated at the texel rate and displaced.
+        g.add({.name = "microgeom.displaced",
+               .help = "Re-tessellate the base surface at one vertex per texel and displace it by the heights (lod = geometry)",
+               .params = {"microgeom.lod", "microgeom.tiling", "geometry.type", "geometry.resolution", "geometry.minor_ratio"},
+               .inputs = {"microgeom.heightfield"},
+               .when = [](const Scene& s) { return any_object(s, [](const SceneObject& o) { return lod(o) == "geometry"; }); },
+               .when_text = "microgeom.lod is geometry",
+               .run = [](StageContext& ctx) {
+                   auto hf = ctx.input<PerObject<Heightfield>>("microgeom.heightfield");
+                   PerObject<TriMesh> out;
+                   out.items.resize(ctx.scene.objects.size());
+                   for (size_t i = 0; i < out.items.size(); ++i) {
+                       const SceneObject& o = ctx.scene.objects[i];
+                       const Heightfield* h = hf->get(int(i));
+                       if (!h || lod(o) != "geometry") continue;
+                       const std::string type = o.geometry.get_string("type");
+                       if (type == "mesh") {
+                           ctx.warn(o.name + ": microgeom.lod = geometry needs a procedural base (plane, sphere, cylinder, torus); the mesh is drawn undisplaced (bump level)");
+                           continue;
+                       }
+                       bool capped = false;
+                       const float tiling = float(o.material.get_float("tiling"));
+                       const int res = displacement_resolution(type, int(o.geometry.get_int("resolution")), h->width, h->height, tiling, kMaxDisplacementSegments, &capped);
+                       if (capped)
+                           ctx.warn(o.name + ": the displaced geometry is capped at " + std::to_string(kMaxDisplacementSegments) +
+                                    " segments, fewer than one vertex per texel: lower microgeom.tiling or the heightfield resolution");
+                       const Primitive prim = type == "sphere" ? Primitive::Sphere : type == "plane" ? Primitive::Plane : type == "torus" ? Primitive::Torus : Primitive::Cylinder;
+                       out.items[i] = std::make_shared<const TriMesh>(displace(make_primitive(prim, res, float(o.geometry.get_float("minor_ratio"))), *h, tiling));
+                       ctx.progress(double(i + 1) / double(out.items.size()));
+                   }
+                   return stage_result(std::move(out));
+               }});
+        // BRDF level of detail: the virtual goniometer (§6).
+        g.add({.name = "microgeom.brdf",
+               .help = "Simulate the heightfield's BRDF with the virtual goniometer: average radiance of texture-space images with masking (lod = brdf)",
+               .params = with(with(keys(kScatterKeys), keys(kBrdfKeys)), {"effects.indirect", "effects.environment"}),
+               .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "microgeom.ellipses"},
+               .when = [](const Scene& s) { return any_object(s, [](const SceneObject& o) { return lod(o) == "brdf"; }); },
+               .when_text = "microgeom.lod is brdf",
+               .paper = PaperFigure{7.5 * 3600e3, "Heidrich et al. 2000, §6: a 16^4 BRDF would take about 7-8 hours (hardware, 2000)"},
+               .run = [](StageContext& ctx) {
+                   auto hf = ctx.input<PerObject<Heightfield>>("microgeom.heightfield");
+                   auto dirs = ctx.input<PerObject<DirectionSet>>("microgeom.directions");
+                   auto vis = ctx.input<PerObject<Visibility>>("microgeom.visibility");
+                   auto imp = ctx.input<PerObject<Importance>>("microgeom.importance");
+                   auto ell = ctx.input<PerObject<EllipseMap>>("microgeom.ellipses");
+                   PerObject<SimulatedBrdf> out;
+                   out.items.resize(ctx.scene.objects.size());
+                   for (size_t i = 0; i < out.items.size(); ++i) {
+                       const SceneObject& o = ctx.scene.objects[i];
+                       if (!hf->get(int(i)) || lod(o) != "brdf") continue;
+                       const ParamTable& m = o.material;
+                       GonioSettings gs;
+                       gs.scatter = scatter_settings(m);
+                       if (!ctx.scene.effect("indirect")) gs.scatter.depth = 0;
+                       gs.scatter.importance = imp ? imp->get(int(i)) : nullptr;
+                       gs.scatter.ellipses = ell ? ell->get(int(i)) : nullptr;
+                       gs.phong = m.get_string("brdf") == "blinn-phong";
+                       gs.ks = m.get_vec3("ks");
+                       gs.shininess = float(m.get_float("shininess"));
+                       gs.resolution = int(m.get_int("brdf_resolution"));
+                       gs.fit = m.get_string("brdf_fit") == "sh" ? GonioSettings::Fit::SH : GonioSettings::Fit::Table;
+                       gs.samples = int(m.get_int("brdf_samples"));
+                       gs.sh_bands = int(m.get_int("sh_bands"));
+                       gs.seed = uint32_t(m.get_int("scatter_seed"));
+                       out.items[i] = std::make_shared<const SimulatedBrdf>(simulate_brdf(*hf->get(int(i)), *dirs->get(int(i)), *vis->get(int(i)), gs, [&](double f) {
+                           ctx.progress((double(i) + f) / double(out.items.size()));
+                       }));
                    }
                    return stage_result(std::move(out));
                }});
@@ -238,6 +398,8 @@ public:
                .params = with(keys(kScatterKeys), {"env.*"}),
                .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "env.map"},
                .effects = {"environment"},
+               .when = [](const Scene& s) { return any_object(s, [](const SceneObject& o) { return lod(o) != "brdf"; }); },
+               .when_text = "an object's microgeom.lod is geometry or bump",
                .run = [](StageContext& ctx) {
                    return stage_result(scatter_all(ctx, /*environment=*/true));
                }});
@@ -247,12 +409,8 @@ public:
                .params = with(keys(kScatterKeys), {"light.*", "geometry.type"}),
                .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "microgeom.ellipses"},
                .effects = {"indirect"},
-               .when = [](const Scene& s) {
-                   for (const auto& o : s.objects)
-                       if (o.technique == "microgeom" && o.material.get_int("depth") > 0) return true;
-                   return false;
-               },
-               .when_text = "microgeom.depth > 0",
+               .when = [](const Scene& s) { return any_object(s, [](const SceneObject& o) { return o.material.get_int("depth") > 0 && lod(o) != "brdf"; }); },
+               .when_text = "microgeom.depth > 0 and microgeom.lod is not brdf",
                .paper = PaperFigure{12e3, "Heidrich et al. 2000, Table 1: Bricks 128x128, software render, 100 samples (SGI Octane)"},
                .run = [](StageContext& ctx) {
                    return stage_result(scatter_all(ctx, /*environment=*/false));
@@ -276,7 +434,7 @@ public:
         out.items.resize(ctx.scene.objects.size());
         for (size_t i = 0; i < out.items.size(); ++i) {
             const SceneObject& o = ctx.scene.objects[i];
-            if (!hf->get(int(i))) continue;
+            if (!hf->get(int(i)) || lod(o) == "brdf") continue;
             LightScatter ls;
             ScatterSettings st = scatter_settings(o.material);
             st.importance = imp ? imp->get(int(i)) : nullptr;
@@ -296,7 +454,14 @@ public:
     }
 
     std::vector<std::string> frame_stages() const override {
-        return {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "microgeom.ellipses", "microgeom.scatter_env", "microgeom.scatter"};
+        return {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "microgeom.ellipses_curved", "microgeom.ellipses",
+                "microgeom.scatter_env", "microgeom.scatter", "microgeom.displaced", "microgeom.brdf"};
+    }
+
+    std::shared_ptr<const TriMesh> object_mesh(const Scene&, const Evaluation& ev, int object) const override {
+        auto d = ev.get<PerObject<TriMesh>>("microgeom.displaced");
+        if (!d || !d->get(object)) return nullptr;
+        return d->items[size_t(object)];
     }
 
     std::optional<ivec2> texture_size(const Scene& s, const Evaluation& ev) const override {
@@ -308,6 +473,7 @@ public:
 
     void shade_cpu(const ShadeContext& ctx) const override;
     std::vector<BenchTable> bench_tables() const override;
+    std::vector<ExportDecl> exports() const override;
 };
 
 // [SECTION] CPU shading (bump level of detail; texture mode = the heightfield's texels 1:1)
@@ -326,6 +492,7 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
     Image& fold_img = ctx.frame.aov("folded");
     auto imps = ctx.eval.get<PerObject<Importance>>("microgeom.importance");
     auto ells = ctx.eval.get<PerObject<EllipseMap>>("microgeom.ellipses");
+    auto brdfs = ctx.eval.get<PerObject<SimulatedBrdf>>("microgeom.brdf");
 
     tbb::parallel_for(0, gb.height, [&](int y) {
         for (int x = 0; x < gb.width; ++x) {
@@ -350,6 +517,34 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
             const vec2 uv = gb.uv[px];
             const float c = uv.x * float(hf.width) * tiling - 0.5f, r = (1.f - uv.y) * float(hf.height) * tiling - 0.5f;
             auto to_local = [&](vec3 w) { return vec3(glm::dot(w, T), glm::dot(w, B), glm::dot(w, N)); };
+
+            // BRDF level: a smooth surface with the simulated BRDF (it folds in shadows, masking and
+            // scattering); the environment part is exact for a constant environment and scaled by the
+            // irradiance at the macro normal for a map.
+            if (const SimulatedBrdf* brdf = brdfs ? brdfs->get(obj) : nullptr) {
+                const vec3 v_loc = to_local(wo);
+                vec3 Lo_lights(0.f);
+                float shadow_first = 0.f;
+                for (size_t li = 0; li < ctx.lighting.lights.size(); ++li) {
+                    vec3 wi, E;
+                    ctx.lighting.lights[li].sample(p, wi, E);
+                    const vec3 l_loc = to_local(wi);
+                    Lo_lights += brdf->eval(l_loc, v_loc) * E;
+                    if (li == 0) shadow_first = 0.f;  // SHADOWTODO
+                }
+                const vec3 Lo_env = ctx.lighting.env_lighting ? brdf->eval_env(v_loc) * ctx.lighting.env_irradiance(N) * kInvPi : vec3(0.f);
+                const vec3 L = Lo_lights + Lo_env;
+                float* q = rad.at(x, y);
+                q[0] = L.x, q[1] = L.y, q[2] = L.z;
+                q = nrm.at(x, y);
+                q[0] = N.x, q[1] = N.y, q[2] = N.z;
+                q = dir_img.at(x, y);
+                q[0] = Lo_lights.x, q[1] = Lo_lights.y, q[2] = Lo_lights.z;
+                q = ind_img.at(x, y);
+                q[0] = Lo_env.x, q[1] = Lo_env.y, q[2] = Lo_env.z;
+                sh_img.at(x, y)[0] = shadow_first;
+                continue;
+            }
 
             // Micro normal and albedo, bilinear.
             const float c0f = std::floor(c), r0f = std::floor(r), fc = c - c0f, fr = r - r0f;
@@ -439,9 +634,82 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
     });
 }
 
+// [SECTION] BTF export (§6)
+namespace {
+ivec2 parse_grid(const std::string& key, const std::string& text) {
+    int a = 0, b = 0;
+    char x = 0, extra = 0;
+    if (std::sscanf(text.c_str(), "%d%c%d%c", &a, &x, &b, &extra) != 3 || (x != 'x' && x != 'X') || a < 1 || b < 1 || a > 64 || b > 128)
+        throw InputError("--option " + key + "=" + text + ": expected THETAxPHI with 1..64 theta and 1..128 phi steps, e.g. 4x8");
+    return {a, b};
+}
+}  // namespace
+
+std::vector<ExportDecl> MicrogeomTechnique::exports() const {
+    ExportDecl btf;
+    btf.name = "btf";
+    btf.help = "Light field / BTF: a view x light grid of texture-space heightfield images (shadows, scattering, masking) as one EXR mosaic";
+    btf.options_help = "grid=THETAxPHI (default 4x8; both lights and views), lights=THETAxPHI, views=THETAxPHI";
+    btf.stages = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "microgeom.ellipses_curved", "microgeom.ellipses"};
+    btf.run = [](const Scene& s, const Evaluation& ev, int object, const std::map<std::string, std::string>& options, const std::string& path,
+                 const ProgressFn& progress) {
+        ivec2 lg(4, 8), vg(4, 8);
+        for (const auto& [k, v] : options) {
+            if (k == "grid") lg = vg = parse_grid(k, v);
+            else if (k == "lights") lg = parse_grid(k, v);
+            else if (k == "views") vg = parse_grid(k, v);
+            else throw InputError("--option " + k + ": unknown option of export btf (accepts grid, lights, views)");
+        }
+        for (const auto& [k, v] : options)  // explicit lights/views win over grid whatever the order
+            if (k == "lights") lg = parse_grid(k, v);
+            else if (k == "views") vg = parse_grid(k, v);
+        const SceneObject& o = s.objects[size_t(object)];
+        const Heightfield& hf = *ev.get<PerObject<Heightfield>>("microgeom.heightfield")->get(object);
+        const DirectionSet& dirs = *ev.get<PerObject<DirectionSet>>("microgeom.directions")->get(object);
+        const Visibility& vis = *ev.get<PerObject<Visibility>>("microgeom.visibility")->get(object);
+        auto imp = ev.get<PerObject<Importance>>("microgeom.importance");
+        auto ell = ev.get<PerObject<EllipseMap>>("microgeom.ellipses");
+        GonioSettings gs;
+        gs.scatter = scatter_settings(o.material);
+        if (!s.effect("indirect")) gs.scatter.depth = 0;
+        gs.scatter.importance = imp ? imp->get(object) : nullptr;
+        gs.scatter.ellipses = ell ? ell->get(object) : nullptr;
+        gs.phong = o.material.get_string("brdf") == "blinn-phong";
+        gs.ks = o.material.get_vec3("ks");
+        gs.shininess = float(o.material.get_float("shininess"));
+        const std::vector<vec3> lights = btf_directions(lg.x, lg.y), views = btf_directions(vg.x, vg.y);
+        const auto t0 = std::chrono::steady_clock::now();
+        const Image mosaic = btf_mosaic(hf, dirs, vis, gs, lights, views, [&](double f) { if (progress) progress("export.btf", f); });
+        const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        write_exr(path, mosaic);
+        // Sidecar: layout and directions.
+        nlohmann::json j;
+        j["export"] = "btf";
+        j["object"] = o.name;
+        j["tile"] = {hf.width, hf.height};
+        j["layout"] = "tile (row = light index, column = view index); tile row 0 = heightfield row 0 (top)";
+        auto list = [](ivec2 g) {
+            nlohmann::json a = nlohmann::json::array();
+            for (int i = 0; i < g.x; ++i)
+                for (int k = 0; k < g.y; ++k) a.push_back({(double(i) + 0.5) * 90.0 / g.x, double(k) * 360.0 / g.y});
+            return a;
+        };
+        j["lights_theta_phi_deg"] = list(lg);
+        j["views_theta_phi_deg"] = list(vg);
+        j["unit"] = "radiance towards the view per unit irradiance from the light (at normal incidence to the light); 0 where masked";
+        j["compute_ms"] = ms;
+        write_text_atomic(path + ".json", j.dump(2) + "\n");
+        char buf[256];
+        std::snprintf(buf, sizeof buf, "btf: %zu lights x %zu views of %dx%d texels (%dx%d EXR), computed in %.0f ms; directions in %s.json", lights.size(), views.size(),
+                      hf.width, hf.height, mosaic.width, mosaic.height, ms, path.c_str());
+        return std::string(buf);
+    };
+    return {btf};
+}
+
 // [SECTION] Table 1
 std::vector<BenchTable> MicrogeomTechnique::bench_tables() const {
-    auto scene = [](const char* field, int res) {
+    auto scene = [](const char* field, int res, std::vector<std::pair<const char*, const char*>> extra = {}) {
         return [=] {
             Scene s = default_scene("microgeom");
             s.name = std::string(field) + std::to_string(res);
@@ -450,22 +718,71 @@ std::vector<BenchTable> MicrogeomTechnique::bench_tables() const {
             apply_set(s, "microgeom.heightfield", field);
             apply_set(s, "microgeom.resolution", std::to_string(res));
             apply_set(s, "microgeom.directions", "100");
+            apply_set(s, "microgeom.shadows", "ellipse");
+            for (const auto& [k, v] : extra) apply_set(s, k, v);
             return s;
         };
+    };
+    auto mb = [](size_t bytes) {
+        char b[32];
+        std::snprintf(b, sizeof b, "%.2f MB", double(bytes) / 1048576.0);
+        return std::string(b);
     };
     BenchTable t;
     t.name = "microgeom";
     t.title = "Heidrich et al. 2000, Table 1: precomputation and rendering (100 directions)";
     t.paper_machine = "SGI Octane 300 MHz R12000 (software) / GeForce 256 (hardware), seconds converted to ms";
+    BenchColumn memory;
+    memory.name = "memory: S_i / ellipses / scattered light";
+    memory.info = [mb](const Scene& s, const Evaluation& ev) {
+        auto vis = ev.get<PerObject<Visibility>>("microgeom.visibility");
+        auto ell = ev.get<PerObject<EllipseMap>>("microgeom.ellipses");
+        auto sc = ev.get<PerObject<LightScatter>>("microgeom.scatter");
+        (void)s;
+        const size_t v = vis && vis->get(0) ? vis->get(0)->bytes() : 0, e = ell && ell->get(0) ? ell->get(0)->bytes() : 0,
+                     l = sc && sc->get(0) ? sc->get(0)->result.E_indirect.size() * sizeof(vec3) : 0;
+        return mb(v) + " / " + mb(e) + " / " + mb(l);
+    };
     t.columns = {{"S_i precompute", "microgeom.visibility"},
+                 {"shadow (ellipse) precompute", "microgeom.ellipses"},
                  {"software render (scattering, depth 2, all 100 directions)", "microgeom.scatter"},
-                 {"frame (texture space, 1 pixel per texel)", "", 0, 0, true, false}};
-    t.rows = {{"Triangles 32x32", scene("triangles", 32), {27e3, 10e3, std::nullopt}},
-              {"Bricks 128x128", scene("bricks", 128), {1029e3, 12e3, std::nullopt}},
-              {"Bumps 32x32", scene("bumps", 32), {109e3, 8e3, std::nullopt}},
+                 {"frame (texture space, 1 pixel per texel; GPU = hardware render)", "", 0, 0, true, true},
+                 memory};
+    t.rows = {{"Triangles 32x32", scene("triangles", 32), {27e3, 32e3, 10e3, 480}},
+              {"Bricks 128x128", scene("bricks", 128), {1029e3, 194e3, 12e3, 2100}},
+              {"Bumps 32x32", scene("bumps", 32), {109e3, 65e3, 8e3, 480}},
               {"Bricks 512x512", scene("bricks", 512), {}},
               {"Bricks 1024x1024", scene("bricks", 1024), {}}};
-    return {t};
+
+    BenchTable lod;
+    lod.name = "microgeom-brdf";
+    lod.title = "Heidrich et al. 2000, §6: simulated BRDF (virtual goniometer) and displaced geometry, Bricks 128x128, 100 directions, depth 2";
+    lod.paper_machine = "SGI Octane + GeForce 256 (hardware goniometer images)";
+    BenchColumn brdf_mem;
+    brdf_mem.name = "memory";
+    brdf_mem.info = [mb](const Scene&, const Evaluation& ev) {
+        auto b = ev.get<PerObject<SimulatedBrdf>>("microgeom.brdf");
+        auto d = ev.get<PerObject<TriMesh>>("microgeom.displaced");
+        if (b && b->get(0)) return mb(b->get(0)->bytes()) + " (" + std::to_string(b->get(0)->images) + " images)";
+        if (d && d->get(0)) return mb(d->get(0)->vertex_count() * (3 * sizeof(vec3) + sizeof(vec2)) + d->get(0)->index.size() * 4) + " (" +
+                                   std::to_string(d->get(0)->triangle_count()) + " triangles)";
+        return std::string("—");
+    };
+    lod.columns = {{"precompute", "microgeom.brdf"}, brdf_mem};
+    lod.rows = {{"BRDF table 8^4", scene("bricks", 128, {{"microgeom.lod", "brdf"}, {"microgeom.brdf_resolution", "8"}, {"microgeom.shadows", "exact"}}), {}},
+                {"BRDF table 16^4", scene("bricks", 128, {{"microgeom.lod", "brdf"}, {"microgeom.brdf_resolution", "16"}, {"microgeom.shadows", "exact"}}), {7.5 * 3600e3}},
+                {"BRDF SH, 300 random images, 3 bands", scene("bricks", 128, {{"microgeom.lod", "brdf"}, {"microgeom.brdf_fit", "sh"}, {"microgeom.shadows", "exact"}}), {}}};
+    BenchTable geo;
+    geo.name = "microgeom-geometry";
+    geo.title = "Displaced geometry level of detail: Bricks 128x128 tiled 4x4 on a sphere (one vertex per texel), 512x512 frame";
+    geo.columns = {{"displace (re-tessellate + displace)", "microgeom.displaced"}, {"frame 512x512", "", 512, 512, true, true}, brdf_mem};
+    geo.rows = {{"Bricks 128x128 on a sphere", [scene] {
+                     Scene s = scene("bricks", 128, {{"microgeom.lod", "geometry"}, {"microgeom.shadows", "exact"}})();
+                     apply_set(s, "camera.mode", "orbit");
+                     apply_set(s, "geometry.type", "sphere");
+                     return s;
+                 }, {}}};
+    return {t, lod, geo};
 }
 }  // namespace
 }  // namespace mesolab::microgeom

@@ -32,7 +32,7 @@ public:
             // The map's address in the stage result is stable while the result is cached.
             glBindTexture(GL_TEXTURE_2D, has_map ? ctx.renderer.texture(maps->at(m.albedo_map), &maps->at(m.albedo_map)) : 0);
             glUniform1i(program_.uniform("u_albedo"), 1);
-            const GpuMesh& mesh = ctx.renderer.mesh(ctx.eval, i);
+            const GpuMesh& mesh = ctx.renderer.mesh(ctx.scene, ctx.eval, i);
             glBindVertexArray(mesh.vao.get());
             glDrawElements(GL_TRIANGLES, mesh.index_count, GL_UNSIGNED_INT, nullptr);
         }

@@ -37,6 +37,11 @@ uniform float u_tiling;
 uniform int u_has_env, u_has_light_scatter, u_light_planar, u_shadows, u_phong;
 uniform vec3 u_ks;
 uniform float u_shininess;
+// BRDF level of detail (microgeom.lod = brdf): SimulatedBrdf's table, as SimulatedBrdf::eval.
+uniform int u_lod_brdf;
+uniform sampler2D u_brdf;       // texel (view node, light node): rgb = T(l, v), a = shadow fraction
+uniform sampler2D u_brdf_env;   // texel (view node, 0): rgb = T_env(v)
+uniform ivec2 u_brdf_nodes;     // (n_theta, n_phi)
 
 layout(location = 0) out vec4 o_radiance;
 layout(location = 1) out vec4 o_normal;
@@ -102,6 +107,48 @@ float visible(ivec2 t, int tri, vec3 bary, vec3 w) {
     return f;
 }
 
+// Table nodes and bilinear weights of a direction (see core/microgeom/goniometer.h).
+void brdf_nodes(vec3 w, out ivec4 node, out vec4 wt) {
+    int nt = u_brdf_nodes.x, np = u_brdf_nodes.y;
+    float tt = clamp(acos(clamp(w.z, 0.0, 1.0)) / (0.5 * PI) * float(nt - 1), 0.0, float(nt - 1));
+    int i0 = min(int(floor(tt)), nt - 2);
+    float ft = tt - float(i0);
+    float ph = (w.x == 0.0 && w.y == 0.0) ? 0.0 : atan(w.y, w.x) / (2.0 * PI);
+    ph -= floor(ph);
+    float tp = ph * float(np);
+    int j0 = int(floor(tp));
+    float fp = tp - float(j0);
+    j0 = j0 % np;
+    int j1 = (j0 + 1) % np;
+    node = ivec4(i0 * np + j0, i0 * np + j1, (i0 + 1) * np + j0, (i0 + 1) * np + j1);
+    wt = vec4((1.0 - ft) * (1.0 - fp), (1.0 - ft) * fp, ft * (1.0 - fp), ft * fp);
+}
+
+vec4 brdf_eval(vec3 l, vec3 v) {
+    l = normalize(l);
+    v = normalize(v);
+    if (!(l.z > 0.0) || !(v.z > 0.0)) return vec4(0.0);
+    ivec4 nl, nv;
+    vec4 wl, wv;
+    brdf_nodes(l, nl, wl);
+    brdf_nodes(v, nv, wv);
+    vec4 r = vec4(0.0);
+    for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b) r += wl[a] * wv[b] * texelFetch(u_brdf, ivec2(nv[b], nl[a]), 0);
+    return r;
+}
+
+vec3 brdf_eval_env(vec3 v) {
+    v = normalize(v);
+    if (!(v.z > 0.0)) return vec3(0.0);
+    ivec4 nv;
+    vec4 wv;
+    brdf_nodes(v, nv, wv);
+    vec3 r = vec3(0.0);
+    for (int b = 0; b < 4; ++b) r += wv[b] * texelFetch(u_brdf_env, ivec2(nv[b], 0), 0).rgb;
+    return r;
+}
+
 void main() {
     vec3 p = v_position;
     vec3 wo = camera_wo(p);
@@ -110,6 +157,26 @@ void main() {
     vec3 T = v_tangent - N * dot(v_tangent, N);
     T = dot(T, T) > 1e-12 ? normalize(T) : (abs(N.x) < 0.9 ? normalize(cross(N, vec3(1, 0, 0))) : normalize(cross(N, vec3(0, 1, 0))));
     vec3 B = cross(N, T);
+    if (u_lod_brdf != 0) {
+        vec3 v_loc = vec3(dot(wo, T), dot(wo, B), dot(wo, N));
+        vec3 Lo_lights = vec3(0.0);
+        float shadow_first = 0.0;
+        for (int i = 0; i < u_light_count; ++i) {
+            vec3 wi, E;
+            light_sample(i, p, wi, E);
+            vec4 f = brdf_eval(vec3(dot(wi, T), dot(wi, B), dot(wi, N)), v_loc);
+            Lo_lights += f.rgb * E;
+            if (i == 0) shadow_first = f.a;
+        }
+        vec3 Lo_env = u_env_lighting != 0 ? brdf_eval_env(v_loc) * env_irradiance(N) / PI : vec3(0.0);
+        o_radiance = vec4(Lo_lights + Lo_env, 1.0);
+        o_normal = vec4(N, 1.0);
+        o_direct = vec4(Lo_lights, 1.0);
+        o_indirect = vec4(Lo_env, 1.0);
+        o_shadow = vec4(shadow_first, 0.0, 0.0, 1.0);
+        o_folded = vec4(0.0, 0.0, 0.0, 1.0);
+        return;
+    }
     float tiling = u_texture_mode != 0 ? 1.0 : u_tiling;
     float c = v_uv.x * float(u_size.x) * tiling - 0.5, r = (1.0 - v_uv.y) * float(u_size.y) * tiling - 0.5;
     float c0 = floor(c), r0 = floor(r), fc = c - c0, fr = r - r0;

@@ -1,6 +1,7 @@
 // GPU pass of technique microgeom: uploads the stages' results (S_i as a texture array, the
 // direction set with its triangulation, adjacency and a look-up grid, heightfield normals and
 // albedo, scattered irradiance) and shades with microgeom.frag.
+#include "core/microgeom/goniometer.h"
 #include "core/microgeom/microgeom.h"
 #include "core/profile.h"
 #include "core/scene_stages.h"
@@ -52,6 +53,11 @@ struct Ellipses {
     Texture t0, t1;
 };
 
+struct BrdfTables {
+    std::shared_ptr<const void> keep;
+    Texture table, env;
+};
+
 struct Irradiance {
     std::shared_ptr<const void> keep;
     Texture tex;
@@ -70,6 +76,7 @@ public:
         auto lights = ctx.eval.get<PerObject<LightScatter>>("microgeom.scatter");
         auto imps = ctx.eval.get<PerObject<Importance>>("microgeom.importance");
         auto ells = ctx.eval.get<PerObject<EllipseMap>>("microgeom.ellipses");
+        auto brdfs = ctx.eval.get<PerObject<SimulatedBrdf>>("microgeom.brdf");
         prune();
         // Upload first: creating a texture binds it to the active unit, which must not disturb
         // the units bound below.
@@ -79,6 +86,7 @@ public:
             if (lights && lights->get(i)) irradiance(lights->items[size_t(i)], *hfs->get(i));
             if (imps && imps->get(i)) folded(imps->items[size_t(i)]);
             if (ells && ells->get(i)) ellipses(ells->items[size_t(i)]);
+            if (brdfs && brdfs->get(i)) brdf_tables(brdfs->items[size_t(i)]);
         }
         program_.use();
         ctx.renderer.draw_buffers({"radiance", "normal", "direct", "indirect", "shadow", "folded"});
@@ -124,7 +132,13 @@ public:
             const vec3 ks = m.get_vec3("ks");
             glUniform3fv(program_.uniform("u_ks"), 1, glm::value_ptr(ks));
             glUniform1f(program_.uniform("u_shininess"), float(m.get_float("shininess")));
-            const GpuMesh& mesh = ctx.renderer.mesh(ctx.eval, i);
+            const SimulatedBrdf* brdf = brdfs ? brdfs->get(i) : nullptr;
+            const BrdfTables* bt = brdf ? &brdf_tables(brdfs->items[size_t(i)]) : nullptr;
+            bind(9, GL_TEXTURE_2D, bt ? bt->table.get() : 0, "u_brdf");
+            bind(10, GL_TEXTURE_2D, bt ? bt->env.get() : 0, "u_brdf_env");
+            glUniform1i(program_.uniform("u_lod_brdf"), brdf ? 1 : 0);
+            glUniform2i(program_.uniform("u_brdf_nodes"), brdf ? brdf->n_theta : 2, brdf ? brdf->n_phi : 1);
+            const GpuMesh& mesh = ctx.renderer.mesh(ctx.scene, ctx.eval, i);
             glBindVertexArray(mesh.vao.get());
             glDrawElements(GL_TRIANGLES, mesh.index_count, GL_UNSIGNED_INT, nullptr);
         }
@@ -147,6 +161,37 @@ private:
             it = it->second.keep.use_count() == 1 ? irradiance_.erase(it) : std::next(it);
         for (auto it = ellipses_.begin(); it != ellipses_.end();)
             it = it->second.keep.use_count() == 1 ? ellipses_.erase(it) : std::next(it);
+        for (auto it = brdfs_.begin(); it != brdfs_.end();)
+            it = it->second.keep.use_count() == 1 ? brdfs_.erase(it) : std::next(it);
+    }
+
+    // The simulated BRDF: (view node, light node) -> (T, shadow), and the environment row.
+    const BrdfTables& brdf_tables(const std::shared_ptr<const SimulatedBrdf>& b) {
+        auto it = brdfs_.find(b.get());
+        if (it != brdfs_.end()) return it->second;
+        PROFILE_SCOPE("microgeom.upload_brdf");
+        const int nodes = b->n_theta * b->n_phi;
+        std::vector<float> rgba(size_t(nodes) * size_t(nodes) * 4), env(size_t(nodes) * 4, 1.f);
+        for (size_t k = 0; k < size_t(nodes) * size_t(nodes); ++k) {
+            for (int c = 0; c < 3; ++c) rgba[k * 4 + size_t(c)] = b->table[k][c];
+            rgba[k * 4 + 3] = 0.f;  // SHADOWTODO
+        }
+        for (size_t k = 0; k < size_t(nodes); ++k)
+            for (int c = 0; c < 3; ++c) env[k * 4 + size_t(c)] = b->env.empty() ? 0.f : b->env[k][c];
+        BrdfTables r;
+        r.keep = b;
+        for (int i = 0; i < 2; ++i) {
+            GLuint id = 0;
+            glGenTextures(1, &id);
+            glBindTexture(GL_TEXTURE_2D, id);
+            glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+            glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, nodes, i == 0 ? nodes : 1, 0, GL_RGBA, GL_FLOAT, i == 0 ? rgba.data() : env.data());
+            glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+            glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+            (i == 0 ? r.table : r.env) = Texture(id);
+        }
+        check_gl("microgeom.upload_brdf");
+        return brdfs_[b.get()] = std::move(r);
     }
 
     Geometry& geometry(const std::shared_ptr<const Heightfield>& hf, const std::shared_ptr<const DirectionSet>& dirs,
@@ -251,6 +296,7 @@ private:
 
     Program program_;
     std::map<const void*, Ellipses> ellipses_;
+    std::map<const void*, BrdfTables> brdfs_;
     std::map<const void*, Geometry> geometry_;
     std::map<const void*, Irradiance> irradiance_;
 };

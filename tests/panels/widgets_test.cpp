@@ -106,3 +106,39 @@ TEST(Widgets, SliderClampsToTheDeclaredRangeAndCost) {
     EXPECT_EQ(geo.get_int("resolution"), int64_t(res.max));
     EXPECT_TRUE(dirty2.recompute) << "geometry.resolution is declared as recompute";
 }
+
+// Clicking the hemisphere disc at a point sets the direction the point projects from: the
+// centre is the zenith, half the radius to the right is theta = 30 degrees, phi = 0; the top
+// of the rim is the horizon at phi = 90; the edit marks the declared cost.
+TEST(Widgets, HemisphereClickSetsTheProjectedDirection) {
+    HeadlessImGui ui;
+    ParamTable light = Registry::instance().light().defaults();
+    const ParamDecl& d = *light.group().find("direction");
+    auto press_at = [&](float fx, float fy) {
+        Dirty dirty;
+        float r[4];
+        auto draw = [&] { hemisphere_widget(d, light, dirty, 200.f); };
+        ui.frame(draw);
+        last_widget_rect(r);
+        ImGuiIO& io = ImGui::GetIO();
+        io.MousePos = ImVec2(r[0] + fx * (r[2] - r[0]), r[1] + fy * (r[3] - r[1]));
+        ui.frame(draw);
+        io.MouseDown[0] = true;
+        ui.frame(draw);
+        ui.frame(draw);
+        io.MouseDown[0] = false;
+        ui.frame(draw);
+        return dirty;
+    };
+    Dirty dirty = press_at(0.75f, 0.5f);  // half way from the centre to the right rim
+    EXPECT_NEAR(light.get_vec2("direction").x, 30.0, 0.5);
+    EXPECT_NEAR(light.get_vec2("direction").y, 0.0, 0.5);
+    EXPECT_TRUE(dirty.redraw);
+    EXPECT_EQ(dirty.recompute, d.cost == Cost::Recompute) << "the edit marks the declared cost";
+    press_at(0.5f, 0.0f);  // top of the rim: the horizon towards +y
+    EXPECT_NEAR(light.get_vec2("direction").x, 90.0, 0.5);
+    EXPECT_NEAR(light.get_vec2("direction").y, 90.0, 0.5);
+    press_at(0.999f, 0.999f);  // outside the disc (corner): clamped to the rim, phi = -45
+    EXPECT_NEAR(light.get_vec2("direction").x, 90.0, 0.5);
+    EXPECT_NEAR(light.get_vec2("direction").y, -45.0, 0.5);
+}
