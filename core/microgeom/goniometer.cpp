@@ -2,9 +2,9 @@
 
 #include "core/error.h"
 
-// Eigen is header-only; Debian installs it under /usr/include/eigen3 (a system directory, so its
+// Eigen (header-only, find_package(Eigen3) -> Eigen3::Eigen: a system include directory, so its
 // headers stay out of our warnings).
-#include <eigen3/Eigen/Dense>
+#include <Eigen/Dense>
 #include <tbb/parallel_for.h>
 #include <algorithm>
 #include <cmath>
@@ -295,6 +295,17 @@ vec3 SimulatedBrdf::eval(vec3 wi, vec3 wo) const {
     return r;
 }
 
+float SimulatedBrdf::eval_shadow(vec3 wi, vec3 wo) const {
+    wi = safe_normalize(wi);
+    wo = safe_normalize(wo);
+    if (wi.z <= 0.f || wo.z <= 0.f || n_theta < 2 || n_phi < 1 || shadow.size() != size_t(nodes()) * size_t(nodes())) return 0.f;
+    const Taps a = taps_of(wi, n_theta, n_phi), b = taps_of(wo, n_theta, n_phi);
+    float r = 0.f;
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) r += a.w[i] * b.w[j] * shadow[size_t(a.node[i]) * size_t(nodes()) + size_t(b.node[j])];
+    return r;
+}
+
 vec3 SimulatedBrdf::eval_env(vec3 wo) const {
     wo = safe_normalize(wo);
     if (wo.z <= 0.f || n_theta < 2 || n_phi < 1 || env.size() != size_t(nodes())) return vec3(0.f);
@@ -322,7 +333,7 @@ vec3 SimulatedBrdf::eval_sh(vec3 wi, vec3 wo) const {
     return vec3(float(std::max(0.0, r[0])), float(std::max(0.0, r[1])), float(std::max(0.0, r[2])));
 }
 
-size_t SimulatedBrdf::bytes() const { return (table.size() + env.size() + sh.size()) * sizeof(vec3); }
+size_t SimulatedBrdf::bytes() const { return (table.size() + env.size() + sh.size()) * sizeof(vec3) + shadow.size() * sizeof(float); }
 
 // [SECTION] Goniometer images
 Image goniometer_image(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, const GonioSettings& g, vec3 wi, vec3 wo) {
@@ -378,6 +389,20 @@ SimulatedBrdf simulate_brdf(const Heightfield& hf, const DirectionSet& dirs, con
         views[size_t(d)] = node_dir(node / np, node % np, nt, np, kPiD / 2 - kGonioHorizonEps);
     }
     const Eigen::MatrixXf Mn = masking_matrix(hf, dirs, vis, g, n, views);
+
+    // Shadow fraction seen from the view: the masked average of V(x, wi) [n.wi > 0] (no scattering
+    // solve: the shadow test's data with the light direction).
+    {
+        Eigen::MatrixXf S(Eigen::Index(n.size()), Eigen::Index(distinct));
+        tbb::parallel_for(0, distinct, [&](int d) {
+            const std::vector<float> V = view_visibility(hf, dirs, vis, g, lights[size_t(d)]);
+            for (size_t p = 0; p < V.size(); ++p) S(Eigen::Index(p), d) = lights[size_t(d)].z > 0.f ? V[p] : 0.f;
+        });
+        const Eigen::MatrixXf R = S.transpose() * Mn;  // distinct lights x distinct views
+        out.shadow.resize(size_t(nodes) * size_t(nodes));
+        for (int a = 0; a < nodes; ++a)
+            for (int b = 0; b < nodes; ++b) out.shadow[size_t(a) * size_t(nodes) + size_t(b)] = std::clamp(R(distinct_of(a, np), distinct_of(b, np)), 0.f, 1.f);
+    }
 
     // Environment: one solve, averaged with the view nodes' masking.
     {

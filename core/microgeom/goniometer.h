@@ -36,7 +36,11 @@
 // vanish (0/0); this keeps the grazing limit there. All theta = 0 nodes are one direction: one
 // scatter solve and one masking texture for all of them. Cost: one scatter solve per distinct
 // light node + one for env, one masking texture per distinct view node, then a matrix product
-// (lights x texels) * (texels x views) per channel (+ the Blinn-Phong sums when `phong`).
+// (lights x texels) * (texels x views) per channel (+ the Blinn-Phong sums when `phong`, one
+// pass over the texels per (light, view) pair). Light solves run in parallel (TBB) in blocks of 8.
+// Memory: the normalised masking weights, 4 bytes x texels x (1 + (n_theta - 1) n_phi). Bricks
+// 128^2, N = 100, depth 2, 2 cores, Release: ~0.6 s at resolution 8, ~2.8 s at 16 (241 light
+// solves of ~10 ms); with `phong` ~0.9 s and ~7 s; the paper's 16^4 took 7-8 hours.
 //
 // [SECTION] Spherical harmonics (fit = SH): "several hundred random samples projected into ... a
 // hierarchical basis such as spherical harmonics". `samples` pairs (wi, wo), both uniform in
@@ -98,6 +102,7 @@ struct SimulatedBrdf {
     int n_theta = 0, n_phi = 0;  // table layout (always filled; for SH the fit tabulated at the nodes)
     std::vector<vec3> table;     // [light_node * nodes + view_node], node = i_theta * n_phi + i_phi: T(wi, wo)
     std::vector<vec3> env;       // [view_node]: T_env(wo)
+    std::vector<float> shadow;   // [light_node * nodes + view_node]: masked average of V(x, wi) [n_x.wi > 0] (the `shadow` AOV)
     int sh_bands = 0;            // SH fit (fit == SH): c[a * B + b], B = sh_bands^2
     std::vector<vec3> sh;
     int images = 0;              // goniometer images computed (scatter solves, env included)
@@ -108,6 +113,7 @@ struct SimulatedBrdf {
     vec3 node_direction(int i_theta, int i_phi) const;
     vec3 eval(vec3 wi, vec3 wo) const;      // from `table`, by the formula above
     vec3 eval_env(vec3 wo) const;           // from `env`
+    float eval_shadow(vec3 wi, vec3 wo) const;  // from `shadow`, same taps as eval
     vec3 eval_sh(vec3 wi, vec3 wo) const;   // the SH fit directly, clamped >= 0 (0 below the horizon or without a fit)
     size_t bytes() const;                   // table + env + sh
 };

@@ -530,7 +530,7 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
                     ctx.lighting.lights[li].sample(p, wi, E);
                     const vec3 l_loc = to_local(wi);
                     Lo_lights += brdf->eval(l_loc, v_loc) * E;
-                    if (li == 0) shadow_first = 0.f;  // SHADOWTODO
+                    if (li == 0) shadow_first = brdf->eval_shadow(l_loc, v_loc);
                 }
                 const vec3 Lo_env = ctx.lighting.env_lighting ? brdf->eval_env(v_loc) * ctx.lighting.env_irradiance(N) * kInvPi : vec3(0.f);
                 const vec3 L = Lo_lights + Lo_env;

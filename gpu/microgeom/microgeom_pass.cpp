@@ -174,7 +174,7 @@ private:
         std::vector<float> rgba(size_t(nodes) * size_t(nodes) * 4), env(size_t(nodes) * 4, 1.f);
         for (size_t k = 0; k < size_t(nodes) * size_t(nodes); ++k) {
             for (int c = 0; c < 3; ++c) rgba[k * 4 + size_t(c)] = b->table[k][c];
-            rgba[k * 4 + 3] = 0.f;  // SHADOWTODO
+            rgba[k * 4 + 3] = b->shadow.empty() ? 0.f : b->shadow[k];
         }
         for (size_t k = 0; k < size_t(nodes); ++k)
             for (int c = 0; c < 3; ++c) env[k * 4 + size_t(c)] = b->env.empty() ? 0.f : b->env[k][c];

@@ -2,6 +2,7 @@
 // field is Lambert, a white furnace stays white, the table look-up, the fast tabulation against
 // single goniometer images, reciprocity, the spherical-harmonics fit, BTF slices, bad settings.
 #include "core/error.h"
+#include "core/microgeom/ellipse.h"
 #include "core/microgeom/goniometer.h"
 #include "core/microgeom/scatter.h"
 
@@ -212,32 +213,37 @@ TEST(Goniometer, StraightDownViewIsThePlainMeanOfTheLightImage) {
 
 TEST(Goniometer, ImageMaskedMeanEqualsGoniometerAverage) {
     const auto s = setup("bricks", 32, 100);
-    GonioSettings g;
-    g.scatter.depth = 2;
-    g.phong = true;
-    g.ks = vec3(0.2f, 0.3f, 0.4f);
+    const EllipseMap ellipses = fit_ellipses(s->hf, s->dirs, s->vis);
     const vec3 wi = direction_from_degrees(35.f, 20.f), wo = direction_from_degrees(55.f, 200.f);
-    const Image img = goniometer_image(s->hf, s->dirs, s->vis, g, wi, wo);
-    ASSERT_EQ(img.width, 32);
-    ASSERT_EQ(img.height, 32);
-    ASSERT_EQ(img.channels, 3);
-    const std::vector<float> V = visibility_texture(s->hf, s->dirs, s->vis, wo);
-    double sum[3] = {0, 0, 0}, wsum = 0;
-    int masked = 0;
-    for (int y = 0; y < img.height; ++y)
-        for (int x = 0; x < img.width; ++x) {
-            const vec3 n = s->hf.normal(x, y);
-            const double proj = std::max(0.f, glm::dot(n, wo)) / n.z;
-            for (int c = 0; c < 3; ++c) sum[c] += double(img.at(x, y)[c]) * proj;
-            wsum += double(V[s->hf.index(x, y)]) * proj;
-            if (V[s->hf.index(x, y)] == 0.f) {
-                ++masked;
-                for (int c = 0; c < 3; ++c) EXPECT_EQ(img.at(x, y)[c], 0.f) << "masked texel " << x << "," << y;
+    for (bool use_ellipses : {false, true}) {
+        SCOPED_TRACE(use_ellipses ? "ellipse masking" : "exact masking");
+        GonioSettings g;
+        g.scatter.depth = 2;
+        g.scatter.ellipses = use_ellipses ? &ellipses : nullptr;
+        g.phong = true;
+        g.ks = vec3(0.2f, 0.3f, 0.4f);
+        const Image img = goniometer_image(s->hf, s->dirs, s->vis, g, wi, wo);
+        ASSERT_EQ(img.width, 32);
+        ASSERT_EQ(img.height, 32);
+        ASSERT_EQ(img.channels, 3);
+        const std::vector<float> V = use_ellipses ? ellipse_visibility_texture(ellipses, s->hf, wo) : visibility_texture(s->hf, s->dirs, s->vis, wo);
+        double sum[3] = {0, 0, 0}, wsum = 0;
+        int masked = 0;
+        for (int y = 0; y < img.height; ++y)
+            for (int x = 0; x < img.width; ++x) {
+                const vec3 n = s->hf.normal(x, y);
+                const double proj = std::max(0.f, glm::dot(n, wo)) / n.z;
+                for (int c = 0; c < 3; ++c) sum[c] += double(img.at(x, y)[c]) * proj;
+                wsum += double(V[s->hf.index(x, y)]) * proj;
+                if (V[s->hf.index(x, y)] == 0.f) {
+                    ++masked;
+                    for (int c = 0; c < 3; ++c) EXPECT_EQ(img.at(x, y)[c], 0.f) << "masked texel " << x << "," << y;
+                }
             }
-        }
-    EXPECT_GT(masked, 0) << "a 55-degree view must mask some of the bricks' texels";
-    const vec3 want = goniometer_average(s->hf, s->dirs, s->vis, g, wi, wo);
-    for (int c = 0; c < 3; ++c) EXPECT_NEAR(sum[c] / wsum, double(want[c]), 1e-5 * double(want[c])) << c;
+        EXPECT_GT(masked, 0) << "a 55-degree view must mask some of the bricks' texels";
+        const vec3 want = goniometer_average(s->hf, s->dirs, s->vis, g, wi, wo);
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(sum[c] / wsum, double(want[c]), 1e-5 * double(want[c])) << c;
+    }
 }
 
 // [SECTION] Reciprocity

@@ -92,13 +92,17 @@ TEST(Lod, BumpImageAverageEqualsTheSimulatedBrdf) {
             for (Scene* s : {&bump, &brdf}) apply_set(*s, "light.direction", light);
             RenderRequest req;
             req.backend = Backend::Cpu;
-            const Image a = wb.render(bump, req).frame.aov("radiance");
-            const Image b = wb.render(brdf, req).frame.aov("radiance");
+            const Frame fa = wb.render(bump, req).frame, fb = wb.render(brdf, req).frame;
+            const Image &a = fa.aov("radiance"), &b = fb.aov("radiance");
             const bool node = std::string(light).rfind("38.57", 0) == 0;
             for (int c = 0; c < 3; ++c) {
                 const double ma = mean_channel(a, c), mb = mean_channel(b, c);
                 EXPECT_NEAR(mb, ma, (node ? 0.02 : 0.06) * ma) << "channel " << c;
             }
+            // The shadow AOV: the bump level's per-texel fraction averaged = the BRDF's shadow table.
+            const double sa = mean_channel(fa.aov("shadow"), 0), sb = mean_channel(fb.aov("shadow"), 0);
+            EXPECT_NEAR(sb, sa, (node ? 0.02 : 0.06) * sa);
+            EXPECT_GT(sa, 0.3);
         }
     }
 }
