@@ -6,17 +6,25 @@
 // heightfield by the Method of Dependent Tests (§3).
 //
 // Stages (results hold one entry per scene object; objects with equal settings share it):
-//   microgeom.heightfield  heights and albedo                (microgeom.heightfield, resolution, ...)
-//   microgeom.directions   N directions + triangulation      (microgeom.directions)
-//   microgeom.visibility   S_i                               (heightfield, directions)  — never the light
-//   microgeom.scatter_env  environment light scattered        (visibility, env.*, depth)      effects.environment
-//   microgeom.scatter      the first light scattered          (visibility, light.*, depth)    effects.indirect
+//   microgeom.heightfield      heights and albedo            (microgeom.heightfield, resolution, texel_size, albedo_map, ...)
+//   microgeom.directions       N directions + triangulation  (microgeom.directions)
+//   microgeom.visibility       S_i                           (heightfield, directions) — never the light or the curvature
+//   microgeom.importance       bent directions' fan areas    (curvature_u/v)                   curved bases (§5)
+//   microgeom.ellipses_curved  ellipses at 5 curvatures      (ellipse_bend)                    shadows = ellipse, curved
+//   microgeom.ellipses         ellipses (fitted, or interpolated at the curvature)             shadows = ellipse
+//   microgeom.scatter_env      environment light scattered   (env.*, depth)                    effects.environment
+//   microgeom.scatter          the first light scattered     (light.*, depth)                  effects.indirect
+//   microgeom.displaced        displaced geometry            (lod, tiling, geometry.*)         lod = geometry (lod.h)
+//   microgeom.brdf             simulated BRDF (goniometer)   (lod, brdf_*, depth, shadows)     lod = brdf (goniometer.h)
 //
-// Scope of this version (see the issue notes): micro-BRDF Lambertian for every bounce (the
-// Blinn-Phong lobe applies to the direct light seen by the viewer); the scattering solution uses
-// the first light; on non-planar base geometry its light-driven part is computed for light along
-// the macro normal and scaled by the macro cosine. Not yet: ellipse shadows, curvature (§5),
-// geometry/BRDF levels of detail, BTF export, GPU compute of S_i and scattering.
+// Levels of detail (lod.h): geometry and bump shade per pixel with the texture-space results;
+// brdf shades a smooth surface with the table: AOV direct = the lights' part (their scattering
+// included), indirect = the environment's part (exact for a constant environment, scaled by the
+// irradiance at the macro normal for a map), shadow = the masked average shadow fraction.
+// Scope (see the issue notes): micro-BRDF Lambertian for every bounce (the Blinn-Phong lobe
+// applies to the direct light seen by the viewer); the scattering solution uses the first light;
+// on non-planar base geometry its light-driven part is computed for light along the macro normal
+// and scaled by the macro cosine; exact shadows ignore the base curvature (ellipse shadows follow it).
 #include "core/microgeom/directions.h"
 #include "core/microgeom/heightfield.h"
 #include "core/microgeom/scatter.h"

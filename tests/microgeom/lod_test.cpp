@@ -216,3 +216,37 @@ TEST(Lod, CpuAndGpuAgreeOnGeometryAndBrdf) {
         EXPECT_GE(double(loose), 0.995 * n) << aov;
     }
 }
+
+// Physical scale and albedo images: an image heightfield's values are heights in the unit of
+// texel_size (height in texels = value * height_scale / texel_size); an albedo image is resampled
+// onto the texels and multiplies microgeom.albedo; a missing or NaN image is an InputError naming it.
+TEST(Lod, TexelSizeAndAlbedoMap) {
+    TempDir dir("albedo");
+    Image h(8, 8, 1, 0.f), a(2, 2, 3, 0.f);
+    for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x) h.at(x, y)[0] = float(x % 2);
+    for (int c = 0; c < 3; ++c) a.at(0, 0)[c] = a.at(1, 0)[c] = a.at(0, 1)[c] = a.at(1, 1)[c] = 0.5f;
+    write_exr(dir / "h.exr", h);
+    write_exr(dir / "a.exr", a);
+    StageGraph& g = Registry::instance().stages();
+    auto field = [&](const char* texel_size, const std::string& albedo_map) {
+        Scene s = texture_scene("bump", "bricks", 8);
+        apply_set(s, "microgeom.heightfield", dir / "h.exr");
+        apply_set(s, "microgeom.texel_size", texel_size);
+        apply_set(s, "microgeom.albedo", "1,1,1");
+        apply_set(s, "microgeom.albedo_map", albedo_map);
+        const Evaluation ev = g.evaluate(s, {"microgeom.heightfield"});
+        return *ev.get<PerObject<Heightfield>>("microgeom.heightfield")->get(0);
+    };
+    const Heightfield h1 = field("1", ""), h05 = field("0.5", dir / "a.exr");
+    EXPECT_FLOAT_EQ(h1.max_height() / h1.texel_size, 1.f);
+    EXPECT_FLOAT_EQ(h05.max_height() / h05.texel_size, 2.f) << "half the texel size doubles the height in texels";
+    EXPECT_NEAR(h05.albedo[0].x, 0.5f, 1e-6f);
+    EXPECT_NEAR(h1.albedo[0].x, 1.f, 1e-6f) << "no map: the albedo parameter";
+    try {
+        field("1", dir / "missing.png");
+        FAIL() << "a missing albedo map must be an InputError";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("missing.png"), std::string::npos) << e.what();
+    }
+}
