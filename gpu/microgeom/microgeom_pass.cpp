@@ -25,19 +25,24 @@ GLuint make_buffer(const void* data, size_t bytes) {
     return id;
 }
 
-// RGBA32F texture from per-texel vec3 (nearest filtering: the shader fetches texels).
-GLuint make_rgb_texture(const std::vector<vec3>& v, int w, int h) {
-    std::vector<float> rgba(size_t(w) * size_t(h) * 4, 1.f);
-    for (size_t i = 0; i < v.size(); ++i)
-        for (int c = 0; c < 3; ++c) rgba[i * 4 + size_t(c)] = v[i][c];
+// RGBA32F texture, nearest filtering (the shader fetches texels).
+GLuint make_rgba_texture(const float* rgba, int w, int h) {
     GLuint id = 0;
     glGenTextures(1, &id);
     glBindTexture(GL_TEXTURE_2D, id);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, rgba.data());
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, rgba);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     return id;
+}
+
+// RGBA32F texture from per-texel vec3 (alpha 1).
+GLuint make_rgb_texture(const std::vector<vec3>& v, int w, int h) {
+    std::vector<float> rgba(size_t(w) * size_t(h) * 4, 1.f);
+    for (size_t i = 0; i < v.size(); ++i)
+        for (int c = 0; c < 3; ++c) rgba[i * 4 + size_t(c)] = v[i][c];
+    return make_rgba_texture(rgba.data(), w, h);
 }
 
 // Resources of one (heightfield, directions, visibility) triple.
@@ -180,16 +185,8 @@ private:
             for (int c = 0; c < 3; ++c) env[k * 4 + size_t(c)] = b->env.empty() ? 0.f : b->env[k][c];
         BrdfTables r;
         r.keep = b;
-        for (int i = 0; i < 2; ++i) {
-            GLuint id = 0;
-            glGenTextures(1, &id);
-            glBindTexture(GL_TEXTURE_2D, id);
-            glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-            glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, nodes, i == 0 ? nodes : 1, 0, GL_RGBA, GL_FLOAT, i == 0 ? rgba.data() : env.data());
-            glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-            glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-            (i == 0 ? r.table : r.env) = Texture(id);
-        }
+        r.table = Texture(make_rgba_texture(rgba.data(), nodes, nodes));
+        r.env = Texture(make_rgba_texture(env.data(), nodes, 1));
         check_gl("microgeom.upload_brdf");
         return brdfs_[b.get()] = std::move(r);
     }
@@ -281,16 +278,8 @@ private:
         }
         Ellipses r;
         r.keep = em;
-        for (int i = 0; i < 2; ++i) {
-            GLuint id = 0;
-            glGenTextures(1, &id);
-            glBindTexture(GL_TEXTURE_2D, id);
-            glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-            glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, em->width, em->height, 0, GL_RGBA, GL_FLOAT, i == 0 ? rgba0.data() : rgba1.data());
-            glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-            glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-            (i == 0 ? r.t0 : r.t1) = Texture(id);
-        }
+        r.t0 = Texture(make_rgba_texture(rgba0.data(), em->width, em->height));
+        r.t1 = Texture(make_rgba_texture(rgba1.data(), em->width, em->height));
         return ellipses_[em.get()] = std::move(r);
     }
 

@@ -8,6 +8,7 @@
 #include "core/microgeom/lod.h"
 #include "core/microgeom/microgeom.h"
 #include "core/scene.h"
+#include "agreement.h"
 #include "support/cli.h"
 
 #include <gtest/gtest.h>
@@ -202,19 +203,7 @@ TEST(Lod, CpuAndGpuAgreeOnGeometryAndBrdf) {
     const Frame cpu = wb.render(s, req).frame;
     req.backend = Backend::Gpu;
     const Frame gpu = wb.render(s, req).frame;
-    for (const char* aov : {"radiance", "normal", "direct", "indirect", "shadow"}) {
-        const Image &a = cpu.aov(aov), &b = gpu.aov(aov);
-        ASSERT_EQ(a.data.size(), b.data.size());
-        size_t tight = 0, loose = 0;
-        for (size_t i = 0; i < a.data.size(); ++i) {
-            const float d = std::fabs(a.data[i] - b.data[i]);
-            tight += d <= 1e-3f;
-            loose += d <= 2e-2f;
-        }
-        const double n = double(a.data.size());
-        EXPECT_GE(double(tight), 0.98 * n) << aov;
-        EXPECT_GE(double(loose), 0.995 * n) << aov;
-    }
+    expect_frames_agree(cpu, gpu, {"radiance", "normal", "direct", "indirect", "shadow"}, 1e-3, 2e-2, 0.98, 0.995);
 }
 
 // Physical scale and albedo images: an image heightfield's values are heights in the unit of

@@ -5,6 +5,7 @@
 #include "core/image.h"
 #include "core/microgeom/microgeom.h"
 #include "core/scene.h"
+#include "agreement.h"
 #include "support/cli.h"
 
 #include <gtest/gtest.h>
@@ -181,19 +182,7 @@ TEST(CpuGpu, AgreeOnEveryAov) {
         const Frame cpu = wb.render(s, req).frame;
         req.backend = Backend::Gpu;
         const Frame gpu = wb.render(s, req).frame;
-        for (const char* aov : {"radiance", "normal", "direct", "indirect", "shadow"}) {
-            const Image &a = cpu.aov(aov), &b = gpu.aov(aov);
-            ASSERT_EQ(a.data.size(), b.data.size());
-            size_t tight = 0, loose = 0;
-            for (size_t i = 0; i < a.data.size(); ++i) {
-                const float d = std::fabs(a.data[i] - b.data[i]);
-                tight += d <= c.tight;
-                loose += d <= c.loose;
-            }
-            const double n = double(a.data.size());
-            EXPECT_GE(double(tight), c.frac_tight * n) << aov << ": " << n - double(tight) << " of " << n << " values differ by more than " << c.tight;
-            EXPECT_GE(double(loose), c.frac_loose * n) << aov << ": " << n - double(loose) << " of " << n << " values differ by more than " << c.loose;
-        }
+        expect_frames_agree(cpu, gpu, {"radiance", "normal", "direct", "indirect", "shadow"}, c.tight, c.loose, c.frac_tight, c.frac_loose);
     }
 }
 
