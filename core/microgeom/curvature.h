@@ -6,8 +6,19 @@
 //    (dx, dy) texels, q drops by (kappa_u dx^2 + kappa_v dy^2)/2, and d_j'(p) = normalize(q' - p).
 //    Directions to the environment (no hit) do not bend.
 //  - the bent directions no longer sample the sphere uniformly: each path through direction j
-//    is weighted by the importance I_j(p) = (area of the triangle fan around d_j' on the unit
+//    is weighted by its importance I_j(p) = (area of the triangle fan around d_j' on the unit
 //    sphere) / (area of the fan around d_j), the paper's estimate of the change in sampling rate.
+//    Only triangles whose three corners all hit the heightfield enter that ratio: a triangle
+//    spanning a hit and an environment direction straddles a silhouette, where the directions
+//    are discontinuous, and its stretching is not a change of sampling rate. On a convex base
+//    the far side of a valley drops, the solid angle it fills shrinks (I < 1), and the sky
+//    uncovered above it belongs to the environment; on a concave base the valley's far side
+//    rises and covers sky.
+//  - the quadrature weights of the gather (scatter.h) follow: w_j(p) ~ max(0, n_p . d_j') Omega_j I_j
+//    for hits, and the environment directions (unbent) share whatever the bent hits leave of the
+//    flat cosine-weighted total, W0(p) = sum_j max(0, n_p . d_j) Omega_j. If the hits alone
+//    exceed W0 (strong concave bending), they are scaled to W0 and the environment gets
+//    nothing. Per texel, sum_j w_j = 1: a white furnace still conserves energy exactly.
 //  - where a bent triangle turns over (its orientation flips), visibility would change: the
 //    texel is flagged (AOV `folded`, and a warning) instead of giving unflagged garbage.
 // Curvature 0 gives importance 1 everywhere and no flags: exactly the flat result.
@@ -29,13 +40,16 @@ struct Bending {
 
 struct Importance {
     int width = 0, height = 0, count = 0;
-    std::vector<float> w;          // [texel][direction], > 0 where the direction is above the texel's plane
+    std::vector<float> I;          // [texel][direction]: fan-area ratio, > 0 (1 for unbent directions)
+    std::vector<float> w;          // [texel][direction]: normalised gather weights, >= 0, sum 1 per texel
     std::vector<uint8_t> folded;   // per texel: 1 where a bent triangle turned over
     size_t folded_count = 0;
-    float at(size_t texel, int dir) const { return w.empty() ? 1.f : w[texel * size_t(count) + size_t(dir)]; }
+    bool empty() const { return w.empty(); }
+    float importance(size_t texel, int dir) const { return I.empty() ? 1.f : I[texel * size_t(count) + size_t(dir)]; }
+    float weight(size_t texel, int dir) const { return w[texel * size_t(count) + size_t(dir)]; }
 };
 
-// Empty weights (all 1) for zero curvature.
+// Empty (no weights: the flat quadrature) for zero curvature.
 Importance compute_importance(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, Bending b,
                               const std::function<void(double)>& progress = {});
 

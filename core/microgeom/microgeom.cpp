@@ -84,10 +84,10 @@ ScatterSettings scatter_settings(const ParamTable& m) {
     return st;
 }
 
-// Direction towards the first light in the heightfield's local frame, for the scattering solution.
-vec3 first_light_local(const Scene& s, const SceneObject& o) {
-    if (!planar(o) || s.lights.empty()) return {0.f, 0.f, 1.f};
-    const ParamTable& l = s.lights[0];
+// Direction towards light `index` in the heightfield's local frame, for the scattering solution.
+vec3 light_local(const Scene& s, const SceneObject& o, size_t index) {
+    if (!planar(o) || index >= s.lights.size()) return {0.f, 0.f, 1.f};
+    const ParamTable& l = s.lights[index];
     vec3 wi;
     if (l.get_string("type") == "directional") {
         const vec2 d = l.get_vec2("direction");
@@ -401,35 +401,34 @@ public:
                .when = [](const Scene& s) { return any_object(s, [](const SceneObject& o) { return lod(o) != "brdf"; }); },
                .when_text = "an object's microgeom.lod is geometry or bump",
                .run = [](StageContext& ctx) {
-                   return stage_result(scatter_all(ctx, /*environment=*/true));
+                   return stage_result(scatter_env(ctx));
                }});
-        // The first light scattered (its direct part is shaded per pixel).
+        // Every light scattered (their direct part is shaded per pixel).
         g.add({.name = "microgeom.scatter",
-               .help = "The first light scattered inside the heightfield (dependent tests)",
+               .help = "Each light scattered inside the heightfield (dependent tests), one solution per light",
                .params = with(keys(kScatterKeys), {"light.*", "geometry.type"}),
                .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "microgeom.ellipses"},
                .effects = {"indirect"},
-               .when = [](const Scene& s) { return any_object(s, [](const SceneObject& o) { return o.material.get_int("depth") > 0 && lod(o) != "brdf"; }); },
-               .when_text = "microgeom.depth > 0 and microgeom.lod is not brdf",
+               .when = [](const Scene& s) {
+                   return !s.lights.empty() && any_object(s, [](const SceneObject& o) { return o.material.get_int("depth") > 0 && lod(o) != "brdf"; });
+               },
+               .when_text = "the scene has a light, microgeom.depth > 0 and microgeom.lod is not brdf",
                .paper = PaperFigure{12e3, "Heidrich et al. 2000, Table 1: Bricks 128x128, software render, 100 samples (SGI Octane)"},
                .run = [](StageContext& ctx) {
-                   return stage_result(scatter_all(ctx, /*environment=*/false));
+                   return stage_result(scatter_lights(ctx));
                }});
     }
 
-    // One scattering solution per object: environment only, or the first light at unit irradiance.
-    static PerObject<LightScatter> scatter_all(StageContext& ctx, bool environment) {
+    // The environment's scattering solution per object.
+    static PerObject<LightScatter> scatter_env(StageContext& ctx) {
         auto hf = ctx.input<PerObject<Heightfield>>("microgeom.heightfield");
         auto dirs = ctx.input<PerObject<DirectionSet>>("microgeom.directions");
         auto vis = ctx.input<PerObject<Visibility>>("microgeom.visibility");
         auto imp = ctx.input<PerObject<Importance>>("microgeom.importance");
-        auto ell = ctx.input<PerObject<EllipseMap>>("microgeom.ellipses");
         Environment env;
-        if (environment) {
-            env.color = ctx.scene.env.get_vec3("color");
-            env.intensity = float(ctx.scene.env.get_float("intensity"));
-            env.map = ctx.input<Image>("env.map");
-        }
+        env.color = ctx.scene.env.get_vec3("color");
+        env.intensity = float(ctx.scene.env.get_float("intensity"));
+        env.map = ctx.input<Image>("env.map");
         PerObject<LightScatter> out;
         out.items.resize(ctx.scene.objects.size());
         for (size_t i = 0; i < out.items.size(); ++i) {
@@ -438,17 +437,49 @@ public:
             LightScatter ls;
             ScatterSettings st = scatter_settings(o.material);
             st.importance = imp ? imp->get(int(i)) : nullptr;
-            st.ellipses = ell ? ell->get(int(i)) : nullptr;
+            st.env = &env;
             ls.planar = planar(o);
-            ls.light_dir = first_light_local(ctx.scene, o);
-            if (environment) {
-                st.env = &env;
-            } else {
+            ls.result = scatter(*hf->get(int(i)), *dirs->get(int(i)), *vis->get(int(i)), st, [&](double f) { ctx.progress((double(i) + f) / double(out.items.size())); });
+            out.items[i] = std::make_shared<const LightScatter>(std::move(ls));
+        }
+        return out;
+    }
+
+    // One solution per object and light, at unit irradiance (planar bases: the light's own
+    // direction; curved bases: along the macro normal, scaled by the macro cosine when shading).
+    static PerObject<LightsScatter> scatter_lights(StageContext& ctx) {
+        auto hf = ctx.input<PerObject<Heightfield>>("microgeom.heightfield");
+        auto dirs = ctx.input<PerObject<DirectionSet>>("microgeom.directions");
+        auto vis = ctx.input<PerObject<Visibility>>("microgeom.visibility");
+        auto imp = ctx.input<PerObject<Importance>>("microgeom.importance");
+        auto ell = ctx.input<PerObject<EllipseMap>>("microgeom.ellipses");
+        PerObject<LightsScatter> out;
+        out.items.resize(ctx.scene.objects.size());
+        const size_t L = ctx.scene.lights.size();
+        for (size_t i = 0; i < out.items.size(); ++i) {
+            const SceneObject& o = ctx.scene.objects[i];
+            if (!hf->get(int(i)) || lod(o) == "brdf") continue;
+            LightsScatter all;
+            for (size_t li = 0; li < L; ++li) {
+                LightScatter ls;
+                ScatterSettings st = scatter_settings(o.material);
+                st.importance = imp ? imp->get(int(i)) : nullptr;
+                st.ellipses = ell ? ell->get(int(i)) : nullptr;
+                ls.planar = planar(o);
+                ls.light_dir = light_local(ctx.scene, o, li);
                 st.light_dir = ls.light_dir;
                 st.light_E = vec3(1.f);
+                // Curved bases: every light is solved along the macro normal, the same solution.
+                if (!ls.planar && li > 0) {
+                    all.lights.push_back(all.lights.front());
+                    continue;
+                }
+                ls.result = scatter(*hf->get(int(i)), *dirs->get(int(i)), *vis->get(int(i)), st, [&](double f) {
+                    ctx.progress((double(i) + (double(li) + f) / double(L)) / double(out.items.size()));
+                });
+                all.lights.push_back(std::move(ls));
             }
-            ls.result = scatter(*hf->get(int(i)), *dirs->get(int(i)), *vis->get(int(i)), st, [&](double f) { ctx.progress(f); });
-            out.items[i] = std::make_shared<const LightScatter>(std::move(ls));
+            out.items[i] = std::make_shared<const LightsScatter>(std::move(all));
         }
         return out;
     }
@@ -482,7 +513,7 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
     auto dirss = ctx.eval.get<PerObject<DirectionSet>>("microgeom.directions");
     auto viss = ctx.eval.get<PerObject<Visibility>>("microgeom.visibility");
     auto envs = ctx.eval.get<PerObject<LightScatter>>("microgeom.scatter_env");
-    auto lights = ctx.eval.get<PerObject<LightScatter>>("microgeom.scatter");
+    auto lights = ctx.eval.get<PerObject<LightsScatter>>("microgeom.scatter");
     const GBuffer& gb = ctx.gbuffer;
     Image& rad = ctx.frame.aov("radiance");
     Image& nrm = ctx.frame.aov("normal");
@@ -602,17 +633,18 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
                 direct += f * E * cos_i * V;
             }
 
-            // Scattered light: environment part, plus the first light's part scaled by its irradiance
+            // Scattered light: environment part, plus each light's part scaled by its irradiance
             // (on curved bases: computed for light along the macro normal, scaled by the macro cosine).
             vec3 E_ind(0.f);
             const LightScatter* es = envs ? envs->get(obj) : nullptr;
             if (es) E_ind += sample_bilinear(es->result.E_indirect, hf.width, hf.height, true, c, r);
-            const LightScatter* ls = lights ? lights->get(obj) : nullptr;
-            if (ls && !ctx.lighting.lights.empty()) {
+            const LightsScatter* ls = lights ? lights->get(obj) : nullptr;
+            for (size_t li = 0; ls && li < std::min(ls->lights.size(), ctx.lighting.lights.size()); ++li) {
                 vec3 wi, E;
-                ctx.lighting.lights[0].sample(p, wi, E);
-                const float scale = ls->planar ? 1.f : std::max(0.f, glm::dot(N, wi));
-                E_ind += sample_bilinear(ls->result.E_indirect, hf.width, hf.height, true, c, r) * E * scale;
+                ctx.lighting.lights[li].sample(p, wi, E);
+                const LightScatter& one = ls->lights[li];
+                const float scale = one.planar ? 1.f : std::max(0.f, glm::dot(N, wi));
+                E_ind += sample_bilinear(one.result.E_indirect, hf.width, hf.height, true, c, r) * E * scale;
             }
             const vec3 indirect = albedo * kInvPi * E_ind;
             const vec3 L = direct + indirect;
@@ -737,10 +769,12 @@ std::vector<BenchTable> MicrogeomTechnique::bench_tables() const {
     memory.info = [mb](const Scene& s, const Evaluation& ev) {
         auto vis = ev.get<PerObject<Visibility>>("microgeom.visibility");
         auto ell = ev.get<PerObject<EllipseMap>>("microgeom.ellipses");
-        auto sc = ev.get<PerObject<LightScatter>>("microgeom.scatter");
+        auto sc = ev.get<PerObject<LightsScatter>>("microgeom.scatter");
         (void)s;
-        const size_t v = vis && vis->get(0) ? vis->get(0)->bytes() : 0, e = ell && ell->get(0) ? ell->get(0)->bytes() : 0,
-                     l = sc && sc->get(0) ? sc->get(0)->result.E_indirect.size() * sizeof(vec3) : 0;
+        const size_t v = vis && vis->get(0) ? vis->get(0)->bytes() : 0, e = ell && ell->get(0) ? ell->get(0)->bytes() : 0;
+        size_t l = 0;
+        if (sc && sc->get(0))
+            for (const LightScatter& one : sc->get(0)->lights) l += one.result.E_indirect.size() * sizeof(vec3);
         return mb(v) + " / " + mb(e) + " / " + mb(l);
     };
     t.columns = {{"S_i precompute", "microgeom.visibility"},

@@ -24,7 +24,7 @@
 // Scope (see the issue notes): micro-BRDF Lambertian for every bounce (the Blinn-Phong lobe
 // applies to the direct light seen by the viewer); the scattering solution uses the first light;
 // on non-planar base geometry its light-driven part is computed for light along the macro normal
-// and scaled by the macro cosine; exact shadows ignore the base curvature (ellipse shadows follow it).
+// and scaled by the macro cosine (every light gets its own solution); exact shadows ignore the base curvature (ellipse shadows follow it).
 #include "core/microgeom/directions.h"
 #include "core/microgeom/heightfield.h"
 #include "core/microgeom/scatter.h"
@@ -47,6 +47,12 @@ struct LightScatter {
     ScatterResult result;
     vec3 light_dir{0, 0, 1};  // local frame
     bool planar = true;       // light_dir is the real light's (plane) or the macro normal (curved base)
+};
+
+// microgeom.scatter: one solution per scene light (same order as Scene::lights), each at unit
+// irradiance; the shaders scale each by its light's irradiance at the pixel.
+struct LightsScatter {
+    std::vector<LightScatter> lights;
 };
 
 ProceduralParams procedural_params(const ParamTable& material);

@@ -108,6 +108,7 @@ ScatterResult scatter(const Heightfield& hf, const DirectionSet& dirs, const Vis
     };
 
     // Gather: E(p) = pi * sum_j w_j(p) L_in,j(p). `primary` selects bilinear hit look-ups.
+    const Importance* bent = s.importance && !s.importance->empty() ? s.importance : nullptr;
     auto gather = [&](const std::vector<vec3>* L_prev, const std::vector<int>& J, bool primary) {
         std::vector<vec3> E(T, vec3(0.f));
         tbb::parallel_for(0, H, [&](int y) {
@@ -116,9 +117,8 @@ ScatterResult scatter(const Heightfield& hf, const DirectionSet& dirs, const Vis
                 vec3 sum(0.f);
                 float wsum = 0.f;
                 for (int j : J) {
-                    const float c = glm::dot(n[p], dirs.d[size_t(j)]);
-                    if (c <= 0.f) continue;
-                    const float w = c * dirs.solid_angle[size_t(j)] * (s.importance ? s.importance->at(p, j) : 1.f);
+                    const float w = bent ? bent->weight(p, j) : glm::dot(n[p], dirs.d[size_t(j)]) * dirs.solid_angle[size_t(j)];
+                    if (w <= 0.f) continue;
                     wsum += w;
                     const uint32_t hit = vis.at(j, x, y);
                     if (hit == Visibility::kNoHit) {

@@ -14,6 +14,7 @@
 // per-texel quadrature weights over the direction set (Omega_j: the direction's share of the
 // sphere), normalised so that a white furnace conserves energy exactly. J_k is either all N
 // directions or a random subset of M directions per bounce (the same for every texel).
+// On a curved base (§5) w_j(p) are the bent, importance-weighted weights of curvature.h.
 // The final gather looks S_j[p] up bilinearly (primary hits); inner bounces use the nearest
 // texel (secondary hits), as in the paper.
 //
@@ -52,7 +53,7 @@ struct ScatterSettings {
     bool all_directions = true;      // J_k = all N, or `paths` random directions per bounce
     int paths = 64;
     uint32_t seed = 1;
-    const Importance* importance = nullptr;  // curved base (§5): paths weighted by fan-area importance
+    const Importance* importance = nullptr;  // curved base (§5): gather weights of the bent directions (curvature.h)
     const EllipseMap* ellipses = nullptr;    // shadows from the per-texel ellipses (§4) instead of the exact test
 };
 

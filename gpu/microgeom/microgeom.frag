@@ -23,7 +23,7 @@ uniform usampler2DArray u_vis;  // S_i: 0xFFFFFFFF = no hit
 uniform sampler2D u_normals;    // heightfield normals (local frame), rgb
 uniform sampler2D u_albedo;
 uniform sampler2D u_E_env;      // microgeom.scatter_env: irradiance, rgb
-uniform sampler2D u_E_light;    // microgeom.scatter: irradiance per unit light irradiance, rgb
+uniform sampler2D u_E_light;    // microgeom.scatter: irradiance per unit light irradiance, rgb; light i at rows i * u_size.y
 uniform sampler2D u_folded;     // microgeom.importance: 1 where the curvature folds the triangulation
 uniform int u_has_folded;
 uniform int u_use_ellipse;      // microgeom.shadows == ellipse
@@ -34,7 +34,7 @@ uniform ivec2 u_size;           // heightfield texels
 uniform ivec2 u_grid;           // grid cells (phi, theta)
 uniform int u_tri_count;
 uniform float u_tiling;
-uniform int u_has_env, u_has_light_scatter, u_light_planar, u_shadows, u_phong;
+uniform int u_has_env, u_light_scatters, u_light_planar, u_shadows, u_phong;
 uniform vec3 u_ks;
 uniform float u_shininess;
 // BRDF level of detail (microgeom.lod = brdf): SimulatedBrdf's table, as SimulatedBrdf::eval.
@@ -184,12 +184,11 @@ void main() {
     ivec2 tk[4] = ivec2[4](t00, t00 + ivec2(1, 0), t00 + ivec2(0, 1), t00 + ivec2(1, 1));
     float wk[4] = float[4]((1.0 - fc) * (1.0 - fr), fc * (1.0 - fr), (1.0 - fc) * fr, fc * fr);
 
-    vec3 n_loc = vec3(0.0), albedo = vec3(0.0), E_env = vec3(0.0), E_light = vec3(0.0);
+    vec3 n_loc = vec3(0.0), albedo = vec3(0.0), E_env = vec3(0.0);
     for (int k = 0; k < 4; ++k) {
         n_loc += wk[k] * fetch_rgb(u_normals, tk[k]);
         albedo += wk[k] * fetch_rgb(u_albedo, tk[k]);
         if (u_has_env != 0) E_env += wk[k] * fetch_rgb(u_E_env, tk[k]);
-        if (u_has_light_scatter != 0) E_light += wk[k] * fetch_rgb(u_E_light, tk[k]);
     }
     n_loc = normalize(n_loc);
     vec3 n = normalize(T * n_loc.x + B * n_loc.y + N * n_loc.z);
@@ -230,10 +229,12 @@ void main() {
     }
 
     vec3 E_ind = E_env;
-    if (u_has_light_scatter != 0 && u_light_count > 0) {
+    for (int i = 0; i < u_light_scatters; ++i) {
         vec3 wi, E;
-        light_sample(0, p, wi, E);
+        light_sample(i, p, wi, E);
         float scale = u_light_planar != 0 ? 1.0 : max(0.0, dot(N, wi));
+        vec3 E_light = vec3(0.0);
+        for (int k = 0; k < 4; ++k) E_light += wk[k] * texelFetch(u_E_light, wrap(tk[k]) + ivec2(0, i * u_size.y), 0).rgb;
         E_ind += E_light * E * scale;
     }
     vec3 indirect = albedo / PI * E_ind;

@@ -78,7 +78,7 @@ public:
         auto dirss = ctx.eval.get<PerObject<DirectionSet>>("microgeom.directions");
         auto viss = ctx.eval.get<PerObject<Visibility>>("microgeom.visibility");
         auto envs = ctx.eval.get<PerObject<LightScatter>>("microgeom.scatter_env");
-        auto lights = ctx.eval.get<PerObject<LightScatter>>("microgeom.scatter");
+        auto lights = ctx.eval.get<PerObject<LightsScatter>>("microgeom.scatter");
         auto imps = ctx.eval.get<PerObject<Importance>>("microgeom.importance");
         auto ells = ctx.eval.get<PerObject<EllipseMap>>("microgeom.ellipses");
         auto brdfs = ctx.eval.get<PerObject<SimulatedBrdf>>("microgeom.brdf");
@@ -88,7 +88,7 @@ public:
         for (int i : ctx.objects) {
             geometry(hfs->items[size_t(i)], dirss->items[size_t(i)], viss->items[size_t(i)]);
             if (envs && envs->get(i)) irradiance(envs->items[size_t(i)], *hfs->get(i));
-            if (lights && lights->get(i)) irradiance(lights->items[size_t(i)], *hfs->get(i));
+            if (lights && lights->get(i)) irradiance_per_light(lights->items[size_t(i)], *hfs->get(i));
             if (imps && imps->get(i)) folded(imps->items[size_t(i)]);
             if (ells && ells->get(i)) ellipses(ells->items[size_t(i)]);
             if (brdfs && brdfs->get(i)) brdf_tables(brdfs->items[size_t(i)]);
@@ -107,8 +107,9 @@ public:
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, g.adj.get());
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, g.grid.get());
             const LightScatter* es = envs ? envs->get(i) : nullptr;
-            const LightScatter* ls = lights ? lights->get(i) : nullptr;
-            const GLuint e_env = es ? irradiance(envs->items[size_t(i)], hf) : 0, e_light = ls ? irradiance(lights->items[size_t(i)], hf) : 0;
+            const LightsScatter* ls = lights ? lights->get(i) : nullptr;
+            const int light_scatters = ls ? int(std::min(ls->lights.size(), ctx.lighting.lights.size())) : 0;
+            const GLuint e_env = es ? irradiance(envs->items[size_t(i)], hf) : 0, e_light = ls ? irradiance_per_light(lights->items[size_t(i)], hf) : 0;
             bind(1, GL_TEXTURE_2D_ARRAY, g.vis.get(), "u_vis");
             bind(2, GL_TEXTURE_2D, g.normals.get(), "u_normals");
             bind(3, GL_TEXTURE_2D, g.albedo.get(), "u_albedo");
@@ -129,8 +130,8 @@ public:
             glUniform1i(program_.uniform("u_tri_count"), g.tri_count);
             glUniform1f(program_.uniform("u_tiling"), float(m.get_float("tiling")));
             glUniform1i(program_.uniform("u_has_env"), es ? 1 : 0);
-            glUniform1i(program_.uniform("u_has_light_scatter"), ls ? 1 : 0);
-            glUniform1i(program_.uniform("u_light_planar"), ls && ls->planar ? 1 : 0);
+            glUniform1i(program_.uniform("u_light_scatters"), light_scatters);
+            glUniform1i(program_.uniform("u_light_planar"), light_scatters > 0 && ls->lights.front().planar ? 1 : 0);
             glUniform1i(program_.uniform("u_shadows"), m.get_string("shadows") != "none" ? 1 : 0);
             const bool phong = m.get_string("brdf") == "blinn-phong";
             glUniform1i(program_.uniform("u_phong"), phong ? 1 : 0);
@@ -253,6 +254,20 @@ private:
         Irradiance r;
         r.keep = s;
         r.tex = Texture(make_rgb_texture(s->result.E_indirect, hf.width, hf.height));
+        return (irradiance_[s.get()] = std::move(r)).tex.get();
+    }
+
+    // All lights' solutions stacked vertically: light i at rows [i H, (i + 1) H).
+    GLuint irradiance_per_light(const std::shared_ptr<const LightsScatter>& s, const Heightfield& hf) {
+        auto it = irradiance_.find(s.get());
+        if (it != irradiance_.end()) return it->second.tex.get();
+        std::vector<vec3> stacked;
+        stacked.reserve(size_t(hf.width) * size_t(hf.height) * std::max<size_t>(1, s->lights.size()));
+        for (const LightScatter& one : s->lights) stacked.insert(stacked.end(), one.result.E_indirect.begin(), one.result.E_indirect.end());
+        if (stacked.empty()) stacked.assign(size_t(hf.width) * size_t(hf.height), vec3(0.f));
+        Irradiance r;
+        r.keep = s;
+        r.tex = Texture(make_rgb_texture(stacked, hf.width, int(stacked.size() / size_t(hf.width))));
         return (irradiance_[s.get()] = std::move(r)).tex.get();
     }
 
