@@ -8,6 +8,7 @@
 #include "panels/panel.h"
 
 #include <imgui.h>
+#include <optional>
 
 namespace mesolab::panels {
 namespace {
@@ -21,8 +22,19 @@ void group(ParamTable& t, Dirty& dirty, const char* title, std::initializer_list
     ImGui::TreePop();
 }
 
+// The objects and camera the side-by-side view replaced, to go back to.
+struct Saved {
+    std::vector<SceneObject> objects;
+    ParamTable camera;
+};
+std::optional<Saved>& saved_scene() {
+    static std::optional<Saved> saved;
+    return saved;
+}
+
 // Replace the scene's objects by three spheres with the material of `src`: geometry, bump, BRDF.
 void side_by_side(Scene& s, const SceneObject& src, Dirty& dirty) {
+    saved_scene() = Saved{s.objects, s.camera};
     const char* lods[3] = {"geometry", "bump", "brdf"};
     std::vector<SceneObject> objs;
     for (int k = 0; k < 3; ++k) {
@@ -54,6 +66,17 @@ void register_microgeom_panel(PanelRegistry& r) {
             ImGui::TextDisabled("moving the light or the view never recomputes S_i (see Timings)");
             ImGui::TreePop();
         }
+        // Only while the three spheres are still there (a preset loaded since forgets the way back).
+        if (saved_scene() && !(ctx.scene.objects.size() == 3 && ctx.scene.objects[0].name == "lod-geometry")) saved_scene().reset();
+        if (saved_scene()) {
+            if (ImGui::Button("Back to the scene before the side-by-side view")) {
+                ctx.scene.objects = std::move(saved_scene()->objects);
+                ctx.scene.camera = std::move(saved_scene()->camera);
+                saved_scene().reset();
+                ctx.dirty.mark(Cost::Recompute);
+            }
+            help_marker("Restores the objects and camera that the side-by-side levels of detail replaced.");
+        }
         for (size_t i = 0; i < ctx.scene.objects.size(); ++i) {
             SceneObject& o = ctx.scene.objects[i];
             if (o.technique != "microgeom") continue;
@@ -73,7 +96,7 @@ void register_microgeom_panel(PanelRegistry& r) {
                 break;
             }
             help_marker("Like the paper's Fig. 9: replaces the scene's objects by three spheres with this material as displaced geometry, "
-                        "bump map and simulated BRDF, left to right (reload the preset to go back).");
+                        "bump map and simulated BRDF, left to right (a button at the top of this panel goes back).");
             if (ctx.eval) {
                 if (auto vis = ctx.eval->get<microgeom::PerObject<microgeom::Visibility>>("microgeom.visibility"))
                     if (const auto* v = vis->get(int(i)))
