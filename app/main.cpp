@@ -1,5 +1,6 @@
 // mesolab: interactive workbench for meso-scale appearance. Subcommands: gui (default),
 // capture, bench, sweep, preset validate|schema|show, info.
+#include "gpu/renderer.h"
 #include "app/commands.h"
 #include "app/workbench.h"
 #include "core/error.h"
@@ -12,6 +13,7 @@
 using namespace mesolab;
 
 int main(int argc, char** argv) {
+    mesolab::gpu::install_gpu_compute();  // stages may run their GPU variants (e.g. microgeom.device=gpu)
     // `mesolab PRESET` and `mesolab` alone mean `mesolab gui ...`.
     static const char* kCommands[] = {"gui", "capture", "bench", "sweep", "preset", "info", "export", "-h", "--help", "--version"};
     std::vector<char*> args(argv, argv + argc);

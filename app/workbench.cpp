@@ -16,7 +16,7 @@ Backend parse_backend(const std::string& s) {
     throw InputError("--backend: '" + s + "' is not one of gpu|cpu");
 }
 
-Workbench::Workbench() = default;
+Workbench::Workbench() { gpu::install_gpu_compute(); }
 Workbench::~Workbench() {
     renderer_.reset();  // GL objects go before their context
     context_.reset();

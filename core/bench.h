@@ -19,6 +19,9 @@ struct BenchColumn {
     int frame_width = 0;     // ... or, when stage is empty, a whole frame of this size
     int frame_height = 0;
     bool cpu = true, gpu = false;  // devices measured (stages are CPU unless they say otherwise)
+    // Stage columns: the `--set` that runs the stage on the GPU ("microgeom.device=gpu"); then it
+    // is timed on both devices. A GPU run that fell back to the CPU (a stage warning) is not reported.
+    std::string gpu_set;
     // A column that reports rather than times (memory per structure, say): called with the
     // row's scene after its frame stages ran; the text goes in the cell as it is.
     std::function<std::string(const Scene&, const Evaluation&)> info;

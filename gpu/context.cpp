@@ -266,4 +266,55 @@ void HeadlessContext::make_current() {
     if (!eglMakeCurrent(impl_->display, impl_->surface, impl_->surface, impl_->context))
         throw std::runtime_error(std::string("eglMakeCurrent failed (") + egl_error_name(eglGetError()) + ")");
 }
+
+// [SECTION] Compute scope: a shared context for compute work, any thread, one at a time
+namespace {
+struct ComputeShared {
+    std::mutex mutex;
+    std::unique_ptr<HeadlessContext> context;
+    std::string failure;
+};
+ComputeShared& compute_shared() {
+    static ComputeShared* shared = new ComputeShared();  // kept until exit: no destruction-order issues with EGL
+    return *shared;
+}
+}  // namespace
+
+struct ComputeScope::Saved {
+    std::unique_lock<std::mutex> lock;
+    EGLDisplay display = EGL_NO_DISPLAY;
+    EGLContext context = EGL_NO_CONTEXT;
+    EGLSurface draw = EGL_NO_SURFACE, read = EGL_NO_SURFACE;
+};
+
+ComputeScope::ComputeScope() : saved_(std::make_unique<Saved>()) {
+    ComputeShared& cs = compute_shared();
+    saved_->lock = std::unique_lock<std::mutex>(cs.mutex);
+    if (!cs.failure.empty()) throw std::runtime_error(cs.failure);
+    saved_->display = eglGetCurrentDisplay();
+    saved_->context = eglGetCurrentContext();
+    saved_->draw = eglGetCurrentSurface(EGL_DRAW);
+    saved_->read = eglGetCurrentSurface(EGL_READ);
+    try {
+        if (!cs.context) {
+            cs.context = HeadlessContext::create();  // current on creation
+        } else {
+            cs.context->make_current();
+        }
+    } catch (const std::runtime_error& e) {
+        cs.failure = e.what();
+        throw;
+    }
+}
+
+ComputeScope::~ComputeScope() {
+    glFinish();
+    if (saved_->context != EGL_NO_CONTEXT) {
+        eglMakeCurrent(saved_->display, saved_->draw, saved_->read, saved_->context);
+    } else {
+        eglMakeCurrent(eglGetCurrentDisplay(), EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+    }
+}
+
+const GlInfo& ComputeScope::info() const { return compute_shared().context->info(); }
 }  // namespace mesolab::gpu

@@ -38,4 +38,22 @@ private:
     std::unique_ptr<Impl> impl_;
     GlInfo info_;
 };
+// A process-wide headless context for compute work (gpu/microgeom/scatter_gpu.h), made current
+// on the calling thread for the scope's lifetime and the thread's previous EGL context restored
+// after. One scope at a time (a mutex): stages may run on a worker thread while the UI thread
+// draws with its own context. Created on first use and kept until exit. Throws
+// std::runtime_error (HeadlessContext::create's message) when no context can be made; that
+// failure is remembered, so later scopes fail at once.
+class ComputeScope {
+public:
+    ComputeScope();
+    ~ComputeScope();
+    ComputeScope(const ComputeScope&) = delete;
+    ComputeScope& operator=(const ComputeScope&) = delete;
+    const GlInfo& info() const;
+
+private:
+    struct Saved;
+    std::unique_ptr<Saved> saved_;
+};
 }  // namespace mesolab::gpu

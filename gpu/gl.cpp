@@ -49,6 +49,15 @@ bool gl_context_current() {
 }
 }  // namespace
 
+Buffer make_storage_buffer(const void* data, size_t bytes, GLenum usage) {
+    GLuint id = 0;
+    glGenBuffers(1, &id);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, id);
+    glBufferData(GL_SHADER_STORAGE_BUFFER, GLsizeiptr(bytes), data, usage);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+    return Buffer(id);
+}
+
 void delete_buffer(GLuint id) { if (gl_context_current()) glDeleteBuffers(1, &id); }
 void delete_texture(GLuint id) { if (gl_context_current()) glDeleteTextures(1, &id); }
 void delete_framebuffer(GLuint id) { if (gl_context_current()) glDeleteFramebuffers(1, &id); }

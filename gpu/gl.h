@@ -39,6 +39,9 @@ using Framebuffer = GlName<delete_framebuffer>;
 using VertexArray = GlName<delete_vertex_array>;
 using Query = GlName<delete_query>;
 
+// A new shader storage buffer holding `bytes` (data may be null); leaves GL_SHADER_STORAGE_BUFFER unbound.
+Buffer make_storage_buffer(const void* data, size_t bytes, GLenum usage = GL_STATIC_DRAW);
+
 // A linked program. Sources are looked up by embedded name (e.g. "basic/basic.frag"); a line
 // `#include "common.glsl"` is replaced by the embedded file of that name (recursively, once).
 // `defines` lines ("NAME VALUE") are inserted after #version. Compile/link errors throw

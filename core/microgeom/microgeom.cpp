@@ -1,5 +1,6 @@
 #include "core/microgeom/microgeom.h"
 #include "core/error.h"
+#include "core/microgeom/device.h"
 #include "core/microgeom/goniometer.h"
 #include "core/microgeom/btf.h"
 #include "core/microgeom/lod.h"
@@ -14,6 +15,8 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <optional>
+#include <stdexcept>
 
 namespace mesolab::microgeom {
 
@@ -73,6 +76,9 @@ std::vector<std::string> with(std::vector<std::string> a, const std::vector<std:
 }
 
 bool planar(const SceneObject& o) { return o.geometry.get_string("type") == "plane"; }
+
+// The first line of an error message (EGL failures list every platform tried).
+std::string first_line(const std::string& text) { return text.substr(0, text.find('\n')); }
 
 ScatterSettings scatter_settings(const ParamTable& m) {
     ScatterSettings st;
@@ -148,6 +154,9 @@ public:
             .doc("Curvature of the base geometry along u, as the total bend across the field (+ convex, - concave): bends the "
                  "scattering directions and reweights paths by the triangle-fan area importance (§5); S_i are not recomputed");
         p.add_float("curvature_v", 0.0).range(-360.0, 360.0).in("degrees").costs(Cost::Recompute).doc("Curvature along v (see curvature_u)");
+        p.add_enum("device", {"cpu", "gpu"}, "cpu").costs(Cost::Recompute)
+            .doc("Where S_i and the scattering bounces are computed: cpu (all cores) or gpu (OpenGL compute shaders on a context of their own; "
+                 "without OpenGL the stage runs on the CPU and says so). Both agree to float rounding (tests/microgeom/scatter_gpu_test.cpp)");
         p.add_enum("shadows", {"none", "exact", "ellipse"}, "exact").costs(Cost::Recompute)
             .doc("none; exact: the visibility of the 3 directions of the spherical triangle containing the light, interpolated; "
                  "ellipse: the paper's per-texel ellipse fitted to the unshadowed directions (§4)");
@@ -210,7 +219,8 @@ public:
                    }));
                }});
         g.add({.name = "microgeom.visibility",
-               .help = "Visibility textures S_i: first hit for every direction and texel",
+               .help = "Visibility textures S_i: first hit for every direction and texel (on microgeom.device)",
+               .params = keys({"device"}),
                .inputs = {"microgeom.heightfield", "microgeom.directions"},
                .paper = PaperFigure{1029e3, "Heidrich et al. 2000, Table 1: Bricks 128x128, 100 directions (SGI Octane)"},
                .run = [](StageContext& ctx) {
@@ -224,7 +234,19 @@ public:
                        const DirectionSet* d = dirs->get(int(i));
                        if (!h || !d) continue;
                        auto& slot = done[{h, d}];
-                       if (!slot) slot = std::make_shared<const Visibility>(compute_visibility(*h, *d, [&](double f) { ctx.progress(f); }));
+                       if (!slot) {
+                           std::optional<Visibility> v;
+                           if (ctx.scene.objects[i].material.get_string("device") == "gpu") {
+                               try {
+                                   if (!gpu_compute()) throw std::runtime_error("this build has no GPU compute");
+                                   v = gpu_compute().visibility(*h, *d);
+                               } catch (const std::runtime_error& e) {
+                                   ctx.warn(ctx.scene.objects[i].name + ": S_i computed on the CPU: the GPU was not available (" + first_line(e.what()) + ")");
+                               }
+                           }
+                           if (!v) v = compute_visibility(*h, *d, [&](double f) { ctx.progress(f); });
+                           slot = std::make_shared<const Visibility>(std::move(*v));
+                       }
                        out.items[i] = slot;
                    }
                    return stage_result(std::move(out));
@@ -395,7 +417,7 @@ public:
         // Environment light scattered: independent of the light.
         g.add({.name = "microgeom.scatter_env",
                .help = "Environment light gathered where S_i has no hit, scattered microgeom.depth times",
-               .params = with(keys(kScatterKeys), {"env.*"}),
+               .params = with(with(keys(kScatterKeys), keys({"device"})), {"env.*"}),
                .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "env.map"},
                .effects = {"environment"},
                .when = [](const Scene& s) { return any_object(s, [](const SceneObject& o) { return lod(o) != "brdf"; }); },
@@ -406,7 +428,7 @@ public:
         // Every light scattered (their direct part is shaded per pixel).
         g.add({.name = "microgeom.scatter",
                .help = "Each light scattered inside the heightfield (dependent tests), one solution per light",
-               .params = with(keys(kScatterKeys), {"light.*", "geometry.type"}),
+               .params = with(with(keys(kScatterKeys), keys({"device"})), {"light.*", "geometry.type"}),
                .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "microgeom.ellipses"},
                .effects = {"indirect"},
                .when = [](const Scene& s) {
@@ -417,6 +439,36 @@ public:
                .run = [](StageContext& ctx) {
                    return stage_result(scatter_lights(ctx));
                }});
+    }
+
+    // The GPU's gatherer where the object asks for it and OpenGL works; else null (the CPU), with a warning.
+    static std::unique_ptr<Gatherer> make_gatherer(StageContext& ctx, const SceneObject& o) {
+        if (o.material.get_string("device") != "gpu") return nullptr;
+        try {
+            if (!gpu_compute()) throw std::runtime_error("this build has no GPU compute");
+            return gpu_compute().gatherer();
+        } catch (const std::runtime_error& e) {
+            ctx.warn(o.name + ": scattering computed on the CPU: the GPU was not available (" + first_line(e.what()) + ")");
+            return nullptr;
+        }
+    }
+
+    // scatter() on the gatherer in st (the GPU), or on the CPU with a warning where the GPU fails.
+    static ScatterResult scatter_on(StageContext& ctx, const SceneObject& o, const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis,
+                                    ScatterSettings st, const std::function<void(double)>& progress) {
+        if (st.gatherer) {
+            try {
+                return scatter(hf, dirs, vis, st, progress);
+            } catch (const Cancelled&) {
+                throw;
+            } catch (const InputError&) {
+                throw;
+            } catch (const std::runtime_error& e) {
+                ctx.warn(o.name + ": scattering computed on the CPU: the GPU could not (" + first_line(e.what()) + ")");
+                st.gatherer = nullptr;
+            }
+        }
+        return scatter(hf, dirs, vis, st, progress);
     }
 
     // The environment's scattering solution per object.
@@ -438,8 +490,10 @@ public:
             ScatterSettings st = scatter_settings(o.material);
             st.importance = imp ? imp->get(int(i)) : nullptr;
             st.env = &env;
+            const auto gatherer = make_gatherer(ctx, o);
+            st.gatherer = gatherer.get();
             ls.planar = planar(o);
-            ls.result = scatter(*hf->get(int(i)), *dirs->get(int(i)), *vis->get(int(i)), st, [&](double f) { ctx.progress((double(i) + f) / double(out.items.size())); });
+            ls.result = scatter_on(ctx, o, *hf->get(int(i)), *dirs->get(int(i)), *vis->get(int(i)), st, [&](double f) { ctx.progress((double(i) + f) / double(out.items.size())); });
             out.items[i] = std::make_shared<const LightScatter>(std::move(ls));
         }
         return out;
@@ -460,6 +514,7 @@ public:
             const SceneObject& o = ctx.scene.objects[i];
             if (!hf->get(int(i)) || lod(o) == "brdf") continue;
             LightsScatter all;
+            const auto gatherer = make_gatherer(ctx, o);
             for (size_t li = 0; li < L; ++li) {
                 LightScatter ls;
                 ScatterSettings st = scatter_settings(o.material);
@@ -469,12 +524,13 @@ public:
                 ls.light_dir = light_local(ctx.scene, o, li);
                 st.light_dir = ls.light_dir;
                 st.light_E = vec3(1.f);
+                st.gatherer = gatherer.get();
                 // Curved bases: every light is solved along the macro normal, the same solution.
                 if (!ls.planar && li > 0) {
                     all.lights.push_back(all.lights.front());
                     continue;
                 }
-                ls.result = scatter(*hf->get(int(i)), *dirs->get(int(i)), *vis->get(int(i)), st, [&](double f) {
+                ls.result = scatter_on(ctx, o, *hf->get(int(i)), *dirs->get(int(i)), *vis->get(int(i)), st, [&](double f) {
                     ctx.progress((double(i) + (double(li) + f) / double(L)) / double(out.items.size()));
                 });
                 all.lights.push_back(std::move(ls));
@@ -777,9 +833,13 @@ std::vector<BenchTable> MicrogeomTechnique::bench_tables() const {
             for (const LightScatter& one : sc->get(0)->lights) l += one.result.E_indirect.size() * sizeof(vec3);
         return mb(v) + " / " + mb(e) + " / " + mb(l);
     };
-    t.columns = {{"S_i precompute", "microgeom.visibility"},
+    BenchColumn vis_col{"S_i precompute", "microgeom.visibility"};
+    vis_col.gpu_set = "microgeom.device=gpu";
+    BenchColumn scatter_col{"software render (scattering, depth 2, all 100 directions)", "microgeom.scatter"};
+    scatter_col.gpu_set = "microgeom.device=gpu";
+    t.columns = {vis_col,
                  {"shadow (ellipse) precompute", "microgeom.ellipses"},
-                 {"software render (scattering, depth 2, all 100 directions)", "microgeom.scatter"},
+                 scatter_col,
                  {"frame (texture space, 1 pixel per texel; GPU = hardware render)", "", 0, 0, true, true},
                  memory};
     t.rows = {{"Triangles 32x32", scene("triangles", 32), {27e3, 32e3, 10e3, 480}},

@@ -142,11 +142,15 @@ ScatterResult scatter(const Heightfield& hf, const DirectionSet& dirs, const Vis
     // E^K: light that reflected at most K times inside the heightfield before reaching p.
     // Only the final gather (at the viewer's texel) looks hits up bilinearly.
     const int K = std::clamp(s.depth, 0, 8);
-    std::vector<vec3> E = gather(nullptr, subset(), K == 0);
+    if (s.gatherer) s.gatherer->begin(hf, dirs, vis, bent, L_env);
+    auto run_gather = [&](const std::vector<vec3>* L_prev, const std::vector<int>& J, bool primary) {
+        return s.gatherer ? s.gatherer->gather(L_prev, J, primary) : gather(L_prev, J, primary);
+    };
+    std::vector<vec3> E = run_gather(nullptr, subset(), K == 0);
     for (int k = 1; k <= K; ++k) {
         std::vector<vec3> L(T);
         for (size_t p = 0; p < T; ++p) L[p] = out.direct[p] + hf.albedo[p] * kInvPi * E[p];
-        E = gather(&L, subset(), k == K);
+        E = run_gather(&L, subset(), k == K);
         if (progress) progress(double(k) / double(K));
     }
     out.E_indirect = std::move(E);

@@ -44,6 +44,18 @@ float visibility_fraction(const Heightfield& hf, const Visibility& vis, const st
 // Per-texel fractions for one direction (shadow texture for the light, masking for the view).
 std::vector<float> visibility_texture(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, vec3 w);
 
+// One bounce's gather, E(p) = pi sum_{j in J} w_j(p) L_in,j(p) / sum_{j in J} w_j(p) for every
+// texel: the part of scatter() that a GPU can run (gpu/microgeom/scatter_gpu.h). scatter() calls
+// begin() once, then gather() per bounce with the same arguments its own CPU gather takes.
+class Gatherer {
+public:
+    virtual ~Gatherer() = default;
+    // bent: the curved base's weights (null: the flat max(0, n_p . d_j) Omega_j); L_env per direction.
+    virtual void begin(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, const Importance* bent, const std::vector<vec3>& L_env) = 0;
+    // L_prev: radiance per texel of the previous bounce (null: environment only); primary: bilinear hit look-ups, else nearest.
+    virtual std::vector<vec3> gather(const std::vector<vec3>* L_prev, const std::vector<int>& J, bool primary) = 0;
+};
+
 struct ScatterSettings {
     vec3 light_dir{0.f, 0.f, 1.f};   // local frame, unit, towards the light
     vec3 light_E{0.f};               // irradiance at normal incidence (RGB); 0 = no direct light
@@ -55,6 +67,7 @@ struct ScatterSettings {
     uint32_t seed = 1;
     const Importance* importance = nullptr;  // curved base (§5): gather weights of the bent directions (curvature.h)
     const EllipseMap* ellipses = nullptr;    // shadows from the per-texel ellipses (§4) instead of the exact test
+    Gatherer* gatherer = nullptr;            // the bounces' gathers elsewhere (the GPU); null: on the CPU
 };
 
 struct ScatterResult {

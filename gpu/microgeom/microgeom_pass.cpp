@@ -17,14 +17,6 @@ using namespace mesolab::microgeom;
 
 constexpr int kGridW = 64, kGridH = 32;
 
-GLuint make_buffer(const void* data, size_t bytes) {
-    GLuint id = 0;
-    glGenBuffers(1, &id);
-    glBindBuffer(GL_SHADER_STORAGE_BUFFER, id);
-    glBufferData(GL_SHADER_STORAGE_BUFFER, GLsizeiptr(bytes), data, GL_STATIC_DRAW);
-    return id;
-}
-
 // RGBA32F texture, nearest filtering (the shader fetches texels).
 GLuint make_rgba_texture(const float* rgba, int w, int h) {
     GLuint id = 0;
@@ -239,10 +231,10 @@ private:
                 vec3 bary;
                 grid[size_t(gy) * kGridW + size_t(gx)] = dirs->locate({std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)}, bary);
             }
-        g.dirs = Buffer(make_buffer(d.data(), d.size() * sizeof(vec4)));
-        g.tris = Buffer(make_buffer(tris.data(), tris.size() * sizeof(glm::ivec4)));
-        g.adj = Buffer(make_buffer(adj.data(), adj.size() * sizeof(glm::ivec4)));
-        g.grid = Buffer(make_buffer(grid.data(), grid.size() * sizeof(int)));
+        g.dirs = make_storage_buffer(d.data(), d.size() * sizeof(vec4));
+        g.tris = make_storage_buffer(tris.data(), tris.size() * sizeof(glm::ivec4));
+        g.adj = make_storage_buffer(adj.data(), adj.size() * sizeof(glm::ivec4));
+        g.grid = make_storage_buffer(grid.data(), grid.size() * sizeof(int));
         g.tri_count = int(tris.size());
         check_gl("microgeom.upload");
         return geometry_[vis.get()] = std::move(g);

@@ -202,14 +202,6 @@ Prepared prepare(const Heightfield& hf, const DirectionSet& dirs) {
     return P;
 }
 
-GLuint make_ssbo(const void* data, size_t bytes, GLenum usage) {
-    GLuint id = 0;
-    glGenBuffers(1, &id);
-    glBindBuffer(GL_SHADER_STORAGE_BUFFER, id);
-    glBufferData(GL_SHADER_STORAGE_BUFFER, GLsizeiptr(bytes), data, usage);
-    return id;
-}
-
 // Uploads, then dispatches batches of directions [d0, d1) into one output SSBO ([d - d0][row][col]),
 // calling sink(d0, d1, buffer) after each. Restores the current program.
 template <class Sink>
@@ -226,11 +218,11 @@ void run(const Program& program, const Prepared& P, Sink&& sink) {
 
     GLint previous = 0;
     glGetIntegerv(GL_CURRENT_PROGRAM, &previous);
-    const Buffer texels(make_ssbo(P.texels.data(), P.texels.size() * sizeof(TexelData), GL_STATIC_DRAW));
-    const Buffer dirs(make_ssbo(P.dirs.data(), P.dirs.size() * sizeof(DirData), GL_STATIC_DRAW));
-    const Buffer cells(make_ssbo(P.cells.data(), P.cells.size() * sizeof(float), GL_STATIC_DRAW));
-    const Buffer mm(make_ssbo(P.mm.data(), P.mm.size() * sizeof(float), GL_STATIC_DRAW));
-    const Buffer out(make_ssbo(nullptr, size_t(std::min(batch, P.N)) * per_dir * sizeof(uint32_t), GL_STREAM_READ));
+    const Buffer texels = make_storage_buffer(P.texels.data(), P.texels.size() * sizeof(TexelData), GL_STATIC_DRAW);
+    const Buffer dirs = make_storage_buffer(P.dirs.data(), P.dirs.size() * sizeof(DirData), GL_STATIC_DRAW);
+    const Buffer cells = make_storage_buffer(P.cells.data(), P.cells.size() * sizeof(float), GL_STATIC_DRAW);
+    const Buffer mm = make_storage_buffer(P.mm.data(), P.mm.size() * sizeof(float), GL_STATIC_DRAW);
+    const Buffer out = make_storage_buffer(nullptr, size_t(std::min(batch, P.N)) * per_dir * sizeof(uint32_t), GL_STREAM_READ);
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
     check_gl("microgeom.visibility upload");
 

@@ -85,7 +85,7 @@ void register_microgeom_panel(PanelRegistry& r) {
             ImGui::TextDisabled("%s", o.name.c_str());
             group(o.material, ctx.dirty, "Heightfield",
                   {"heightfield", "resolution", "height_scale", "texel_size", "periodic", "vgroove_angle", "rms_slope", "correlation", "seed", "albedo", "albedo_map", "tiling"}, true);
-            group(o.material, ctx.dirty, "Visibility and scattering", {"directions", "depth", "sampling", "paths", "scatter_seed", "shadows"}, true);
+            group(o.material, ctx.dirty, "Visibility and scattering", {"directions", "depth", "sampling", "paths", "scatter_seed", "shadows", "device"}, true);
             group(o.material, ctx.dirty, "Curvature of the base (§5)", {"curvature_u", "curvature_v"}, true);
             group(o.material, ctx.dirty, "Level of detail", {"lod", "brdf_fit", "brdf_resolution", "brdf_samples", "sh_bands"}, true);
             group(o.material, ctx.dirty, "Shading", {"brdf", "ks", "shininess"}, false);

@@ -1,0 +1,20 @@
+// microgeom's GPU precomputations, installed into the core's hook (core/microgeom/device.h).
+#include "core/microgeom/device.h"
+#include "gpu/context.h"
+#include "gpu/microgeom/scatter_gpu.h"
+#include "gpu/microgeom/visibility_gpu.h"
+
+namespace mesolab::gpu {
+
+void install_microgeom_gpu_compute() {
+    microgeom::GpuCompute g;
+    g.visibility = [](const microgeom::Heightfield& hf, const microgeom::DirectionSet& dirs) {
+        ComputeScope scope;
+        // Compiled once, on the compute context, and kept (that context lives until exit).
+        static const VisibilityProgram* program = new VisibilityProgram();
+        return program->compute(hf, dirs);
+    };
+    g.gatherer = [] { return make_gpu_gatherer(); };
+    microgeom::set_gpu_compute(std::move(g));
+}
+}  // namespace mesolab::gpu

@@ -1,0 +1,103 @@
+#include "gpu/microgeom/scatter_gpu.h"
+
+#include "gpu/context.h"
+#include "gpu/gl.h"
+
+#include <stdexcept>
+#include <string>
+
+namespace mesolab::gpu {
+namespace {
+using namespace mesolab::microgeom;
+constexpr int kLocal = 8;
+
+class GpuGatherer final : public Gatherer {
+public:
+    GpuGatherer() {
+        // Compiled once on the compute context, kept with it until exit.
+        static const Program* compiled = new Program(Program::compute("microgeom/scatter.comp"));
+        program_ = compiled;
+    }
+
+    ~GpuGatherer() override = default;  // buffers go first, then the scope (declared first)
+
+    // [SECTION] Upload what every bounce reads
+    void begin(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, const Importance* bent, const std::vector<vec3>& L_env) override {
+        W_ = hf.width;
+        H_ = hf.height;
+        N_ = dirs.size();
+        periodic_ = hf.periodic;
+        has_bent_ = bent && !bent->empty();
+        const size_t T = size_t(W_) * size_t(H_);
+        GLint64 max_block = 0;
+        glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
+        if (vis.hit.size() * sizeof(uint32_t) > size_t(max_block) || (has_bent_ && bent->w.size() * sizeof(float) > size_t(max_block)))
+            throw std::runtime_error("microgeom scattering (GPU): S_i of " + std::to_string(W_) + "x" + std::to_string(H_) + " texels x " + std::to_string(N_) +
+                                     " directions exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (" + std::to_string(max_block) + " bytes)");
+        std::vector<vec4> n(T), d(static_cast<size_t>(N_)), env(static_cast<size_t>(N_));
+        for (int y = 0; y < H_; ++y)
+            for (int x = 0; x < W_; ++x) n[hf.index(x, y)] = vec4(hf.normal(x, y), 0.f);
+        for (int j = 0; j < N_; ++j) {
+            d[size_t(j)] = vec4(dirs.d[size_t(j)], dirs.solid_angle[size_t(j)]);
+            env[size_t(j)] = vec4(L_env[size_t(j)], 0.f);
+        }
+        vis_ = make_storage_buffer(vis.hit.data(), vis.hit.size() * sizeof(uint32_t));
+        normals_ = make_storage_buffer(n.data(), n.size() * sizeof(vec4));
+        dirs_ = make_storage_buffer(d.data(), d.size() * sizeof(vec4));
+        const float zero = 0.f;
+        bent_ = has_bent_ ? make_storage_buffer(bent->w.data(), bent->w.size() * sizeof(float)) : make_storage_buffer(&zero, sizeof zero);
+        env_ = make_storage_buffer(env.data(), env.size() * sizeof(vec4));
+        prev_ = make_storage_buffer(nullptr, T * sizeof(vec4), GL_DYNAMIC_DRAW);
+        out_ = make_storage_buffer(nullptr, T * sizeof(vec4), GL_STREAM_READ);
+        check_gl("microgeom.scatter upload");
+    }
+
+    // [SECTION] One bounce
+    std::vector<vec3> gather(const std::vector<vec3>* L_prev, const std::vector<int>& J, bool primary) override {
+        const size_t T = size_t(W_) * size_t(H_);
+        if (L_prev) {
+            std::vector<vec4> prev(T);
+            for (size_t p = 0; p < T; ++p) prev[p] = vec4((*L_prev)[p], 0.f);
+            glBindBuffer(GL_SHADER_STORAGE_BUFFER, prev_.get());
+            glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(T * sizeof(vec4)), prev.data());
+            glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+        }
+        const int none = 0;
+        const Buffer subset = J.empty() ? make_storage_buffer(&none, sizeof none) : make_storage_buffer(J.data(), J.size() * sizeof(int));
+        GLint previous = 0;
+        glGetIntegerv(GL_CURRENT_PROGRAM, &previous);
+        program_->use();
+        glUniform2i(program_->uniform("u_size"), W_, H_);
+        glUniform1i(program_->uniform("u_N"), N_);
+        glUniform1i(program_->uniform("u_J_count"), int(J.size()));
+        glUniform1i(program_->uniform("u_periodic"), periodic_ ? 1 : 0);
+        glUniform1i(program_->uniform("u_has_bent"), has_bent_ ? 1 : 0);
+        glUniform1i(program_->uniform("u_has_prev"), L_prev ? 1 : 0);
+        glUniform1i(program_->uniform("u_primary"), primary ? 1 : 0);
+        const GLuint buffers[8] = {vis_.get(), normals_.get(), dirs_.get(), bent_.get(), env_.get(), prev_.get(), subset.get(), out_.get()};
+        for (GLuint b = 0; b < 8; ++b) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b, buffers[b]);
+        glDispatchCompute(GLuint((W_ + kLocal - 1) / kLocal), GLuint((H_ + kLocal - 1) / kLocal), 1);
+        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        std::vector<vec4> E4(T);
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, out_.get());
+        glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(T * sizeof(vec4)), E4.data());
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+        for (GLuint b = 0; b < 8; ++b) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b, 0);
+        glUseProgram(GLuint(previous));
+        check_gl("microgeom.scatter gather");
+        std::vector<vec3> E(T);
+        for (size_t p = 0; p < T; ++p) E[p] = vec3(E4[p]);
+        return E;
+    }
+
+private:
+    ComputeScope scope_;  // first: current before the buffers exist, released after they are gone
+    const Program* program_ = nullptr;
+    Buffer vis_, normals_, dirs_, bent_, env_, prev_, out_;
+    int W_ = 0, H_ = 0, N_ = 0;
+    bool periodic_ = false, has_bent_ = false;
+};
+}  // namespace
+
+std::unique_ptr<Gatherer> make_gpu_gatherer() { return std::make_unique<GpuGatherer>(); }
+}  // namespace mesolab::gpu
