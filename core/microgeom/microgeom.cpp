@@ -80,6 +80,19 @@ bool planar(const SceneObject& o) { return o.geometry.get_string("type") == "pla
 // The first line of an error message (EGL failures list every platform tried).
 std::string first_line(const std::string& text) { return text.substr(0, text.find('\n')); }
 
+// The per-object results most stages read (null where a stage did not run).
+struct FieldInputs {
+    explicit FieldInputs(const StageContext& ctx)
+        : hf(ctx.input<PerObject<Heightfield>>("microgeom.heightfield")), dirs(ctx.input<PerObject<DirectionSet>>("microgeom.directions")),
+          vis(ctx.input<PerObject<Visibility>>("microgeom.visibility")), imp(ctx.input<PerObject<Importance>>("microgeom.importance")),
+          ell(ctx.input<PerObject<EllipseMap>>("microgeom.ellipses")) {}
+    std::shared_ptr<const PerObject<Heightfield>> hf;
+    std::shared_ptr<const PerObject<DirectionSet>> dirs;
+    std::shared_ptr<const PerObject<Visibility>> vis;
+    std::shared_ptr<const PerObject<Importance>> imp;
+    std::shared_ptr<const PerObject<EllipseMap>> ell;
+};
+
 ScatterSettings scatter_settings(const ParamTable& m) {
     ScatterSettings st;
     st.depth = int(m.get_int("depth"));
@@ -384,11 +397,7 @@ public:
                .when_text = "microgeom.lod is brdf",
                .paper = PaperFigure{7.5 * 3600e3, "Heidrich et al. 2000, §6: a 16^4 BRDF would take about 7-8 hours (hardware, 2000)"},
                .run = [](StageContext& ctx) {
-                   auto hf = ctx.input<PerObject<Heightfield>>("microgeom.heightfield");
-                   auto dirs = ctx.input<PerObject<DirectionSet>>("microgeom.directions");
-                   auto vis = ctx.input<PerObject<Visibility>>("microgeom.visibility");
-                   auto imp = ctx.input<PerObject<Importance>>("microgeom.importance");
-                   auto ell = ctx.input<PerObject<EllipseMap>>("microgeom.ellipses");
+                   const auto [hf, dirs, vis, imp, ell] = FieldInputs(ctx);
                    PerObject<SimulatedBrdf> out;
                    out.items.resize(ctx.scene.objects.size());
                    for (size_t i = 0; i < out.items.size(); ++i) {
@@ -473,10 +482,7 @@ public:
 
     // The environment's scattering solution per object.
     static PerObject<LightScatter> scatter_env(StageContext& ctx) {
-        auto hf = ctx.input<PerObject<Heightfield>>("microgeom.heightfield");
-        auto dirs = ctx.input<PerObject<DirectionSet>>("microgeom.directions");
-        auto vis = ctx.input<PerObject<Visibility>>("microgeom.visibility");
-        auto imp = ctx.input<PerObject<Importance>>("microgeom.importance");
+        const auto [hf, dirs, vis, imp, ell] = FieldInputs(ctx);
         Environment env;
         env.color = ctx.scene.env.get_vec3("color");
         env.intensity = float(ctx.scene.env.get_float("intensity"));
@@ -502,11 +508,7 @@ public:
     // One solution per object and light, at unit irradiance (planar bases: the light's own
     // direction; curved bases: along the macro normal, scaled by the macro cosine when shading).
     static PerObject<LightsScatter> scatter_lights(StageContext& ctx) {
-        auto hf = ctx.input<PerObject<Heightfield>>("microgeom.heightfield");
-        auto dirs = ctx.input<PerObject<DirectionSet>>("microgeom.directions");
-        auto vis = ctx.input<PerObject<Visibility>>("microgeom.visibility");
-        auto imp = ctx.input<PerObject<Importance>>("microgeom.importance");
-        auto ell = ctx.input<PerObject<EllipseMap>>("microgeom.ellipses");
+        const auto [hf, dirs, vis, imp, ell] = FieldInputs(ctx);
         PerObject<LightsScatter> out;
         out.items.resize(ctx.scene.objects.size());
         const size_t L = ctx.scene.lights.size();
