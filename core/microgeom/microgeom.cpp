@@ -276,9 +276,7 @@ public:
                },
                .when_text = "microgeom.curvature_u or curvature_v is not 0",
                .run = [](StageContext& ctx) {
-                   auto hf = ctx.input<PerObject<Heightfield>>("microgeom.heightfield");
-                   auto dirs = ctx.input<PerObject<DirectionSet>>("microgeom.directions");
-                   auto vis = ctx.input<PerObject<Visibility>>("microgeom.visibility");
+                   const auto [hf, dirs, vis, imp, ell] = FieldInputs(ctx);
                    PerObject<Importance> out;
                    out.items.resize(ctx.scene.objects.size());
                    for (size_t i = 0; i < out.items.size(); ++i) {
@@ -307,9 +305,7 @@ public:
                .when = [](const Scene& s) { return any_object(s, [](const SceneObject& o) { return o.material.get_string("shadows") == "ellipse" && curved(o); }); },
                .when_text = "microgeom.shadows is ellipse on a curved base",
                .run = [](StageContext& ctx) {
-                   auto hf = ctx.input<PerObject<Heightfield>>("microgeom.heightfield");
-                   auto dirs = ctx.input<PerObject<DirectionSet>>("microgeom.directions");
-                   auto vis = ctx.input<PerObject<Visibility>>("microgeom.visibility");
+                   const auto [hf, dirs, vis, imp, ell] = FieldInputs(ctx);
                    PerObject<CurvedEllipses> out;
                    out.items.resize(ctx.scene.objects.size());
                    for (size_t i = 0; i < out.items.size(); ++i) {
@@ -330,9 +326,7 @@ public:
                .when_text = "microgeom.shadows is ellipse",
                .paper = PaperFigure{194e3, "Heidrich et al. 2000, Table 1: Bricks 128x128 shadow precompute (SGI Octane)"},
                .run = [](StageContext& ctx) {
-                   auto hf = ctx.input<PerObject<Heightfield>>("microgeom.heightfield");
-                   auto dirs = ctx.input<PerObject<DirectionSet>>("microgeom.directions");
-                   auto vis = ctx.input<PerObject<Visibility>>("microgeom.visibility");
+                   const auto [hf, dirs, vis, imp, ell] = FieldInputs(ctx);
                    auto curved_fits = ctx.input<PerObject<CurvedEllipses>>("microgeom.ellipses_curved");
                    PerObject<EllipseMap> out;
                    out.items.resize(ctx.scene.objects.size());

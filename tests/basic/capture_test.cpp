@@ -5,6 +5,7 @@
 #include "core/image.h"
 #include "core/scene.h"
 #include "support/cli.h"
+#include "support/frames.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -86,13 +87,7 @@ TEST(Capture, CpuAndGpuAgree) {
         SCOPED_TRACE(setup);
         Scene s = load_preset(source_path("presets/basic/sphere.json"));
         apply_set(s, setup);
-        RenderRequest req;
-        req.width = 200;
-        req.height = 150;
-        req.backend = Backend::Cpu;
-        const Frame cpu = wb.render(s, req).frame;
-        req.backend = Backend::Gpu;
-        const Frame gpu = wb.render(s, req).frame;
+        const auto [cpu, gpu] = render_cpu_and_gpu(wb, s, 200, 150);
         for (const char* aov : {"radiance", "normal"}) {
             const Image &a = cpu.aov(aov), &b = gpu.aov(aov);
             size_t off = 0;

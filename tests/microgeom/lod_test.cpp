@@ -10,6 +10,7 @@
 #include "core/scene.h"
 #include "agreement.h"
 #include "support/cli.h"
+#include "support/frames.h"
 
 #include <gtest/gtest.h>
 #include <cmath>
@@ -196,13 +197,7 @@ TEST(Lod, BtfExportCommand) {
 TEST(Lod, CpuAndGpuAgreeOnGeometryAndBrdf) {
     Workbench wb;
     Scene s = load_preset(source_path("presets/microgeom/fig9-geometry-vs-brdf.json"));
-    RenderRequest req;
-    req.width = 160;
-    req.height = 160;
-    req.backend = Backend::Cpu;
-    const Frame cpu = wb.render(s, req).frame;
-    req.backend = Backend::Gpu;
-    const Frame gpu = wb.render(s, req).frame;
+    const auto [cpu, gpu] = render_cpu_and_gpu(wb, s, 160, 160);
     expect_frames_agree(cpu, gpu, {"radiance", "normal", "direct", "indirect", "shadow"}, 1e-3, 2e-2, 0.98, 0.995);
 }
 

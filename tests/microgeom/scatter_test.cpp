@@ -7,6 +7,7 @@
 #include "core/scene.h"
 #include "agreement.h"
 #include "support/cli.h"
+#include "support/frames.h"
 
 #include <gtest/gtest.h>
 #include <cmath>
@@ -175,13 +176,7 @@ TEST(CpuGpu, AgreeOnEveryAov) {
                           Case{"presets/microgeom/fig10c-environment.json", 1e-3, 2e-2, 0.98, 0.995}}) {
         SCOPED_TRACE(c.preset);
         Scene s = load_preset(source_path(c.preset));
-        RenderRequest req;
-        req.width = 160;
-        req.height = 120;
-        req.backend = Backend::Cpu;
-        const Frame cpu = wb.render(s, req).frame;
-        req.backend = Backend::Gpu;
-        const Frame gpu = wb.render(s, req).frame;
+        const auto [cpu, gpu] = render_cpu_and_gpu(wb, s, 160, 120);
         expect_frames_agree(cpu, gpu, {"radiance", "normal", "direct", "indirect", "shadow"}, c.tight, c.loose, c.frac_tight, c.frac_loose);
     }
 }
@@ -216,12 +211,8 @@ TEST(CpuGpu, EveryLightIsScattered) {
         EXPECT_GT(max_b, 1e-3) << "the second light alone must scatter visibly";
         EXPECT_LT(max_err, 1e-5) << (backend == Backend::Cpu ? "cpu" : "gpu");
     }
-    Scene s = scene_from_json(two, "test", ".");
-    RenderRequest req;
-    req.backend = Backend::Cpu;
-    const Frame cpu = wb.render(s, req).frame;
-    req.backend = Backend::Gpu;
-    expect_frames_agree(cpu, wb.render(s, req).frame, {"radiance", "direct", "indirect", "shadow"}, 1e-4, 1e-4, 1.0, 1.0);
+    const auto [cpu, gpu] = render_cpu_and_gpu(wb, scene_from_json(two, "test", "."));
+    expect_frames_agree(cpu, gpu, {"radiance", "direct", "indirect", "shadow"}, 1e-4, 1e-4, 1.0, 1.0);
 }
 
 // Curved base (§5).
