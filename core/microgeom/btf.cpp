@@ -3,7 +3,9 @@
 #include "core/microgeom/scatter.h"
 
 #include <tbb/parallel_for.h>
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 
 namespace mesolab::microgeom {
 
@@ -32,31 +34,45 @@ Image btf_mosaic(const Heightfield& hf, const DirectionSet& dirs, const Visibili
     tbb::parallel_for(size_t(0), views.size(), [&](size_t k) {
         mask[k] = s.scatter.ellipses ? ellipse_visibility_texture(*s.scatter.ellipses, hf, views[k]) : visibility_texture(hf, dirs, vis, views[k]);
     });
-    for (size_t li = 0; li < lights.size(); ++li) {
-        const vec3 l = lights[li];
-        ScatterSettings st = s.scatter;
-        st.light_dir = l;
-        st.light_E = vec3(1.f);
-        st.env = nullptr;
-        const ScatterResult sr = scatter(hf, dirs, vis, st);
-        tbb::parallel_for(size_t(0), views.size(), [&](size_t vi) {
-            const vec3 v = views[vi];
+    // Light images in batches: on s.lights where set (the GPU), else scatter() in parallel.
+    const size_t batch = s.lights ? size_t(std::max(1, s.lights->batch())) : 4;
+    for (size_t l0 = 0; l0 < lights.size(); l0 += batch) {
+        const size_t bn = std::min(batch, lights.size() - l0);
+        std::vector<std::vector<vec3>> L(bn);
+        std::vector<std::vector<float>> shadow(bn);
+        if (s.lights) {
+            s.lights->solve(std::vector<vec3>(lights.begin() + std::ptrdiff_t(l0), lights.begin() + std::ptrdiff_t(l0 + bn)), L, shadow);
+        } else {
+            tbb::parallel_for(size_t(0), bn, [&](size_t k) {
+                ScatterSettings st = s.scatter;
+                st.light_dir = lights[l0 + k];
+                st.light_E = vec3(1.f);
+                st.env = nullptr;
+                ScatterResult sr = scatter(hf, dirs, vis, st);
+                L[k].resize(W * H);
+                for (size_t t = 0; t < W * H; ++t) L[k][t] = sr.direct[t] + hf.albedo[t] * kInvPi * sr.E_indirect[t];
+                shadow[k] = std::move(sr.shadow);
+            });
+        }
+        tbb::parallel_for(size_t(0), bn * views.size(), [&](size_t kv) {
+            const size_t k = kv / views.size(), vi = kv % views.size(), li = l0 + k;
+            const vec3 l = lights[li], v = views[vi];
             const vec3 h = glm::normalize(l + v);
             for (size_t y = 0; y < H; ++y)
                 for (size_t x = 0; x < W; ++x) {
                     const size_t t = y * W + x;
-                    vec3 L = sr.direct[t] + hf.albedo[t] * kInvPi * sr.E_indirect[t];
+                    vec3 Lt = L[k][t];
                     if (s.phong) {
                         const vec3 n = hf.normal(int(x), int(y));
                         const float cos_l = std::max(0.f, glm::dot(n, l));
-                        L += s.ks * (s.shininess + 8.f) / (8.f * kPi) * std::pow(std::max(0.f, glm::dot(n, h)), s.shininess) * cos_l * sr.shadow[t];
+                        Lt += s.ks * (s.shininess + 8.f) / (8.f * kPi) * std::pow(std::max(0.f, glm::dot(n, h)), s.shininess) * cos_l * shadow[k][t];
                     }
-                    L *= mask[vi][t];
+                    Lt *= mask[vi][t];
                     float* q = out.at(int(vi * W + x), int(li * H + y));
-                    q[0] = L.x, q[1] = L.y, q[2] = L.z;
+                    q[0] = Lt.x, q[1] = Lt.y, q[2] = Lt.z;
                 }
         });
-        if (progress) progress(double(li + 1) / double(lights.size()));
+        if (progress) progress(double(l0 + bn) / double(lights.size()));
     }
     return out;
 }

@@ -20,6 +20,10 @@ struct GpuCompute {
     // A gatherer running the bounces on the GPU (scatter.comp); it holds the compute context
     // while it lives. Throws std::runtime_error without OpenGL.
     std::function<std::unique_ptr<Gatherer>()> gatherer;
+    // A solver for many lights' images at once (the goniometer's and the BTF's), made for these
+    // inputs and settings (uploaded once); it holds the compute context while it lives. Throws
+    // std::runtime_error without OpenGL or when the inputs exceed a storage-buffer limit.
+    std::function<std::unique_ptr<LightSolver>(const Heightfield&, const DirectionSet&, const Visibility&, const ScatterSettings&)> light_solver;
     explicit operator bool() const { return bool(visibility) && bool(gatherer); }
 };
 

@@ -74,6 +74,18 @@ struct LightImage {
     std::vector<float> cos_vis;  // only with phong
 };
 
+// L and, for the lobe, max(0, n.wi) V(x, wi) from the shadow texture.
+LightImage light_image(const GonioSettings& g, const std::vector<vec3>& n, vec3 wi, std::vector<vec3> L,
+                       const std::vector<float>& shadow) {
+    LightImage out;
+    out.L = std::move(L);
+    if (g.phong) {
+        out.cos_vis.resize(shadow.size());
+        for (size_t p = 0; p < out.cos_vis.size(); ++p) out.cos_vis[p] = std::max(0.f, glm::dot(n[p], wi)) * shadow[p];
+    }
+    return out;
+}
+
 LightImage solve_light(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, const GonioSettings& g,
                        const std::vector<vec3>& n, vec3 wi) {
     ScatterSettings s = g.scatter;
@@ -81,13 +93,26 @@ LightImage solve_light(const Heightfield& hf, const DirectionSet& dirs, const Vi
     s.light_E = vec3(1.f);
     s.env = nullptr;
     const ScatterResult r = scatter(hf, dirs, vis, s);
-    LightImage out;
-    out.L.resize(r.direct.size());
-    for (size_t p = 0; p < out.L.size(); ++p) out.L[p] = r.direct[p] + hf.albedo[p] * kInvPi * r.E_indirect[p];
-    if (g.phong) {
-        out.cos_vis.resize(r.shadow.size());
-        for (size_t p = 0; p < out.cos_vis.size(); ++p) out.cos_vis[p] = std::max(0.f, glm::dot(n[p], wi)) * r.shadow[p];
+    std::vector<vec3> L(r.direct.size());
+    for (size_t p = 0; p < L.size(); ++p) L[p] = r.direct[p] + hf.albedo[p] * kInvPi * r.E_indirect[p];
+    return light_image(g, n, wi, std::move(L), r.shadow);
+}
+
+// Lights per batch: the light solver's (the GPU), or kLightBlock solved in parallel on the CPU.
+int light_batch(const GonioSettings& g) { return g.lights ? std::max(1, g.lights->batch()) : kLightBlock; }
+
+// The images of a batch of lights: on g.lights where set, else scatter() in parallel.
+std::vector<LightImage> solve_lights(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, const GonioSettings& g,
+                                     const std::vector<vec3>& n, const std::vector<vec3>& wis) {
+    std::vector<LightImage> out(wis.size());
+    if (g.lights) {
+        std::vector<std::vector<vec3>> L;
+        std::vector<std::vector<float>> shadow;
+        g.lights->solve(wis, L, shadow);
+        for (size_t k = 0; k < wis.size(); ++k) out[k] = light_image(g, n, wis[k], std::move(L[k]), shadow[k]);
+        return out;
     }
+    tbb::parallel_for(size_t(0), wis.size(), [&](size_t k) { out[k] = solve_light(hf, dirs, vis, g, n, wis[k]); });
     return out;
 }
 
@@ -217,15 +242,16 @@ void simulate_table(const Heightfield& hf, const DirectionSet& dirs, const Visib
                     double p1) {
     const Eigen::Index T = Eigen::Index(n.size()), nl = Eigen::Index(lights.size()), nv = Eigen::Index(views.size());
     out.assign(size_t(nl * nv), vec3(0.f));
-    for (Eigen::Index b0 = 0; b0 < nl; b0 += kLightBlock) {
-        const Eigen::Index bn = std::min<Eigen::Index>(kLightBlock, nl - b0);
+    const Eigen::Index batch = light_batch(g);
+    for (Eigen::Index b0 = 0; b0 < nl; b0 += batch) {
+        const Eigen::Index bn = std::min<Eigen::Index>(batch, nl - b0);
         Eigen::MatrixXf L[3] = {Eigen::MatrixXf(T, bn), Eigen::MatrixXf(T, bn), Eigen::MatrixXf(T, bn)};
-        std::vector<LightImage> images(static_cast<size_t>(bn));
+        std::vector<LightImage> images =
+            solve_lights(hf, dirs, vis, g, n, std::vector<vec3>(lights.begin() + b0, lights.begin() + b0 + bn));
         tbb::parallel_for(Eigen::Index(0), bn, [&](Eigen::Index k) {
-            LightImage li = solve_light(hf, dirs, vis, g, n, lights[size_t(b0 + k)]);
+            const LightImage& li = images[size_t(k)];
             for (Eigen::Index p = 0; p < T; ++p)
                 for (int c = 0; c < 3; ++c) L[c](p, k) = li.L[size_t(p)][c];
-            if (g.phong) images[size_t(k)].cos_vis = std::move(li.cos_vis);
         });
         Eigen::MatrixXf R[3];
         for (int c = 0; c < 3; ++c) R[c].noalias() = L[c].transpose() * Mn;  // bn x nv
@@ -343,7 +369,7 @@ Image goniometer_image(const Heightfield& hf, const DirectionSet& dirs, const Vi
     wo = safe_normalize(wo);
     if (wi.z <= 0.f || wo.z <= 0.f) return img;
     const std::vector<vec3> n = normals_of(hf);
-    const LightImage li = solve_light(hf, dirs, vis, g, n, wi);
+    const LightImage li = std::move(solve_lights(hf, dirs, vis, g, n, {wi})[0]);
     const std::vector<float> V = view_visibility(hf, dirs, vis, g, wo);
     const vec3 h = safe_normalize(wi + wo);
     for (int y = 0; y < hf.height; ++y)
@@ -366,7 +392,7 @@ vec3 goniometer_average(const Heightfield& hf, const DirectionSet& dirs, const V
     wo = safe_normalize(wo);
     if (wi.z <= 0.f || wo.z <= 0.f) return vec3(0.f);
     const std::vector<vec3> n = normals_of(hf);
-    const LightImage li = solve_light(hf, dirs, vis, g, n, wi);
+    const LightImage li = std::move(solve_lights(hf, dirs, vis, g, n, {wi})[0]);
     return masked_average(g, n, li, masking(hf, dirs, vis, g, n, wo), wi, wo);
 }
 
@@ -439,11 +465,12 @@ SimulatedBrdf simulate_brdf(const Heightfield& hf, const DirectionSet& dirs, con
         wis[size_t(s)] = hemisphere_sample(rng);
         wos[size_t(s)] = hemisphere_sample(rng);
     }
-    for (int s0 = 0; s0 < S; s0 += kLightBlock) {
-        const int sn = std::min(kLightBlock, S - s0);
+    const int batch = light_batch(g);
+    for (int s0 = 0; s0 < S; s0 += batch) {
+        const int sn = std::min(batch, S - s0);
+        const std::vector<LightImage> images = solve_lights(hf, dirs, vis, g, n, std::vector<vec3>(wis.begin() + s0, wis.begin() + s0 + sn));
         tbb::parallel_for(s0, s0 + sn, [&](int s) {
-            const LightImage li = solve_light(hf, dirs, vis, g, n, wis[size_t(s)]);
-            y[size_t(s)] = masked_average(g, n, li, masking(hf, dirs, vis, g, n, wos[size_t(s)]), wis[size_t(s)], wos[size_t(s)]);
+            y[size_t(s)] = masked_average(g, n, images[size_t(s - s0)], masking(hf, dirs, vis, g, n, wos[size_t(s)]), wis[size_t(s)], wos[size_t(s)]);
         });
         if (progress) progress(0.02 + 0.93 * double(s0 + sn) / double(S));
     }

@@ -96,6 +96,9 @@ struct GonioSettings {
     int samples = 300;        // SH: random (wi, wo) pairs, each one goniometer image, >= 1
     int sh_bands = 3;         // SH: bands 0..sh_bands-1 per direction (sh_bands^2 coefficients each), [1, 8]
     uint32_t seed = 1;        // SH: sample pairs
+    // The light images elsewhere (the GPU, made for the same hf, dirs, vis and `scatter`), in
+    // batches of lights->batch(); null: scatter() on the CPU, 8 lights in parallel at a time.
+    LightSolver* lights = nullptr;
 };
 
 struct SimulatedBrdf {

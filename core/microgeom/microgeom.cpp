@@ -133,6 +133,27 @@ void apply_albedo_map(Heightfield& hf, const std::string& path, vec3 tint) {
 }
 
 // [SECTION] The technique
+// f(solver) with the GPU's light solver (goniometer and BTF light images) where the object asks
+// for it and OpenGL works; else, or when the GPU fails on the way, f(nullptr) (the CPU) with a warning.
+template <class F>
+auto with_light_solver(const std::function<void(const std::string&)>& warn, const SceneObject& o, const Heightfield& hf, const DirectionSet& dirs,
+                              const Visibility& vis, const ScatterSettings& st, F&& f) {
+    if (o.material.get_string("device") == "gpu") {
+        try {
+            if (!gpu_compute().light_solver) throw std::runtime_error("this build has no GPU compute");
+            const std::unique_ptr<LightSolver> solver = gpu_compute().light_solver(hf, dirs, vis, st);
+            return f(solver.get());
+        } catch (const Cancelled&) {
+            throw;
+        } catch (const InputError&) {
+            throw;
+        } catch (const std::runtime_error& e) {
+            warn(o.name + ": light images computed on the CPU: the GPU could not (" + first_line(e.what()) + ")");
+        }
+    }
+    return f(nullptr);
+}
+
 class MicrogeomTechnique final : public Technique {
 public:
     MicrogeomTechnique() : Technique("microgeom", "Micro-geometry (Heidrich et al. 2000)") {
@@ -385,7 +406,7 @@ public:
         // BRDF level of detail: the virtual goniometer (§6).
         g.add({.name = "microgeom.brdf",
                .help = "Simulate the heightfield's BRDF with the virtual goniometer: average radiance of texture-space images with masking (lod = brdf)",
-               .params = with(with(keys(kScatterKeys), keys(kBrdfKeys)), {"effects.indirect", "effects.environment"}),
+               .params = with(with(keys(kScatterKeys), keys(kBrdfKeys)), {"microgeom.device", "effects.indirect", "effects.environment"}),
                .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "microgeom.ellipses"},
                .when = [](const Scene& s) { return any_object(s, [](const SceneObject& o) { return lod(o) == "brdf"; }); },
                .when_text = "microgeom.lod is brdf",
@@ -411,9 +432,13 @@ public:
                        gs.samples = int(m.get_int("brdf_samples"));
                        gs.sh_bands = int(m.get_int("sh_bands"));
                        gs.seed = uint32_t(m.get_int("scatter_seed"));
-                       out.items[i] = std::make_shared<const SimulatedBrdf>(simulate_brdf(*hf->get(int(i)), *dirs->get(int(i)), *vis->get(int(i)), gs, [&](double f) {
-                           ctx.progress((double(i) + f) / double(out.items.size()));
-                       }));
+                       const Heightfield& h = *hf->get(int(i));
+                       const DirectionSet& d = *dirs->get(int(i));
+                       const Visibility& v = *vis->get(int(i));
+                       out.items[i] = with_light_solver([&](const std::string& m) { ctx.warn(m); }, o, h, d, v, gs.scatter, [&](LightSolver* solver) {
+                           gs.lights = solver;
+                           return std::make_shared<const SimulatedBrdf>(simulate_brdf(h, d, v, gs, [&](double f) { ctx.progress((double(i) + f) / double(out.items.size())); }));
+                       });
                    }
                    return stage_result(std::move(out));
                }});
@@ -763,7 +788,12 @@ std::vector<ExportDecl> MicrogeomTechnique::exports() const {
         gs.shininess = float(o.material.get_float("shininess"));
         const std::vector<vec3> lights = btf_directions(lg.x, lg.y), views = btf_directions(vg.x, vg.y);
         const auto t0 = std::chrono::steady_clock::now();
-        const Image mosaic = btf_mosaic(hf, dirs, vis, gs, lights, views, [&](double f) { if (progress) progress("export.btf", f); });
+        std::string warnings;
+        const Image mosaic = with_light_solver([&](const std::string& m) { warnings += "\nwarning: " + m; }, o, hf, dirs, vis, gs.scatter,
+                                                                   [&](LightSolver* solver) {
+                                                                       gs.lights = solver;
+                                                                       return btf_mosaic(hf, dirs, vis, gs, lights, views, [&](double f) { if (progress) progress("export.btf", f); });
+                                                                   });
         const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         write_exr(path, mosaic);
         // Sidecar: layout and directions.
@@ -786,7 +816,7 @@ std::vector<ExportDecl> MicrogeomTechnique::exports() const {
         char buf[256];
         std::snprintf(buf, sizeof buf, "btf: %zu lights x %zu views of %dx%d texels (%dx%d EXR), computed in %.0f ms; directions in %s.json", lights.size(), views.size(),
                       hf.width, hf.height, mosaic.width, mosaic.height, ms, path.c_str());
-        return std::string(buf);
+        return std::string(buf) + warnings;
     };
     return {btf};
 }
@@ -858,7 +888,9 @@ std::vector<BenchTable> MicrogeomTechnique::bench_tables() const {
                                    std::to_string(d->get(0)->triangle_count()) + " triangles)";
         return std::string("—");
     };
-    lod.columns = {{"precompute", "microgeom.brdf"}, brdf_mem};
+    BenchColumn brdf_col{"precompute", "microgeom.brdf"};
+    brdf_col.gpu_set = "microgeom.device=gpu";
+    lod.columns = {brdf_col, brdf_mem};
     lod.rows = {{"BRDF table 8^4", scene("bricks", 128, {{"microgeom.lod", "brdf"}, {"microgeom.brdf_resolution", "8"}, {"microgeom.shadows", "exact"}}), {}},
                 {"BRDF table 16^4", scene("bricks", 128, {{"microgeom.lod", "brdf"}, {"microgeom.brdf_resolution", "16"}, {"microgeom.shadows", "exact"}}), {7.5 * 3600e3}},
                 {"BRDF SH, 300 random images, 3 bands", scene("bricks", 128, {{"microgeom.lod", "brdf"}, {"microgeom.brdf_fit", "sh"}, {"microgeom.shadows", "exact"}}), {}}};

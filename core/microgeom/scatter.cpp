@@ -62,6 +62,20 @@ std::vector<float> visibility_texture(const Heightfield& hf, const DirectionSet&
 }
 
 // [SECTION] Dependent-test scattering
+std::vector<std::vector<int>> scatter_subsets(const ScatterSettings& s, int N) {
+    std::mt19937 rng(s.seed);
+    std::vector<std::vector<int>> out(size_t(std::clamp(s.depth, 0, 8) + 1));
+    for (std::vector<int>& J : out) {
+        if (s.all_directions || s.paths >= N) {
+            J.resize(size_t(N));
+            for (int j = 0; j < N; ++j) J[size_t(j)] = j;
+        } else {
+            for (int m = 0; m < s.paths; ++m) J.push_back(int(rng() % uint32_t(N)));
+        }
+    }
+    return out;
+}
+
 ScatterResult scatter(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, const ScatterSettings& s,
                       const std::function<void(double)>& progress) {
     const int W = hf.width, H = hf.height, N = dirs.size();
@@ -93,19 +107,6 @@ ScatterResult scatter(const Heightfield& hf, const DirectionSet& dirs, const Vis
     std::vector<vec3> L_env(size_t(N), vec3(0.f));
     if (s.env)
         for (int j = 0; j < N; ++j) L_env[size_t(j)] = s.env->radiance(dirs.d[size_t(j)]);
-
-    // Direction subsets per bounce: all, or M random (seeded, identical for every texel).
-    std::mt19937 rng(s.seed);
-    auto subset = [&]() {
-        std::vector<int> J;
-        if (s.all_directions || s.paths >= N) {
-            J.resize(size_t(N));
-            for (int j = 0; j < N; ++j) J[size_t(j)] = j;
-        } else {
-            for (int m = 0; m < s.paths; ++m) J.push_back(int(rng() % uint32_t(N)));
-        }
-        return J;
-    };
 
     // Gather: E(p) = pi * sum_j w_j(p) L_in,j(p). `primary` selects bilinear hit look-ups.
     const Importance* bent = s.importance && !s.importance->empty() ? s.importance : nullptr;
@@ -146,11 +147,12 @@ ScatterResult scatter(const Heightfield& hf, const DirectionSet& dirs, const Vis
     auto run_gather = [&](const std::vector<vec3>* L_prev, const std::vector<int>& J, bool primary) {
         return s.gatherer ? s.gatherer->gather(L_prev, J, primary) : gather(L_prev, J, primary);
     };
-    std::vector<vec3> E = run_gather(nullptr, subset(), K == 0);
+    const std::vector<std::vector<int>> J = scatter_subsets(s, N);
+    std::vector<vec3> E = run_gather(nullptr, J[0], K == 0);
     for (int k = 1; k <= K; ++k) {
         std::vector<vec3> L(T);
         for (size_t p = 0; p < T; ++p) L[p] = out.direct[p] + hf.albedo[p] * kInvPi * E[p];
-        E = run_gather(&L, subset(), k == K);
+        E = run_gather(&L, J[size_t(k)], k == K);
         if (progress) progress(double(k) / double(K));
     }
     out.E_indirect = std::move(E);

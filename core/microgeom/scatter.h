@@ -56,6 +56,20 @@ public:
     virtual std::vector<vec3> gather(const std::vector<vec3>* L_prev, const std::vector<int>& J, bool primary) = 0;
 };
 
+struct ScatterSettings;
+
+// Many lights' images solved at once (the goniometer's and the BTF's, goniometer.h), elsewhere
+// (the GPU: gpu/microgeom/lights_gpu.h). Made for one heightfield, visibility and settings; for
+// each wi, exactly what scatter(hf, dirs, vis, s) gives with light_dir = wi, light_E = 1 and
+// env = null: L(x, wi) = direct + rho/pi E_indirect and shadow(x, wi), per texel.
+class LightSolver {
+public:
+    virtual ~LightSolver() = default;
+    virtual int batch() const = 0;  // lights per solve() call that fit at once (>= 1)
+    // L and shadow are resized to wis.size() images of width x height texels.
+    virtual void solve(const std::vector<vec3>& wis, std::vector<std::vector<vec3>>& L, std::vector<std::vector<float>>& shadow) = 0;
+};
+
 struct ScatterSettings {
     vec3 light_dir{0.f, 0.f, 1.f};   // local frame, unit, towards the light
     vec3 light_E{0.f};               // irradiance at normal incidence (RGB); 0 = no direct light
@@ -76,6 +90,10 @@ struct ScatterResult {
     std::vector<float> shadow;     // V(p, l) * [n_p . l > 0]
     std::vector<vec3> direct;      // L_d(p): direct radiance (Lambert part)
 };
+
+// The direction subsets J_0..J_K of one scatter() call, in the order it gathers: all N
+// directions each time, or s.paths random ones per bounce from std::mt19937(s.seed), j = rng() % N.
+std::vector<std::vector<int>> scatter_subsets(const ScatterSettings& s, int N);
 
 ScatterResult scatter(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, const ScatterSettings& s,
                       const std::function<void(double)>& progress = {});

@@ -1,6 +1,7 @@
 // microgeom's GPU precomputations, installed into the core's hook (core/microgeom/device.h).
 #include "core/microgeom/device.h"
 #include "gpu/context.h"
+#include "gpu/microgeom/lights_gpu.h"
 #include "gpu/microgeom/scatter_gpu.h"
 #include "gpu/microgeom/visibility_gpu.h"
 
@@ -15,6 +16,9 @@ void install_microgeom_gpu_compute() {
         return program->compute(hf, dirs);
     };
     g.gatherer = [] { return make_gpu_gatherer(); };
+    g.light_solver = [](const microgeom::Heightfield& hf, const microgeom::DirectionSet& dirs, const microgeom::Visibility& vis, const microgeom::ScatterSettings& s) {
+        return make_gpu_light_solver(hf, dirs, vis, s);
+    };
     microgeom::set_gpu_compute(std::move(g));
 }
 }  // namespace mesolab::gpu

@@ -1,0 +1,20 @@
+#pragma once
+// Many lights' images of the heightfield at once on the GPU (microgeom.device = gpu): the light
+// solves of the virtual goniometer and the BTF export (core/microgeom/goniometer.h, btf.h), each
+// exactly scatter() with one light (direct light with exact or ellipse shadows, K bounces of
+// dependent-test scattering, no sky), in microgeom/lights.comp, a batch of lights per dispatch
+// (one invocation per texel and light). The CPU code is the reference:
+// tests/microgeom/lights_gpu_test.cpp checks the two agree.
+#include "core/microgeom/scatter.h"
+#include <memory>
+
+namespace mesolab::gpu {
+
+// A LightSolver (core/microgeom/scatter.h) for these inputs and settings (S_i, normals, albedo,
+// the curved base's weights and the ellipses uploaded once). Holds the compute scope (the shared
+// context current, other users waiting) from construction to destruction, so make it where the
+// solves happen and drop it after. Throws std::runtime_error without OpenGL, or when S_i or the
+// weights exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE.
+std::unique_ptr<microgeom::LightSolver> make_gpu_light_solver(const microgeom::Heightfield& hf, const microgeom::DirectionSet& dirs,
+                                                              const microgeom::Visibility& vis, const microgeom::ScatterSettings& s);
+}  // namespace mesolab::gpu

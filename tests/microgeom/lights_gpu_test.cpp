@@ -1,0 +1,217 @@
+// The goniometer's and the BTF's light images on the GPU (microgeom.device = gpu:
+// gpu/microgeom/lights.comp through core/microgeom/scatter.h's LightSolver) against the CPU
+// reference (scatter() per light, core/microgeom/goniometer.cpp and btf.cpp).
+//
+// Tolerance: the same sums in the same order, in float on both sides; the GPU may contract
+// multiply-adds (FMA), so images, tables and mosaics agree to 1e-4 relative (of max(1, |x|)) and
+// the shadow fractions to 1e-5 absolute. Measured on llvmpipe: printed by each test.
+#include "app/workbench.h"
+#include "core/microgeom/btf.h"
+#include "core/microgeom/curvature.h"
+#include "core/microgeom/ellipse.h"
+#include "core/microgeom/goniometer.h"
+#include "core/microgeom/microgeom.h"
+#include "core/scene.h"
+#include "gpu/microgeom/lights_gpu.h"
+#include "support/cli.h"
+
+#include <gtest/gtest.h>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+using namespace mesolab;
+using namespace mesolab::microgeom;
+
+namespace {
+struct Field {
+    Heightfield hf;
+    DirectionSet dirs;
+    Visibility vis;
+};
+
+Field field(const char* name, int res, int n, bool periodic = true) {
+    ProceduralParams p;
+    p.name = name;
+    p.resolution = res;
+    Field f;
+    f.hf = make_procedural(p);
+    f.hf.periodic = periodic;
+    f.dirs = make_direction_set(n);
+    f.vis = compute_visibility(f.hf, f.dirs);
+    return f;
+}
+
+bool have_gl() {
+    try {
+        const Field f = field("bricks", 8, 16);
+        gpu::make_gpu_light_solver(f.hf, f.dirs, f.vis, ScatterSettings{});
+        return true;
+    } catch (const std::runtime_error&) {
+        return false;
+    }
+}
+
+double rel(double a, double b) { return std::fabs(a - b) / std::max(1.0, std::fabs(a)); }
+
+// Worst relative difference of the light images and worst absolute difference of the shadows.
+void compare_images(const Field& f, const ScatterSettings& s, const std::vector<vec3>& wis, double& worst_L, double& worst_shadow) {
+    const auto solver = gpu::make_gpu_light_solver(f.hf, f.dirs, f.vis, s);
+    std::vector<std::vector<vec3>> L;
+    std::vector<std::vector<float>> shadow;
+    solver->solve(wis, L, shadow);
+    ASSERT_EQ(L.size(), wis.size());
+    for (size_t k = 0; k < wis.size(); ++k) {
+        ScatterSettings st = s;
+        st.light_dir = wis[k];
+        st.light_E = vec3(1.f);
+        st.env = nullptr;
+        const ScatterResult r = scatter(f.hf, f.dirs, f.vis, st);
+        ASSERT_EQ(L[k].size(), r.direct.size());
+        for (size_t p = 0; p < r.direct.size(); ++p) {
+            const vec3 cpu = r.direct[p] + f.hf.albedo[p] * kInvPi * r.E_indirect[p];
+            for (int c = 0; c < 3; ++c) {
+                ASSERT_TRUE(std::isfinite(L[k][p][c]));
+                worst_L = std::max(worst_L, rel(cpu[c], L[k][p][c]));
+            }
+            worst_shadow = std::max(worst_shadow, std::fabs(double(r.shadow[p]) - double(shadow[k][p])));
+        }
+    }
+}
+
+std::vector<vec3> some_lights() {
+    std::vector<vec3> w = btf_directions(3, 5);
+    w.push_back(glm::normalize(vec3(1.f, 0.2f, 0.001f)));  // grazing
+    w.push_back(vec3(0.f, 0.f, 1.f));
+    return w;
+}
+}  // namespace
+
+TEST(LightsGpu, LightImagesAgreeWithScatterPerLight) {
+    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    double worst_L = 0, worst_shadow = 0;
+    for (const char* name : {"triangles", "bricks", "gaussian"})
+        for (bool periodic : {true, false})
+            for (int depth : {0, 1, 3}) {
+                const Field f = field(name, 32, 64, periodic);
+                ScatterSettings s;
+                s.depth = depth;
+                compare_images(f, s, some_lights(), worst_L, worst_shadow);
+                s.all_directions = false;  // random subsets per bounce, as scatter() draws them
+                s.paths = 20;
+                s.seed = 7;
+                compare_images(f, s, some_lights(), worst_L, worst_shadow);
+            }
+    std::printf("light images: worst relative difference %.2g, shadow %.2g\n", worst_L, worst_shadow);
+    EXPECT_LT(worst_L, 1e-4);
+    EXPECT_LT(worst_shadow, 1e-5);
+}
+
+TEST(LightsGpu, EllipseShadowsCurvedBasesAndNoShadowsAgree) {
+    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    const Field f = field("bricks", 32, 100);
+    const EllipseMap ell = fit_ellipses(f.hf, f.dirs, f.vis);
+    const Importance imp = compute_importance(f.hf, f.dirs, f.vis, Bending::from_degrees(60.f, -30.f, 32, 32));
+    double worst_L = 0, worst_shadow = 0;
+    ScatterSettings s;
+    s.depth = 2;
+    s.ellipses = &ell;
+    compare_images(f, s, some_lights(), worst_L, worst_shadow);
+    s.ellipses = nullptr;
+    s.importance = &imp;
+    compare_images(f, s, some_lights(), worst_L, worst_shadow);
+    s.shadows = false;
+    compare_images(f, s, some_lights(), worst_L, worst_shadow);
+    std::printf("ellipses / curved / unshadowed: worst relative difference %.2g, shadow %.2g\n", worst_L, worst_shadow);
+    EXPECT_LT(worst_L, 1e-4);
+    EXPECT_LT(worst_shadow, 1e-5);
+}
+
+TEST(LightsGpu, SimulatedBrdfAndBtfAgreeWithTheCpu) {
+    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    const Field f = field("bricks", 32, 64);
+    GonioSettings g;
+    g.scatter.depth = 2;
+    g.resolution = 5;
+    g.phong = true;
+    g.ks = vec3(0.3f);
+    const auto solver = gpu::make_gpu_light_solver(f.hf, f.dirs, f.vis, g.scatter);
+    for (GonioSettings::Fit fit : {GonioSettings::Fit::Table, GonioSettings::Fit::SH}) {
+        g.fit = fit;
+        g.samples = 40;
+        g.lights = nullptr;
+        const SimulatedBrdf cpu = simulate_brdf(f.hf, f.dirs, f.vis, g);
+        g.lights = solver.get();
+        const SimulatedBrdf gpu = simulate_brdf(f.hf, f.dirs, f.vis, g);
+        ASSERT_EQ(cpu.table.size(), gpu.table.size());
+        double worst = 0;
+        for (size_t k = 0; k < cpu.table.size(); ++k)
+            for (int c = 0; c < 3; ++c) worst = std::max(worst, rel(cpu.table[k][c], gpu.table[k][c]));
+        EXPECT_EQ(cpu.images, gpu.images);
+        std::printf("simulated BRDF (%s): worst relative difference %.2g\n", fit == GonioSettings::Fit::SH ? "SH" : "table", worst);
+        EXPECT_LT(worst, 1e-4);
+    }
+    g.lights = nullptr;
+    const std::vector<vec3> lights = btf_directions(2, 3), views = btf_directions(2, 2);
+    const Image cpu = btf_mosaic(f.hf, f.dirs, f.vis, g, lights, views);
+    g.lights = solver.get();
+    const Image gpu = btf_mosaic(f.hf, f.dirs, f.vis, g, lights, views);
+    ASSERT_EQ(cpu.data.size(), gpu.data.size());
+    double worst = 0;
+    for (size_t k = 0; k < cpu.data.size(); ++k) worst = std::max(worst, rel(cpu.data[k], gpu.data[k]));
+    std::printf("BTF mosaic: worst relative difference %.2g\n", worst);
+    EXPECT_LT(worst, 1e-4);
+}
+
+TEST(LightsGpu, BatchesLargerThanOneDispatchGiveTheSameImages) {
+    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    const Field f = field("gaussian", 16, 32);
+    const auto solver = gpu::make_gpu_light_solver(f.hf, f.dirs, f.vis, ScatterSettings{});
+    ASSERT_GE(solver->batch(), 1);
+    std::vector<vec3> wis = btf_directions(8, 20);  // 160 lights: more than one dispatch (at most 64 each)
+    std::vector<std::vector<vec3>> all, one;
+    std::vector<std::vector<float>> sa, so;
+    solver->solve(wis, all, sa);
+    for (size_t k : {size_t(0), size_t(63), size_t(64), size_t(159)}) {
+        solver->solve({wis[k]}, one, so);
+        EXPECT_EQ(one[0], all[k]) << k;
+        EXPECT_EQ(so[0], sa[k]) << k;
+    }
+}
+
+TEST(LightsGpu, BrdfLevelOfDetailOnDeviceGpuMatchesDeviceCpu) {
+    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    Scene s = load_preset(test::source_path("presets/microgeom/bricks-texture.json"));
+    apply_set(s, "microgeom.resolution=32");
+    apply_set(s, "microgeom.lod=brdf");
+    apply_set(s, "microgeom.brdf_resolution=5");
+    apply_set(s, "camera.mode=orbit");  // the BRDF level shades a smooth sphere
+    apply_set(s, "geometry.type=sphere");
+    Workbench wb;
+    RenderRequest req;
+    req.backend = Backend::Cpu;
+    const RenderResult cpu = wb.render(s, req);
+    apply_set(s, "microgeom.device=gpu");
+    const RenderResult gpu = wb.render(s, req);
+    const StageRun* run = gpu.eval.run("microgeom.brdf");
+    ASSERT_NE(run, nullptr);
+    EXPECT_EQ(run->status, StageStatus::Ran);
+    EXPECT_TRUE(run->warnings.empty()) << (run->warnings.empty() ? "" : run->warnings.front());
+    ASSERT_NE(cpu.eval.run("microgeom.brdf"), nullptr);
+    const SimulatedBrdf* bc = cpu.eval.get<PerObject<SimulatedBrdf>>("microgeom.brdf")->get(0);
+    const SimulatedBrdf* bg = gpu.eval.get<PerObject<SimulatedBrdf>>("microgeom.brdf")->get(0);
+    ASSERT_TRUE(bc && bg);
+    ASSERT_EQ(bc->table.size(), bg->table.size());
+    double worst_table = 0;
+    for (size_t k = 0; k < bc->table.size(); ++k)
+        for (int c = 0; c < 3; ++c) worst_table = std::max(worst_table, rel(bc->table[k][c], bg->table[k][c]));
+    std::printf("brdf table, device gpu vs cpu: worst relative difference %.2g\n", worst_table);
+    EXPECT_LT(worst_table, 2e-2);
+    const Image& a = cpu.frame.aov("radiance");
+    const Image& b = gpu.frame.aov("radiance");
+    ASSERT_EQ(a.data.size(), b.data.size());
+    double worst = 0;
+    for (size_t k = 0; k < a.data.size(); ++k) worst = std::max(worst, rel(a.data[k], b.data[k]));
+    std::printf("brdf level of detail, device gpu vs cpu (S_i from each device): worst relative difference %.2g\n", worst);
+    EXPECT_LT(worst, 2e-2);
+}
