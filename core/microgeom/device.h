@@ -5,7 +5,9 @@
 // ComputeScope), so they work from any thread (the GUI evaluates stages off the UI thread) and
 // return the same CPU-side results as the CPU code: the stages' consumers never know. Where the
 // hook is empty or fails (no OpenGL), the stage falls back to the CPU and warns.
+#include "core/microgeom/curvature.h"
 #include "core/microgeom/directions.h"
+#include "core/microgeom/ellipse.h"
 #include "core/microgeom/heightfield.h"
 #include "core/microgeom/scatter.h"
 #include "core/microgeom/visibility.h"
@@ -24,6 +26,11 @@ struct GpuCompute {
     // inputs and settings (uploaded once); it holds the compute context while it lives. Throws
     // std::runtime_error without OpenGL or when the inputs exceed a storage-buffer limit.
     std::function<std::unique_ptr<LightSolver>(const Heightfield&, const DirectionSet&, const Visibility&, const ScatterSettings&)> light_solver;
+    // The curved base's importance (curvature.h compute_importance) and one curvature's ellipse
+    // fit (ellipse.h fit_ellipses) on the GPU, with the CPU functions' arguments and results.
+    // Throw std::runtime_error without OpenGL.
+    std::function<Importance(const Heightfield&, const DirectionSet&, const Visibility&, Bending, const std::function<void(double)>&)> importance;
+    std::function<EllipseMap(const Heightfield&, const DirectionSet&, const Visibility&, Bending, const std::function<void(double)>&)> ellipses;
     explicit operator bool() const { return bool(visibility) && bool(gatherer); }
 };
 

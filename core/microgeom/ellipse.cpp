@@ -386,20 +386,26 @@ EllipseMap fit_ellipses(const Heightfield& hf, const DirectionSet& dirs, const V
 size_t CurvedEllipses::bytes() const { return flat.bytes() + u_pos.bytes() + u_neg.bytes() + v_pos.bytes() + v_neg.bytes(); }
 
 CurvedEllipses fit_curved_ellipses(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, float bend_deg,
-                                   const std::function<void(double)>& progress) {
+                                   const std::function<void(double)>& progress, const EllipseFit& fit) {
     if (!std::isfinite(bend_deg)) throw std::invalid_argument("microgeom ellipses: bend must be finite");
     CurvedEllipses c;
     c.bend_deg = std::abs(bend_deg);
     c.step_u = Bending::from_degrees(c.bend_deg, 0.f, hf.width, hf.height);
     c.step_v = Bending::from_degrees(0.f, c.bend_deg, hf.width, hf.height);
+    // The fits elsewhere (the GPU) one curvature at a time, or all in one pass on the CPU.
+    auto fit_all = [&](const std::vector<Bending>& bends) {
+        if (!fit) return fit_bent_maps(hf, dirs, vis, bends, progress);
+        std::vector<EllipseMap> out;
+        for (size_t k = 0; k < bends.size(); ++k)
+            out.push_back(fit(bends[k], [&](double f) { if (progress) progress((double(k) + f) / double(bends.size())); }));
+        return out;
+    };
     if (c.step_u.zero() && c.step_v.zero()) {
-        c.flat = std::move(fit_bent_maps(hf, dirs, vis, {Bending{}}, progress)[0]);
+        c.flat = std::move(fit_all({Bending{}})[0]);
         c.u_pos = c.u_neg = c.v_pos = c.v_neg = c.flat;
         return c;
     }
-    std::vector<EllipseMap> m = fit_bent_maps(
-        hf, dirs, vis,
-        {Bending{}, c.step_u, Bending{-c.step_u.ku, 0.f}, c.step_v, Bending{0.f, -c.step_v.kv}}, progress);
+    std::vector<EllipseMap> m = fit_all({Bending{}, c.step_u, Bending{-c.step_u.ku, 0.f}, c.step_v, Bending{0.f, -c.step_v.kv}});
     c.flat = std::move(m[0]);
     c.u_pos = std::move(m[1]);
     c.u_neg = std::move(m[2]);

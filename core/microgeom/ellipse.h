@@ -153,8 +153,11 @@ struct CurvedEllipses {
 // The five fits in one pass, in parallel over rows (deterministic; each map is bit-identical to
 // fit_ellipses at its curvature). |bend_deg| is used; 0 fits once and copies. About 5.5x
 // fit_ellipses: 0.85 s for Bricks 128x128, N = 100 on 2 cores (Release). std::invalid_argument for a non-finite bend or mismatched visibility.
+// `fit`, where given, fits one curvature's map instead (the GPU: gpu/microgeom/ellipse_gpu.h),
+// called for the five in the order flat, u_pos, u_neg, v_pos, v_neg.
+using EllipseFit = std::function<EllipseMap(Bending, const std::function<void(double)>&)>;
 CurvedEllipses fit_curved_ellipses(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, float bend_deg,
-                                   const std::function<void(double)>& progress = {});
+                                   const std::function<void(double)>& progress = {}, const EllipseFit& fit = {});
 
 // The ellipses at curvature b by the linear model above (|ku|, |kv| clamped to the samples'; a NaN
 // component counts as 0).

@@ -133,6 +133,25 @@ void apply_albedo_map(Heightfield& hf, const std::string& path, vec3 tint) {
 }
 
 // [SECTION] The technique
+// gpu() where the object asks for microgeom.device = gpu and the GPU works; else cpu(), with a
+// warning naming `what` (e.g. when OpenGL is missing or fails on the way).
+template <class Gpu, class Cpu>
+auto on_device(StageContext& ctx, const SceneObject& o, const char* what, bool available, Gpu&& gpu, Cpu&& cpu) {
+    if (o.material.get_string("device") == "gpu") {
+        try {
+            if (!available) throw std::runtime_error("this build has no GPU compute");
+            return gpu();
+        } catch (const Cancelled&) {
+            throw;
+        } catch (const InputError&) {
+            throw;
+        } catch (const std::runtime_error& e) {
+            ctx.warn(o.name + ": " + what + " computed on the CPU: the GPU could not (" + first_line(e.what()) + ")");
+        }
+    }
+    return cpu();
+}
+
 // f(solver) with the GPU's light solver (goniometer and BTF light images) where the object asks
 // for it and OpenGL works; else, or when the GPU fails on the way, f(nullptr) (the CPU) with a warning.
 template <class F>
@@ -288,7 +307,7 @@ public:
         // Curved base: fan-area importance of the bent directions (never recomputes S_i).
         g.add({.name = "microgeom.importance",
                .help = "Bend the directions by the base curvature and weight them by the relative triangle-fan area (§5)",
-               .params = keys(kCurvatureKeys),
+               .params = with(keys(kCurvatureKeys), {"microgeom.device"}),
                .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility"},
                .when = [](const Scene& s) {
                    for (const auto& o : s.objects)
@@ -305,7 +324,12 @@ public:
                        const Heightfield* h = hf->get(int(i));
                        if (!h || !curved(o)) continue;
                        const Bending b = Bending::from_degrees(float(o.material.get_float("curvature_u")), float(o.material.get_float("curvature_v")), h->width, h->height);
-                       auto imp = std::make_shared<Importance>(compute_importance(*h, *dirs->get(int(i)), *vis->get(int(i)), b, [&](double f) { ctx.progress(f); }));
+                       const DirectionSet& d = *dirs->get(int(i));
+                       const Visibility& v = *vis->get(int(i));
+                       const auto progress = [&](double f) { ctx.progress(f); };
+                       auto imp = std::make_shared<Importance>(on_device(
+                           ctx, o, "the curvature importance", bool(gpu_compute().importance), [&] { return gpu_compute().importance(*h, d, v, b, progress); },
+                           [&] { return compute_importance(*h, d, v, b, progress); }));
                        if (imp->folded_count > 0) {
                            char msg[256];
                            std::snprintf(msg, sizeof msg, "%s: the curvature folds the direction triangulation over at %zu of %zu texels (%.1f%%): visibility would change there; "
@@ -321,7 +345,7 @@ public:
         // fitted once at 5 curvatures (§5) and interpolated for the current one.
         g.add({.name = "microgeom.ellipses_curved",
                .help = "Fit the per-texel ellipses at 5 base curvatures: flat, +-microgeom.ellipse_bend along u and along v (§5)",
-               .params = {"microgeom.ellipse_bend", "microgeom.shadows"},
+               .params = {"microgeom.ellipse_bend", "microgeom.shadows", "microgeom.device"},
                .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility"},
                .when = [](const Scene& s) { return any_object(s, [](const SceneObject& o) { return o.material.get_string("shadows") == "ellipse" && curved(o); }); },
                .when_text = "microgeom.shadows is ellipse on a curved base",
@@ -333,15 +357,25 @@ public:
                        const SceneObject& o = ctx.scene.objects[i];
                        const Visibility* v = vis->get(int(i));
                        if (!v || o.material.get_string("shadows") != "ellipse" || !curved(o)) continue;
-                       out.items[i] = std::make_shared<const CurvedEllipses>(fit_curved_ellipses(*hf->get(int(i)), *dirs->get(int(i)), *v,
-                           float(o.material.get_float("ellipse_bend")), [&](double f) { ctx.progress(f); }));
+                       const Heightfield& h = *hf->get(int(i));
+                       const DirectionSet& d = *dirs->get(int(i));
+                       const float bend = float(o.material.get_float("ellipse_bend"));
+                       const auto progress = [&](double f) { ctx.progress(f); };
+                       out.items[i] = std::make_shared<const CurvedEllipses>(on_device(
+                           ctx, o, "the ellipses", bool(gpu_compute().ellipses),
+                           [&] {
+                               return fit_curved_ellipses(h, d, *v, bend, progress, [&](Bending b, const std::function<void(double)>& p) {
+                                   return gpu_compute().ellipses(h, d, *v, b, p);
+                               });
+                           },
+                           [&] { return fit_curved_ellipses(h, d, *v, bend, progress); }));
                    }
                    return stage_result(std::move(out));
                }});
         g.add({.name = "microgeom.ellipses",
                .help = "Fit a per-texel ellipse to the projections of the unshadowed directions (covariance start, optimised); on a curved base "
                        "interpolate the 5 fits of microgeom.ellipses_curved",
-               .params = keys(kCurvatureKeys),
+               .params = with(keys(kCurvatureKeys), {"microgeom.device"}),
                .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.ellipses_curved"},
                .when = [](const Scene& s) { return any_object(s, [](const SceneObject& o) { return o.material.get_string("shadows") == "ellipse"; }); },
                .when_text = "microgeom.shadows is ellipse",
@@ -366,7 +400,13 @@ public:
                            continue;
                        }
                        auto& slot = done[v];
-                       if (!slot) slot = std::make_shared<const EllipseMap>(fit_ellipses(h, *dirs->get(int(i)), *v, [&](double f) { ctx.progress(f); }));
+                       if (!slot) {
+                           const DirectionSet& d = *dirs->get(int(i));
+                           const auto progress = [&](double f) { ctx.progress(f); };
+                           slot = std::make_shared<const EllipseMap>(on_device(
+                               ctx, o, "the ellipses", bool(gpu_compute().ellipses), [&] { return gpu_compute().ellipses(h, d, *v, Bending{}, progress); },
+                               [&] { return fit_ellipses(h, d, *v, progress); }));
+                       }
                        out.items[i] = slot;
                    }
                    return stage_result(std::move(out));
@@ -863,8 +903,10 @@ std::vector<BenchTable> MicrogeomTechnique::bench_tables() const {
     vis_col.gpu_set = "microgeom.device=gpu";
     BenchColumn scatter_col{"software render (scattering, depth 2, all 100 directions)", "microgeom.scatter"};
     scatter_col.gpu_set = "microgeom.device=gpu";
+    BenchColumn ellipse_col{"shadow (ellipse) precompute", "microgeom.ellipses"};
+    ellipse_col.gpu_set = "microgeom.device=gpu";
     t.columns = {vis_col,
-                 {"shadow (ellipse) precompute", "microgeom.ellipses"},
+                 ellipse_col,
                  scatter_col,
                  {"frame (texture space, 1 pixel per texel; GPU = hardware render)", "", 0, 0, true, true},
                  memory};

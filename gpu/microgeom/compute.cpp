@@ -1,6 +1,8 @@
 // microgeom's GPU precomputations, installed into the core's hook (core/microgeom/device.h).
 #include "core/microgeom/device.h"
 #include "gpu/context.h"
+#include "gpu/microgeom/ellipse_gpu.h"
+#include "gpu/microgeom/importance_gpu.h"
 #include "gpu/microgeom/lights_gpu.h"
 #include "gpu/microgeom/scatter_gpu.h"
 #include "gpu/microgeom/visibility_gpu.h"
@@ -19,6 +21,10 @@ void install_microgeom_gpu_compute() {
     g.light_solver = [](const microgeom::Heightfield& hf, const microgeom::DirectionSet& dirs, const microgeom::Visibility& vis, const microgeom::ScatterSettings& s) {
         return make_gpu_light_solver(hf, dirs, vis, s);
     };
+    g.importance = [](const microgeom::Heightfield& hf, const microgeom::DirectionSet& dirs, const microgeom::Visibility& vis, microgeom::Bending b,
+                      const std::function<void(double)>& progress) { return compute_importance_gpu(hf, dirs, vis, b, progress); };
+    g.ellipses = [](const microgeom::Heightfield& hf, const microgeom::DirectionSet& dirs, const microgeom::Visibility& vis, microgeom::Bending b,
+                    const std::function<void(double)>& progress) { return fit_ellipses_gpu(hf, dirs, vis, b, progress); };
     microgeom::set_gpu_compute(std::move(g));
 }
 }  // namespace mesolab::gpu

@@ -9,6 +9,9 @@
 //   1 gather:  E(p) = pi sum_{j in J} w_j(p) L_in,j(p) / sum w_j(p) (scatter.comp's sum; L_in from
 //              LBuf[b], nothing from the sky: env = null)          -> E[b][p]
 //   2 compose: L = L_d + rho/pi E                                  -> LBuf[b][p]
+// The gather takes S_i and the bent weights in chunks of directions [u_j0, u_j1)
+// (gpu/microgeom/chunks.h): one dispatch per chunk accumulates (sum, wsum) in E, the last divides.
+// The exact shadow test sums, chunk by chunk too, the light's three directions held by each.
 layout(local_size_x = 8, local_size_y = 8) in;
 
 struct Texel {
@@ -18,10 +21,10 @@ struct Texel {
     vec4 e1;       // ellipse: a, b
 };
 
-layout(std430, binding = 0) readonly buffer Vis { uint S[]; };          // [direction][row][column]
+layout(std430, binding = 0) readonly buffer Vis { uint S[]; };          // [direction - u_j0][row][column]
 layout(std430, binding = 1) readonly buffer Texels { Texel texels[]; };
 layout(std430, binding = 2) readonly buffer Dirs { vec4 dirs[]; };       // xyz, w = Omega_j
-layout(std430, binding = 3) readonly buffer Bent { float bent_w[]; };    // [texel][direction] (curved base)
+layout(std430, binding = 3) readonly buffer Bent { float bent_w[]; };    // [texel][direction - u_j0] (curved base)
 layout(std430, binding = 4) buffer Direct { vec4 direct[]; };           // [light][texel]: L_d, shadow
 layout(std430, binding = 5) buffer LBuf { vec4 L[]; };                  // [light][texel]
 layout(std430, binding = 6) buffer EBuf { vec4 E[]; };                  // [light][texel]
@@ -30,7 +33,7 @@ layout(std430, binding = 7) readonly buffer Subset { int J[]; };
 const int kMaxBatch = 64;
 uniform int u_mode;
 uniform ivec2 u_size;
-uniform int u_N, u_J_count, u_periodic, u_has_bent, u_has_prev, u_primary;
+uniform int u_j0, u_j1, u_first, u_last, u_J_count, u_periodic, u_has_bent, u_has_prev, u_primary;
 uniform int u_shadows, u_ellipses;
 uniform float u_edge;
 uniform vec4 u_light[kMaxBatch];    // xyz direction
@@ -57,21 +60,22 @@ float ellipse_vis(Texel t, vec3 w) {
 void direct_kernel(int b, int p, int T) {
     Texel t = texels[p];
     vec3 l = u_light[b].xyz;
-    float shadow = 1.0;
-    if (u_shadows != 0) {
-        shadow = 0.0;
-        if (dot(t.n.xyz, l) > 0.0) {
-            if (u_ellipses != 0) {
-                shadow = ellipse_vis(t, l);
-            } else {
-                ivec4 tri = u_tri[b];
-                vec4 bary = u_bary[b];
-                shadow += bary.x * (S[tri.x * T + p] == kNoHit ? 1.0 : 0.0);
-                shadow += bary.y * (S[tri.y * T + p] == kNoHit ? 1.0 : 0.0);
-                shadow += bary.z * (S[tri.z * T + p] == kNoHit ? 1.0 : 0.0);
-            }
+    // This chunk's part of the exact test: the barycentric mix of the 3 directions' visibility.
+    float v = 0.0;
+    if (u_shadows != 0 && u_ellipses == 0 && dot(t.n.xyz, l) > 0.0) {
+        ivec4 tri = u_tri[b];
+        vec4 bary = u_bary[b];
+        for (int k = 0; k < 3; ++k) {
+            int j = tri[k];
+            if (j >= u_j0 && j < u_j1) v += bary[k] * (S[(j - u_j0) * T + p] == kNoHit ? 1.0 : 0.0);
         }
     }
+    if (u_first == 0) v += direct[b * T + p].w;
+    if (u_last == 0) {
+        direct[b * T + p] = vec4(0.0, 0.0, 0.0, v);
+        return;
+    }
+    float shadow = u_shadows == 0 ? 1.0 : u_ellipses == 0 ? v : (dot(t.n.xyz, l) > 0.0 ? ellipse_vis(t, l) : 0.0);
     float cos_l = max(0.0, dot(t.n.xyz, l));
     if (cos_l <= 0.0) shadow = 0.0;
     direct[b * T + p] = vec4(t.albedo.rgb * INV_PI * cos_l * shadow, shadow);
@@ -95,10 +99,11 @@ void gather_kernel(int b, int p, int T) {
     float wsum = 0.0;
     for (int m = 0; m < u_J_count; ++m) {
         int j = J[m];
-        float w = u_has_bent != 0 ? bent_w[p * u_N + j] : dot(n, dirs[j].xyz) * dirs[j].w;
+        if (j < u_j0 || j >= u_j1) continue;
+        float w = u_has_bent != 0 ? bent_w[p * (u_j1 - u_j0) + (j - u_j0)] : dot(n, dirs[j].xyz) * dirs[j].w;
         if (w <= 0.0) continue;
         wsum += w;
-        uint hit = S[j * T + p];
+        uint hit = S[(j - u_j0) * T + p];
         if (hit != kNoHit && hit != kBelow && u_has_prev != 0) {
             vec2 tc = vec2(float(hit >> 16), float(hit & 0xFFFFu)) / 16.0;
             if (u_primary != 0) {
@@ -109,7 +114,9 @@ void gather_kernel(int b, int p, int T) {
             }
         }
     }
-    E[base + p] = vec4(wsum > 0.0 ? PI * sum / wsum : vec3(0.0), 1.0);
+    vec4 acc = vec4(sum, wsum);
+    if (u_first == 0) acc += E[base + p];
+    E[base + p] = u_last != 0 ? vec4(acc.w > 0.0 ? PI * acc.xyz / acc.w : vec3(0.0), 1.0) : acc;
 }
 
 void main() {

@@ -2,6 +2,7 @@
 
 #include "gpu/context.h"
 #include "gpu/gl.h"
+#include "gpu/microgeom/chunks.h"
 
 #include <algorithm>
 #include <stdexcept>
@@ -21,7 +22,7 @@ struct TexelGpu {
 class GpuLightSolver final : public LightSolver {
 public:
     // [SECTION] Upload what every light reads
-    GpuLightSolver(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, const ScatterSettings& s) : dirs_(&dirs), s_(s) {
+    GpuLightSolver(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, const ScatterSettings& s, size_t max_chunk_bytes) : dirs_(&dirs), s_(s) {
         static const Program* compiled = new Program(Program::compute("microgeom/lights.comp"));
         program_ = compiled;
         W_ = hf.width;
@@ -33,9 +34,9 @@ public:
         has_bent_ = bent != nullptr;
         GLint64 max_block = 0;
         glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
-        if (vis.hit.size() * sizeof(uint32_t) > size_t(max_block) || (bent && bent->w.size() * sizeof(float) > size_t(max_block)) || T * sizeof(vec4) > size_t(max_block))
-            throw std::runtime_error("microgeom light images (GPU): S_i of " + std::to_string(W_) + "x" + std::to_string(H_) + " texels x " + std::to_string(N_) +
-                                     " directions exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (" + std::to_string(max_block) + " bytes)");
+        if (T * sizeof(TexelGpu) > size_t(max_block))
+            throw std::runtime_error("microgeom light images (GPU): " + std::to_string(W_) + "x" + std::to_string(H_) +
+                                     " texels exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (" + std::to_string(max_block) + " bytes)");
         const size_t per_light = T * sizeof(vec4);
         batch_ = int(std::clamp<size_t>(std::min(kBatchBytes / 3, size_t(max_block)) / per_light, 1, kMaxBatch));
 
@@ -54,11 +55,9 @@ public:
         std::vector<vec4> d(static_cast<size_t>(N_));
         for (int j = 0; j < N_; ++j) d[size_t(j)] = vec4(dirs.d[size_t(j)], dirs.solid_angle[size_t(j)]);
         subsets_ = scatter_subsets(s, N_);
-        const float zero = 0.f;
-        vis_ = make_storage_buffer(vis.hit.data(), vis.hit.size() * sizeof(uint32_t));
+        chunks_ = upload_direction_chunks(vis, bent, max_chunk_bytes, "microgeom light images (GPU)");
         texels_ = make_storage_buffer(texels.data(), texels.size() * sizeof(TexelGpu));
         dirs_buf_ = make_storage_buffer(d.data(), d.size() * sizeof(vec4));
-        bent_ = bent ? make_storage_buffer(bent->w.data(), bent->w.size() * sizeof(float)) : make_storage_buffer(&zero, sizeof zero);
         direct_ = make_storage_buffer(nullptr, size_t(batch_) * per_light, GL_DYNAMIC_COPY);
         L_ = make_storage_buffer(nullptr, size_t(batch_) * per_light, GL_DYNAMIC_COPY);
         E_ = make_storage_buffer(nullptr, size_t(batch_) * per_light, GL_DYNAMIC_COPY);
@@ -102,18 +101,30 @@ private:
         glUniform4iv(program_->uniform("u_tri"), GLsizei(bn), &tri[0].x);
         glUniform4fv(program_->uniform("u_bary"), GLsizei(bn), &bary[0].x);
         glUniform2i(program_->uniform("u_size"), W_, H_);
-        glUniform1i(program_->uniform("u_N"), N_);
         glUniform1i(program_->uniform("u_periodic"), periodic_ ? 1 : 0);
         glUniform1i(program_->uniform("u_has_bent"), has_bent_ ? 1 : 0);
         glUniform1i(program_->uniform("u_shadows"), s_.shadows ? 1 : 0);
         glUniform1i(program_->uniform("u_ellipses"), s_.ellipses ? 1 : 0);
         glUniform1f(program_->uniform("u_edge"), s_.ellipses ? s_.ellipses->edge : 0.f);
-        const GLuint buffers[7] = {vis_.get(), texels_.get(), dirs_buf_.get(), bent_.get(), direct_.get(), L_.get(), E_.get()};
+        const GLuint buffers[7] = {0, texels_.get(), dirs_buf_.get(), 0, direct_.get(), L_.get(), E_.get()};
         for (GLuint k = 0; k < 7; ++k) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, k, buffers[k]);
-        auto dispatch = [&](int mode) {
-            glUniform1i(program_->uniform("u_mode"), mode);
+        auto run = [&]() {
             glDispatchCompute(GLuint((W_ + kLocal - 1) / kLocal), GLuint((H_ + kLocal - 1) / kLocal), GLuint(bn));
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+        };
+        // Direct and gather read S_i: one dispatch per chunk of directions, accumulating.
+        auto dispatch = [&](int mode) {
+            glUniform1i(program_->uniform("u_mode"), mode);
+            if (mode == 2) return run();
+            for (size_t c = 0; c < chunks_.size(); ++c) {
+                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, chunks_.S[c].get());
+                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, chunks_.bent[c].get());
+                glUniform1i(program_->uniform("u_j0"), chunks_.begin[c]);
+                glUniform1i(program_->uniform("u_j1"), chunks_.end(c));
+                glUniform1i(program_->uniform("u_first"), c == 0 ? 1 : 0);
+                glUniform1i(program_->uniform("u_last"), c + 1 == chunks_.size() ? 1 : 0);
+                run();
+            }
         };
         auto gather = [&](size_t k, bool has_prev, bool primary) {
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, J_[k].get());
@@ -155,14 +166,16 @@ private:
     const DirectionSet* dirs_;
     ScatterSettings s_;
     std::vector<std::vector<int>> subsets_;
-    Buffer vis_, texels_, dirs_buf_, bent_, direct_, L_, E_;
+    DirectionChunks chunks_;
+    Buffer texels_, dirs_buf_, direct_, L_, E_;
     std::vector<Buffer> J_;
     int W_ = 0, H_ = 0, N_ = 0, batch_ = 1;
     bool periodic_ = false, has_bent_ = false;
 };
 }  // namespace
 
-std::unique_ptr<LightSolver> make_gpu_light_solver(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, const ScatterSettings& s) {
-    return std::make_unique<GpuLightSolver>(hf, dirs, vis, s);
+std::unique_ptr<LightSolver> make_gpu_light_solver(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, const ScatterSettings& s,
+                                                   size_t max_chunk_bytes) {
+    return std::make_unique<GpuLightSolver>(hf, dirs, vis, s, max_chunk_bytes);
 }
 }  // namespace mesolab::gpu

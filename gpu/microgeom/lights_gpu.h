@@ -6,6 +6,7 @@
 // (one invocation per texel and light). The CPU code is the reference:
 // tests/microgeom/lights_gpu_test.cpp checks the two agree.
 #include "core/microgeom/scatter.h"
+#include <cstddef>
 #include <memory>
 
 namespace mesolab::gpu {
@@ -13,8 +14,10 @@ namespace mesolab::gpu {
 // A LightSolver (core/microgeom/scatter.h) for these inputs and settings (S_i, normals, albedo,
 // the curved base's weights and the ellipses uploaded once). Holds the compute scope (the shared
 // context current, other users waiting) from construction to destruction, so make it where the
-// solves happen and drop it after. Throws std::runtime_error without OpenGL, or when S_i or the
-// weights exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE.
+// solves happen and drop it after. S_i and the weights go up in chunks of directions of at most
+// max_chunk_bytes (0: GL_MAX_SHADER_STORAGE_BLOCK_SIZE; gpu/microgeom/chunks.h). Throws
+// std::runtime_error without OpenGL, or when one direction's texture alone exceeds that limit.
 std::unique_ptr<microgeom::LightSolver> make_gpu_light_solver(const microgeom::Heightfield& hf, const microgeom::DirectionSet& dirs,
-                                                              const microgeom::Visibility& vis, const microgeom::ScatterSettings& s);
+                                                              const microgeom::Visibility& vis, const microgeom::ScatterSettings& s,
+                                                              size_t max_chunk_bytes = 0);
 }  // namespace mesolab::gpu

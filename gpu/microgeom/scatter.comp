@@ -6,19 +6,21 @@
 // directions with w <= 0 skipped, L_in,j = the environment where S_j[p] says no hit, the previous
 // bounce's radiance at the hit (bilinear for the primary gather, nearest texel for inner ones),
 // 0 below p's plane or in the first gather (environment only).
+// S_i and the bent weights come in chunks of directions [u_j0, u_j1) (gpu/microgeom/chunks.h):
+// one dispatch per chunk accumulates (sum, wsum) in E_out; the last one divides.
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(std430, binding = 0) readonly buffer Vis { uint S[]; };          // [direction][row][column]
+layout(std430, binding = 0) readonly buffer Vis { uint S[]; };          // [direction - u_j0][row][column]
 layout(std430, binding = 1) readonly buffer Normals { vec4 normals[]; };  // xyz per texel
 layout(std430, binding = 2) readonly buffer Dirs { vec4 dirs[]; };       // xyz, w = Omega_j
-layout(std430, binding = 3) readonly buffer Bent { float bent_w[]; };    // [texel][direction] (curved base)
+layout(std430, binding = 3) readonly buffer Bent { float bent_w[]; };    // [texel][direction - u_j0] (curved base)
 layout(std430, binding = 4) readonly buffer Env { vec4 L_env[]; };       // per direction
 layout(std430, binding = 5) readonly buffer Prev { vec4 L_prev[]; };     // per texel
 layout(std430, binding = 6) readonly buffer Subset { int J[]; };
-layout(std430, binding = 7) writeonly buffer Out { vec4 E_out[]; };
+layout(std430, binding = 7) buffer Out { vec4 E_out[]; };               // (sum, wsum) until the last chunk, then (E, 1)
 
 uniform ivec2 u_size;
-uniform int u_N, u_J_count, u_periodic, u_has_bent, u_has_prev, u_primary;
+uniform int u_j0, u_j1, u_first, u_last, u_J_count, u_periodic, u_has_bent, u_has_prev, u_primary;
 
 const float PI = 3.14159265358979323846;
 const uint kNoHit = 0xFFFFFFFFu, kBelow = 0xFFFFFFFEu;
@@ -43,10 +45,11 @@ void main() {
     float wsum = 0.0;
     for (int m = 0; m < u_J_count; ++m) {
         int j = J[m];
-        float w = u_has_bent != 0 ? bent_w[p * u_N + j] : dot(n, dirs[j].xyz) * dirs[j].w;
+        if (j < u_j0 || j >= u_j1) continue;
+        float w = u_has_bent != 0 ? bent_w[p * (u_j1 - u_j0) + (j - u_j0)] : dot(n, dirs[j].xyz) * dirs[j].w;
         if (w <= 0.0) continue;
         wsum += w;
-        uint hit = S[j * T + p];
+        uint hit = S[(j - u_j0) * T + p];
         if (hit == kNoHit) {
             sum += w * L_env[j].xyz;
         } else if (hit != kBelow && u_has_prev != 0) {
@@ -59,5 +62,7 @@ void main() {
             }
         }
     }
-    E_out[p] = vec4(wsum > 0.0 ? PI * sum / wsum : vec3(0.0), 1.0);
+    vec4 acc = vec4(sum, wsum);
+    if (u_first == 0) acc += E_out[p];
+    E_out[p] = u_last != 0 ? vec4(acc.w > 0.0 ? PI * acc.xyz / acc.w : vec3(0.0), 1.0) : acc;
 }

@@ -2,6 +2,7 @@
 
 #include "gpu/context.h"
 #include "gpu/gl.h"
+#include "gpu/microgeom/chunks.h"
 
 #include <stdexcept>
 #include <string>
@@ -13,7 +14,7 @@ constexpr int kLocal = 8;
 
 class GpuGatherer final : public Gatherer {
 public:
-    GpuGatherer() {
+    explicit GpuGatherer(size_t max_chunk_bytes) : max_chunk_bytes_(max_chunk_bytes) {
         // Compiled once on the compute context, kept with it until exit.
         static const Program* compiled = new Program(Program::compute("microgeom/scatter.comp"));
         program_ = compiled;
@@ -29,11 +30,6 @@ public:
         periodic_ = hf.periodic;
         has_bent_ = bent && !bent->empty();
         const size_t T = size_t(W_) * size_t(H_);
-        GLint64 max_block = 0;
-        glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
-        if (vis.hit.size() * sizeof(uint32_t) > size_t(max_block) || (has_bent_ && bent->w.size() * sizeof(float) > size_t(max_block)))
-            throw std::runtime_error("microgeom scattering (GPU): S_i of " + std::to_string(W_) + "x" + std::to_string(H_) + " texels x " + std::to_string(N_) +
-                                     " directions exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (" + std::to_string(max_block) + " bytes)");
         std::vector<vec4> n(T), d(static_cast<size_t>(N_)), env(static_cast<size_t>(N_));
         for (int y = 0; y < H_; ++y)
             for (int x = 0; x < W_; ++x) n[hf.index(x, y)] = vec4(hf.normal(x, y), 0.f);
@@ -41,11 +37,9 @@ public:
             d[size_t(j)] = vec4(dirs.d[size_t(j)], dirs.solid_angle[size_t(j)]);
             env[size_t(j)] = vec4(L_env[size_t(j)], 0.f);
         }
-        vis_ = make_storage_buffer(vis.hit.data(), vis.hit.size() * sizeof(uint32_t));
+        chunks_ = upload_direction_chunks(vis, has_bent_ ? bent : nullptr, max_chunk_bytes_, "microgeom scattering (GPU)");
         normals_ = make_storage_buffer(n.data(), n.size() * sizeof(vec4));
         dirs_ = make_storage_buffer(d.data(), d.size() * sizeof(vec4));
-        const float zero = 0.f;
-        bent_ = has_bent_ ? make_storage_buffer(bent->w.data(), bent->w.size() * sizeof(float)) : make_storage_buffer(&zero, sizeof zero);
         env_ = make_storage_buffer(env.data(), env.size() * sizeof(vec4));
         prev_ = make_storage_buffer(nullptr, T * sizeof(vec4), GL_DYNAMIC_DRAW);
         out_ = make_storage_buffer(nullptr, T * sizeof(vec4), GL_STREAM_READ);
@@ -68,16 +62,24 @@ public:
         glGetIntegerv(GL_CURRENT_PROGRAM, &previous);
         program_->use();
         glUniform2i(program_->uniform("u_size"), W_, H_);
-        glUniform1i(program_->uniform("u_N"), N_);
         glUniform1i(program_->uniform("u_J_count"), int(J.size()));
         glUniform1i(program_->uniform("u_periodic"), periodic_ ? 1 : 0);
         glUniform1i(program_->uniform("u_has_bent"), has_bent_ ? 1 : 0);
         glUniform1i(program_->uniform("u_has_prev"), L_prev ? 1 : 0);
         glUniform1i(program_->uniform("u_primary"), primary ? 1 : 0);
-        const GLuint buffers[8] = {vis_.get(), normals_.get(), dirs_.get(), bent_.get(), env_.get(), prev_.get(), subset.get(), out_.get()};
+        const GLuint buffers[8] = {0, normals_.get(), dirs_.get(), 0, env_.get(), prev_.get(), subset.get(), out_.get()};
         for (GLuint b = 0; b < 8; ++b) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b, buffers[b]);
-        glDispatchCompute(GLuint((W_ + kLocal - 1) / kLocal), GLuint((H_ + kLocal - 1) / kLocal), 1);
-        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        // One dispatch per chunk of directions, accumulating; the last divides.
+        for (size_t c = 0; c < chunks_.size(); ++c) {
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, chunks_.S[c].get());
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, chunks_.bent[c].get());
+            glUniform1i(program_->uniform("u_j0"), chunks_.begin[c]);
+            glUniform1i(program_->uniform("u_j1"), chunks_.end(c));
+            glUniform1i(program_->uniform("u_first"), c == 0 ? 1 : 0);
+            glUniform1i(program_->uniform("u_last"), c + 1 == chunks_.size() ? 1 : 0);
+            glDispatchCompute(GLuint((W_ + kLocal - 1) / kLocal), GLuint((H_ + kLocal - 1) / kLocal), 1);
+            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+        }
         std::vector<vec4> E4(T);
         glBindBuffer(GL_SHADER_STORAGE_BUFFER, out_.get());
         glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(T * sizeof(vec4)), E4.data());
@@ -93,11 +95,13 @@ public:
 private:
     ComputeScope scope_;  // first: current before the buffers exist, released after they are gone
     const Program* program_ = nullptr;
-    Buffer vis_, normals_, dirs_, bent_, env_, prev_, out_;
+    DirectionChunks chunks_;
+    Buffer normals_, dirs_, env_, prev_, out_;
+    size_t max_chunk_bytes_ = 0;
     int W_ = 0, H_ = 0, N_ = 0;
     bool periodic_ = false, has_bent_ = false;
 };
 }  // namespace
 
-std::unique_ptr<Gatherer> make_gpu_gatherer() { return std::make_unique<GpuGatherer>(); }
+std::unique_ptr<Gatherer> make_gpu_gatherer(size_t max_chunk_bytes) { return std::make_unique<GpuGatherer>(max_chunk_bytes); }
 }  // namespace mesolab::gpu
