@@ -208,8 +208,9 @@ public:
                  "scattering directions and reweights paths by the triangle-fan area importance (§5); S_i are not recomputed");
         p.add_float("curvature_v", 0.0).range(-360.0, 360.0).in("degrees").costs(Cost::Recompute).doc("Curvature along v (see curvature_u)");
         p.add_enum("device", {"cpu", "gpu"}, "cpu").costs(Cost::Recompute)
-            .doc("Where S_i and the scattering bounces are computed: cpu (all cores) or gpu (OpenGL compute shaders on a context of their own; "
-                 "without OpenGL the stage runs on the CPU and says so). Both agree to float rounding (tests/microgeom/scatter_gpu_test.cpp)");
+            .doc("Where the precomputations run: cpu (all cores) or gpu (OpenGL compute shaders on a context of their own): S_i, the scattering "
+                 "bounces, the curvature importance, the ellipse fits and the goniometer's and BTF's light images; without OpenGL a stage runs on "
+                 "the CPU and says so. Both agree to float rounding (tests/microgeom/*_gpu_test.cpp)");
         p.add_enum("shadows", {"none", "exact", "ellipse"}, "exact").costs(Cost::Recompute)
             .doc("none; exact: the visibility of the 3 directions of the spherical triangle containing the light, interpolated; "
                  "ellipse: the paper's per-texel ellipse fitted to the unshadowed directions (§4)");
