@@ -116,15 +116,7 @@ private:
         auto dispatch = [&](int mode) {
             glUniform1i(program_->uniform("u_mode"), mode);
             if (mode == 2) return run();
-            for (size_t c = 0; c < chunks_.size(); ++c) {
-                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, chunks_.S[c].get());
-                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, chunks_.bent[c].get());
-                glUniform1i(program_->uniform("u_j0"), chunks_.begin[c]);
-                glUniform1i(program_->uniform("u_j1"), chunks_.end(c));
-                glUniform1i(program_->uniform("u_first"), c == 0 ? 1 : 0);
-                glUniform1i(program_->uniform("u_last"), c + 1 == chunks_.size() ? 1 : 0);
-                run();
-            }
+            for_each_chunk(chunks_, *program_, 0, 3, run);
         };
         auto gather = [&](size_t k, bool has_prev, bool primary) {
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 7, J_[k].get());

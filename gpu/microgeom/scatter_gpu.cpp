@@ -70,16 +70,10 @@ public:
         const GLuint buffers[8] = {0, normals_.get(), dirs_.get(), 0, env_.get(), prev_.get(), subset.get(), out_.get()};
         for (GLuint b = 0; b < 8; ++b) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b, buffers[b]);
         // One dispatch per chunk of directions, accumulating; the last divides.
-        for (size_t c = 0; c < chunks_.size(); ++c) {
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, chunks_.S[c].get());
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, chunks_.bent[c].get());
-            glUniform1i(program_->uniform("u_j0"), chunks_.begin[c]);
-            glUniform1i(program_->uniform("u_j1"), chunks_.end(c));
-            glUniform1i(program_->uniform("u_first"), c == 0 ? 1 : 0);
-            glUniform1i(program_->uniform("u_last"), c + 1 == chunks_.size() ? 1 : 0);
+        for_each_chunk(chunks_, *program_, 0, 3, [&] {
             glDispatchCompute(GLuint((W_ + kLocal - 1) / kLocal), GLuint((H_ + kLocal - 1) / kLocal), 1);
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-        }
+        });
         std::vector<vec4> E4(T);
         glBindBuffer(GL_SHADER_STORAGE_BUFFER, out_.get());
         glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(T * sizeof(vec4)), E4.data());

@@ -1,12 +1,35 @@
 #pragma once
-// CPU vs GPU frame agreement for the microgeom tests: for each AOV, at least `frac_tight` of all
+// Shared by the microgeom GPU tests. CPU vs GPU frame agreement: for each AOV, at least `frac_tight` of all
 // values within `tight` and `frac_loose` within `loose` (absolute).
+#include "core/microgeom/heightfield.h"
 #include "core/render.h"
+#include "gpu/context.h"
 
 #include <gtest/gtest.h>
 #include <cmath>
+#include <stdexcept>
 
 namespace mesolab::test {
+
+// Whether the shared compute context (gpu/context.h) can be made: the GPU tests skip without it.
+inline bool have_compute_gl() {
+    try {
+        gpu::ComputeScope scope;
+        return true;
+    } catch (const std::runtime_error&) {
+        return false;
+    }
+}
+
+// A procedural heightfield by name at res x res texels, periodic or not.
+inline microgeom::Heightfield procedural_field(const char* name, int res, bool periodic) {
+    microgeom::ProceduralParams p;
+    p.name = name;
+    p.resolution = res;
+    microgeom::Heightfield hf = microgeom::make_procedural(p);
+    hf.periodic = periodic;
+    return hf;
+}
 
 inline void expect_frames_agree(const Frame& cpu, const Frame& gpu, std::initializer_list<const char*> aovs, double tight, double loose,
                                 double frac_tight, double frac_loose) {

@@ -16,6 +16,8 @@
 #include "gpu/context.h"
 #include "gpu/microgeom/ellipse_gpu.h"
 
+#include "agreement.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -31,14 +33,6 @@ using namespace mesolab::microgeom;
 
 namespace {
 
-bool have_gl() {
-    try {
-        gpu::ComputeScope scope;
-        return true;
-    } catch (const std::runtime_error&) {
-        return false;
-    }
-}
 
 Heightfield procedural(const char* name, int res) {
     ProceduralParams p;
@@ -136,7 +130,7 @@ void expect_agreement(const Agreement& A) {
 
 // [SECTION] Agreement on the flat base
 TEST(EllipseGpu, FlatFieldsAgreeWithTheCpu) {
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     const DirectionSet dirs = make_direction_set(100);
     for (const char* name : {"bricks", "gaussian", "triangles"}) {
         SCOPED_TRACE(name);
@@ -152,7 +146,7 @@ TEST(EllipseGpu, FlatFieldsAgreeWithTheCpu) {
 
 // [SECTION] Agreement on a curved base
 TEST(EllipseGpu, CurvedBaseAgreesWithTheCpu) {
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     const DirectionSet dirs = make_direction_set(100);
     for (const char* name : {"bricks", "gaussian"}) {
         SCOPED_TRACE(name);
@@ -169,7 +163,7 @@ TEST(EllipseGpu, CurvedBaseAgreesWithTheCpu) {
 
 // [SECTION] Hard cases
 TEST(EllipseGpu, AllZeroFieldIsTheAllLitCircle) {
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     Heightfield hf = procedural("flat", 16);
     std::fill(hf.h.begin(), hf.h.end(), 0.f);
     const DirectionSet dirs = make_direction_set(100);
@@ -185,7 +179,7 @@ TEST(EllipseGpu, AllZeroFieldIsTheAllLitCircle) {
 }
 
 TEST(EllipseGpu, HardCases) {
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     struct Case {
         std::string name;
         Heightfield hf;
@@ -220,7 +214,7 @@ TEST(EllipseGpu, HardCases) {
 }
 
 TEST(EllipseGpu, TooManyPointsThrow) {
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     const Heightfield hf = procedural("flat", 8);
     const DirectionSet dirs = make_direction_set(2500);  // about 1250 upper directions
     const Visibility vis = compute_visibility(hf, dirs);
@@ -229,7 +223,7 @@ TEST(EllipseGpu, TooManyPointsThrow) {
 }
 
 TEST(EllipseGpu, ErrorsAndProgress) {
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     const Heightfield hf = procedural("bricks", 16);
     const DirectionSet dirs = make_direction_set(64);
     const Visibility vis = compute_visibility(hf, dirs);
@@ -261,7 +255,7 @@ TEST(EllipseGpu, ErrorsAndProgress) {
 // [SECTION] The bench's size: bricks 128x128, N = 100
 TEST(EllipseGpu, Bricks128AgreesWithTheCpu) {
     // Timing is `mesolab bench microgeom` (column "shadow (ellipse) precompute", GPU line).
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     const Heightfield hf = procedural("bricks", 128);
     const DirectionSet dirs = make_direction_set(100);
     const Visibility vis = compute_visibility(hf, dirs);

@@ -14,6 +14,8 @@
 #include "gpu/gl.h"
 #include "gpu/microgeom/importance_gpu.h"
 
+#include "agreement.h"
+
 #include <gtest/gtest.h>
 #include <algorithm>
 #include <cmath>
@@ -25,14 +27,6 @@ using namespace mesolab;
 using namespace mesolab::microgeom;
 
 namespace {
-Heightfield field(const char* name, int res, bool periodic) {
-    ProceduralParams p;
-    p.name = name;
-    p.resolution = res;
-    Heightfield hf = make_procedural(p);
-    hf.periodic = periodic;
-    return hf;
-}
 
 // A flat field with one tall, one-texel spike: extreme slopes and long hit offsets around it.
 Heightfield spike(int res, bool periodic) {
@@ -45,14 +39,6 @@ Heightfield spike(int res, bool periodic) {
     return hf;
 }
 
-bool have_gl() {
-    try {
-        gpu::ComputeScope scope;
-        return true;
-    } catch (const std::runtime_error&) {
-        return false;
-    }
-}
 
 struct Agreement {
     size_t entries = 0, I_off = 0, w_off = 0;  // entries beyond 1e-4 relative
@@ -115,7 +101,7 @@ std::string label(const char* name, int res, bool periodic, int N, float bu, flo
 }  // namespace
 
 TEST(ImportanceGpu, AgreesWithTheCpu) {
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     struct Case {
         const char* name;
         int res;
@@ -124,7 +110,7 @@ TEST(ImportanceGpu, AgreesWithTheCpu) {
     const float bends[][2] = {{60.f, 30.f}, {60.f, -30.f}, {-60.f, 30.f}, {-60.f, -30.f}, {120.f, 0.f}};
     for (const Case& c : {Case{"triangles", 48}, Case{"bricks", 64}, Case{"gaussian", 64}})
         for (bool periodic : {true, false}) {
-            const Heightfield hf = field(c.name, c.res, periodic);
+            const Heightfield hf = test::procedural_field(c.name, c.res, periodic);
             const Visibility vis = compute_visibility(hf, dirs);
             for (const auto& bend : bends) {
                 const Bending b = Bending::from_degrees(bend[0], bend[1], hf.width, hf.height);
@@ -140,7 +126,7 @@ TEST(ImportanceGpu, AgreesWithTheCpu) {
 
 TEST(ImportanceGpu, ZeroCurvatureGivesAnEmptyResult) {
     // As the CPU: no weights (the flat quadrature), no GL needed.
-    const Heightfield hf = field("triangles", 16, true);
+    const Heightfield hf = test::procedural_field("triangles", 16, true);
     const DirectionSet dirs = make_direction_set(32);
     const Visibility vis = compute_visibility(hf, dirs);
     const Importance imp = gpu::compute_importance_gpu(hf, dirs, vis, Bending{});
@@ -158,7 +144,7 @@ TEST(ImportanceGpu, HardCasesStayFinite) {
     // A one-texel spike (slopes of 24 texels per texel, hits far away in every direction) and a
     // coarse N = 16 triangulation, with bends strong enough to fold: everything finite, I > 0,
     // w >= 0 summing to 1, and still the CPU's result.
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     struct Case {
         Heightfield hf;
         int N;
@@ -168,8 +154,8 @@ TEST(ImportanceGpu, HardCasesStayFinite) {
     for (bool periodic : {true, false}) {
         cases.push_back({spike(32, periodic), 100, "spike"});
         cases.push_back({spike(32, periodic), 16, "spike"});
-        cases.push_back({field("bricks", 48, periodic), 16, "bricks"});
-        cases.push_back({field("gaussian", 48, periodic), 16, "gaussian"});
+        cases.push_back({test::procedural_field("bricks", 48, periodic), 16, "bricks"});
+        cases.push_back({test::procedural_field("gaussian", 48, periodic), 16, "gaussian"});
     }
     const float bends[][2] = {{360.f, 0.f}, {-360.f, -360.f}, {120.f, -120.f}, {1e-3f, 0.f}};
     for (const Case& c : cases) {
@@ -188,9 +174,9 @@ TEST(ImportanceGpu, HardCasesStayFinite) {
 }
 
 TEST(ImportanceGpu, ReportsProgressAndCancels) {
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     // 44 rows in batches of 5: the last batch is short.
-    const Heightfield hf = field("bricks", 44, false);
+    const Heightfield hf = test::procedural_field("bricks", 44, false);
     const DirectionSet dirs = make_direction_set(64);
     const Visibility vis = compute_visibility(hf, dirs);
     const Bending b = Bending::from_degrees(60.f, -30.f, hf.width, hf.height);
@@ -211,17 +197,17 @@ TEST(ImportanceGpu, ReportsProgressAndCancels) {
 }
 
 TEST(ImportanceGpu, RejectsMismatchedVisibility) {
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
-    const Heightfield hf = field("bricks", 16, true);
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
+    const Heightfield hf = test::procedural_field("bricks", 16, true);
     const DirectionSet dirs = make_direction_set(32);
-    const Visibility vis = compute_visibility(field("bricks", 24, true), dirs);
+    const Visibility vis = compute_visibility(test::procedural_field("bricks", 24, true), dirs);
     EXPECT_THROW(gpu::compute_importance_gpu(hf, dirs, vis, Bending{0.01f, 0.f}), std::invalid_argument);
 }
 
 TEST(ImportanceGpu, Bricks128AgreesWithTheCpu) {
     // bricks 128^2, N = 100, bend (60, -30): the bench's field size, one run each.
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
-    const Heightfield hf = field("bricks", 128, true);
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
+    const Heightfield hf = test::procedural_field("bricks", 128, true);
     const DirectionSet dirs = make_direction_set(100);
     const Visibility vis = compute_visibility(hf, dirs);
     const Bending b = Bending::from_degrees(60.f, -30.f, hf.width, hf.height);

@@ -33,28 +33,23 @@ struct Field {
 };
 
 Field field(const char* name, int res, int n, bool periodic = true) {
-    ProceduralParams p;
-    p.name = name;
-    p.resolution = res;
     Field f;
-    f.hf = make_procedural(p);
-    f.hf.periodic = periodic;
+    f.hf = test::procedural_field(name, res, periodic);
     f.dirs = make_direction_set(n);
     f.vis = compute_visibility(f.hf, f.dirs);
     return f;
 }
 
-bool have_gl() {
-    try {
-        const Field f = field("bricks", 8, 16);
-        gpu::make_gpu_light_solver(f.hf, f.dirs, f.vis, ScatterSettings{});
-        return true;
-    } catch (const std::runtime_error&) {
-        return false;
-    }
-}
 
 double rel(double a, double b) { return std::fabs(a - b) / std::max(1.0, std::fabs(a)); }
+
+double worst_rel(const std::vector<vec3>& cpu, const std::vector<vec3>& gpu) {
+    EXPECT_EQ(cpu.size(), gpu.size());
+    double worst = 0;
+    for (size_t k = 0; k < std::min(cpu.size(), gpu.size()); ++k)
+        for (int c = 0; c < 3; ++c) worst = std::max(worst, rel(cpu[k][c], gpu[k][c]));
+    return worst;
+}
 
 // Worst relative difference of the light images and worst absolute difference of the shadows.
 void compare_images(const Field& f, const ScatterSettings& s, const std::vector<vec3>& wis, double& worst_L, double& worst_shadow) {
@@ -81,6 +76,12 @@ void compare_images(const Field& f, const ScatterSettings& s, const std::vector<
     }
 }
 
+void expect_images_agree(const char* what, double worst_L, double worst_shadow) {
+    std::printf("%s: worst relative difference %.2g, shadow %.2g\n", what, worst_L, worst_shadow);
+    EXPECT_LT(worst_L, 1e-4) << what;
+    EXPECT_LT(worst_shadow, 1e-5) << what;
+}
+
 std::vector<vec3> some_lights() {
     std::vector<vec3> w = btf_directions(3, 5);
     w.push_back(glm::normalize(vec3(1.f, 0.2f, 0.001f)));  // grazing
@@ -90,7 +91,7 @@ std::vector<vec3> some_lights() {
 }  // namespace
 
 TEST(LightsGpu, LightImagesAgreeWithScatterPerLight) {
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     double worst_L = 0, worst_shadow = 0;
     for (const char* name : {"triangles", "bricks", "gaussian"})
         for (bool periodic : {true, false})
@@ -104,13 +105,11 @@ TEST(LightsGpu, LightImagesAgreeWithScatterPerLight) {
                 s.seed = 7;
                 compare_images(f, s, some_lights(), worst_L, worst_shadow);
             }
-    std::printf("light images: worst relative difference %.2g, shadow %.2g\n", worst_L, worst_shadow);
-    EXPECT_LT(worst_L, 1e-4);
-    EXPECT_LT(worst_shadow, 1e-5);
+    expect_images_agree("light images", worst_L, worst_shadow);
 }
 
 TEST(LightsGpu, EllipseShadowsCurvedBasesAndNoShadowsAgree) {
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     const Field f = field("bricks", 32, 100);
     const EllipseMap ell = fit_ellipses(f.hf, f.dirs, f.vis);
     const Importance imp = compute_importance(f.hf, f.dirs, f.vis, Bending::from_degrees(60.f, -30.f, 32, 32));
@@ -124,13 +123,11 @@ TEST(LightsGpu, EllipseShadowsCurvedBasesAndNoShadowsAgree) {
     compare_images(f, s, some_lights(), worst_L, worst_shadow);
     s.shadows = false;
     compare_images(f, s, some_lights(), worst_L, worst_shadow);
-    std::printf("ellipses / curved / unshadowed: worst relative difference %.2g, shadow %.2g\n", worst_L, worst_shadow);
-    EXPECT_LT(worst_L, 1e-4);
-    EXPECT_LT(worst_shadow, 1e-5);
+    expect_images_agree("ellipses / curved / unshadowed", worst_L, worst_shadow);
 }
 
 TEST(LightsGpu, SimulatedBrdfAndBtfAgreeWithTheCpu) {
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     const Field f = field("bricks", 32, 64);
     GonioSettings g;
     g.scatter.depth = 2;
@@ -145,10 +142,7 @@ TEST(LightsGpu, SimulatedBrdfAndBtfAgreeWithTheCpu) {
         const SimulatedBrdf cpu = simulate_brdf(f.hf, f.dirs, f.vis, g);
         g.lights = solver.get();
         const SimulatedBrdf gpu = simulate_brdf(f.hf, f.dirs, f.vis, g);
-        ASSERT_EQ(cpu.table.size(), gpu.table.size());
-        double worst = 0;
-        for (size_t k = 0; k < cpu.table.size(); ++k)
-            for (int c = 0; c < 3; ++c) worst = std::max(worst, rel(cpu.table[k][c], gpu.table[k][c]));
+        const double worst = worst_rel(cpu.table, gpu.table);
         EXPECT_EQ(cpu.images, gpu.images);
         std::printf("simulated BRDF (%s): worst relative difference %.2g\n", fit == GonioSettings::Fit::SH ? "SH" : "table", worst);
         EXPECT_LT(worst, 1e-4);
@@ -166,7 +160,7 @@ TEST(LightsGpu, SimulatedBrdfAndBtfAgreeWithTheCpu) {
 }
 
 TEST(LightsGpu, BatchesLargerThanOneDispatchGiveTheSameImages) {
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     const Field f = field("gaussian", 16, 32);
     const auto solver = gpu::make_gpu_light_solver(f.hf, f.dirs, f.vis, ScatterSettings{});
     ASSERT_GE(solver->batch(), 1);
@@ -182,7 +176,7 @@ TEST(LightsGpu, BatchesLargerThanOneDispatchGiveTheSameImages) {
 }
 
 TEST(LightsGpu, BrdfLevelOfDetailOnDeviceGpuMatchesDeviceCpu) {
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     Scene s = load_preset(test::source_path("presets/microgeom/bricks-texture.json"));
     apply_set(s, "microgeom.resolution=32");
     apply_set(s, "microgeom.lod=brdf");
@@ -203,10 +197,7 @@ TEST(LightsGpu, BrdfLevelOfDetailOnDeviceGpuMatchesDeviceCpu) {
     const SimulatedBrdf* bc = cpu.eval.get<PerObject<SimulatedBrdf>>("microgeom.brdf")->get(0);
     const SimulatedBrdf* bg = gpu.eval.get<PerObject<SimulatedBrdf>>("microgeom.brdf")->get(0);
     ASSERT_TRUE(bc && bg);
-    ASSERT_EQ(bc->table.size(), bg->table.size());
-    double worst_table = 0;
-    for (size_t k = 0; k < bc->table.size(); ++k)
-        for (int c = 0; c < 3; ++c) worst_table = std::max(worst_table, rel(bc->table[k][c], bg->table[k][c]));
+    const double worst_table = worst_rel(bc->table, bg->table);
     std::printf("brdf table, device gpu vs cpu: worst relative difference %.2g\n", worst_table);
     EXPECT_LT(worst_table, 2e-2);
     const Image& a = cpu.frame.aov("radiance");
@@ -221,7 +212,7 @@ TEST(LightsGpu, BrdfLevelOfDetailOnDeviceGpuMatchesDeviceCpu) {
 // S_i in chunks of directions (gpu/microgeom/chunks.h: what lets 1024^2 x 100 directions past
 // llvmpipe's 128 MB storage-block limit), forced here on a small field: 7 directions per chunk.
 TEST(LightsGpu, ChunkedDirectionsGiveTheSameResults) {
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     const Field f = field("bricks", 32, 64);
     const size_t chunk = size_t(32 * 32) * sizeof(uint32_t) * 7;
     const Importance imp = compute_importance(f.hf, f.dirs, f.vis, Bending::from_degrees(40.f, 20.f, 32, 32));
@@ -266,7 +257,7 @@ TEST(LightsGpu, ChunkedDirectionsGiveTheSameResults) {
 // on the GPU (no CPU-fallback warning) and the frame matches device = cpu (S_i differ for a few
 // grazing rays, see visibility_gpu_test.cpp, so as ScatterGpu.DeviceGpuThroughTheStages...).
 TEST(LightsGpu, EveryPrecomputeRunsOnTheGpuThroughTheStages) {
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     Scene s = load_preset(test::source_path("presets/microgeom/bricks-texture.json"));
     for (const char* kv : {"microgeom.resolution=48", "microgeom.curvature_u=40", "microgeom.curvature_v=-20", "microgeom.shadows=ellipse"})
         apply_set(s, kv);

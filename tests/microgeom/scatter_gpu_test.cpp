@@ -23,14 +23,6 @@ using namespace mesolab;
 using namespace mesolab::microgeom;
 
 namespace {
-Heightfield field(const char* name, int res, bool periodic) {
-    ProceduralParams p;
-    p.name = name;
-    p.resolution = res;
-    Heightfield hf = make_procedural(p);
-    hf.periodic = periodic;
-    return hf;
-}
 
 // Max |E_cpu - E_gpu| / max(1, |E_cpu|) over texels and channels.
 double compare(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, ScatterSettings s) {
@@ -49,18 +41,10 @@ double compare(const Heightfield& hf, const DirectionSet& dirs, const Visibility
     return worst;
 }
 
-bool have_gl() {
-    try {
-        gpu::make_gpu_gatherer();
-        return true;
-    } catch (const std::runtime_error&) {
-        return false;
-    }
-}
 }  // namespace
 
 TEST(ScatterGpu, EveryBounceAgreesWithTheCpu) {
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     Environment env;
     env.color = vec3(0.3f, 0.5f, 0.8f);
     struct Case {
@@ -69,7 +53,7 @@ TEST(ScatterGpu, EveryBounceAgreesWithTheCpu) {
         bool periodic;
     };
     for (const Case& c : {Case{"triangles", 32, true}, Case{"bricks", 48, true}, Case{"gaussian", 40, false}}) {
-        const Heightfield hf = field(c.name, c.res, c.periodic);
+        const Heightfield hf = test::procedural_field(c.name, c.res, c.periodic);
         const DirectionSet dirs = make_direction_set(64);
         const Visibility vis = compute_visibility(hf, dirs);
         for (int depth : {0, 1, 4}) {
@@ -91,8 +75,8 @@ TEST(ScatterGpu, EveryBounceAgreesWithTheCpu) {
 }
 
 TEST(ScatterGpu, CurvedBaseWeightsAgreeWithTheCpu) {
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
-    const Heightfield hf = field("triangles", 48, true);
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
+    const Heightfield hf = test::procedural_field("triangles", 48, true);
     const DirectionSet dirs = make_direction_set(100);
     const Visibility vis = compute_visibility(hf, dirs);
     for (float deg : {-60.f, 60.f}) {
@@ -109,8 +93,8 @@ TEST(ScatterGpu, CurvedBaseWeightsAgreeWithTheCpu) {
 // The compute context is made current on a worker thread (as the GUI evaluates stages) while
 // another thread renders with its own context; both keep working.
 TEST(ScatterGpu, RunsFromAWorkerThreadBesideARenderingThread) {
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
-    const Heightfield hf = field("bumps", 32, true);
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
+    const Heightfield hf = test::procedural_field("bumps", 32, true);
     const DirectionSet dirs = make_direction_set(64);
     const Visibility vis = compute_visibility(hf, dirs);
     ScatterSettings s;
@@ -134,7 +118,7 @@ TEST(ScatterGpu, RunsFromAWorkerThreadBesideARenderingThread) {
 // microgeom.device = gpu through the stage graph (S_i and scattering on the GPU) renders what
 // device = cpu renders, with the GPU backend drawing afterwards on its own context.
 TEST(ScatterGpu, DeviceGpuThroughTheStagesMatchesDeviceCpu) {
-    if (!have_gl()) GTEST_SKIP() << "no OpenGL context";
+    if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     Scene s = load_preset(test::source_path("presets/microgeom/bricks-texture.json"));
     apply_set(s, "microgeom.resolution=64");
     Workbench wb;
