@@ -21,8 +21,8 @@ inline bool have_compute_gl() {
     }
 }
 
-// A procedural heightfield by name at res x res texels, periodic or not.
-inline microgeom::Heightfield procedural_field(const char* name, int res, bool periodic) {
+// A procedural heightfield by name at res x res texels, periodic or not (default: the procedural default).
+inline microgeom::Heightfield procedural_field(const char* name, int res, bool periodic = microgeom::ProceduralParams{}.periodic) {
     microgeom::ProceduralParams p;
     p.name = name;
     p.resolution = res;

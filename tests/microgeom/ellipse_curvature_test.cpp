@@ -2,6 +2,8 @@
 // precomputed curvatures and their linear interpolation (ellipse.h, "Curved base").
 #include "core/microgeom/ellipse.h"
 
+#include "agreement.h"
+
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
@@ -19,13 +21,6 @@ using namespace mesolab;
 using namespace mesolab::microgeom;
 
 namespace {
-
-Heightfield procedural(const char* name, int res) {
-    ProceduralParams p;
-    p.name = name;
-    p.resolution = res;
-    return make_procedural(p);
-}
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -84,7 +79,7 @@ std::vector<uint8_t> bent_reference(const Heightfield& hf, const DirectionSet& d
 // Bricks 128x128, N = 100, samples at +-60 degrees across the field (shared by the tests below).
 struct Bricks {
     static constexpr float kBend = 60.f;
-    Heightfield hf = procedural("bricks", 128);
+    Heightfield hf = test::procedural_field("bricks", 128);
     DirectionSet dirs = make_direction_set(100);
     Visibility vis;
     CurvedEllipses curved;
@@ -149,7 +144,7 @@ double mean_lit_fraction(const EllipseMap& map, const DirectionSet& dirs) {
 TEST(EllipseCurvature, ZeroBendingReproducesTheFlatFitBitExactly) {
     for (const char* name : {"bricks", "bumps", "triangles"}) {
         SCOPED_TRACE(name);
-        const Heightfield hf = procedural(name, 32);
+        const Heightfield hf = test::procedural_field(name, 32);
         const DirectionSet dirs = make_direction_set(100);
         const Visibility vis = compute_visibility(hf, dirs);
         const EllipseMap flat = fit_ellipses(hf, dirs, vis);
@@ -166,7 +161,7 @@ TEST(EllipseCurvature, SamplesEqualDirectFitsAndInterpolationHitsThemExactly) {
     // Tolerance of the Q round trip (ellipse.h): centre 1e-6 absolute, a and b 1e-6 relative, the
     // angle 1e-4 radians (mod pi) where a and b differ by more than 1e-3 relative (otherwise the
     // axis direction is ill-conditioned and irrelevant); at Bending{} the flat fit bit-exactly.
-    const Heightfield hf = procedural("bumps", 32);
+    const Heightfield hf = test::procedural_field("bumps", 32);
     const DirectionSet dirs = make_direction_set(100);
     const Visibility vis = compute_visibility(hf, dirs);
     std::vector<double> fractions;
@@ -295,7 +290,7 @@ TEST(EllipseCurvature, HalfBendConvexAndConcaveBothWaysAgreesWithBentReferenceOn
 }
 
 TEST(EllipseCurvature, CurvedFitIsIndependentOfTheThreadCount) {
-    const Heightfield hf = procedural("triangles", 32);
+    const Heightfield hf = test::procedural_field("triangles", 32);
     const DirectionSet dirs = make_direction_set(64);
     const Visibility vis = compute_visibility(hf, dirs);
     const CurvedEllipses a = fit_curved_ellipses(hf, dirs, vis, 45.f);
@@ -317,7 +312,7 @@ TEST(EllipseCurvature, CurvedFitIsIndependentOfTheThreadCount) {
 }
 
 TEST(EllipseCurvature, CurvatureBeyondTheSamplesIsClamped) {
-    const Heightfield hf = procedural("bumps", 16);
+    const Heightfield hf = test::procedural_field("bumps", 16);
     const DirectionSet dirs = make_direction_set(64);
     const Visibility vis = compute_visibility(hf, dirs);
     const CurvedEllipses c = fit_curved_ellipses(hf, dirs, vis, -40.f);  // the sign is dropped
@@ -329,7 +324,7 @@ TEST(EllipseCurvature, CurvatureBeyondTheSamplesIsClamped) {
     EXPECT_TRUE(same_bytes(interpolate_ellipses(c, Bending{inf, 0.f}), interpolate_ellipses(c, c.step_u)));
     EXPECT_TRUE(same_bytes(interpolate_ellipses(c, Bending{std::nanf(""), 0.f}), c.flat));
     EXPECT_THROW(fit_curved_ellipses(hf, dirs, vis, inf), std::invalid_argument);
-    EXPECT_THROW(fit_ellipses(procedural("flat", 8), dirs, vis, c.step_u), std::invalid_argument);
+    EXPECT_THROW(fit_ellipses(test::procedural_field("flat", 8), dirs, vis, c.step_u), std::invalid_argument);
     CurvedEllipses broken = c;
     broken.v_neg.e.pop_back();
     EXPECT_THROW(interpolate_ellipses(broken, c.step_u), std::invalid_argument);
@@ -398,14 +393,14 @@ TEST(EllipseCurvature, EmptySamplesFollowTheNearestSampleAndIndefiniteSumsAreCla
 TEST(EllipseCurvature, InterpolatedEllipsesAreAlwaysValid) {
     // Extreme bends and degenerate fields, over a grid of curvatures inside and beyond the samples.
     const DirectionSet dirs = make_direction_set(64);
-    Heightfield zeros = procedural("flat", 12);
+    Heightfield zeros = test::procedural_field("flat", 12);
     zeros.periodic = false;
-    Heightfield spike = procedural("flat", 9);
+    Heightfield spike = test::procedural_field("flat", 9);
     spike.h[spike.index(4, 4)] = 5.f;
-    Heightfield hole = procedural("flat", 9);
+    Heightfield hole = test::procedural_field("flat", 9);
     for (float& h : hole.h) h = 50.f;
     hole.h[hole.index(4, 4)] = 0.f;
-    const Heightfield fields[] = {procedural("bricks", 32), procedural("triangles", 24), procedural("flat", 16), zeros,
+    const Heightfield fields[] = {test::procedural_field("bricks", 32), test::procedural_field("triangles", 24), test::procedural_field("flat", 16), zeros,
                                   spike, hole};
     const float ts[] = {-4.f, -1.f, -0.7f, -0.5f, -0.25f, 0.f, 0.1f, 0.5f, 0.9f, 1.f, 2.5f};
     for (const Heightfield& hf : fields) {
@@ -424,7 +419,7 @@ TEST(EllipseCurvature, InterpolatedEllipsesAreAlwaysValid) {
         }
     }
     // A flat field is lit from every upward direction at any curvature (nothing to bend).
-    const Heightfield flat = procedural("flat", 16);
+    const Heightfield flat = test::procedural_field("flat", 16);
     const CurvedEllipses c = fit_curved_ellipses(flat, dirs, compute_visibility(flat, dirs), 90.f);
     const EllipseMap m = interpolate_ellipses(c, scaled(sum(c.step_u, c.step_v), 0.5f));
     for (const Ellipse& e : m.e)

@@ -34,13 +34,6 @@ using namespace mesolab::microgeom;
 namespace {
 
 
-Heightfield procedural(const char* name, int res) {
-    ProceduralParams p;
-    p.name = name;
-    p.resolution = res;
-    return make_procedural(p);
-}
-
 bool well_formed(const Ellipse& e) {
     return std::isfinite(e.centre.x) && std::isfinite(e.centre.y) && std::isfinite(e.angle) && std::isfinite(e.a) &&
            std::isfinite(e.b) && e.a >= e.b && e.b > 0.f && e.angle >= 0.f && e.angle < kPi;
@@ -134,7 +127,7 @@ TEST(EllipseGpu, FlatFieldsAgreeWithTheCpu) {
     const DirectionSet dirs = make_direction_set(100);
     for (const char* name : {"bricks", "gaussian", "triangles"}) {
         SCOPED_TRACE(name);
-        const Heightfield hf = procedural(name, 64);
+        const Heightfield hf = test::procedural_field(name, 64);
         const Visibility vis = compute_visibility(hf, dirs);
         const EllipseMap cpu = fit_ellipses(hf, dirs, vis);
         const EllipseMap gpu = gpu::fit_ellipses_gpu(hf, dirs, vis);
@@ -150,7 +143,7 @@ TEST(EllipseGpu, CurvedBaseAgreesWithTheCpu) {
     const DirectionSet dirs = make_direction_set(100);
     for (const char* name : {"bricks", "gaussian"}) {
         SCOPED_TRACE(name);
-        const Heightfield hf = procedural(name, 64);
+        const Heightfield hf = test::procedural_field(name, 64);
         const Visibility vis = compute_visibility(hf, dirs);
         const Bending b = Bending::from_degrees(60.f, -30.f, hf.width, hf.height);
         const EllipseMap cpu = fit_ellipses(hf, dirs, vis, b);
@@ -164,7 +157,7 @@ TEST(EllipseGpu, CurvedBaseAgreesWithTheCpu) {
 // [SECTION] Hard cases
 TEST(EllipseGpu, AllZeroFieldIsTheAllLitCircle) {
     if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
-    Heightfield hf = procedural("flat", 16);
+    Heightfield hf = test::procedural_field("flat", 16);
     std::fill(hf.h.begin(), hf.h.end(), 0.f);
     const DirectionSet dirs = make_direction_set(100);
     const Visibility vis = compute_visibility(hf, dirs);
@@ -185,12 +178,12 @@ TEST(EllipseGpu, HardCases) {
         Heightfield hf;
         int n;
     };
-    Heightfield spike = procedural("flat", 32);
+    Heightfield spike = test::procedural_field("flat", 32);
     spike.h[spike.index(16, 16)] = 12.f;
-    std::vector<Case> cases{{"bricks 32x32, N = 16", procedural("bricks", 32), 16},
-                            {"gaussian 32x32, N = 16", procedural("gaussian", 32), 16},
+    std::vector<Case> cases{{"bricks 32x32, N = 16", test::procedural_field("bricks", 32), 16},
+                            {"gaussian 32x32, N = 16", test::procedural_field("gaussian", 32), 16},
                             {"single spike 32x32, N = 100", spike, 100},
-                            {"bricks 16x16, N = 1024", procedural("bricks", 16), 1024}};
+                            {"bricks 16x16, N = 1024", test::procedural_field("bricks", 16), 1024}};
     for (const Case& c : cases) {
         SCOPED_TRACE(c.name);
         const DirectionSet dirs = make_direction_set(c.n);
@@ -215,7 +208,7 @@ TEST(EllipseGpu, HardCases) {
 
 TEST(EllipseGpu, TooManyPointsThrow) {
     if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
-    const Heightfield hf = procedural("flat", 8);
+    const Heightfield hf = test::procedural_field("flat", 8);
     const DirectionSet dirs = make_direction_set(2500);  // about 1250 upper directions
     const Visibility vis = compute_visibility(hf, dirs);
     EXPECT_THROW(gpu::fit_ellipses_gpu(hf, dirs, vis), std::runtime_error);
@@ -224,7 +217,7 @@ TEST(EllipseGpu, TooManyPointsThrow) {
 
 TEST(EllipseGpu, ErrorsAndProgress) {
     if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
-    const Heightfield hf = procedural("bricks", 16);
+    const Heightfield hf = test::procedural_field("bricks", 16);
     const DirectionSet dirs = make_direction_set(64);
     const Visibility vis = compute_visibility(hf, dirs);
     Visibility wrong = vis;
@@ -256,7 +249,7 @@ TEST(EllipseGpu, ErrorsAndProgress) {
 TEST(EllipseGpu, Bricks128AgreesWithTheCpu) {
     // Timing is `mesolab bench microgeom` (column "shadow (ellipse) precompute", GPU line).
     if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
-    const Heightfield hf = procedural("bricks", 128);
+    const Heightfield hf = test::procedural_field("bricks", 128);
     const DirectionSet dirs = make_direction_set(100);
     const Visibility vis = compute_visibility(hf, dirs);
     const EllipseMap cpu = fit_ellipses(hf, dirs, vis), gpu = gpu::fit_ellipses_gpu(hf, dirs, vis);
