@@ -1,11 +1,12 @@
 // bumpsynth look-up table (Kautz et al. 2001, §4, §7): the entries, the tangent frames, hard NDFs
 // (α = 1e-4 and 1, delta-like, zero regions) with no NaN and no normal outside the support, the
-// §7 round trip normal -> (r1, r2) -> normal, the input CDF G, and the build time.
+// §7 round trip normal -> (r1, r2) -> normal, and the input CDF G.
 #include "core/bumpsynth/lut.h"
 #include "core/bumpsynth/ndf.h"
 #include "core/error.h"
 #include "stats.h"
 
+#include "support/errors.h"
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -15,20 +16,11 @@
 #include <vector>
 
 using namespace mesolab;
+using mesolab::test::expect_input_error;
+using mesolab::test::ring_image;
 using namespace mesolab::bumpsynth;
 
 namespace {
-
-template <class F>
-void expect_input_error(F&& f, std::initializer_list<const char*> parts) {
-    try {
-        f();
-        ADD_FAILURE() << "no InputError";
-    } catch (const InputError& e) {
-        const std::string msg = e.what();
-        for (const char* p : parts) EXPECT_NE(msg.find(p), std::string::npos) << "message: " << msg << "\nmissing: " << p;
-    }
-}
 
 bool finite(vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
@@ -57,16 +49,6 @@ void expect_well_formed(const Lut& lut, const Ndf& ndf, const char* name) {
     }
     EXPECT_EQ(bad, 0u) << name << ": malformed entries (NaN, not unit, m_z <= 0 or a bad frame)";
     EXPECT_EQ(outside, 0u) << name << ": normals in cells of zero mass";
-}
-
-std::vector<float> ring_image(int n, double r0, double r1) {
-    std::vector<float> img(size_t(n) * size_t(n), 0.f);
-    for (int py = 0; py < n; ++py)
-        for (int px = 0; px < n; ++px) {
-            const double x = -1.0 + (px + 0.5) * 2.0 / n, y = 1.0 - (py + 0.5) * 2.0 / n, r = std::hypot(x, y);
-            if (r >= r0 && r <= r1) img[size_t(py) * size_t(n) + size_t(px)] = 1.f;
-        }
-    return img;
 }
 
 // G for r = u²: G(r) = sqrt(r), knots exact.

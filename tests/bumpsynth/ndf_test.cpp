@@ -5,6 +5,7 @@
 #include "core/error.h"
 #include "stats.h"
 
+#include "support/errors.h"
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -14,34 +15,13 @@
 #include <vector>
 
 using namespace mesolab;
+using mesolab::test::expect_input_error;
+using mesolab::test::ring_image;
 using namespace mesolab::bumpsynth;
 
 namespace {
 
 constexpr double kPiD = std::numbers::pi;
-
-// Expects an InputError whose message contains every one of `parts`.
-template <class F>
-void expect_input_error(F&& f, std::initializer_list<const char*> parts) {
-    try {
-        f();
-        ADD_FAILURE() << "no InputError";
-    } catch (const InputError& e) {
-        const std::string msg = e.what();
-        for (const char* p : parts) EXPECT_NE(msg.find(p), std::string::npos) << "message: " << msg << "\nmissing: " << p;
-    }
-}
-
-// A ring image: 1 where r0 <= r <= r1, else 0.
-std::vector<float> ring_image(int n, double r0, double r1) {
-    std::vector<float> img(size_t(n) * size_t(n), 0.f);
-    for (int py = 0; py < n; ++py)
-        for (int px = 0; px < n; ++px) {
-            const double x = -1.0 + (px + 0.5) * 2.0 / n, y = 1.0 - (py + 0.5) * 2.0 / n, r = std::hypot(x, y);
-            if (r >= r0 && r <= r1) img[size_t(py) * size_t(n) + size_t(px)] = 1.f;
-        }
-    return img;
-}
 
 struct NamedLobes {
     const char* name;

@@ -22,6 +22,17 @@ struct Rng {
     double uniform() { return double(engine() >> 11) * 0x1.0p-53; }
 };
 
+// [SECTION] A ring NDF image: 1 where r0 <= r <= r1 (r = |(x, y)|), else 0; row 0 at y = +1.
+inline std::vector<float> ring_image(int n, double r0, double r1) {
+    std::vector<float> img(size_t(n) * size_t(n), 0.f);
+    for (int py = 0; py < n; ++py)
+        for (int px = 0; px < n; ++px) {
+            const double x = -1.0 + (px + 0.5) * 2.0 / n, y = 1.0 - (py + 0.5) * 2.0 / n, r = std::hypot(x, y);
+            if (r >= r0 && r <= r1) img[size_t(py) * size_t(n) + size_t(px)] = 1.f;
+        }
+    return img;
+}
+
 // [SECTION] Reference closed forms, in the lobe frame (φ measured from the lobe's α_x axis)
 // Beckmann: exp(-tan²θ (cos²φ/αx² + sin²φ/αy²)) / (π αx αy cos⁴θ)
 inline double ref_beckmann(double theta, double phi, double ax, double ay) {

@@ -5,6 +5,7 @@
 #include "core/plot.h"
 
 #include <OpenImageIO/imageio.h>
+#include "support/errors.h"
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 #include <unistd.h>
@@ -22,6 +23,7 @@
 
 namespace fs = std::filesystem;
 using namespace mesolab;
+using mesolab::test::expect_input_error;
 
 namespace {
 
@@ -51,18 +53,6 @@ std::string file_bytes(const std::string& p) {
 void write_text(const std::string& p, const std::string& text) {
     std::ofstream f(p, std::ios::binary);
     f << text;
-}
-
-// Runs `f`, expecting an InputError whose message contains every string in `parts`.
-template <typename F>
-void expect_input_error(F&& f, std::initializer_list<std::string> parts) {
-    try {
-        f();
-        ADD_FAILURE() << "expected InputError";
-    } catch (const InputError& e) {
-        const std::string msg = e.what();
-        for (const std::string& p : parts) EXPECT_NE(msg.find(p), std::string::npos) << "message: " << msg << "\nmissing: " << p;
-    }
 }
 
 Image random_image(int w, int h, int c, unsigned seed, float lo = -4.f, float hi = 1000.f) {
