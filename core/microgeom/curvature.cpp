@@ -34,15 +34,10 @@ vec3 bent_direction(const Heightfield& hf, const DirectionSet& dirs, const Visib
 // [SECTION] Fan-area importance and gather weights
 Importance compute_importance(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, Bending b,
                               const std::function<void(double)>& progress) {
-    Importance imp;
-    imp.width = hf.width;
-    imp.height = hf.height;
-    imp.count = dirs.size();
+    Importance imp = Importance::sized(hf.width, hf.height, dirs.size());
     if (b.zero()) return imp;
-    const size_t T = size_t(hf.width) * size_t(hf.height), N = size_t(dirs.size()), M = dirs.triangles.size();
-    imp.I.assign(T * N, 1.f);
-    imp.w.assign(T * N, 0.f);
-    imp.folded.assign(T, 0);
+    const size_t N = size_t(dirs.size()), M = dirs.triangles.size();
+    imp.allocate();
     // Unbent triangle areas, once.
     std::vector<float> area0(M);
     for (size_t t = 0; t < M; ++t) {

@@ -44,6 +44,20 @@ struct Importance {
     std::vector<float> w;          // [texel][direction]: normalised gather weights, >= 0, sum 1 per texel
     std::vector<uint8_t> folded;   // per texel: 1 where a bent triangle turned over
     size_t folded_count = 0;
+    // Sized for a field and direction set, with no weights yet (empty: the flat quadrature).
+    static Importance sized(int width, int height, int count) {
+        Importance imp;
+        imp.width = width, imp.height = height, imp.count = count;
+        return imp;
+    }
+    // Every direction unbent: I = 1, w = 0, nothing folded (the start of a computation).
+    void allocate() {
+        const size_t T = size_t(width) * size_t(height);
+        I.assign(T * size_t(count), 1.f);
+        w.assign(T * size_t(count), 0.f);
+        folded.assign(T, 0);
+        folded_count = 0;
+    }
     bool empty() const { return w.empty(); }
     float importance(size_t texel, int dir) const { return I.empty() ? 1.f : I[texel * size_t(count) + size_t(dir)]; }
     float weight(size_t texel, int dir) const { return w[texel * size_t(count) + size_t(dir)]; }

@@ -17,6 +17,7 @@
 #include <map>
 #include <optional>
 #include <stdexcept>
+#include <utility>
 
 namespace mesolab::microgeom {
 
@@ -642,6 +643,14 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
     auto imps = ctx.eval.get<PerObject<Importance>>("microgeom.importance");
     auto ells = ctx.eval.get<PerObject<EllipseMap>>("microgeom.ellipses");
     auto brdfs = ctx.eval.get<PerObject<SimulatedBrdf>>("microgeom.brdf");
+    // One pixel's AOVs.
+    auto store = [&](int x, int y, vec3 L, vec3 n, vec3 direct, vec3 indirect, float shadow) {
+        for (auto [img, v] : {std::pair{&rad, L}, std::pair{&nrm, n}, std::pair{&dir_img, direct}, std::pair{&ind_img, indirect}}) {
+            float* q = img->at(x, y);
+            q[0] = v.x, q[1] = v.y, q[2] = v.z;
+        }
+        sh_img.at(x, y)[0] = shadow;
+    };
 
     tbb::parallel_for(0, gb.height, [&](int y) {
         for (int x = 0; x < gb.width; ++x) {
@@ -682,16 +691,7 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
                     if (li == 0) shadow_first = brdf->eval_shadow(l_loc, v_loc);
                 }
                 const vec3 Lo_env = ctx.lighting.env_lighting ? brdf->eval_env(v_loc) * ctx.lighting.env_irradiance(N) * kInvPi : vec3(0.f);
-                const vec3 L = Lo_lights + Lo_env;
-                float* q = rad.at(x, y);
-                q[0] = L.x, q[1] = L.y, q[2] = L.z;
-                q = nrm.at(x, y);
-                q[0] = N.x, q[1] = N.y, q[2] = N.z;
-                q = dir_img.at(x, y);
-                q[0] = Lo_lights.x, q[1] = Lo_lights.y, q[2] = Lo_lights.z;
-                q = ind_img.at(x, y);
-                q[0] = Lo_env.x, q[1] = Lo_env.y, q[2] = Lo_env.z;
-                sh_img.at(x, y)[0] = shadow_first;
+                store(x, y, Lo_lights + Lo_env, N, Lo_lights, Lo_env, shadow_first);
                 continue;
             }
 
@@ -765,16 +765,7 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
                 E_ind += sample_bilinear(one.result.E_indirect, hf.width, hf.height, true, c, r) * E * scale;
             }
             const vec3 indirect = albedo * kInvPi * E_ind;
-            const vec3 L = direct + indirect;
-            float* q = rad.at(x, y);
-            q[0] = L.x, q[1] = L.y, q[2] = L.z;
-            q = nrm.at(x, y);
-            q[0] = n.x, q[1] = n.y, q[2] = n.z;
-            q = dir_img.at(x, y);
-            q[0] = direct.x, q[1] = direct.y, q[2] = direct.z;
-            q = ind_img.at(x, y);
-            q[0] = indirect.x, q[1] = indirect.y, q[2] = indirect.z;
-            sh_img.at(x, y)[0] = shadow0;
+            store(x, y, direct + indirect, n, direct, indirect, shadow0);
             const Importance* imp = imps ? imps->get(obj) : nullptr;
             if (imp && !imp->folded.empty()) {
                 const int fx = ((int(std::floor(c + 0.5f)) % hf.width) + hf.width) % hf.width, fy = ((int(std::floor(r + 0.5f)) % hf.height) + hf.height) % hf.height;

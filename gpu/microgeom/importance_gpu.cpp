@@ -57,17 +57,12 @@ void check_input(const Heightfield& hf, const DirectionSet& dirs, const Visibili
 
 Importance compute_importance_gpu(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, Bending b,
                                   const std::function<void(double)>& progress) {
-    Importance imp;
-    imp.width = hf.width;
-    imp.height = hf.height;
-    imp.count = dirs.size();
+    Importance imp = Importance::sized(hf.width, hf.height, dirs.size());
     if (b.zero()) return imp;
     check_input(hf, dirs, vis);
     const int W = hf.width, H = hf.height, N = dirs.size(), M = int(dirs.triangles.size());
     const size_t T = size_t(W) * size_t(H);
-    imp.I.assign(T * size_t(N), 1.f);
-    imp.w.assign(T * size_t(N), 0.f);
-    imp.folded.assign(T, 0);
+    imp.allocate();
     if (T == 0 || N == 0) return imp;
 
     // [SECTION] Batches of rows within the storage block limit

@@ -1,12 +1,17 @@
 #pragma once
 // Shared by the microgeom GPU tests. CPU vs GPU frame agreement: for each AOV, at least `frac_tight` of all
 // values within `tight` and `frac_loose` within `loose` (absolute).
+#include "app/workbench.h"
 #include "core/microgeom/heightfield.h"
+#include "core/scene.h"
 #include "core/render.h"
 #include "gpu/context.h"
+#include "support/cli.h"
 
 #include <gtest/gtest.h>
 #include <cmath>
+#include <initializer_list>
+#include <string>
 #include <stdexcept>
 
 namespace mesolab::test {
@@ -45,6 +50,34 @@ inline void expect_frames_agree(const Frame& cpu, const Frame& gpu, std::initial
         const double n = double(a.data.size());
         EXPECT_GE(double(n_tight), frac_tight * n) << aov << ": " << n - double(n_tight) << " of " << n << " values differ by more than " << tight;
         EXPECT_GE(double(n_loose), frac_loose * n) << aov << ": " << n - double(n_loose) << " of " << n << " values differ by more than " << loose;
+    }
+}
+// presets/microgeom/bricks-texture.json with `sets` applied, rendered on `backend` with
+// microgeom.device = cpu and then = gpu (one Workbench: the second render recomputes what the
+// device change invalidates).
+struct DeviceRenders {
+    RenderResult cpu, gpu;
+};
+inline DeviceRenders render_on_both_devices(std::initializer_list<const char*> sets, Backend backend) {
+    Scene s = load_preset(source_path("presets/microgeom/bricks-texture.json"));
+    for (const char* kv : sets) apply_set(s, kv);
+    Workbench wb;
+    RenderRequest req;
+    req.backend = backend;
+    DeviceRenders r;
+    r.cpu = wb.render(s, req);
+    apply_set(s, "microgeom.device=gpu");
+    r.gpu = wb.render(s, req);
+    return r;
+}
+
+// Each stage ran in `r` and none fell back to the CPU ("... computed on the CPU ..." warnings).
+inline void expect_ran_on_the_gpu(const RenderResult& r, std::initializer_list<const char*> stages) {
+    for (const char* stage : stages) {
+        const StageRun* run = r.eval.run(stage);
+        ASSERT_NE(run, nullptr) << stage;
+        EXPECT_EQ(run->status, StageStatus::Ran) << stage;
+        for (const std::string& w : run->warnings) EXPECT_EQ(w.find("computed on the CPU"), std::string::npos) << stage << ": " << w;
     }
 }
 }  // namespace mesolab::test

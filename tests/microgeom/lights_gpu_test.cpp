@@ -83,6 +83,12 @@ void compare_images(const Field& f, const ScatterSettings& s, const std::vector<
     }
 }
 
+// Prints the worst difference found and expects it below tol.
+void expect_worst_below(const char* what, double worst, double tol) {
+    std::printf("%s: worst relative difference %.2g\n", what, worst);
+    EXPECT_LT(worst, tol) << what;
+}
+
 void expect_images_agree(const char* what, double worst_L, double worst_shadow) {
     std::printf("%s: worst relative difference %.2g, shadow %.2g\n", what, worst_L, worst_shadow);
     EXPECT_LT(worst_L, 1e-4) << what;
@@ -151,8 +157,7 @@ TEST(LightsGpu, SimulatedBrdfAndBtfAgreeWithTheCpu) {
         const SimulatedBrdf gpu = simulate_brdf(f.hf, f.dirs, f.vis, g);
         const double worst = worst_rel(cpu.table, gpu.table);
         EXPECT_EQ(cpu.images, gpu.images);
-        std::printf("simulated BRDF (%s): worst relative difference %.2g\n", fit == GonioSettings::Fit::SH ? "SH" : "table", worst);
-        EXPECT_LT(worst, 1e-4);
+        expect_worst_below(fit == GonioSettings::Fit::SH ? "simulated BRDF (SH)" : "simulated BRDF (table)", worst, 1e-4);
     }
     g.lights = nullptr;
     const std::vector<vec3> lights = btf_directions(2, 3), views = btf_directions(2, 2);
@@ -160,8 +165,7 @@ TEST(LightsGpu, SimulatedBrdfAndBtfAgreeWithTheCpu) {
     g.lights = solver.get();
     const Image gpu = btf_mosaic(f.hf, f.dirs, f.vis, g, lights, views);
     const double worst = worst_rel(cpu.data, gpu.data);
-    std::printf("BTF mosaic: worst relative difference %.2g\n", worst);
-    EXPECT_LT(worst, 1e-4);
+    expect_worst_below("BTF mosaic", worst, 1e-4);
 }
 
 TEST(LightsGpu, BatchesLargerThanOneDispatchGiveTheSameImages) {
@@ -182,34 +186,20 @@ TEST(LightsGpu, BatchesLargerThanOneDispatchGiveTheSameImages) {
 
 TEST(LightsGpu, BrdfLevelOfDetailOnDeviceGpuMatchesDeviceCpu) {
     if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
-    Scene s = load_preset(test::source_path("presets/microgeom/bricks-texture.json"));
-    apply_set(s, "microgeom.resolution=32");
-    apply_set(s, "microgeom.lod=brdf");
-    apply_set(s, "microgeom.brdf_resolution=5");
-    apply_set(s, "camera.mode=orbit");  // the BRDF level shades a smooth sphere
-    apply_set(s, "geometry.type=sphere");
-    Workbench wb;
-    RenderRequest req;
-    req.backend = Backend::Cpu;
-    const RenderResult cpu = wb.render(s, req);
-    apply_set(s, "microgeom.device=gpu");
-    const RenderResult gpu = wb.render(s, req);
-    const StageRun* run = gpu.eval.run("microgeom.brdf");
-    ASSERT_NE(run, nullptr);
-    EXPECT_EQ(run->status, StageStatus::Ran);
-    EXPECT_TRUE(run->warnings.empty()) << (run->warnings.empty() ? "" : run->warnings.front());
-    ASSERT_NE(cpu.eval.run("microgeom.brdf"), nullptr);
+    // The BRDF level shades a smooth sphere.
+    const test::DeviceRenders r = test::render_on_both_devices(
+        {"microgeom.resolution=32", "microgeom.lod=brdf", "microgeom.brdf_resolution=5", "camera.mode=orbit", "geometry.type=sphere"}, Backend::Cpu);
+    const RenderResult &cpu = r.cpu, &gpu = r.gpu;
+    test::expect_ran_on_the_gpu(gpu, {"microgeom.brdf"});
     const SimulatedBrdf* bc = cpu.eval.get<PerObject<SimulatedBrdf>>("microgeom.brdf")->get(0);
     const SimulatedBrdf* bg = gpu.eval.get<PerObject<SimulatedBrdf>>("microgeom.brdf")->get(0);
     ASSERT_TRUE(bc && bg);
     const double worst_table = worst_rel(bc->table, bg->table);
-    std::printf("brdf table, device gpu vs cpu: worst relative difference %.2g\n", worst_table);
-    EXPECT_LT(worst_table, 2e-2);
+    expect_worst_below("brdf table, device gpu vs cpu", worst_table, 2e-2);
     const Image& a = cpu.frame.aov("radiance");
     const Image& b = gpu.frame.aov("radiance");
     const double worst = worst_rel(a.data, b.data);
-    std::printf("brdf level of detail, device gpu vs cpu (S_i from each device): worst relative difference %.2g\n", worst);
-    EXPECT_LT(worst, 2e-2);
+    expect_worst_below("brdf level of detail, device gpu vs cpu (S_i from each device)", worst, 2e-2);
 }
 
 // S_i in chunks of directions (gpu/microgeom/chunks.h: what lets 1024^2 x 100 directions past
@@ -251,8 +241,7 @@ TEST(LightsGpu, ChunkedDirectionsGiveTheSameResults) {
             }
         }
     }
-    std::printf("10 chunks of 7 directions: worst relative difference %.2g\n", worst);
-    EXPECT_LT(worst, 1e-4);
+    expect_worst_below("10 chunks of 7 directions", worst, 1e-4);
 }
 
 // microgeom.device = gpu through the stages with everything switched on that has a GPU path:
@@ -261,21 +250,9 @@ TEST(LightsGpu, ChunkedDirectionsGiveTheSameResults) {
 // grazing rays, see visibility_gpu_test.cpp, so as ScatterGpu.DeviceGpuThroughTheStages...).
 TEST(LightsGpu, EveryPrecomputeRunsOnTheGpuThroughTheStages) {
     if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
-    Scene s = load_preset(test::source_path("presets/microgeom/bricks-texture.json"));
-    for (const char* kv : {"microgeom.resolution=48", "microgeom.curvature_u=40", "microgeom.curvature_v=-20", "microgeom.shadows=ellipse"})
-        apply_set(s, kv);
-    Workbench wb;
-    RenderRequest req;
-    req.backend = Backend::Cpu;
-    const RenderResult cpu = wb.render(s, req);
-    apply_set(s, "microgeom.device=gpu");
-    const RenderResult gpu = wb.render(s, req);
-    for (const char* stage : {"microgeom.visibility", "microgeom.importance", "microgeom.ellipses_curved", "microgeom.ellipses", "microgeom.scatter",
-                              "microgeom.scatter_env"}) {
-        const StageRun* run = gpu.eval.run(stage);
-        ASSERT_NE(run, nullptr) << stage;
-        EXPECT_EQ(run->status, StageStatus::Ran) << stage;
-        for (const std::string& w : run->warnings) EXPECT_EQ(w.find("computed on the CPU"), std::string::npos) << stage << ": " << w;
-    }
-    test::expect_frames_agree(cpu.frame, gpu.frame, {"radiance", "direct", "indirect", "shadow"}, 1e-3, 2e-2, 0.99, 0.999);
+    const test::DeviceRenders r = test::render_on_both_devices(
+        {"microgeom.resolution=48", "microgeom.curvature_u=40", "microgeom.curvature_v=-20", "microgeom.shadows=ellipse"}, Backend::Cpu);
+    test::expect_ran_on_the_gpu(r.gpu, {"microgeom.visibility", "microgeom.importance", "microgeom.ellipses_curved", "microgeom.ellipses",
+                                        "microgeom.scatter", "microgeom.scatter_env"});
+    test::expect_frames_agree(r.cpu.frame, r.gpu.frame, {"radiance", "direct", "indirect", "shadow"}, 1e-3, 2e-2, 0.99, 0.999);
 }

@@ -119,19 +119,7 @@ TEST(ScatterGpu, RunsFromAWorkerThreadBesideARenderingThread) {
 // device = cpu renders, with the GPU backend drawing afterwards on its own context.
 TEST(ScatterGpu, DeviceGpuThroughTheStagesMatchesDeviceCpu) {
     if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
-    Scene s = load_preset(test::source_path("presets/microgeom/bricks-texture.json"));
-    apply_set(s, "microgeom.resolution=64");
-    Workbench wb;
-    RenderRequest req;
-    req.backend = Backend::Gpu;
-    const RenderResult cpu = wb.render(s, req);
-    apply_set(s, "microgeom.device=gpu");
-    const RenderResult gpu = wb.render(s, req);
-    for (const char* stage : {"microgeom.visibility", "microgeom.scatter", "microgeom.scatter_env"}) {
-        const StageRun* run = gpu.eval.run(stage);
-        ASSERT_NE(run, nullptr) << stage;
-        EXPECT_EQ(run->status, StageStatus::Ran) << stage;
-        EXPECT_TRUE(run->warnings.empty()) << stage << ": " << (run->warnings.empty() ? "" : run->warnings.front());
-    }
-    test::expect_frames_agree(cpu.frame, gpu.frame, {"radiance", "direct", "indirect", "shadow"}, 1e-3, 2e-2, 0.99, 0.999);
+    const test::DeviceRenders r = test::render_on_both_devices({"microgeom.resolution=64"}, Backend::Gpu);
+    test::expect_ran_on_the_gpu(r.gpu, {"microgeom.visibility", "microgeom.scatter", "microgeom.scatter_env"});
+    test::expect_frames_agree(r.cpu.frame, r.gpu.frame, {"radiance", "direct", "indirect", "shadow"}, 1e-3, 2e-2, 0.99, 0.999);
 }
