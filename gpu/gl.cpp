@@ -419,8 +419,7 @@ double GpuTimer::elapsed_ms() {
     glGetQueryObjectui64v(query_.get(), GL_QUERY_RESULT, &ns);  // waits for the GPU
     const double wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin_wall_).count();
     const double gpu_ms = double(ns) * 1e-6;
-    // The GPU work happened between begin() and now; allow 1 ms + 1% for clock granularity.
-    valid_ = gpu_ms <= wall_ms * 1.01 + 1.0;
+    valid_ = plausible(gpu_ms, wall_ms);  // the GPU work happened between begin() and now
     result_ms_ = valid_ ? gpu_ms : std::numeric_limits<double>::quiet_NaN();
     read_ = true;
     return result_ms_;

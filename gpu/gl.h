@@ -90,6 +90,9 @@ public:
     void end();
     double elapsed_ms();  // blocks until available; 0 if never begun; NaN if the driver's value is impossible
     bool valid() const { return valid_; }
+    // A driver's answer is plausible when it is a number in [0, the wall-clock time around the
+    // query + 1% + 1 ms of clock granularity].
+    static bool plausible(double gpu_ms, double wall_ms) { return gpu_ms >= 0.0 && gpu_ms <= wall_ms * 1.01 + 1.0; }
 private:
     Query query_;
     bool pending_ = false;
