@@ -99,6 +99,15 @@ Frame make_frame(const std::vector<AovDecl>& layout, int width, int height) {
     return f;
 }
 
+TangentFrame tangent_frame(vec3 normal, vec3 tangent, vec3 wo) {
+    vec3 N = normal;
+    if (glm::dot(N, wo) < 0.f) N = -N;
+    vec3 T = tangent - N * glm::dot(tangent, N);
+    T = glm::dot(T, T) > 1e-12f ? glm::normalize(T)
+        : (std::fabs(N.x) < 0.9f ? glm::normalize(glm::cross(N, vec3(1, 0, 0))) : glm::normalize(glm::cross(N, vec3(0, 1, 0))));
+    return {T, glm::cross(N, T), N};
+}
+
 bool ShadeContext::mine(size_t pixel) const {
     const int o = gbuffer.object[pixel];
     return o >= 0 && std::find(objects.begin(), objects.end(), o) != objects.end();

@@ -75,6 +75,15 @@ struct ShadeContext {
     bool mine(size_t pixel) const;
 };
 
+// The shading frame at a pixel: N the interpolated normal turned towards the viewer (surfaces are
+// two-sided), T the tangent made orthogonal to it (any perpendicular when the mesh has none), B = N × T.
+struct TangentFrame {
+    vec3 T, B, N;
+    vec3 to_local(vec3 w) const { return {glm::dot(w, T), glm::dot(w, B), glm::dot(w, N)}; }
+    vec3 to_world(vec3 v) const { return T * v.x + B * v.y + N * v.z; }
+};
+TangentFrame tangent_frame(vec3 normal, vec3 tangent, vec3 wo);
+
 // Frame size for a scene: texture mode asks the techniques for a native texture size first.
 ivec2 frame_size(const Scene& s, const Evaluation& ev, ivec2 requested);
 

@@ -40,6 +40,16 @@ vec3 sample_albedo(const Image& img, vec2 uv) {
     return glm::mix(glm::mix(texel(x0, y0), texel(x1, y0), ax), glm::mix(texel(x0, y1), texel(x1, y1), ax), ay);
 }
 
+AlbedoMaps read_albedo_maps(const Scene& s, const std::string& technique) {
+    AlbedoMaps maps;
+    for (const auto& o : s.objects) {
+        if (o.technique != technique) continue;
+        const std::string path = s.resolve(o.material.get_string("albedo_map"));
+        if (!path.empty() && !maps.count(path)) maps.emplace(path, read_image(path, true, true));
+    }
+    return maps;
+}
+
 namespace {
 
 class BasicTechnique final : public Technique {
@@ -57,15 +67,7 @@ public:
         g.add({.name = "basic.albedo",
                .help = "Read the albedo maps of the objects using basic",
                .params = {"basic.albedo_map"},
-               .run = [](StageContext& ctx) {
-                   AlbedoMaps maps;
-                   for (const auto& o : ctx.scene.objects) {
-                       if (o.technique != "basic") continue;
-                       const std::string path = ctx.scene.resolve(o.material.get_string("albedo_map"));
-                       if (!path.empty() && !maps.count(path)) maps.emplace(path, read_image(path, true, true));
-                   }
-                   return stage_result(std::move(maps));
-               }});
+               .run = [](StageContext& ctx) { return stage_result(read_albedo_maps(ctx.scene, "basic")); }});
     }
 
     std::vector<std::string> frame_stages() const override { return {"basic.albedo"}; }

@@ -38,22 +38,9 @@ ProceduralParams procedural_params(const ParamTable& m) {
 namespace {
 
 // [SECTION] Per-object stage helpers
-// Run `make` once per distinct fingerprint of `keys` among the objects using microgeom.
 template <class T, class Make>
 PerObject<T> per_object(const Scene& s, const std::vector<std::string>& keys, const Make& make) {
-    PerObject<T> out;
-    out.items.resize(s.objects.size());
-    std::map<std::string, std::shared_ptr<const T>> done;
-    for (size_t i = 0; i < s.objects.size(); ++i) {
-        const SceneObject& o = s.objects[i];
-        if (o.technique != "microgeom") continue;
-        std::string fp;
-        for (const auto& k : keys) fp += value_canonical(*o.material.group().find(k), o.material.get(k), s.base_dir) + ";";
-        auto it = done.find(fp);
-        if (it == done.end()) it = done.emplace(fp, std::make_shared<const T>(make(int(i), o))).first;
-        out.items[i] = it->second;
-    }
-    return out;
+    return mesolab::per_object<T>(s, "microgeom", keys, make);
 }
 
 const std::vector<std::string> kFieldKeys{"heightfield", "resolution", "height_scale", "texel_size", "periodic", "vgroove_angle", "rms_slope", "correlation", "seed", "albedo", "albedo_map"};
@@ -666,15 +653,12 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
             // Macro frame (two-sided) and the texel position of this pixel.
             const vec3 p = gb.position[px];
             const vec3 wo = ctx.camera.wo(p);
-            vec3 N = gb.normal[px];
-            if (glm::dot(N, wo) < 0.f) N = -N;
-            vec3 T = gb.tangent[px] - N * glm::dot(gb.tangent[px], N);
-            T = glm::dot(T, T) > 1e-12f ? glm::normalize(T) : (std::fabs(N.x) < 0.9f ? glm::normalize(glm::cross(N, vec3(1, 0, 0))) : glm::normalize(glm::cross(N, vec3(0, 1, 0))));
-            const vec3 B = glm::cross(N, T);
+            const TangentFrame frame = tangent_frame(gb.normal[px], gb.tangent[px], wo);
+            const vec3 N = frame.N, T = frame.T, B = frame.B;
             const float tiling = ctx.camera.texture_mode ? 1.f : float(m.get_float("tiling"));
             const vec2 uv = gb.uv[px];
             const float c = uv.x * float(hf.width) * tiling - 0.5f, r = (1.f - uv.y) * float(hf.height) * tiling - 0.5f;
-            auto to_local = [&](vec3 w) { return vec3(glm::dot(w, T), glm::dot(w, B), glm::dot(w, N)); };
+            auto to_local = [&](vec3 w) { return frame.to_local(w); };
 
             // BRDF level: a smooth surface with the simulated BRDF (it folds in shadows, masking and
             // scattering); the environment part is exact for a constant environment and scaled by the

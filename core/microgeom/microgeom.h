@@ -30,17 +30,13 @@
 #include "core/microgeom/scatter.h"
 #include "core/microgeom/visibility.h"
 #include "core/param.h"
+#include "core/per_object.h"
 #include <memory>
 #include <vector>
 
 namespace mesolab::microgeom {
 
-// A stage result with one entry per scene object (null for objects using other techniques).
-template <class T>
-struct PerObject {
-    std::vector<std::shared_ptr<const T>> items;
-    const T* get(int object) const { return size_t(object) < items.size() ? items[size_t(object)].get() : nullptr; }
-};
+using mesolab::PerObject;
 
 // The light-driven scattering solution of one object: unit irradiance from `light_dir`.
 struct LightScatter {

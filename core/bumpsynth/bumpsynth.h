@@ -1,0 +1,34 @@
+#pragma once
+// Technique `bumpsynth`: real-time bump map synthesis from a normal density function (Kautz,
+// Heidrich, Seidel 2001). Stages (each per object, shared by objects with equal keys):
+//   bumpsynth.ndf            the tabulated NDF (ndf.h) from bumpsynth.ndf and its source keys
+//   bumpsynth.lut            the normal look-up table L(r1, r2) for uniform inputs (lut.h)
+//   bumpsynth.noise_cdf      G_k of the fractal noise for k = 1..octaves_max (noise.h)
+//   bumpsynth.noise_texture  the paper's mip-mapped noise texture (noise = texture only)
+//   bumpsynth.masking        the Smith table of the NDF (masking on only)
+//   bumpsynth.albedo         the albedo maps
+// A frame shades every pixel with shading.h's synthesis at o(d) octaves (d: eye distance; all
+// octaves in camera.mode=texture). AOVs: radiance, normal (the microfacet normal in the surface's
+// tangent frame, blended while an octave fades in), octaves (o at the pixel).
+#include "core/basic/basic.h"
+#include "core/bumpsynth/lut.h"
+#include "core/bumpsynth/ndf.h"
+#include "core/bumpsynth/noise.h"
+#include "core/bumpsynth/shading.h"
+#include "core/per_object.h"
+#include "core/stage.h"
+
+namespace mesolab::bumpsynth {
+
+// The NDF an object's material describes (InputError naming the key for bad values or files).
+Ndf ndf_from_material(const Scene& s, const ParamTable& m);
+NoiseParams noise_from_material(const ParamTable& m);
+ShadingModel shading_from_material(const ParamTable& m);
+
+// The synthesis of object `object` from an evaluation that ran the frame stages (null members
+// where a stage was not needed: noise_texture with procedural noise, smith without masking).
+Synthesis synthesis_for(const Scene& s, const Evaluation& ev, int object);
+
+// The octave count at a world point seen from `eye` (all octaves in texture mode).
+float pixel_octaves(const ParamTable& m, bool texture_mode, vec3 eye, vec3 p);
+}  // namespace mesolab::bumpsynth

@@ -1,0 +1,162 @@
+#include "core/bumpsynth/noise.h"
+#include "core/error.h"
+
+#include <tbb/parallel_for.h>
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <string>
+
+namespace mesolab::bumpsynth {
+namespace {
+
+constexpr float kS = 0.70710678f;  // √½: the bound of 2D gradient noise with unit gradients
+constexpr float kGrad[8][2] = {{1.f, 0.f}, {-1.f, 0.f}, {0.f, 1.f}, {0.f, -1.f}, {kS, kS}, {-kS, kS}, {kS, -kS}, {-kS, -kS}};
+
+float fade(float t) { return t * t * t * (t * (t * 6.f - 15.f) + 10.f); }
+
+int wrap(int i, int n) { return ((i % n) + n) % n; }
+}  // namespace
+
+uint32_t octave_seed(uint32_t seed, int octave, int channel) { return hash32(seed * 0x9E3779B1u + uint32_t(octave * 2 + channel) * 0x85EBCA77u + 0x165667B1u); }
+vec2 octave_offset(int octave, int channel) {
+    const double a = 0.6180339887498949 * (octave + 1) + 0.4142135623730951 * channel;
+    const double b = 0.7548776662466927 * (octave + 1) + 0.2071067811865476 * channel;
+    return {float(a - std::floor(a)), float(b - std::floor(b))};
+}
+
+void NoiseParams::validate() const {
+    if (base_frequency < 1 || base_frequency > 4096)
+        throw InputError("bumpsynth.noise_frequency: expected an integer in [1, 4096] lattice cells per unit of uv, got " + std::to_string(base_frequency));
+    if (!(gain > 0.f && gain <= 1.f)) throw InputError("bumpsynth.noise_gain: expected a value in (0, 1], got " + std::to_string(gain));
+    if (octaves_max < 1 || octaves_max > 16) throw InputError("bumpsynth.octaves_max: expected an integer in [1, 16], got " + std::to_string(octaves_max));
+}
+
+uint32_t hash32(uint32_t x) {
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return x;
+}
+
+// [SECTION] Gradient noise
+float gradient_noise(vec2 p, int period, uint32_t seed) {
+    const float fx0 = std::floor(p.x), fy0 = std::floor(p.y);
+    const float fx = p.x - fx0, fy = p.y - fy0;
+    const int x0 = wrap(int(fx0), period), y0 = wrap(int(fy0), period);
+    const int x1 = x0 + 1 == period ? 0 : x0 + 1, y1 = y0 + 1 == period ? 0 : y0 + 1;
+    auto corner = [&](int x, int y, float dx, float dy) {
+        const uint32_t h = hash32(uint32_t(x) + hash32(uint32_t(y) + seed)) & 7u;
+        return kGrad[h][0] * dx + kGrad[h][1] * dy;
+    };
+    const float n00 = corner(x0, y0, fx, fy), n10 = corner(x1, y0, fx - 1.f, fy);
+    const float n01 = corner(x0, y1, fx, fy - 1.f), n11 = corner(x1, y1, fx - 1.f, fy - 1.f);
+    const float u = fade(fx), v = fade(fy);
+    const float a = n00 + u * (n10 - n00), b = n01 + u * (n11 - n01);
+    return a + v * (b - a);
+}
+
+// [SECTION] Fractal noise
+float noise_octave(const NoiseParams& n, vec2 uv, int octave, int channel) {
+    const int period = n.base_frequency << octave;
+    const vec2 p = uv * float(period) + octave_offset(octave, channel);
+    return std::pow(n.gain, float(octave)) * gradient_noise(p, period, octave_seed(n.seed, octave, channel));
+}
+
+float fractal_noise(const NoiseParams& n, vec2 uv, int k, int channel) {
+    float T = 0.f, A = 0.f;
+    for (int o = 0; o < k; ++o) {
+        T += noise_octave(n, uv, o, channel);
+        A += std::pow(n.gain, float(o));
+    }
+    return std::clamp(0.5f + T / (2.f * kS * A), 0.f, 1.f);
+}
+
+void fractal_noise_all(const NoiseParams& n, vec2 uv, vec2* out) {
+    vec2 T(0.f);
+    float A = 0.f;
+    for (int o = 0; o < n.octaves_max; ++o) {
+        T += vec2(noise_octave(n, uv, o, 0), noise_octave(n, uv, o, 1));
+        A += std::pow(n.gain, float(o));
+        out[o] = glm::clamp(vec2(0.5f) + T / (2.f * kS * A), vec2(0.f), vec2(1.f));
+    }
+}
+
+float octaves_at_distance(float distance, float detail_distance, int octaves_max) {
+    if (!(distance > 0.f)) return float(octaves_max);  // at the eye (or NaN): full detail
+    const float o = std::log2(detail_distance / distance);
+    return std::clamp(std::isfinite(o) ? o : (o > 0.f ? float(octaves_max) : 0.f), 0.f, float(octaves_max));
+}
+
+// [SECTION] Input CDFs per octave count
+NoiseCdfs measure_noise_cdfs(const NoiseParams& n, int samples) {
+    n.validate();
+    const int K = n.octaves_max, N = std::max(16, samples);
+    std::vector<std::vector<float>> r(size_t(K), std::vector<float>(size_t(N) * size_t(N) * 2));
+    tbb::parallel_for(0, N, [&](int y) {
+        std::mt19937 rng(uint32_t(y) * 7919u + n.seed);
+        std::uniform_real_distribution<float> jitter(0.f, 1.f);
+        std::vector<vec2> all(static_cast<size_t>(K));
+        for (int x = 0; x < N; ++x) {
+            const vec2 uv((float(x) + jitter(rng)) / float(N), (float(y) + jitter(rng)) / float(N));
+            fractal_noise_all(n, uv, all.data());
+            const size_t i = (size_t(y) * size_t(N) + size_t(x)) * 2;
+            for (int k = 0; k < K; ++k) r[size_t(k)][i] = all[size_t(k)].x, r[size_t(k)][i + 1] = all[size_t(k)].y;
+        }
+    });
+    NoiseCdfs out;
+    out.params = n;
+    out.G.resize(size_t(K));
+    tbb::parallel_for(0, K, [&](int k) { out.G[size_t(k)] = measure_input_cdf(r[size_t(k)]); });
+    return out;
+}
+
+vec2 noise_inputs(const NoiseCdfs& cdfs, vec2 uv, int k) {
+    const InputCdf& G = cdfs.of(k);
+    return {float(G(fractal_noise(cdfs.params, uv, k, 0))), float(G(fractal_noise(cdfs.params, uv, k, 1)))};
+}
+
+// [SECTION] Mip-mapped noise texture
+int NoiseTexture::level_of(int k) const { return std::clamp(octaves_max - k, 0, int(levels.size()) - 1); }
+
+vec2 NoiseTexture::bilinear(int level, vec2 uv) const {
+    const int s = std::max(1, size >> level);
+    const std::vector<vec2>& t = levels[size_t(level)];
+    const float fx = uv.x * float(s) - 0.5f, fy = uv.y * float(s) - 0.5f;
+    const float x0f = std::floor(fx), y0f = std::floor(fy);
+    const float ax = fx - x0f, ay = fy - y0f;
+    const int x0 = wrap(int(x0f), s), x1 = wrap(int(x0f) + 1, s), y0 = wrap(int(y0f), s), y1 = wrap(int(y0f) + 1, s);
+    auto at = [&](int x, int y) { return t[size_t(y) * size_t(s) + size_t(x)]; };
+    return glm::mix(glm::mix(at(x0, y0), at(x1, y0), ax), glm::mix(at(x0, y1), at(x1, y1), ax), ay);
+}
+
+NoiseTexture make_noise_texture(const NoiseCdfs& cdfs, int size) {
+    if (size < 16 || size > 4096 || (size & (size - 1)) != 0)
+        throw InputError("bumpsynth.noise_texture_size: expected a power of two in [16, 4096], got " + std::to_string(size));
+    NoiseTexture tex;
+    tex.size = size;
+    tex.octaves_max = cdfs.params.octaves_max;
+    int count = 0;
+    while (count < tex.octaves_max && (size >> count) >= 1) ++count;
+    tex.levels.resize(size_t(count));
+    for (int l = 0; l < count; ++l) {
+        const int s = size >> l, k = std::max(1, tex.octaves_max - l), sub = l == 0 ? 1 : 2;
+        std::vector<vec2>& t = tex.levels[size_t(l)];
+        t.resize(size_t(s) * size_t(s));
+        tbb::parallel_for(0, s, [&](int y) {
+            for (int x = 0; x < s; ++x) {
+                vec2 sum(0.f);
+                for (int j = 0; j < sub; ++j)
+                    for (int i = 0; i < sub; ++i) {
+                        const vec2 uv((float(x) + (float(i) + 0.5f) / float(sub)) / float(s), (float(y) + (float(j) + 0.5f) / float(sub)) / float(s));
+                        sum += noise_inputs(cdfs, uv, k);
+                    }
+                t[size_t(y) * size_t(s) + size_t(x)] = sum / float(sub * sub);
+            }
+        });
+    }
+    return tex;
+}
+}  // namespace mesolab::bumpsynth

@@ -1,0 +1,97 @@
+#pragma once
+// Fractal Perlin noise with distance-dependent detail, the inputs (r1, r2) of the normal look-up
+// table (Kautz, Heidrich, Seidel 2001, §4, §5.1, §5.2.2).
+//
+// [SECTION] Gradient noise
+// Perlin's gradient noise (Perlin 2002: quintic fade 6t⁵ - 15t⁴ + 10t³) on the integer lattice, with
+// one of 8 unit gradients per lattice point chosen by an integer hash (no permutation table, so the
+// GLSL version in gpu/bumpsynth/noise.glsl computes the same bits). The lattice is periodic with
+// `period` cells, so noise laid over a surface's uv square tiles (no seam at u = 0 = 1 on a sphere).
+// Its values lie in [-√½, √½] (unit gradients in 2D), 0 at lattice points.
+//
+// [SECTION] Fractal noise ("turbulence", §4)
+// Octave o (o = 0, 1, ...) of channel c at uv:  n_o,c(uv) = gain^o · noise(F 2^o uv + offset_o,c)
+// with F = base_frequency (lattice cells per unit of uv, an integer so the noise tiles uv), a period of
+// F 2^o cells, a hash seed per (seed, channel, octave), and an irrational offset per octave and
+// channel so that the octaves' lattice zeros never line up. The k-octave sum T_k = Σ_{o<k} n_o,c is
+// mapped to r_k = 1/2 + T_k / (2 √½ A_k), A_k = Σ_{o<k} gain^o, which lies in [0, 1]. Channels 0 and 1
+// (r1, r2) use unrelated seeds and offsets: decorrelated. The paper's turbulence is this sum (its
+// "Gaussian distributed" random numbers, §4); Perlin's |noise| variant would fold the distribution.
+//
+// [SECTION] Input CDFs per octave count (§4)
+// The paper assumes the distribution of the turbulence "remains constant independent of the number of
+// octaves"; it does not (one octave is far from Gaussian), so G_k is measured for every octave count
+// k = 1..K (NoiseCdfs, from stratified samples over the uv square, both channels pooled), and the
+// look-up uses u = G_k(r_k), uniform for every k.
+//
+// [SECTION] Detail by distance (§5.1)
+// At eye distance d the octave count is o(d) = clamp(log2(detail_distance / d), 0, K): no bumps at
+// d >= detail_distance (the surface is shaded with the NDF alone), one more octave at every halving of
+// the distance. A fractional o = k + w blends the shading of k and k + 1 octaves with weight w, so an
+// octave fades in continuously while zooming (no popping); k = 0 is the NDF alone.
+//
+// [SECTION] The mip-mapped noise texture (§5.2.2, the paper's hardware path)
+// noise = texture: level l of a mip chain (level 0: size², halving) holds u = G_{K-l}(r_{K-l}) of both
+// channels (the finest level the most octaves, each coarser level one octave less, box-filtered from
+// 4 x 4 samples of its own octave count per texel: the filtered indices of §6). The inputs of k
+// octaves are a bilinear, wrapping look-up in level K - k (clamped to the chain), and a fractional
+// octave count blends the shading of two levels exactly as the procedural path blends k and k + 1.
+#include "core/bumpsynth/lut.h"
+#include "core/math.h"
+#include <cstdint>
+#include <vector>
+
+namespace mesolab::bumpsynth {
+
+struct NoiseParams {
+    int base_frequency = 8;  // lattice cells per unit of uv in octave 0 (>= 1)
+    float gain = 0.5f;       // amplitude ratio between octaves, in (0, 1]
+    uint32_t seed = 1;
+    int octaves_max = 8;     // K, in [1, 16]
+    // InputError naming bumpsynth.noise_frequency, noise_gain or octaves_max when out of range.
+    void validate() const;
+};
+
+// 32-bit integer hash (lowbias32 finaliser), shared with the GLSL.
+uint32_t hash32(uint32_t x);
+// Gradient noise at p, periodic with `period` lattice cells (period >= 1), seeded.
+float gradient_noise(vec2 p, int period, uint32_t seed);
+// The hash seed and lattice offset (in cells) of octave o of channel c (uniforms of the shader).
+uint32_t octave_seed(uint32_t seed, int octave, int channel);
+vec2 octave_offset(int octave, int channel);
+// Octave o of channel c (0 or 1), including its gain^o.
+float noise_octave(const NoiseParams& n, vec2 uv, int octave, int channel);
+// r_k: the first k octaves of channel c mapped to [0, 1] (k >= 1).
+float fractal_noise(const NoiseParams& n, vec2 uv, int k, int channel);
+// r_k of both channels for every k = 1..K at once: out[k-1] = (r1, r2) of k octaves.
+void fractal_noise_all(const NoiseParams& n, vec2 uv, vec2* out);
+
+// The octave count at eye distance d (see above); texture mode renders at the full K.
+float octaves_at_distance(float distance, float detail_distance, int octaves_max);
+
+// G_k for k = 1..K.
+struct NoiseCdfs {
+    NoiseParams params;
+    std::vector<InputCdf> G;  // G[k-1]
+    const InputCdf& of(int k) const { return G[size_t(k - 1)]; }
+};
+// Measures G_k from samples² stratified jittered points over [0, 1)² (fixed seed), both channels.
+// ~60 ms for K = 8, samples = 512 on 2 cores.
+NoiseCdfs measure_noise_cdfs(const NoiseParams& n, int samples = 512);
+
+// The uniformised inputs u = (G_k(r1), G_k(r2)) of k >= 1 octaves at uv.
+vec2 noise_inputs(const NoiseCdfs& cdfs, vec2 uv, int k);
+
+// The paper's mip-mapped noise texture (level l: K - l octaves; levels of size >> l down to size 1
+// or K levels, whichever comes first; levels beyond K hold 1 octave).
+struct NoiseTexture {
+    int size = 0;                    // level 0 width = height (a power of two)
+    int octaves_max = 0;
+    std::vector<std::vector<vec2>> levels;  // row-major, row 0 at v = 0
+    int level_of(int k) const;              // K - k, clamped to [0, levels - 1]
+    vec2 bilinear(int level, vec2 uv) const;  // GL_LINEAR + GL_REPEAT at one level
+    vec2 inputs(vec2 uv, int k) const { return bilinear(level_of(k), uv); }
+};
+// InputError (bumpsynth.noise_texture_size) unless size is a power of two in [16, 4096].
+NoiseTexture make_noise_texture(const NoiseCdfs& cdfs, int size);
+}  // namespace mesolab::bumpsynth

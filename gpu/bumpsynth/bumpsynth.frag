@@ -1,0 +1,218 @@
+#version 430 core
+// Technique bumpsynth: bump map synthesis from an NDF (Kautz et al. 2001), the GLSL twin of
+// core/bumpsynth/{noise,lut,shading,bumpsynth}.cpp: the same bits of noise, the same input CDFs,
+// the same nearest look-up-table entries and the same BRDF.
+#include "common.glsl"
+#include "camera.glsl"
+#include "lighting.glsl"
+
+in vec3 v_position;
+in vec3 v_normal;
+in vec3 v_tangent;
+in vec2 v_uv;
+
+// [SECTION] Data
+uniform sampler2D u_ndf;             // R x R: (value, 1 where the cell meets the disk)
+uniform int u_ndf_res;
+uniform sampler2DArray u_lut;        // S x S x 3: m, t, b
+uniform int u_lut_size;
+layout(std430, binding = 0) readonly buffer Cdfs { vec2 cdf_knots[]; };  // (r, G(r)) of G_1..G_K
+uniform int u_cdf_offset[16];
+uniform int u_cdf_count[16];
+uniform int u_octaves_max;
+uniform int u_base_frequency;
+uniform uint u_octave_seed[32];      // [2 o + c]
+uniform vec2 u_octave_offset[32];
+uniform float u_octave_gain[16];     // gain^o
+uniform int u_noise_texture;         // 1: noise = texture
+uniform sampler2D u_noise;           // RG: uniformised inputs, level l = K - l octaves
+uniform int u_noise_levels;
+uniform sampler2D u_smith;           // 64 (phi) x 65 (theta): G1
+uniform int u_masking;
+uniform int u_fresnel;
+uniform vec3 u_ks;
+uniform vec3 u_kd;
+uniform float u_detail_distance;
+uniform int u_has_albedo;
+uniform sampler2D u_albedo;          // top row at t = 0: sampled at (u, 1 - v)
+
+layout(location = 0) out vec4 o_radiance;
+layout(location = 1) out vec4 o_normal;
+layout(location = 2) out vec4 o_octaves;
+
+// [SECTION] Noise (core/bumpsynth/noise.cpp)
+const float kS = 0.70710678;
+const vec2 kGrad[8] = vec2[8](vec2(1, 0), vec2(-1, 0), vec2(0, 1), vec2(0, -1), vec2(kS, kS), vec2(-kS, kS), vec2(kS, -kS), vec2(-kS, -kS));
+
+uint hash32(uint x) {
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return x;
+}
+
+int wrap_i(int i, int n) { return ((i % n) + n) % n; }
+float fade(float t) { return t * t * t * (t * (t * 6.0 - 15.0) + 10.0); }
+
+float gradient_noise(vec2 p, int period, uint seed) {
+    vec2 f0 = floor(p);
+    vec2 f = p - f0;
+    int x0 = wrap_i(int(f0.x), period), y0 = wrap_i(int(f0.y), period);
+    int x1 = x0 + 1 == period ? 0 : x0 + 1, y1 = y0 + 1 == period ? 0 : y0 + 1;
+    vec2 g00 = kGrad[hash32(uint(x0) + hash32(uint(y0) + seed)) & 7u];
+    vec2 g10 = kGrad[hash32(uint(x1) + hash32(uint(y0) + seed)) & 7u];
+    vec2 g01 = kGrad[hash32(uint(x0) + hash32(uint(y1) + seed)) & 7u];
+    vec2 g11 = kGrad[hash32(uint(x1) + hash32(uint(y1) + seed)) & 7u];
+    float n00 = dot(g00, f), n10 = dot(g10, f - vec2(1, 0)), n01 = dot(g01, f - vec2(0, 1)), n11 = dot(g11, f - vec2(1, 1));
+    float u = fade(f.x), v = fade(f.y);
+    float a = n00 + u * (n10 - n00), b = n01 + u * (n11 - n01);
+    return a + v * (b - a);
+}
+
+float fractal_noise(vec2 uv, int k, int c) {
+    float T = 0.0, A = 0.0;
+    for (int o = 0; o < k; ++o) {
+        int period = u_base_frequency << o;
+        vec2 p = uv * float(period) + u_octave_offset[2 * o + c];
+        T += u_octave_gain[o] * gradient_noise(p, period, u_octave_seed[2 * o + c]);
+        A += u_octave_gain[o];
+    }
+    return clamp(0.5 + T / (2.0 * kS * A), 0.0, 1.0);
+}
+
+// G_k(r): piecewise linear through the knots (core/bumpsynth/lut.cpp InputCdf::operator()).
+float input_cdf(int k, float r) {
+    int off = u_cdf_offset[k - 1], n = u_cdf_count[k - 1];
+    int lo = 0, hi = n - 1;  // the last knot with knot.r <= r, in [0, n - 2]
+    while (hi - lo > 1) {
+        int mid = (lo + hi) / 2;
+        if (cdf_knots[off + mid].x <= r) lo = mid; else hi = mid;
+    }
+    vec2 a = cdf_knots[off + lo], b = cdf_knots[off + lo + 1];
+    return b.x > a.x ? a.y + (r - a.x) / (b.x - a.x) * (b.y - a.y) : b.y;
+}
+
+vec2 inputs(vec2 uv, int k) {
+    if (u_noise_texture != 0) return textureLod(u_noise, uv, float(clamp(u_octaves_max - k, 0, u_noise_levels - 1))).rg;
+    return vec2(input_cdf(k, fractal_noise(uv, k, 0)), input_cdf(k, fractal_noise(uv, k, 1)));
+}
+
+// [SECTION] Look-up table and NDF (core/bumpsynth/lut.cpp, ndf.cpp)
+void lut_lookup(vec2 r, out vec3 m, out vec3 t, out vec3 b) {
+    int a = min(u_lut_size - 1, int(clamp(r.x, 0.0, 1.0) * float(u_lut_size)));
+    int c = min(u_lut_size - 1, int(clamp(r.y, 0.0, 1.0) * float(u_lut_size)));
+    m = texelFetch(u_lut, ivec3(a, c, 0), 0).xyz;
+    t = texelFetch(u_lut, ivec3(a, c, 1), 0).xyz;
+    b = texelFetch(u_lut, ivec3(a, c, 2), 0).xyz;
+}
+
+float ndf_eval(vec3 m) {
+    float len = length(m);
+    if (!(len > 0.0) || m.z < 0.0) return 0.0;
+    vec2 xy = m.xy / len;
+    float r2 = dot(xy, xy);
+    if (!(r2 <= 1.0 + 1e-6)) return 0.0;
+    if (r2 > 1.0) xy /= sqrt(r2);
+    float h = 2.0 / float(u_ndf_res);
+    vec2 f = (xy + 1.0) / h - 0.5;
+    ivec2 c0 = ivec2(floor(f));
+    vec2 t = f - vec2(c0);
+    float sum = 0.0, sum_w = 0.0;
+    for (int dj = 0; dj < 2; ++dj)
+        for (int di = 0; di < 2; ++di) {
+            ivec2 c = c0 + ivec2(di, dj);
+            if (c.x < 0 || c.y < 0 || c.x >= u_ndf_res || c.y >= u_ndf_res) continue;
+            vec2 v = texelFetch(u_ndf, c, 0).rg;
+            if (v.y <= 0.0) continue;
+            float w = (di != 0 ? t.x : 1.0 - t.x) * (dj != 0 ? t.y : 1.0 - t.y);
+            sum += w * v.x;
+            sum_w += w;
+        }
+    if (sum_w > 0.0) return sum / sum_w;
+    ivec2 c = clamp(ivec2(floor((xy + 1.0) / h)), ivec2(0), ivec2(u_ndf_res - 1));
+    return texelFetch(u_ndf, c, 0).r;
+}
+
+float smith_g1(vec3 w) {
+    if (!(w.z > 0.0)) return 0.0;
+    float theta = acos(clamp(w.z / length(w), 0.0, 1.0));
+    float phi = atan(w.y, w.x);
+    if (phi < 0.0) phi += TWO_PI;
+    float ft = theta / (PI / 2.0) * 64.0, fp = phi / TWO_PI * 64.0;
+    int t0 = min(int(ft), 63), p0 = int(fp) % 64, p1 = (p0 + 1) % 64;
+    float at = clamp(ft - float(t0), 0.0, 1.0), ap = fp - floor(fp);
+    float g00 = texelFetch(u_smith, ivec2(p0, t0), 0).r, g01 = texelFetch(u_smith, ivec2(p1, t0), 0).r;
+    float g10 = texelFetch(u_smith, ivec2(p0, t0 + 1), 0).r, g11 = texelFetch(u_smith, ivec2(p1, t0 + 1), 0).r;
+    float a = g00 + ap * (g01 - g00), b = g10 + ap * (g11 - g10);
+    return a + at * (b - a);
+}
+
+// [SECTION] The BRDF in a facet's frame (core/bumpsynth/shading.cpp shade_facet)
+vec3 shade_facet(vec3 fm, vec3 ft, vec3 fb, vec3 wo, vec3 wi, vec3 E, vec3 albedo) {
+    if (!(wo.z > 0.0) || !(wi.z > 0.0)) return vec3(0.0);
+    vec3 o = vec3(dot(wo, ft), dot(wo, fb), dot(wo, fm));
+    vec3 i = vec3(dot(wi, ft), dot(wi, fb), dot(wi, fm));
+    if (!(i.z > 0.0)) return vec3(0.0);
+    vec3 L = u_kd * albedo * (INV_PI * i.z);
+    if (o.z > 0.0) {
+        vec3 h = normalize(o + i);
+        float D = ndf_eval(h);
+        vec3 F = u_fresnel != 0 ? u_ks + (vec3(1.0) - u_ks) * pow(clamp(1.0 - dot(i, h), 0.0, 1.0), 5.0) : u_ks;
+        if (u_masking != 0) {
+            float g1o = max(smith_g1(o), 1e-7), g1i = max(smith_g1(i), 1e-7);
+            float G2 = 1.0 / (1.0 / g1o + 1.0 / g1i - 1.0);
+            L += F * (D * G2 / (4.0 * max(o.z, 1e-7)));
+        } else {
+            L += F * (D * i.z / 4.0);
+        }
+    }
+    return L * E;
+}
+
+void main() {
+    vec3 p = v_position;
+    vec3 wo = camera_wo(p);
+    // Shading frame (core/render.cpp tangent_frame).
+    vec3 N = normalize(v_normal);
+    if (dot(N, wo) < 0.0) N = -N;
+    vec3 T = v_tangent - N * dot(v_tangent, N);
+    T = dot(T, T) > 1e-12 ? normalize(T) : (abs(N.x) < 0.9 ? normalize(cross(N, vec3(1, 0, 0))) : normalize(cross(N, vec3(0, 1, 0))));
+    vec3 B = cross(N, T);
+    mat3 to_world = mat3(T, B, N);
+    vec3 wo_t = vec3(dot(wo, T), dot(wo, B), dot(wo, N));
+
+    // Octaves at this distance (core/bumpsynth/noise.cpp octaves_at_distance).
+    float K = float(u_octaves_max);
+    float oct = K;
+    if (u_texture_mode == 0) {
+        float d = length(u_eye - p);
+        oct = d > 0.0 ? clamp(log2(u_detail_distance / d), 0.0, K) : K;
+    }
+    int k = int(floor(oct));
+    float w = oct - float(k);
+    if (k >= u_octaves_max) { k = u_octaves_max; w = 0.0; }
+
+    vec3 cm = vec3(0, 0, 1), ct = vec3(1, 0, 0), cb = vec3(0, 1, 0);
+    if (k > 0) lut_lookup(inputs(v_uv, k), cm, ct, cb);
+    vec3 fm = cm, ft = ct, fb = cb;
+    if (w > 0.0) lut_lookup(inputs(v_uv, k + 1), fm, ft, fb);
+
+    vec3 albedo = u_has_albedo != 0 ? texture(u_albedo, vec2(v_uv.x, 1.0 - v_uv.y)).rgb : vec3(1.0);
+    vec3 Lc = vec3(0.0), Lf = vec3(0.0);
+    for (int li = 0; li < u_light_count; ++li) {
+        vec3 wi, E;
+        light_sample(li, p, wi, E);
+        vec3 wi_t = vec3(dot(wi, T), dot(wi, B), dot(wi, N));
+        Lc += shade_facet(cm, ct, cb, wo_t, wi_t, E, albedo);
+        if (w > 0.0) Lf += shade_facet(fm, ft, fb, wo_t, wi_t, E, albedo);
+    }
+    Lc += u_kd * albedo * INV_PI * env_irradiance(to_world * cm);
+    if (w > 0.0) Lf += u_kd * albedo * INV_PI * env_irradiance(to_world * fm);
+    vec3 L = w > 0.0 ? mix(Lc, Lf, w) : Lc;
+    vec3 n = w > 0.0 ? normalize(mix(cm, fm, w)) : cm;
+    o_radiance = vec4(L, 1.0);
+    o_normal = vec4(n, 1.0);
+    o_octaves = vec4(oct, 0.0, 0.0, 1.0);
+}
