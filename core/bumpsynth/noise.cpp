@@ -60,7 +60,7 @@ float gradient_noise(vec2 p, int period, uint32_t seed) {
 
 // [SECTION] Fractal noise
 float noise_octave(const NoiseParams& n, vec2 uv, int octave, int channel) {
-    const int period = n.base_frequency << octave;
+    const int period = (n.base_frequency + channel) << octave;  // see the header: decorrelated lattices
     const vec2 p = uv * float(period) + octave_offset(octave, channel);
     return std::pow(n.gain, float(octave)) * gradient_noise(p, period, octave_seed(n.seed, octave, channel));
 }
@@ -94,7 +94,7 @@ float octaves_at_distance(float distance, float detail_distance, int octaves_max
 NoiseCdfs measure_noise_cdfs(const NoiseParams& n, int samples) {
     n.validate();
     const int K = n.octaves_max, N = std::max(16, samples);
-    std::vector<std::vector<float>> r(size_t(K), std::vector<float>(size_t(N) * size_t(N) * 2));
+    std::vector<std::vector<float>> r(size_t(2 * K), std::vector<float>(size_t(N) * size_t(N)));
     tbb::parallel_for(0, N, [&](int y) {
         std::mt19937 rng(uint32_t(y) * 7919u + n.seed);
         std::uniform_real_distribution<float> jitter(0.f, 1.f);
@@ -102,20 +102,19 @@ NoiseCdfs measure_noise_cdfs(const NoiseParams& n, int samples) {
         for (int x = 0; x < N; ++x) {
             const vec2 uv((float(x) + jitter(rng)) / float(N), (float(y) + jitter(rng)) / float(N));
             fractal_noise_all(n, uv, all.data());
-            const size_t i = (size_t(y) * size_t(N) + size_t(x)) * 2;
-            for (int k = 0; k < K; ++k) r[size_t(k)][i] = all[size_t(k)].x, r[size_t(k)][i + 1] = all[size_t(k)].y;
+            const size_t i = size_t(y) * size_t(N) + size_t(x);
+            for (int k = 0; k < K; ++k) r[size_t(2 * k)][i] = all[size_t(k)].x, r[size_t(2 * k + 1)][i] = all[size_t(k)].y;
         }
     });
     NoiseCdfs out;
     out.params = n;
-    out.G.resize(size_t(K));
-    tbb::parallel_for(0, K, [&](int k) { out.G[size_t(k)] = measure_input_cdf(r[size_t(k)]); });
+    out.G.resize(size_t(2 * K));
+    tbb::parallel_for(0, 2 * K, [&](int k) { out.G[size_t(k)] = measure_input_cdf(r[size_t(k)]); });
     return out;
 }
 
 vec2 noise_inputs(const NoiseCdfs& cdfs, vec2 uv, int k) {
-    const InputCdf& G = cdfs.of(k);
-    return {float(G(fractal_noise(cdfs.params, uv, k, 0))), float(G(fractal_noise(cdfs.params, uv, k, 1)))};
+    return {float(cdfs.of(k, 0)(fractal_noise(cdfs.params, uv, k, 0))), float(cdfs.of(k, 1)(fractal_noise(cdfs.params, uv, k, 1)))};
 }
 
 // [SECTION] Mip-mapped noise texture

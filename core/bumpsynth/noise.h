@@ -10,19 +10,25 @@
 // Its values lie in [-√½, √½] (unit gradients in 2D), 0 at lattice points.
 //
 // [SECTION] Fractal noise ("turbulence", §4)
-// Octave o (o = 0, 1, ...) of channel c at uv:  n_o,c(uv) = gain^o · noise(F 2^o uv + offset_o,c)
-// with F = base_frequency (lattice cells per unit of uv, an integer so the noise tiles uv), a period of
-// F 2^o cells, a hash seed per (seed, channel, octave), and an irrational offset per octave and
+// Octave o (o = 0, 1, ...) of channel c at uv:  n_o,c(uv) = gain^o · noise(F_c 2^o uv + offset_o,c)
+// with F_c = base_frequency + c (lattice cells per unit of uv, integers so the noise tiles uv), a period
+// of F_c 2^o cells, a hash seed per (seed, channel, octave), and an irrational offset per octave and
 // channel so that the octaves' lattice zeros never line up. The k-octave sum T_k = Σ_{o<k} n_o,c is
 // mapped to r_k = 1/2 + T_k / (2 √½ A_k), A_k = Σ_{o<k} gain^o, which lies in [0, 1]. Channels 0 and 1
-// (r1, r2) use unrelated seeds and offsets: decorrelated. The paper's turbulence is this sum (its
+// (r1, r2) use unrelated seeds and offsets, and lattices of different periods: gradient noise's
+// variance varies within a lattice cell (0 at the lattice points), so two channels on lattices of the
+// same period depend on each other through that pattern whatever their offset (a 200k-sample χ² test
+// sees it); with F and F + 1 the patterns beat and average out over the uv square. What remains is
+// the finite square's sampling dependence, ~1/sqrt(cells): |corr| ~ 0.03 for F = 8, ~1e-4 for F = 256. The paper's turbulence is this sum (its
 // "Gaussian distributed" random numbers, §4); Perlin's |noise| variant would fold the distribution.
 //
 // [SECTION] Input CDFs per octave count (§4)
 // The paper assumes the distribution of the turbulence "remains constant independent of the number of
 // octaves"; it does not (one octave is far from Gaussian), so G_k is measured for every octave count
-// k = 1..K (NoiseCdfs, from stratified samples over the uv square, both channels pooled), and the
-// look-up uses u = G_k(r_k), uniform for every k.
+// k = 1..K and each channel (NoiseCdfs, from stratified samples over the uv square), and the look-up
+// uses u = G_k,c(r_k,c), uniform for every k. Per channel, because on a finite (periodic) square the
+// two channels' empirical distributions differ by ~1/sqrt(lattice cells): one pooled G is off by
+// ~0.005 in u for a first octave of 64² cells, which a 200k-sample χ² test sees.
 //
 // [SECTION] Detail by distance (§5.1)
 // At eye distance d the octave count is o(d) = clamp(log2(detail_distance / d), 0, K): no bumps at
@@ -69,17 +75,17 @@ void fractal_noise_all(const NoiseParams& n, vec2 uv, vec2* out);
 // The octave count at eye distance d (see above); texture mode renders at the full K.
 float octaves_at_distance(float distance, float detail_distance, int octaves_max);
 
-// G_k for k = 1..K.
+// G_k,c for k = 1..K and channels c = 0, 1.
 struct NoiseCdfs {
     NoiseParams params;
-    std::vector<InputCdf> G;  // G[k-1]
-    const InputCdf& of(int k) const { return G[size_t(k - 1)]; }
+    std::vector<InputCdf> G;  // G[2 (k-1) + c]
+    const InputCdf& of(int k, int channel) const { return G[size_t(2 * (k - 1) + channel)]; }
 };
 // Measures G_k from samples² stratified jittered points over [0, 1)² (fixed seed), both channels.
 // ~60 ms for K = 8, samples = 512 on 2 cores.
 NoiseCdfs measure_noise_cdfs(const NoiseParams& n, int samples = 512);
 
-// The uniformised inputs u = (G_k(r1), G_k(r2)) of k >= 1 octaves at uv.
+// The uniformised inputs u = (G_k,0(r1), G_k,1(r2)) of k >= 1 octaves at uv.
 vec2 noise_inputs(const NoiseCdfs& cdfs, vec2 uv, int k);
 
 // The paper's mip-mapped noise texture (level l: K - l octaves; levels of size >> l down to size 1

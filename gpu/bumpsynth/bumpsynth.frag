@@ -16,9 +16,9 @@ uniform sampler2D u_ndf;             // R x R: (value, 1 where the cell meets th
 uniform int u_ndf_res;
 uniform sampler2DArray u_lut;        // S x S x 3: m, t, b
 uniform int u_lut_size;
-layout(std430, binding = 0) readonly buffer Cdfs { vec2 cdf_knots[]; };  // (r, G(r)) of G_1..G_K
-uniform int u_cdf_offset[16];
-uniform int u_cdf_count[16];
+layout(std430, binding = 0) readonly buffer Cdfs { vec2 cdf_knots[]; };  // (r, G(r)) of G_k,c at [2 (k-1) + c]
+uniform int u_cdf_offset[32];
+uniform int u_cdf_count[32];
 uniform int u_octaves_max;
 uniform int u_base_frequency;
 uniform uint u_octave_seed[32];      // [2 o + c]
@@ -74,7 +74,7 @@ float gradient_noise(vec2 p, int period, uint seed) {
 float fractal_noise(vec2 uv, int k, int c) {
     float T = 0.0, A = 0.0;
     for (int o = 0; o < k; ++o) {
-        int period = u_base_frequency << o;
+        int period = (u_base_frequency + c) << o;
         vec2 p = uv * float(period) + u_octave_offset[2 * o + c];
         T += u_octave_gain[o] * gradient_noise(p, period, u_octave_seed[2 * o + c]);
         A += u_octave_gain[o];
@@ -82,9 +82,9 @@ float fractal_noise(vec2 uv, int k, int c) {
     return clamp(0.5 + T / (2.0 * kS * A), 0.0, 1.0);
 }
 
-// G_k(r): piecewise linear through the knots (core/bumpsynth/lut.cpp InputCdf::operator()).
-float input_cdf(int k, float r) {
-    int off = u_cdf_offset[k - 1], n = u_cdf_count[k - 1];
+// G_k,c(r): piecewise linear through the knots (core/bumpsynth/lut.cpp InputCdf::operator()).
+float input_cdf(int k, int c, float r) {
+    int off = u_cdf_offset[2 * (k - 1) + c], n = u_cdf_count[2 * (k - 1) + c];
     int lo = 0, hi = n - 1;  // the last knot with knot.r <= r, in [0, n - 2]
     while (hi - lo > 1) {
         int mid = (lo + hi) / 2;
@@ -96,7 +96,7 @@ float input_cdf(int k, float r) {
 
 vec2 inputs(vec2 uv, int k) {
     if (u_noise_texture != 0) return textureLod(u_noise, uv, float(clamp(u_octaves_max - k, 0, u_noise_levels - 1))).rg;
-    return vec2(input_cdf(k, fractal_noise(uv, k, 0)), input_cdf(k, fractal_noise(uv, k, 1)));
+    return vec2(input_cdf(k, 0, fractal_noise(uv, k, 0)), input_cdf(k, 1, fractal_noise(uv, k, 1)));
 }
 
 // [SECTION] Look-up table and NDF (core/bumpsynth/lut.cpp, ndf.cpp)
