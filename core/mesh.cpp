@@ -10,6 +10,7 @@
 #pragma GCC diagnostic pop
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cctype>
 #include <cstdlib>
@@ -100,8 +101,331 @@ SurfaceSample sample_primitive(Primitive prim, int i, int nu, int j, int nv, dou
             const vec3 p(float(cos_phi), float(sin_phi), float(2.0 * v - 1.0));
             return {p, vec3(float(cos_phi), float(sin_phi), 0.f), azimuth_tangent};
         }
+        case Primitive::Teapot: break;  // Bezier patches: make_teapot
     }
     return {};
+}
+}  // namespace
+
+// [SECTION] Utah teapot
+namespace {
+
+// Newell's control points (1975), as published with the 32-patch teapot: z up, in his units
+// (the body's widest radius is 2, the lid's knob top at z = 3.15, the bottom at z = 0).
+// Points 205, 206, 216 and 223 (one-based; next to the knob top) are not used by any patch.
+constexpr double kTeapotPoints[306][3] = {
+    {1.4, 0.0, 2.4}, {1.4, -0.784, 2.4}, {0.784, -1.4, 2.4}, {0.0, -1.4, 2.4},  // 1
+    {1.3375, 0.0, 2.53125}, {1.3375, -0.749, 2.53125}, {0.749, -1.3375, 2.53125}, {0.0, -1.3375, 2.53125},
+    {1.4375, 0.0, 2.53125}, {1.4375, -0.805, 2.53125}, {0.805, -1.4375, 2.53125}, {0.0, -1.4375, 2.53125},
+    {1.5, 0.0, 2.4}, {1.5, -0.84, 2.4}, {0.84, -1.5, 2.4}, {0.0, -1.5, 2.4},
+    {-0.784, -1.4, 2.4}, {-1.4, -0.784, 2.4}, {-1.4, 0.0, 2.4}, {-0.749, -1.3375, 2.53125},  // 17
+    {-1.3375, -0.749, 2.53125}, {-1.3375, 0.0, 2.53125}, {-0.805, -1.4375, 2.53125}, {-1.4375, -0.805, 2.53125},
+    {-1.4375, 0.0, 2.53125}, {-0.84, -1.5, 2.4}, {-1.5, -0.84, 2.4}, {-1.5, 0.0, 2.4},
+    {-1.4, 0.784, 2.4}, {-0.784, 1.4, 2.4}, {0.0, 1.4, 2.4}, {-1.3375, 0.749, 2.53125},  // 29
+    {-0.749, 1.3375, 2.53125}, {0.0, 1.3375, 2.53125}, {-1.4375, 0.805, 2.53125}, {-0.805, 1.4375, 2.53125},
+    {0.0, 1.4375, 2.53125}, {-1.5, 0.84, 2.4}, {-0.84, 1.5, 2.4}, {0.0, 1.5, 2.4},
+    {0.784, 1.4, 2.4}, {1.4, 0.784, 2.4}, {0.749, 1.3375, 2.53125}, {1.3375, 0.749, 2.53125},  // 41
+    {0.805, 1.4375, 2.53125}, {1.4375, 0.805, 2.53125}, {0.84, 1.5, 2.4}, {1.5, 0.84, 2.4},
+    {1.75, 0.0, 1.875}, {1.75, -0.98, 1.875}, {0.98, -1.75, 1.875}, {0.0, -1.75, 1.875},  // 49
+    {2.0, 0.0, 1.35}, {2.0, -1.12, 1.35}, {1.12, -2.0, 1.35}, {0.0, -2.0, 1.35},
+    {2.0, 0.0, 0.9}, {2.0, -1.12, 0.9}, {1.12, -2.0, 0.9}, {0.0, -2.0, 0.9},
+    {-0.98, -1.75, 1.875}, {-1.75, -0.98, 1.875}, {-1.75, 0.0, 1.875}, {-1.12, -2.0, 1.35},  // 61
+    {-2.0, -1.12, 1.35}, {-2.0, 0.0, 1.35}, {-1.12, -2.0, 0.9}, {-2.0, -1.12, 0.9},
+    {-2.0, 0.0, 0.9}, {-1.75, 0.98, 1.875}, {-0.98, 1.75, 1.875}, {0.0, 1.75, 1.875},
+    {-2.0, 1.12, 1.35}, {-1.12, 2.0, 1.35}, {0.0, 2.0, 1.35}, {-2.0, 1.12, 0.9},  // 73
+    {-1.12, 2.0, 0.9}, {0.0, 2.0, 0.9}, {0.98, 1.75, 1.875}, {1.75, 0.98, 1.875},
+    {1.12, 2.0, 1.35}, {2.0, 1.12, 1.35}, {1.12, 2.0, 0.9}, {2.0, 1.12, 0.9},
+    {2.0, 0.0, 0.45}, {2.0, -1.12, 0.45}, {1.12, -2.0, 0.45}, {0.0, -2.0, 0.45},  // 85
+    {1.5, 0.0, 0.225}, {1.5, -0.84, 0.225}, {0.84, -1.5, 0.225}, {0.0, -1.5, 0.225},
+    {1.5, 0.0, 0.15}, {1.5, -0.84, 0.15}, {0.84, -1.5, 0.15}, {0.0, -1.5, 0.15},
+    {-1.12, -2.0, 0.45}, {-2.0, -1.12, 0.45}, {-2.0, 0.0, 0.45}, {-0.84, -1.5, 0.225},  // 97
+    {-1.5, -0.84, 0.225}, {-1.5, 0.0, 0.225}, {-0.84, -1.5, 0.15}, {-1.5, -0.84, 0.15},
+    {-1.5, 0.0, 0.15}, {-2.0, 1.12, 0.45}, {-1.12, 2.0, 0.45}, {0.0, 2.0, 0.45},
+    {-1.5, 0.84, 0.225}, {-0.84, 1.5, 0.225}, {0.0, 1.5, 0.225}, {-1.5, 0.84, 0.15},  // 109
+    {-0.84, 1.5, 0.15}, {0.0, 1.5, 0.15}, {1.12, 2.0, 0.45}, {2.0, 1.12, 0.45},
+    {0.84, 1.5, 0.225}, {1.5, 0.84, 0.225}, {0.84, 1.5, 0.15}, {1.5, 0.84, 0.15},
+    {-1.6, 0.0, 2.025}, {-1.6, -0.3, 2.025}, {-1.5, -0.3, 2.25}, {-1.5, 0.0, 2.25},  // 121: handle
+    {-2.3, 0.0, 2.025}, {-2.3, -0.3, 2.025}, {-2.5, -0.3, 2.25}, {-2.5, 0.0, 2.25},
+    {-2.7, 0.0, 2.025}, {-2.7, -0.3, 2.025}, {-3.0, -0.3, 2.25}, {-3.0, 0.0, 2.25},
+    {-2.7, 0.0, 1.8}, {-2.7, -0.3, 1.8}, {-3.0, -0.3, 1.8}, {-3.0, 0.0, 1.8},
+    {-1.5, 0.3, 2.25}, {-1.6, 0.3, 2.025}, {-2.5, 0.3, 2.25}, {-2.3, 0.3, 2.025},  // 137
+    {-3.0, 0.3, 2.25}, {-2.7, 0.3, 2.025}, {-3.0, 0.3, 1.8}, {-2.7, 0.3, 1.8},
+    {-2.7, 0.0, 1.575}, {-2.7, -0.3, 1.575}, {-3.0, -0.3, 1.35}, {-3.0, 0.0, 1.35},  // 145
+    {-2.5, 0.0, 1.125}, {-2.5, -0.3, 1.125}, {-2.65, -0.3, 0.9375}, {-2.65, 0.0, 0.9375},
+    {-2.0, -0.3, 0.9}, {-1.9, -0.3, 0.6}, {-1.9, 0.0, 0.6}, {-3.0, 0.3, 1.35},  // 153
+    {-2.7, 0.3, 1.575}, {-2.65, 0.3, 0.9375}, {-2.5, 0.3, 1.125}, {-1.9, 0.3, 0.6},
+    {-2.0, 0.3, 0.9}, {1.7, 0.0, 1.425}, {1.7, -0.66, 1.425}, {1.7, -0.66, 0.6},  // 161; 162: spout
+    {1.7, 0.0, 0.6}, {2.6, 0.0, 1.425}, {2.6, -0.66, 1.425}, {3.1, -0.66, 0.825},  // 165
+    {3.1, 0.0, 0.825}, {2.3, 0.0, 2.1}, {2.3, -0.25, 2.1}, {2.4, -0.25, 2.025},  // 169
+    {2.4, 0.0, 2.025}, {2.7, 0.0, 2.4}, {2.7, -0.25, 2.4}, {3.3, -0.25, 2.4},  // 173
+    {3.3, 0.0, 2.4}, {1.7, 0.66, 0.6}, {1.7, 0.66, 1.425}, {3.1, 0.66, 0.825},  // 177
+    {2.6, 0.66, 1.425}, {2.4, 0.25, 2.025}, {2.3, 0.25, 2.1}, {3.3, 0.25, 2.4},  // 181
+    {2.7, 0.25, 2.4}, {2.8, 0.0, 2.475}, {2.8, -0.25, 2.475}, {3.525, -0.25, 2.49375},  // 185
+    {3.525, 0.0, 2.49375}, {2.9, 0.0, 2.475}, {2.9, -0.15, 2.475}, {3.45, -0.15, 2.5125},  // 189
+    {3.45, 0.0, 2.5125}, {2.8, 0.0, 2.4}, {2.8, -0.15, 2.4}, {3.2, -0.15, 2.4},  // 193
+    {3.2, 0.0, 2.4}, {3.525, 0.25, 2.49375}, {2.8, 0.25, 2.475}, {3.45, 0.15, 2.5125},  // 197
+    {2.9, 0.15, 2.475}, {3.2, 0.15, 2.4}, {2.8, 0.15, 2.4}, {0.0, 0.0, 3.15},  // 201; 204: lid
+    {0.0, -0.002, 3.15}, {0.002, 0.0, 3.15}, {0.8, 0.0, 3.15}, {0.8, -0.45, 3.15},  // 205
+    {0.45, -0.8, 3.15}, {0.0, -0.8, 3.15}, {0.0, 0.0, 2.85}, {0.2, 0.0, 2.7},  // 209
+    {0.2, -0.112, 2.7}, {0.112, -0.2, 2.7}, {0.0, -0.2, 2.7}, {-0.002, 0.0, 3.15},  // 213
+    {-0.45, -0.8, 3.15}, {-0.8, -0.45, 3.15}, {-0.8, 0.0, 3.15}, {-0.112, -0.2, 2.7},  // 217
+    {-0.2, -0.112, 2.7}, {-0.2, 0.0, 2.7}, {0.0, 0.002, 3.15}, {-0.8, 0.45, 3.15},  // 221
+    {-0.45, 0.8, 3.15}, {0.0, 0.8, 3.15}, {-0.2, 0.112, 2.7}, {-0.112, 0.2, 2.7},  // 225
+    {0.0, 0.2, 2.7}, {0.45, 0.8, 3.15}, {0.8, 0.45, 3.15}, {0.112, 0.2, 2.7},  // 229
+    {0.2, 0.112, 2.7}, {0.4, 0.0, 2.55}, {0.4, -0.224, 2.55}, {0.224, -0.4, 2.55},  // 233
+    {0.0, -0.4, 2.55}, {1.3, 0.0, 2.55}, {1.3, -0.728, 2.55}, {0.728, -1.3, 2.55},  // 237
+    {0.0, -1.3, 2.55}, {1.3, 0.0, 2.4}, {1.3, -0.728, 2.4}, {0.728, -1.3, 2.4},  // 241
+    {0.0, -1.3, 2.4}, {-0.224, -0.4, 2.55}, {-0.4, -0.224, 2.55}, {-0.4, 0.0, 2.55},  // 245
+    {-0.728, -1.3, 2.55}, {-1.3, -0.728, 2.55}, {-1.3, 0.0, 2.55}, {-0.728, -1.3, 2.4},  // 249
+    {-1.3, -0.728, 2.4}, {-1.3, 0.0, 2.4}, {-0.4, 0.224, 2.55}, {-0.224, 0.4, 2.55},  // 253
+    {0.0, 0.4, 2.55}, {-1.3, 0.728, 2.55}, {-0.728, 1.3, 2.55}, {0.0, 1.3, 2.55},  // 257
+    {-1.3, 0.728, 2.4}, {-0.728, 1.3, 2.4}, {0.0, 1.3, 2.4}, {0.224, 0.4, 2.55},  // 261
+    {0.4, 0.224, 2.55}, {0.728, 1.3, 2.55}, {1.3, 0.728, 2.55}, {0.728, 1.3, 2.4},  // 265
+    {1.3, 0.728, 2.4}, {0.0, 0.0, 0.0}, {1.5, 0.0, 0.15}, {1.5, 0.84, 0.15},  // 269; 270: bottom
+    {0.84, 1.5, 0.15}, {0.0, 1.5, 0.15}, {1.5, 0.0, 0.075}, {1.5, 0.84, 0.075},  // 273
+    {0.84, 1.5, 0.075}, {0.0, 1.5, 0.075}, {1.425, 0.0, 0.0}, {1.425, 0.798, 0.0},  // 277
+    {0.798, 1.425, 0.0}, {0.0, 1.425, 0.0}, {-0.84, 1.5, 0.15}, {-1.5, 0.84, 0.15},  // 281
+    {-1.5, 0.0, 0.15}, {-0.84, 1.5, 0.075}, {-1.5, 0.84, 0.075}, {-1.5, 0.0, 0.075},  // 285
+    {-0.798, 1.425, 0.0}, {-1.425, 0.798, 0.0}, {-1.425, 0.0, 0.0}, {-1.5, -0.84, 0.15},  // 289
+    {-0.84, -1.5, 0.15}, {0.0, -1.5, 0.15}, {-1.5, -0.84, 0.075}, {-0.84, -1.5, 0.075},  // 293
+    {0.0, -1.5, 0.075}, {-1.425, -0.798, 0.0}, {-0.798, -1.425, 0.0}, {0.0, -1.425, 0.0},  // 297
+    {0.84, -1.5, 0.15}, {1.5, -0.84, 0.15}, {0.84, -1.5, 0.075}, {1.5, -0.84, 0.075},  // 301
+    {0.798, -1.425, 0.0}, {1.425, -0.798, 0.0},  // 305
+};
+
+// The 32 patches: 16 one-based indices into kTeapotPoints each, 4 rows (along t) of 4 (along s).
+constexpr uint16_t kTeapotPatches[32][16] = {
+    // Rim
+    {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16},
+    {4, 17, 18, 19, 8, 20, 21, 22, 12, 23, 24, 25, 16, 26, 27, 28},
+    {19, 29, 30, 31, 22, 32, 33, 34, 25, 35, 36, 37, 28, 38, 39, 40},
+    {31, 41, 42, 1, 34, 43, 44, 5, 37, 45, 46, 9, 40, 47, 48, 13},
+    // Body
+    {13, 14, 15, 16, 49, 50, 51, 52, 53, 54, 55, 56, 57, 58, 59, 60},
+    {16, 26, 27, 28, 52, 61, 62, 63, 56, 64, 65, 66, 60, 67, 68, 69},
+    {28, 38, 39, 40, 63, 70, 71, 72, 66, 73, 74, 75, 69, 76, 77, 78},
+    {40, 47, 48, 13, 72, 79, 80, 49, 75, 81, 82, 53, 78, 83, 84, 57},
+    {57, 58, 59, 60, 85, 86, 87, 88, 89, 90, 91, 92, 93, 94, 95, 96},
+    {60, 67, 68, 69, 88, 97, 98, 99, 92, 100, 101, 102, 96, 103, 104, 105},
+    {69, 76, 77, 78, 99, 106, 107, 108, 102, 109, 110, 111, 105, 112, 113, 114},
+    {78, 83, 84, 57, 108, 115, 116, 85, 111, 117, 118, 89, 114, 119, 120, 93},
+    // Handle
+    {121, 122, 123, 124, 125, 126, 127, 128, 129, 130, 131, 132, 133, 134, 135, 136},
+    {124, 137, 138, 121, 128, 139, 140, 125, 132, 141, 142, 129, 136, 143, 144, 133},
+    {133, 134, 135, 136, 145, 146, 147, 148, 149, 150, 151, 152, 69, 153, 154, 155},
+    {136, 143, 144, 133, 148, 156, 157, 145, 152, 158, 159, 149, 155, 160, 161, 69},
+    // Spout
+    {162, 163, 164, 165, 166, 167, 168, 169, 170, 171, 172, 173, 174, 175, 176, 177},
+    {165, 178, 179, 162, 169, 180, 181, 166, 173, 182, 183, 170, 177, 184, 185, 174},
+    {174, 175, 176, 177, 186, 187, 188, 189, 190, 191, 192, 193, 194, 195, 196, 197},
+    {177, 184, 185, 174, 189, 198, 199, 186, 193, 200, 201, 190, 197, 202, 203, 194},
+    // Lid: knob (its first row is the single point 204, the top centre) and lid
+    {204, 204, 204, 204, 207, 208, 209, 210, 211, 211, 211, 211, 212, 213, 214, 215},
+    {204, 204, 204, 204, 210, 217, 218, 219, 211, 211, 211, 211, 215, 220, 221, 222},
+    {204, 204, 204, 204, 219, 224, 225, 226, 211, 211, 211, 211, 222, 227, 228, 229},
+    {204, 204, 204, 204, 226, 230, 231, 207, 211, 211, 211, 211, 229, 232, 233, 212},
+    {212, 213, 214, 215, 234, 235, 236, 237, 238, 239, 240, 241, 242, 243, 244, 245},
+    {215, 220, 221, 222, 237, 246, 247, 248, 241, 249, 250, 251, 245, 252, 253, 254},
+    {222, 227, 228, 229, 248, 255, 256, 257, 251, 258, 259, 260, 254, 261, 262, 263},
+    {229, 232, 233, 212, 257, 264, 265, 234, 260, 266, 267, 238, 263, 268, 269, 242},
+    // Bottom (first row: the single point 270, the bottom centre)
+    {270, 270, 270, 270, 279, 280, 281, 282, 275, 276, 277, 278, 271, 272, 273, 274},
+    {270, 270, 270, 270, 282, 289, 290, 291, 278, 286, 287, 288, 274, 283, 284, 285},
+    {270, 270, 270, 270, 291, 298, 299, 300, 288, 295, 296, 297, 285, 292, 293, 294},
+    {270, 270, 270, 270, 300, 305, 306, 279, 297, 303, 304, 275, 294, 301, 302, 271},
+};
+
+constexpr int kTeapotPatchCount = 32;
+constexpr int kAtlasColumns = 8, kAtlasRows = 4;  // patch i in cell (i % 8, i / 8)
+constexpr double kAtlasInset = 0.02;              // of a cell's size, on each side
+
+// Control points of one patch, [4 * row + column]: rows along t, columns along s.
+using PatchGrid = std::array<glm::dvec3, 16>;
+
+// Cubic Bernstein polynomials b and their derivatives db at x.
+void bernstein(double x, double b[4], double db[4]) {
+    const double y = 1.0 - x;
+    b[0] = y * y * y, b[1] = 3.0 * x * y * y, b[2] = 3.0 * x * x * y, b[3] = x * x * x;
+    db[0] = -3.0 * y * y, db[1] = 3.0 * y * (y - 2.0 * x), db[2] = 3.0 * x * (2.0 * y - x), db[3] = 3.0 * x * x;
+}
+
+// Point and partial derivatives of a patch at (s, t).
+struct PatchPoint {
+    glm::dvec3 p{0.0}, dpds{0.0}, dpdt{0.0};
+};
+
+PatchPoint eval_patch(const PatchGrid& g, double s, double t) {
+    double bs[4], dbs[4], bt[4], dbt[4];
+    bernstein(s, bs, dbs);
+    bernstein(t, bt, dbt);
+    PatchPoint e;
+    for (int row = 0; row < 4; ++row)
+        for (int col = 0; col < 4; ++col) {
+            const glm::dvec3& q = g[size_t(4 * row + col)];
+            e.p += (bt[row] * bs[col]) * q;
+            e.dpds += (bt[row] * dbs[col]) * q;
+            e.dpdt += (dbt[row] * bs[col]) * q;
+        }
+    return e;
+}
+
+// Point, unnormalised normal dP/ds x dP/dt and dP/ds at (s, t). Where the normal vanishes (an
+// edge collapsed to a point: the knob top and the bottom centre, where dP/ds = 0) the normal and
+// dP/ds are taken a step of 1e-5 of the way towards the patch centre: their limit along the
+// grid line, to within ~1e-5 rad.
+struct PatchSample {
+    glm::dvec3 p, normal, dpds;
+};
+
+PatchSample sample_patch(const PatchGrid& g, double s, double t) {
+    const PatchPoint at = eval_patch(g, s, t);
+    PatchPoint e = at;
+    glm::dvec3 n = glm::cross(e.dpds, e.dpdt);
+    const double size = glm::length(e.dpds) + glm::length(e.dpdt);
+    if (!(glm::length(n) > 1e-9 * size * size)) {
+        constexpr double kInside = 1e-5;
+        e = eval_patch(g, s + kInside * (0.5 - s), t + kInside * (0.5 - t));
+        n = glm::cross(e.dpds, e.dpdt);
+    }
+    return {at.p, n, e.dpds};
+}
+
+// Widen [lo, hi] to the range of the cubic Bezier with coefficients a over [0, 1]: its end
+// points and the zeros of its derivative (a quadratic) inside.
+void extend_by_cubic(const double a[4], double& lo, double& hi) {
+    auto widen = [&](double x) {
+        const double y = 1.0 - x;
+        const double v = y * y * y * a[0] + 3.0 * x * y * y * a[1] + 3.0 * x * x * y * a[2] + x * x * x * a[3];
+        lo = std::min(lo, v), hi = std::max(hi, v);
+    };
+    widen(0.0), widen(1.0);
+    const double d0 = a[1] - a[0], d1 = a[2] - a[1], d2 = a[3] - a[2];
+    const double qa = d0 - 2.0 * d1 + d2, qb = 2.0 * (d1 - d0), qc = d0;  // derivative / 3
+    auto widen_inside = [&](double x) { if (x > 0.0 && x < 1.0) widen(x); };
+    if (std::abs(qa) < 1e-14) {
+        if (qb != 0.0) widen_inside(-qc / qb);
+        return;
+    }
+    const double disc = qb * qb - 4.0 * qa * qc;
+    if (disc < 0.0) return;
+    widen_inside((-qb + std::sqrt(disc)) / (2.0 * qa));
+    widen_inside((-qb - std::sqrt(disc)) / (2.0 * qa));
+}
+
+// Bounding box of a patch: the exact range of every iso-line s = k/32 and t = k/32 (exact for
+// extremes on a patch edge, as all of the teapot's are; second order in 1/32 inside).
+void extend_by_patch(const PatchGrid& g, glm::dvec3& lo, glm::dvec3& hi) {
+    constexpr int kLines = 32;
+    for (int k = 0; k <= kLines; ++k) {
+        double b[4], db[4];
+        bernstein(double(k) / kLines, b, db);
+        for (int axis = 0; axis < 3; ++axis) {
+            double along_t[4] = {0.0, 0.0, 0.0, 0.0}, along_s[4] = {0.0, 0.0, 0.0, 0.0};
+            for (int row = 0; row < 4; ++row)
+                for (int col = 0; col < 4; ++col) {
+                    along_t[row] += b[col] * g[size_t(4 * row + col)][axis];  // s = k/32 fixed
+                    along_s[col] += b[row] * g[size_t(4 * row + col)][axis];  // t = k/32 fixed
+                }
+            extend_by_cubic(along_t, lo[axis], hi[axis]);
+            extend_by_cubic(along_s, lo[axis], hi[axis]);
+        }
+    }
+}
+
+// Area-weighted sum of dot(dP/ds x dP/dt, P - centre) over a 16 x 16 grid of the patch:
+// positive when dP/ds x dP/dt points away from `centre` (outwards) on the whole.
+double outwardness(const PatchGrid& g, glm::dvec3 centre) {
+    constexpr int kSamples = 16;
+    double sum = 0.0;
+    for (int j = 0; j < kSamples; ++j)
+        for (int k = 0; k < kSamples; ++k) {
+            const PatchPoint e = eval_patch(g, (k + 0.5) / kSamples, (j + 0.5) / kSamples);
+            sum += glm::dot(glm::cross(e.dpds, e.dpdt), e.p - centre);
+        }
+    return sum;
+}
+
+// The teapot's patches, oriented outwards, and the map to unit size: p' = (p - centre) * scale.
+struct TeapotModel {
+    std::array<PatchGrid, kTeapotPatchCount> patch;
+    glm::dvec3 centre{0.0};
+    double scale = 1.0;
+};
+
+TeapotModel build_teapot_model() {
+    TeapotModel model;
+    glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+    for (int i = 0; i < kTeapotPatchCount; ++i) {
+        PatchGrid& g = model.patch[size_t(i)];
+        for (size_t k = 0; k < 16; ++k) {
+            const double* q = kTeapotPoints[kTeapotPatches[i][k] - 1];
+            g[k] = glm::dvec3(q[0], q[1], q[2]);
+        }
+        extend_by_patch(g, lo, hi);
+    }
+    model.centre = 0.5 * (lo + hi);
+    const glm::dvec3 half = 0.5 * (hi - lo);
+    model.scale = 1.0 / std::max({half.x, half.y, half.z});
+    // Reverse s (the columns) of patches whose dP/ds x dP/dt points inwards, so that every
+    // patch's (s, t) is counter-clockwise seen from outside.
+    for (PatchGrid& g : model.patch)
+        if (outwardness(g, model.centre) < 0.0)
+            for (size_t row = 0; row < 4; ++row) {
+                std::swap(g[4 * row], g[4 * row + 3]);
+                std::swap(g[4 * row + 1], g[4 * row + 2]);
+            }
+    return model;
+}
+
+const TeapotModel& teapot_model() {
+    static const TeapotModel model = build_teapot_model();
+    return model;
+}
+
+// Atlas position of patch-local (s, t): inside the patch's cell, inset on every side.
+vec2 atlas_uv(int patch, double s, double t) {
+    const double inner = 1.0 - 2.0 * kAtlasInset;
+    const double u = (double(patch % kAtlasColumns) + kAtlasInset + inner * s) / kAtlasColumns;
+    const double v = (double(patch / kAtlasColumns) + kAtlasInset + inner * t) / kAtlasRows;
+    return {float(u), float(v)};
+}
+
+// 32 patches of n x n cells, two triangles each; vertices per patch (not welded).
+TriMesh make_teapot(int resolution) {
+    const TeapotModel& model = teapot_model();
+    const int n = std::max(2, resolution / 8);
+    const size_t side = size_t(n) + 1;
+    TriMesh m;
+    m.has_uv = true;
+    const size_t n_vertices = size_t(kTeapotPatchCount) * side * side;
+    m.position.reserve(n_vertices);
+    m.normal.reserve(n_vertices);
+    m.tangent.reserve(n_vertices);
+    m.uv.reserve(n_vertices);
+    m.index.reserve(size_t(kTeapotPatchCount) * size_t(n) * size_t(n) * 6);
+    for (int i = 0; i < kTeapotPatchCount; ++i) {
+        const PatchGrid& g = model.patch[size_t(i)];
+        const size_t first = m.position.size();
+        for (int j = 0; j <= n; ++j)
+            for (int k = 0; k <= n; ++k) {
+                const double s = double(k) / n, t = double(j) / n;
+                const PatchSample f = sample_patch(g, s, t);
+                const double len = glm::length(f.normal);
+                const vec3 normal = len > 0.0 && std::isfinite(len) ? vec3(f.normal / len) : vec3(0.f, 0.f, 1.f);
+                m.position.push_back(vec3((f.p - model.centre) * model.scale));
+                m.normal.push_back(normal);
+                m.tangent.push_back(orthonormal_tangent(vec3(f.dpds), normal));
+                m.uv.push_back(atlas_uv(i, s, t));
+            }
+        // Counter-clockwise in (s, t), hence seen from outside (dP/ds x dP/dt points outwards).
+        for (int j = 0; j < n; ++j)
+            for (int k = 0; k < n; ++k) {
+                const uint32_t a = uint32_t(first + size_t(j) * side + size_t(k)), b = a + 1;
+                const uint32_t d = uint32_t(first + size_t(j + 1) * side + size_t(k)), c = d + 1;
+                m.index.insert(m.index.end(), {a, b, c, a, c, d});
+            }
+    }
+    return m;
 }
 }  // namespace
 
@@ -112,6 +436,7 @@ TriMesh make_primitive(Primitive prim, int resolution, float minor_ratio) {
     if (prim == Primitive::Torus && !(minor_ratio > 0.f && minor_ratio < 1.f))
         throw InputError("geometry.minor_ratio: value " + std::to_string(minor_ratio) +
                          " is out of range (0, 1) (torus minor radius relative to the major radius)");
+    if (prim == Primitive::Teapot) return make_teapot(resolution);
 
     const int nu = resolution;
     const int nv = prim == Primitive::Sphere ? std::max(2, resolution / 2) : resolution;
@@ -148,6 +473,15 @@ TriMesh make_primitive(Primitive prim, int resolution, float minor_ratio) {
             m.index.insert(m.index.end(), {a, b, c, a, c, d});
         }
     return m;
+}
+
+Primitive primitive_named(const std::string& type) {
+    if (type == "sphere") return Primitive::Sphere;
+    if (type == "plane") return Primitive::Plane;
+    if (type == "torus") return Primitive::Torus;
+    if (type == "cylinder") return Primitive::Cylinder;
+    if (type == "teapot") return Primitive::Teapot;
+    throw InputError("geometry.type: '" + type + "' is not a procedural primitive (sphere, plane, torus, cylinder, teapot)");
 }
 
 // [SECTION] Mesh files (OpenMesh)

@@ -28,9 +28,7 @@ void declare_scene_stages(StageGraph& g) {
                        if (path.empty()) throw InputError("objects[" + std::to_string(i) + "].geometry.path: geometry.type is 'mesh' but no mesh file is given");
                        out.meshes[i] = load_mesh(path);
                    } else {
-                       const Primitive p = type == "sphere" ? Primitive::Sphere : type == "plane" ? Primitive::Plane
-                                         : type == "torus" ? Primitive::Torus : Primitive::Cylinder;
-                       out.meshes[i] = make_primitive(p, int(g.get_int("resolution")), float(g.get_float("minor_ratio")));
+                       out.meshes[i] = make_primitive(primitive_named(type), int(g.get_int("resolution")), float(g.get_float("minor_ratio")));
                    }
                    ctx.progress(double(i + 1) / double(objs.size()));
                }

@@ -31,12 +31,12 @@ Registry::Registry()
     env_.add_path("map", "").costs(Cost::Recompute).doc("Lat-long environment map (EXR, linear radiance); relative paths are relative to the preset's folder");
     env_.add_float("intensity", 1.0).range(0.0, 1e6).log().doc("Scale of the environment radiance");
 
-    geometry_.add_enum("type", {"sphere", "plane", "torus", "cylinder", "mesh"}, "sphere").costs(Cost::Recompute)
-        .doc("Procedural shape or a mesh file (geometry.path)");
+    geometry_.add_enum("type", {"sphere", "plane", "torus", "cylinder", "teapot", "mesh"}, "sphere").costs(Cost::Recompute)
+        .doc("Procedural shape (teapot: the Utah teapot, Newell's 32 Bezier patches) or a mesh file (geometry.path)");
     geometry_.add_path("path", "").costs(Cost::Recompute).used_when("type", {"mesh"})
         .doc("Mesh file read with OpenMesh (OBJ, OFF, PLY, STL, OM); relative to the preset's folder");
-    geometry_.add_int("resolution", 64).range(3, 4096).costs(Cost::Recompute).used_when("type", {"sphere", "plane", "torus", "cylinder"})
-        .more_accurate(Accuracy::Higher, int64_t(1024)).doc("Tessellation: segments around u");
+    geometry_.add_int("resolution", 64).range(3, 4096).costs(Cost::Recompute).used_when("type", {"sphere", "plane", "torus", "cylinder", "teapot"})
+        .more_accurate(Accuracy::Higher, int64_t(1024)).doc("Tessellation: segments around u (teapot: resolution/8 per side of each of its 32 patches)");
     geometry_.add_float("minor_ratio", 0.35).range(0.01, 0.99).costs(Cost::Recompute).used_when("type", {"torus"})
         .doc("Torus tube radius relative to the major radius");
     geometry_.add_float("scale", 1.0).range(1e-6, 1e6).log().doc("Uniform scale (object -> world)");

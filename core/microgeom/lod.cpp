@@ -9,9 +9,11 @@ namespace mesolab::microgeom {
 
 // [SECTION] Tessellation rate
 int displacement_resolution(const std::string& type, int base_resolution, int field_width, int field_height, float tiling, int cap, bool* capped) {
-    // Segments along u; the sphere has half as many along v (mesh.h), so it needs twice the rate.
+    // Segments along u; the sphere has half as many along v (mesh.h), so it needs twice the rate,
+    // and so does the teapot (its atlas has 8 patch cells along u, 4 along v, resolution/8 segments per patch side).
     const double along_u = double(field_width) * tiling, along_v = double(field_height) * tiling;
-    double need = std::max(along_u, type == "sphere" ? 2.0 * along_v : along_v);
+    const bool half_along_v = type == "sphere" || type == "teapot";
+    double need = std::max(along_u, half_along_v ? 2.0 * along_v : along_v);
     need = std::ceil(need);
     if (capped) *capped = need > cap;
     return int(std::clamp(need, double(base_resolution), double(std::max(cap, base_resolution))));

@@ -417,7 +417,7 @@ public:
                        if (!h || lod(o) != "geometry") continue;
                        const std::string type = o.geometry.get_string("type");
                        if (type == "mesh") {
-                           ctx.warn(o.name + ": microgeom.lod = geometry needs a procedural base (plane, sphere, cylinder, torus); the mesh is drawn undisplaced (bump level)");
+                           ctx.warn(o.name + ": microgeom.lod = geometry needs a procedural base (plane, sphere, cylinder, torus, teapot); the mesh is drawn undisplaced (bump level)");
                            continue;
                        }
                        bool capped = false;
@@ -426,8 +426,9 @@ public:
                        if (capped)
                            ctx.warn(o.name + ": the displaced geometry is capped at " + std::to_string(kMaxDisplacementSegments) +
                                     " segments, fewer than one vertex per texel: lower microgeom.tiling or the heightfield resolution");
-                       const Primitive prim = type == "sphere" ? Primitive::Sphere : type == "plane" ? Primitive::Plane : type == "torus" ? Primitive::Torus : Primitive::Cylinder;
-                       out.items[i] = std::make_shared<const TriMesh>(displace(make_primitive(prim, res, float(o.geometry.get_float("minor_ratio"))), *h, tiling));
+                       if (type == "teapot")
+                           ctx.warn(o.name + ": the teapot's 32 patches are displaced independently (each has its own cell of the uv atlas), so cracks can open along the patch borders");
+                       out.items[i] = std::make_shared<const TriMesh>(displace(make_primitive(primitive_named(type), res, float(o.geometry.get_float("minor_ratio"))), *h, tiling));
                        ctx.progress(double(i + 1) / double(out.items.size()));
                    }
                    return stage_result(std::move(out));

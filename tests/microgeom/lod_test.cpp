@@ -76,6 +76,9 @@ TEST(Lod, DisplacementFollowsTheHeightsInTexelLengths) {
     bool capped = true;
     EXPECT_EQ(displacement_resolution("sphere", 64, 128, 128, 4.f, 2048, &capped), 1024);
     EXPECT_FALSE(capped);
+    EXPECT_EQ(displacement_resolution("teapot", 64, 128, 128, 4.f, 2048, &capped), 1024);  // 4 patch cells along v, 8 along u
+    EXPECT_FALSE(capped);
+    EXPECT_EQ(displacement_resolution("torus", 64, 128, 128, 4.f, 2048, &capped), 512);
     EXPECT_EQ(displacement_resolution("plane", 64, 1024, 1024, 4.f, 2048, &capped), 2048);
     EXPECT_TRUE(capped);
 }
