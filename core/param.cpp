@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <sstream>
+#include <sys/stat.h>
 
 namespace mesolab {
 namespace {
@@ -341,10 +342,16 @@ std::string value_canonical(const ParamDecl& d, const Value& v, const std::strin
         namespace fs = std::filesystem;
         fs::path p = std::get<std::string>(v);
         if (p.is_relative() && !base_dir.empty()) p = fs::path(base_dir) / p;
-        std::error_code ec;
-        const auto size = fs::file_size(p, ec);
-        const auto mtime = fs::last_write_time(p, ec);
-        s += "|" + (ec ? std::string("missing") : std::to_string(size) + ":" + std::to_string(mtime.time_since_epoch().count()));
+        // Size, modification time and file number (device, inode): file systems stamp times with
+        // a coarse clock (several ms), so two atomic saves of one size within a tick differ only
+        // by the new file that each rename puts in place.
+        struct stat st {};
+        if (::stat(p.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) {
+            s += "|missing";
+        } else {
+            s += "|" + std::to_string(st.st_size) + ":" + std::to_string(st.st_mtim.tv_sec) + "." + std::to_string(st.st_mtim.tv_nsec) + ":" +
+                 std::to_string(st.st_dev) + ":" + std::to_string(st.st_ino);
+        }
     }
     return s;
 }

@@ -136,8 +136,9 @@ Value value_from_text(const ParamDecl& d, std::string_view text, const std::stri
 std::string value_to_text(const ParamDecl& d, const Value& v);
 // Throws InputError if v is out of range or not one of the choices.
 void validate_value(const ParamDecl& d, const Value& v, const std::string& where);
-// Canonical bytes for cache keys. Paths include the file's size and modification time, so
-// editing a file on disk invalidates the stages that read it.
+// Canonical bytes for cache keys. Paths include the file's size, modification time and file
+// number (device, inode), so editing a file on disk invalidates the stages that read it, and so
+// does an atomic re-save (a new file renamed over the old) within one tick of the file clock.
 std::string value_canonical(const ParamDecl& d, const Value& v, const std::string& base_dir);
 // The schema of one group as JSON (every parameter with type, default, range, unit, help, cost).
 json group_schema(const ParamGroup& g);

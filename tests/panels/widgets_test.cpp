@@ -4,6 +4,7 @@
 #include "core/scene.h"
 #include "core/technique.h"
 #include "panels/panel.h"
+#include "support/headless_imgui.h"
 
 #include <gtest/gtest.h>
 #include <imgui.h>
@@ -11,32 +12,9 @@
 
 using namespace mesolab;
 using namespace mesolab::panels;
+using mesolab::test::HeadlessImGui;
 
 namespace {
-
-// A headless ImGui context (no backend: nothing is drawn on screen).
-struct HeadlessImGui {
-    HeadlessImGui() {
-        ImGui::CreateContext();
-        ImGuiIO& io = ImGui::GetIO();
-        io.DisplaySize = ImVec2(900, 700);
-        io.DeltaTime = 1.f / 60.f;
-        io.IniFilename = nullptr;
-        unsigned char* pixels = nullptr;
-        int w = 0, h = 0;
-        io.Fonts->GetTexDataAsRGBA32(&pixels, &w, &h);
-    }
-    ~HeadlessImGui() { ImGui::DestroyContext(); }
-    void frame(const std::function<void()>& body) {
-        ImGui::NewFrame();
-        ImGui::SetNextWindowPos(ImVec2(0, 0));
-        ImGui::SetNextWindowSize(ImVec2(900, 700));
-        ImGui::Begin("test");
-        body();
-        ImGui::End();
-        ImGui::Render();
-    }
-};
 
 // Press and release the mouse at (x, y) over the widget drawn by `draw`.
 void click(HeadlessImGui& ui, const std::function<void()>& draw, float fx) {

@@ -1,6 +1,9 @@
 // The stage graph runs only what an enabled effect needs, caches by declared inputs, and
 // invalidates exactly what depends on a change.
+#include "core/bumpsynth/ndf.h"
 #include "core/error.h"
+#include "core/image.h"
+#include "core/per_object.h"
 #include "core/scene.h"
 #include "core/stage.h"
 #include "core/technique.h"
@@ -8,6 +11,7 @@
 
 #include <gtest/gtest.h>
 #include <atomic>
+#include <filesystem>
 #include <map>
 
 using namespace mesolab;
@@ -149,4 +153,49 @@ TEST(FrameStages, EditingAReferencedFileInvalidates) {
     const uint64_t k0 = g.key(s, "scene.geometry");
     write_file(dir / "m.obj", "v 0 0 0\nv 2 0 0\nv 0 1 0\nv 5 5 5\nf 1 2 3\n");
     EXPECT_NE(g.key(s, "scene.geometry"), k0);
+}
+
+// The NDF editor re-saves the same file (same path, often the same size) after every stroke, by
+// an atomic rename, possibly within one tick of the file system's coarse clock: the key must
+// still change, and the recomputed stage must read the new content.
+TEST(FrameStages, AtomicRewriteOfASameSizeFileInvalidates) {
+    using namespace mesolab::test;
+    TempDir dir("rewritekey");
+    // Two pixels over [-1, 1]^2: all the mass in the right half of the disk, or in the left half
+    // (centroid x = +-4/(3 pi)). Too small to compress, so both files have the same size.
+    auto half = [](bool right) {
+        Image img(2, 1, 1, 0.f);
+        *img.at(right ? 1 : 0, 0) = 1.f;
+        return img;
+    };
+    write_exr(dir / "d.exr", half(true));
+    Scene s = default_scene("bumpsynth");
+    s.base_dir = dir.path.string();
+    s.objects[0].material.set("ndf", std::string("image"));
+    s.objects[0].material.set("ndf_image", std::string("d.exr"));
+    s.objects[0].material.set("ndf_resolution", int64_t(64));
+    StageGraph& g = Registry::instance().stages();
+    const uint64_t k0 = g.key(s, "bumpsynth.ndf");
+    const Evaluation e0 = g.evaluate(s, {"bumpsynth.ndf"});
+    const auto centroid_x = [](const Evaluation& e) {
+        const bumpsynth::Ndf& d = *e.get<PerObject<bumpsynth::Ndf>>("bumpsynth.ndf")->get(0);
+        double cx = 0;
+        for (int j = 0; j < d.resolution(); ++j)
+            for (int i = 0; i < d.resolution(); ++i) cx += d.mass(i, j) * double(d.cell_centre(i, j).x);
+        return cx;
+    };
+    EXPECT_NEAR(centroid_x(e0), 4.0 / (3.0 * M_PI), 0.01);
+
+    // The mirror image, same size, with the modification time of the first: file systems stamp
+    // files with a coarse clock (one tick is several ms here), so two saves within one tick look
+    // alike by size and time.
+    const auto size0 = std::filesystem::file_size(dir / "d.exr");
+    const auto time0 = std::filesystem::last_write_time(dir / "d.exr");
+    write_exr(dir / "d.exr", half(false));
+    std::filesystem::last_write_time(dir / "d.exr", time0);
+    ASSERT_EQ(std::filesystem::file_size(dir / "d.exr"), size0) << "the test wants two files of one size";
+    EXPECT_NE(g.key(s, "bumpsynth.ndf"), k0);
+    const Evaluation e1 = g.evaluate(s, {"bumpsynth.ndf"});
+    EXPECT_EQ(e1.run("bumpsynth.ndf")->status, StageStatus::Ran);
+    EXPECT_NEAR(centroid_x(e1), -4.0 / (3.0 * M_PI), 0.01);
 }
