@@ -54,6 +54,12 @@ public:
     GLuint id() const { return id_.get(); }
     void use() const { glUseProgram(id_.get()); }
     GLint uniform(const char* name) const { return glGetUniformLocation(id_.get(), name); }
+    // Bind texture `tex` (0: none) to unit `unit` and point the sampler uniform `sampler` at it.
+    void bind_texture(int unit, GLenum target, GLuint tex, const char* sampler) const {
+        glActiveTexture(GLenum(GL_TEXTURE0 + unit));
+        glBindTexture(target, tex);
+        glUniform1i(uniform(sampler), unit);
+    }
     explicit operator bool() const { return bool(id_); }
 private:
     GlName<delete_program> id_;

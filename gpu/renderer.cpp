@@ -89,6 +89,12 @@ GpuMesh upload_mesh(const TriMesh& m) {
 }
 }  // namespace
 
+void Renderer::draw_object(const Scene& s, const Evaluation& ev, int object) {
+    const GpuMesh& m = mesh(s, ev, object);
+    glBindVertexArray(m.vao.get());
+    glDrawElements(GL_TRIANGLES, m.index_count, GL_UNSIGNED_INT, nullptr);
+}
+
 const GpuMesh& Renderer::mesh(const Scene& s, const Evaluation& ev, int object) {
     // One upload per object, redone when the drawn mesh changes (new tessellation or LOD).
     std::shared_ptr<const TriMesh> m = drawn_mesh(s, ev, object);

@@ -61,6 +61,8 @@ public:
 
     // [SECTION] Services for technique passes
     const GpuMesh& mesh(const Scene& s, const Evaluation& ev, int object);  // drawn_mesh(), uploaded
+    // Draw the object's triangles (mesh() uploaded) with the program and uniforms in use.
+    void draw_object(const Scene& s, const Evaluation& ev, int object);
     // GL texture of an image (RGB(A) float, uploaded top row first at t = 0), cached per image.
     GLuint texture(const std::shared_ptr<const Image>& img, bool repeat = true);
     GLuint texture(const Image& img, const void* owner_key, bool repeat = true);

@@ -28,13 +28,11 @@ public:
             glUniform1f(program_.uniform("u_shininess"), m.shininess);
             const bool has_map = !m.albedo_map.empty() && maps && maps->count(m.albedo_map);
             glUniform1i(program_.uniform("u_has_albedo"), has_map ? 1 : 0);
-            glActiveTexture(GL_TEXTURE1);
             // The map's address in the stage result is stable while the result is cached.
-            glBindTexture(GL_TEXTURE_2D, has_map ? ctx.renderer.texture(maps->at(m.albedo_map), &maps->at(m.albedo_map)) : 0);
-            glUniform1i(program_.uniform("u_albedo"), 1);
-            const GpuMesh& mesh = ctx.renderer.mesh(ctx.scene, ctx.eval, i);
-            glBindVertexArray(mesh.vao.get());
-            glDrawElements(GL_TRIANGLES, mesh.index_count, GL_UNSIGNED_INT, nullptr);
+            program_.bind_texture(1, GL_TEXTURE_2D,
+                                  has_map ? ctx.renderer.texture(maps->at(m.albedo_map), &maps->at(m.albedo_map)) : 0,
+                                  "u_albedo");
+            ctx.renderer.draw_object(ctx.scene, ctx.eval, i);
         }
         glBindVertexArray(0);
     }

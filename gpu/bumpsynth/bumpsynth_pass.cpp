@@ -92,11 +92,11 @@ public:
             const NoiseCdfs& cdfs = *cdfss->get(i);
             const NoiseParams& np = cdfs.params;
             ctx.renderer.set_camera_uniforms(program_, ctx.camera, object_to_world(o));
-            bind(1, GL_TEXTURE_2D, b.ndf, "u_ndf");
-            bind(2, GL_TEXTURE_2D_ARRAY, b.lut, "u_lut");
-            bind(3, GL_TEXTURE_2D, b.noise, "u_noise");
-            bind(4, GL_TEXTURE_2D, b.smith, "u_smith");
-            bind(5, GL_TEXTURE_2D, b.albedo, "u_albedo");
+            program_.bind_texture(1, GL_TEXTURE_2D, b.ndf, "u_ndf");
+            program_.bind_texture(2, GL_TEXTURE_2D_ARRAY, b.lut, "u_lut");
+            program_.bind_texture(3, GL_TEXTURE_2D, b.noise, "u_noise");
+            program_.bind_texture(4, GL_TEXTURE_2D, b.smith, "u_smith");
+            program_.bind_texture(5, GL_TEXTURE_2D, b.albedo, "u_albedo");
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, b.cdf->knots.get());
             glUniform1i(program_.uniform("u_ndf_res"), ndfs->get(i)->resolution());
             glUniform1i(program_.uniform("u_lut_size"), luts->get(i)->size());
@@ -126,20 +126,13 @@ public:
             glUniform3fv(program_.uniform("u_kd"), 1, glm::value_ptr(sm.kd));
             glUniform1f(program_.uniform("u_detail_distance"), float(m.get_float("detail_distance")));
             glUniform1i(program_.uniform("u_has_albedo"), b.albedo ? 1 : 0);
-            const GpuMesh& mesh = ctx.renderer.mesh(ctx.scene, ctx.eval, i);
-            glBindVertexArray(mesh.vao.get());
-            glDrawElements(GL_TRIANGLES, mesh.index_count, GL_UNSIGNED_INT, nullptr);
+            ctx.renderer.draw_object(ctx.scene, ctx.eval, i);
         }
         glBindVertexArray(0);
         check_gl("bumpsynth.draw");
     }
 
 private:
-    void bind(int unit, GLenum target, GLuint tex, const char* name) {
-        glActiveTexture(GLenum(GL_TEXTURE0 + unit));
-        glBindTexture(target, tex);
-        glUniform1i(program_.uniform(name), unit);
-    }
 
     // NDF: (value, 1 where the cell meets the disk).
     static Texture upload_ndf(const Ndf& ndf) {

@@ -102,19 +102,19 @@ public:
             const LightsScatter* ls = lights ? lights->get(i) : nullptr;
             const int light_scatters = ls ? int(std::min(ls->lights.size(), ctx.lighting.lights.size())) : 0;
             const GLuint e_env = es ? irradiance(envs->items[size_t(i)], hf) : 0, e_light = ls ? irradiance_per_light(lights->items[size_t(i)], hf) : 0;
-            bind(1, GL_TEXTURE_2D_ARRAY, g.vis.get(), "u_vis");
-            bind(2, GL_TEXTURE_2D, g.normals.get(), "u_normals");
-            bind(3, GL_TEXTURE_2D, g.albedo.get(), "u_albedo");
-            bind(4, GL_TEXTURE_2D, e_env, "u_E_env");
-            bind(5, GL_TEXTURE_2D, e_light, "u_E_light");
+            program_.bind_texture(1, GL_TEXTURE_2D_ARRAY, g.vis.get(), "u_vis");
+            program_.bind_texture(2, GL_TEXTURE_2D, g.normals.get(), "u_normals");
+            program_.bind_texture(3, GL_TEXTURE_2D, g.albedo.get(), "u_albedo");
+            program_.bind_texture(4, GL_TEXTURE_2D, e_env, "u_E_env");
+            program_.bind_texture(5, GL_TEXTURE_2D, e_light, "u_E_light");
             const Importance* imp = imps ? imps->get(i) : nullptr;
             const bool has_folded = imp && !imp->folded.empty();
-            bind(6, GL_TEXTURE_2D, has_folded ? folded(imps->items[size_t(i)]) : 0, "u_folded");
+            program_.bind_texture(6, GL_TEXTURE_2D, has_folded ? folded(imps->items[size_t(i)]) : 0, "u_folded");
             glUniform1i(program_.uniform("u_has_folded"), has_folded ? 1 : 0);
             const EllipseMap* em = ells ? ells->get(i) : nullptr;
             const Ellipses* et = em ? &ellipses(ells->items[size_t(i)]) : nullptr;
-            bind(7, GL_TEXTURE_2D, et ? et->t0.get() : 0, "u_ellipse0");
-            bind(8, GL_TEXTURE_2D, et ? et->t1.get() : 0, "u_ellipse1");
+            program_.bind_texture(7, GL_TEXTURE_2D, et ? et->t0.get() : 0, "u_ellipse0");
+            program_.bind_texture(8, GL_TEXTURE_2D, et ? et->t1.get() : 0, "u_ellipse1");
             glUniform1i(program_.uniform("u_use_ellipse"), em ? 1 : 0);
             glUniform1f(program_.uniform("u_ellipse_edge"), em ? em->edge : 0.f);
             glUniform2i(program_.uniform("u_size"), hf.width, hf.height);
@@ -132,24 +132,17 @@ public:
             glUniform1f(program_.uniform("u_shininess"), float(m.get_float("shininess")));
             const SimulatedBrdf* brdf = brdfs ? brdfs->get(i) : nullptr;
             const BrdfTables* bt = brdf ? &brdf_tables(brdfs->items[size_t(i)]) : nullptr;
-            bind(9, GL_TEXTURE_2D, bt ? bt->table.get() : 0, "u_brdf");
-            bind(10, GL_TEXTURE_2D, bt ? bt->env.get() : 0, "u_brdf_env");
+            program_.bind_texture(9, GL_TEXTURE_2D, bt ? bt->table.get() : 0, "u_brdf");
+            program_.bind_texture(10, GL_TEXTURE_2D, bt ? bt->env.get() : 0, "u_brdf_env");
             glUniform1i(program_.uniform("u_lod_brdf"), brdf ? 1 : 0);
             glUniform2i(program_.uniform("u_brdf_nodes"), brdf ? brdf->n_theta : 2, brdf ? brdf->n_phi : 1);
-            const GpuMesh& mesh = ctx.renderer.mesh(ctx.scene, ctx.eval, i);
-            glBindVertexArray(mesh.vao.get());
-            glDrawElements(GL_TRIANGLES, mesh.index_count, GL_UNSIGNED_INT, nullptr);
+            ctx.renderer.draw_object(ctx.scene, ctx.eval, i);
         }
         glBindVertexArray(0);
         check_gl("microgeom.draw");
     }
 
 private:
-    void bind(int unit, GLenum target, GLuint tex, const char* name) {
-        glActiveTexture(GLenum(GL_TEXTURE0 + unit));
-        glBindTexture(target, tex);
-        glUniform1i(program_.uniform(name), unit);
-    }
 
     // Drop resources whose stage results are no longer cached anywhere but here.
     void prune() {
