@@ -2,6 +2,7 @@
 #include "core/bumpsynth/bumpsynth.h"
 #include "core/error.h"
 #include "core/image.h"
+#include "core/microgeom/microgeom.h"
 #include "core/render.h"
 #include "core/technique.h"
 
@@ -12,8 +13,20 @@
 namespace mesolab::bumpsynth {
 namespace {
 
-const std::vector<std::string> kNdfKeys{"ndf", "alpha_x", "alpha_y", "rotation", "exponent", "lobe2_kind", "lobe2_alpha",
-                                        "lobe2_rotation", "lobe2_weight", "ndf_image", "ndf_resolution"};
+// The bump map an NDF may come from (ndf = normal_map | heightfield, §7): the normal map and the
+// heightfield's own keys (declared by microgeom, the same surface in both techniques).
+std::vector<std::string> source_keys() {
+    std::vector<std::string> k{"ndf", "normal_map", "normal_map_encoding", "normal_map_y"};
+    for (const auto& h : microgeom::heightfield_keys()) k.push_back(h);
+    return k;
+}
+const std::vector<std::string> kSourceKeys = source_keys();
+const std::vector<std::string> kNdfKeys = [] {
+    std::vector<std::string> k{"alpha_x", "alpha_y", "rotation", "exponent", "lobe2_kind", "lobe2_alpha",
+                               "lobe2_rotation", "lobe2_weight", "ndf_image", "ndf_resolution"};
+    k.insert(k.begin(), kSourceKeys.begin(), kSourceKeys.end());
+    return k;
+}();
 const std::vector<std::string> kNoiseKeys{"noise_frequency", "noise_gain", "noise_seed", "octaves_max"};
 
 std::vector<std::string> keys(const std::vector<std::string>& names) {
@@ -28,7 +41,14 @@ std::vector<std::string> with(std::vector<std::string> a, const std::vector<std:
 bool any_object(const Scene& s, const std::function<bool(const SceneObject&)>& f) {
     return std::any_of(s.objects.begin(), s.objects.end(), [&](const SceneObject& o) { return o.technique == "bumpsynth" && f(o); });
 }
-bool texture_noise(const SceneObject& o) { return o.material.get_string("noise") == "texture"; }
+bool from_bump_map(const SceneObject& o) {
+    const std::string& n = o.material.get_string("ndf");
+    return n == "normal_map" || n == "heightfield";
+}
+// §7: the bump map's own normals through the index texture instead of noise.
+bool index_mode(const SceneObject& o) { return from_bump_map(o) && o.material.get_bool("index_map"); }
+bool noise_inputs_needed(const SceneObject& o) { return !index_mode(o); }
+bool texture_noise(const SceneObject& o) { return !index_mode(o) && o.material.get_string("noise") == "texture"; }
 bool masking(const SceneObject& o) { return o.material.get_bool("masking"); }
 
 Lobe lobe_of(const std::string& kind, vec2 alpha, float rotation, float weight) {
@@ -39,9 +59,26 @@ Lobe lobe_of(const std::string& kind, vec2 alpha, float rotation, float weight) 
 }  // namespace
 
 // [SECTION] Materials
-Ndf ndf_from_material(const Scene& s, const ParamTable& m) {
+BumpNormals bump_normals_from_material(const Scene& s, const ParamTable& m) {
+    const std::string& kind = m.get_string("ndf");
+    if (kind == "heightfield") return normals_of(microgeom::heightfield_from_material(s, m));
+    if (kind != "normal_map") throw std::logic_error("bumpsynth: ndf " + kind + " has no bump map");
+    const std::string path = s.resolve(m.get_string("normal_map"));
+    if (path.empty()) throw InputError("bumpsynth.normal_map: ndf is normal_map but no image is given");
+    NormalMapFormat f;
+    f.encoding = m.get_string("normal_map_encoding") == "signed" ? NormalEncoding::signed_unit : NormalEncoding::unsigned_unit;
+    f.y_down = m.get_string("normal_map_y") == "down";
+    return read_normal_map(path, f);
+}
+
+Ndf ndf_from_material(const Scene& s, const ParamTable& m, const BumpNormals* normals) {
     const std::string kind = m.get_string("ndf");
     const int R = int(m.get_int("ndf_resolution"));
+    if (kind == "normal_map" || kind == "heightfield") {
+        BumpNormals own;
+        if (!normals) own = bump_normals_from_material(s, m), normals = &own;
+        return Ndf::from_normals(normals->m, R);
+    }
     const vec2 alpha(float(m.get_float("alpha_x")), float(m.get_float("alpha_y")));
     const float rotation = float(m.get_float("rotation"));
     if (kind == "phong") return Ndf::from_lobe(Lobe::blinn_phong(float(m.get_float("exponent"))), R);
@@ -99,9 +136,16 @@ Synthesis synthesis_for(const Scene& s, const Evaluation& ev, int object) {
     };
     syn.ndf = get(std::type_identity<Ndf>{}, "bumpsynth.ndf");
     syn.lut = get(std::type_identity<Lut>{}, "bumpsynth.lut");
-    syn.cdfs = get(std::type_identity<NoiseCdfs>{}, "bumpsynth.noise_cdf");
-    const ParamTable& m = s.objects[size_t(object)].material;
-    if (m.get_string("noise") == "texture") syn.noise_texture = get(std::type_identity<NoiseTexture>{}, "bumpsynth.noise_texture");
+    const SceneObject& o = s.objects[size_t(object)];
+    const ParamTable& m = o.material;
+    syn.octaves_max = int(m.get_int("octaves_max"));
+    if (index_mode(o)) {
+        syn.index_map = get(std::type_identity<IndexMap>{}, "bumpsynth.index_map");
+        if (syn.index_map) syn.index_detail = index_detail(*syn.index_map, noise_from_material(m), float(m.get_float("index_noise")));
+    } else {
+        syn.cdfs = get(std::type_identity<NoiseCdfs>{}, "bumpsynth.noise_cdf");
+        if (texture_noise(o)) syn.noise_texture = get(std::type_identity<NoiseTexture>{}, "bumpsynth.noise_texture");
+    }
     syn.model = shading_from_material(m);
     if (syn.model.masking) syn.smith = get(std::type_identity<SmithTable>{}, "bumpsynth.masking");
     return syn;
@@ -119,8 +163,9 @@ public:
     BumpsynthTechnique() : Technique("bumpsynth", "Bump map synthesis (Kautz et al. 2001)") {
         auto& p = params_;
         const std::vector<std::string> lobed{"beckmann", "ggx", "ward", "lobes"};
-        p.add_enum("ndf", {"phong", "beckmann", "ggx", "ward", "lobes", "image"}, "beckmann").costs(Cost::Recompute)
-            .doc("Normal density function: an analytic lobe, a sum of two lobes, or an image of D over the normal's (x, y) disk");
+        p.add_enum("ndf", {"phong", "beckmann", "ggx", "ward", "lobes", "image", "normal_map", "heightfield"}, "beckmann").costs(Cost::Recompute)
+            .doc("Normal density function: an analytic lobe, a sum of two lobes, an image of D over the normal's (x, y) disk, or the "
+                 "histogram of an existing bump map's normals (a normal map, or a heightfield as in microgeom; §7)");
         p.add_float("alpha_x", 0.3).range(1e-4, 1.0).log().costs(Cost::Recompute).used_when("ndf", lobed)
             .doc("Roughness along the lobe's x axis (RMS slope for Beckmann; the first lobe of 'lobes')");
         p.add_float("alpha_y", 0.3).range(1e-4, 1.0).log().costs(Cost::Recompute).used_when("ndf", lobed)
@@ -139,6 +184,21 @@ public:
             .doc("Weight of the second lobe (the first has weight 1; the sum is normalised)");
         p.add_path("ndf_image", "").costs(Cost::Recompute).used_when("ndf", {"image"})
             .doc("Image of D over [-1, 1]^2 (x right, y up; any positive scale; channels averaged; pixels outside the disk ignored)");
+        p.add_path("normal_map", "").costs(Cost::Recompute).used_when("ndf", {"normal_map"})
+            .doc("Tangent-space normal map (RGB = x along u, y along v, z out of the surface; row 0 at v = 1); relative to the preset's folder");
+        p.add_enum("normal_map_encoding", {"unsigned", "signed"}, "unsigned").costs(Cost::Recompute).used_when("ndf", {"normal_map"})
+            .doc("unsigned: components stored as (v + 1)/2 in [0, 1] (8/16-bit maps); signed: stored as they are (float maps)");
+        p.add_enum("normal_map_y", {"up", "down"}, "up").costs(Cost::Recompute).used_when("ndf", {"normal_map"})
+            .doc("Green channel convention: up (OpenGL, Blender) or down (DirectX, Unreal: y negated)");
+        microgeom::declare_heightfield_params(p, [](ParamDecl& d) {
+            d.used_when("ndf", {"heightfield"});
+            d.help += " (the same surface as microgeom." + d.name + ")";
+        });
+        p.add_bool("index_map", false).costs(Cost::Recompute).used_when("ndf", {"normal_map", "heightfield"})
+            .doc("§7: render the bump map's own normals through an index texture into the look-up table (instead of noise), "
+                 "adding index_noise detail when zooming in past its texels");
+        p.add_float("index_noise", 0.03).range(0.0, 0.5).used_when("index_map", {"true"})
+            .doc("Amplitude of the detail noise added to the index texture's inputs (uniform units) per octave beyond the bump map");
         p.add_int("ndf_resolution", 128).range(64, 512).in("cells").costs(Cost::Recompute).more_accurate(Accuracy::Higher, int64_t(512))
             .doc("Cells per side of the tabulated NDF");
         p.add_int("lut_size", 256).range(16, 4096).in("entries").costs(Cost::Recompute).more_accurate(Accuracy::Higher, int64_t(4096))
@@ -165,12 +225,24 @@ public:
     }
 
     void declare_stages(StageGraph& g) const override {
+        g.add({.name = "bumpsynth.bump_normals",
+               .help = "Read the bump map (a normal map, or a heightfield's normals) whose histogram is the NDF (§7)",
+               .params = keys(kSourceKeys),
+               .when = [](const Scene& s) { return any_object(s, from_bump_map); },
+               .when_text = "bumpsynth.ndf is normal_map or heightfield",
+               .run = [](StageContext& ctx) {
+                   return stage_result(per_object<BumpNormals>(
+                       ctx.scene, "bumpsynth", kSourceKeys, [&](int, const SceneObject& o) { return bump_normals_from_material(ctx.scene, o.material); },
+                       from_bump_map));
+               }});
         g.add({.name = "bumpsynth.ndf",
                .help = "Tabulate the normal density function over the normal's (x, y) disk",
                .params = keys(kNdfKeys),
+               .inputs = {"bumpsynth.bump_normals"},
                .run = [](StageContext& ctx) {
-                   return stage_result(per_object<Ndf>(ctx.scene, "bumpsynth", kNdfKeys, [&](int, const SceneObject& o) {
-                       return ndf_from_material(ctx.scene, o.material);
+                   auto normals = ctx.input<PerObject<BumpNormals>>("bumpsynth.bump_normals");
+                   return stage_result(per_object<Ndf>(ctx.scene, "bumpsynth", kNdfKeys, [&](int i, const SceneObject& o) {
+                       return ndf_from_material(ctx.scene, o.material, normals ? normals->get(i) : nullptr);
                    }));
                }});
         g.add({.name = "bumpsynth.lut",
@@ -184,13 +256,28 @@ public:
                        return build_lut(*ndfs->get(i), int(o.material.get_int("lut_size")));
                    }));
                }});
+        g.add({.name = "bumpsynth.index_map",
+               .help = "Turn the bump map's normals into an index texture of look-up-table inputs (§7)",
+               .params = keys(with(kNdfKeys, {"lut_size", "index_map"})),
+               .inputs = {"bumpsynth.bump_normals", "bumpsynth.lut"},
+               .when = [](const Scene& s) { return any_object(s, index_mode); },
+               .when_text = "bumpsynth.index_map is on",
+               .run = [](StageContext& ctx) {
+                   auto normals = ctx.input<PerObject<BumpNormals>>("bumpsynth.bump_normals");
+                   auto luts = ctx.input<PerObject<Lut>>("bumpsynth.lut");
+                   return stage_result(per_object<IndexMap>(
+                       ctx.scene, "bumpsynth", with(kNdfKeys, {"lut_size", "index_map"}),
+                       [&](int i, const SceneObject&) { return make_index_map(*normals->get(i), *luts->get(i)); }, index_mode));
+               }});
         g.add({.name = "bumpsynth.noise_cdf",
                .help = "Measure the CDF G_k of the fractal noise for every octave count k (§4)",
                .params = keys(kNoiseKeys),
+               .when = [](const Scene& s) { return any_object(s, noise_inputs_needed); },
+               .when_text = "an object synthesises its bumps from noise (bumpsynth.index_map off)",
                .run = [](StageContext& ctx) {
-                   return stage_result(per_object<NoiseCdfs>(ctx.scene, "bumpsynth", kNoiseKeys, [](int, const SceneObject& o) {
-                       return measure_noise_cdfs(noise_from_material(o.material));
-                   }));
+                   return stage_result(per_object<NoiseCdfs>(
+                       ctx.scene, "bumpsynth", kNoiseKeys, [](int, const SceneObject& o) { return measure_noise_cdfs(noise_from_material(o.material)); },
+                       noise_inputs_needed));
                }});
         g.add({.name = "bumpsynth.noise_texture",
                .help = "Bake the mip-mapped noise texture: each coarser level one octave less (§5.2.2)",
@@ -223,14 +310,24 @@ public:
     }
 
     std::vector<std::string> frame_stages() const override {
-        return {"bumpsynth.ndf", "bumpsynth.lut", "bumpsynth.noise_cdf", "bumpsynth.noise_texture", "bumpsynth.masking", "bumpsynth.albedo"};
+        return {"bumpsynth.ndf", "bumpsynth.lut", "bumpsynth.index_map", "bumpsynth.noise_cdf", "bumpsynth.noise_texture", "bumpsynth.masking", "bumpsynth.albedo"};
     }
 
     // Texture mode: the uv square at one pixel per cell of the finest octave (at least 512, at most 4096).
-    std::optional<ivec2> texture_size(const Scene& s, const Evaluation&) const override {
-        for (const SceneObject& o : s.objects) {
+    // Index map: one pixel per cell of the finest detail octave (the bump map's texels at K = 1).
+    std::optional<ivec2> texture_size(const Scene& s, const Evaluation& ev) const override {
+        for (size_t i = 0; i < s.objects.size(); ++i) {
+            const SceneObject& o = s.objects[i];
             if (o.technique != "bumpsynth") continue;
             const ParamTable& m = o.material;
+            if (index_mode(o)) {
+                auto maps = ev.get<PerObject<IndexMap>>("bumpsynth.index_map");
+                const IndexMap* map = maps ? maps->get(int(i)) : nullptr;
+                if (!map) return std::nullopt;
+                const int K = int(m.get_int("octaves_max"));
+                const auto side = [&](int n) { return int(std::min<int64_t>(4096, int64_t(n) << (K - 1))); };
+                return ivec2(std::max(map->width, side(map->width)), std::max(map->height, side(map->height)));
+            }
             if (texture_noise(o)) return ivec2(int(m.get_int("noise_texture_size")));
             const double cells = double(m.get_int("noise_frequency")) * std::ldexp(1.0, int(m.get_int("octaves_max")) - 1);
             const int side = int(std::clamp(cells, 512.0, 4096.0));

@@ -1,9 +1,11 @@
 #pragma once
 // Technique `bumpsynth`: real-time bump map synthesis from a normal density function (Kautz,
 // Heidrich, Seidel 2001). Stages (each per object, shared by objects with equal keys):
+//   bumpsynth.bump_normals   the normals of a bump map (ndf = normal_map | heightfield; bump_map.h)
 //   bumpsynth.ndf            the tabulated NDF (ndf.h) from bumpsynth.ndf and its source keys
 //   bumpsynth.lut            the normal look-up table L(r1, r2) for uniform inputs (lut.h)
-//   bumpsynth.noise_cdf      G_k of the fractal noise for k = 1..octaves_max (noise.h)
+//   bumpsynth.index_map      §7: the bump map's normals as inputs of the look-up table (index_map on)
+//   bumpsynth.noise_cdf      G_k of the fractal noise for k = 1..octaves_max (noise.h; not with index_map)
 //   bumpsynth.noise_texture  the paper's mip-mapped noise texture (noise = texture only)
 //   bumpsynth.masking        the Smith table of the NDF (masking on only)
 //   bumpsynth.albedo         the albedo maps
@@ -11,6 +13,7 @@
 // octaves in camera.mode=texture). AOVs: radiance, normal (the microfacet normal in the surface's
 // tangent frame, blended while an octave fades in), octaves (o at the pixel).
 #include "core/basic/basic.h"
+#include "core/bumpsynth/bump_map.h"
 #include "core/bumpsynth/lut.h"
 #include "core/bumpsynth/ndf.h"
 #include "core/bumpsynth/noise.h"
@@ -20,8 +23,11 @@
 
 namespace mesolab::bumpsynth {
 
-// The NDF an object's material describes (InputError naming the key for bad values or files).
-Ndf ndf_from_material(const Scene& s, const ParamTable& m);
+// The bump map an object's material names (ndf = normal_map | heightfield; bump_map.h).
+BumpNormals bump_normals_from_material(const Scene& s, const ParamTable& m);
+// The NDF an object's material describes (InputError naming the key for bad values or files). For a
+// bump-map source, `normals` are its normals when already read (else they are read here).
+Ndf ndf_from_material(const Scene& s, const ParamTable& m, const BumpNormals* normals = nullptr);
 NoiseParams noise_from_material(const ParamTable& m);
 ShadingModel shading_from_material(const ParamTable& m);
 

@@ -77,11 +77,12 @@ vec3 shade_facet(const ShadingModel& s, const Ndf& ndf, const SmithTable* smith,
 
 // [SECTION] Synthesis
 vec2 synthesis_inputs(const Synthesis& s, vec2 uv, int k) {
+    if (s.index_map) return index_inputs(*s.index_map, s.index_detail, uv, k);
     return s.noise_texture ? s.noise_texture->inputs(uv, k) : noise_inputs(*s.cdfs, uv, k);
 }
 
 FacetBlend facets_at(const Synthesis& s, vec2 uv, float octaves) {
-    const int K = s.cdfs->params.octaves_max;
+    const int K = s.octaves_max;
     FacetBlend b;
     const float o = std::clamp(std::isfinite(octaves) ? octaves : 0.f, 0.f, float(K));
     int k = int(std::floor(o));

@@ -19,12 +19,13 @@
 //
 // [SECTION] Synthesis at a pixel (§5.1)
 // The microfacet at uv with o(d) = k + w octaves: k octaves (k = 0: the macro frame, no bumps) and
-// k + 1 octaves, each the nearest look-up-table entry of its inputs u = G_k(r_k) (procedural noise) or
-// of the noise texture's level K - k; the two shadings blend with weight w. The half vector is
+// k + 1 octaves, each the nearest look-up-table entry of its inputs u = G_k(r_k) (procedural noise),
+// of the noise texture's level K - k, or of the index map with k - 1 octaves of detail (bump_map.h); the two shadings blend with weight w. The half vector is
 // projected into the microfacet's frame {t_m, b_m, m} and the NDF looked up there (§5.1), i.e. the
 // BRDF above is evaluated in that frame: with n = m, wo and wi expressed in {t_m, b_m, m}.
 // Both must also be above the macro surface (wo·n > 0 and wi·n > 0); a facet facing away from the
 // eye or the light reflects nothing specular.
+#include "core/bumpsynth/bump_map.h"
 #include "core/bumpsynth/lut.h"
 #include "core/bumpsynth/ndf.h"
 #include "core/bumpsynth/noise.h"
@@ -58,14 +59,18 @@ struct ShadingModel {
 vec3 shade_facet(const ShadingModel& s, const Ndf& ndf, const SmithTable* smith, const LutEntry& f, vec3 wo, vec3 wi, vec3 E,
                  vec3 albedo = vec3(1.f));
 
-// What a pixel's synthesis needs; noise_texture is used when non-null (noise = texture).
+// What a pixel's synthesis needs. The inputs come from index_map when non-null (§7, bump_map.h),
+// else from noise_texture when non-null (noise = texture), else from the procedural noise (cdfs).
 struct Synthesis {
     const Ndf* ndf = nullptr;
     const Lut* lut = nullptr;
     const NoiseCdfs* cdfs = nullptr;
     const NoiseTexture* noise_texture = nullptr;
+    const IndexMap* index_map = nullptr;
+    IndexDetail index_detail;
     const SmithTable* smith = nullptr;
     ShadingModel model;
+    int octaves_max = 1;  // K
 };
 
 // The two microfacets a pixel blends (coarse: k octaves, fine: k + 1, weight w of fine).
@@ -75,6 +80,6 @@ struct FacetBlend {
 };
 FacetBlend facets_at(const Synthesis& s, vec2 uv, float octaves);
 
-// Inputs u of k >= 1 octaves at uv, from the procedural noise or the noise texture.
+// Inputs u of k >= 1 octaves at uv, from the index map, the procedural noise or the noise texture.
 vec2 synthesis_inputs(const Synthesis& s, vec2 uv, int k);
 }  // namespace mesolab::bumpsynth

@@ -219,15 +219,15 @@ Heightfield make_procedural(const ProceduralParams& p) {
         std::string list;
         for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
         const std::string hint = nearest_key(p.name, names);
-        throw InputError("microgeom.heightfield: '" + p.name + "' is not one of " + list +
+        throw InputError(p.group + ".heightfield: '" + p.name + "' is not one of " + list +
                          (hint.empty() ? "" : " (did you mean '" + hint + "'?)"));
     }
     if (p.resolution < 8 || p.resolution > 4096)
-        throw InputError("microgeom.resolution: value " + std::to_string(p.resolution) + " is out of range [8, 4096]");
+        throw InputError(p.group + ".resolution: value " + std::to_string(p.resolution) + " is out of range [8, 4096]");
     if (!std::isfinite(p.height_scale))
-        throw InputError("microgeom.height_scale: value " + to_text(p.height_scale) + " is not finite");
+        throw InputError(p.group + ".height_scale: value " + to_text(p.height_scale) + " is not finite");
     if (!(p.texel_size > 0.f) || !std::isfinite(p.texel_size))
-        throw InputError("microgeom.texel_size: value " + to_text(p.texel_size) + " must be positive and finite");
+        throw InputError(p.group + ".texel_size: value " + to_text(p.texel_size) + " must be positive and finite");
 
     const int n = p.resolution;
     Heightfield f;
@@ -245,16 +245,16 @@ Heightfield make_procedural(const ProceduralParams& p) {
         make_bumps(f, n);
     } else if (p.name == "vgrooves") {
         if (!(p.vgroove_angle >= 1.f && p.vgroove_angle <= 179.f))
-            throw InputError("microgeom.vgroove_angle: value " + to_text(p.vgroove_angle) +
+            throw InputError(p.group + ".vgroove_angle: value " + to_text(p.vgroove_angle) +
                              " is out of range [1, 179] (opening angle of the V, degrees)");
         make_vgrooves(f, n, p.vgroove_angle);
     } else if (p.name == "gaussian") {
         if (!(p.rms_slope >= 0.f) || !std::isfinite(p.rms_slope))
-            throw InputError("microgeom.rms_slope: value " + to_text(p.rms_slope) + " must be finite and >= 0");
+            throw InputError(p.group + ".rms_slope: value " + to_text(p.rms_slope) + " must be finite and >= 0");
         // Beyond the resolution the periodic kernel is flat to within rounding (the field would be
         // rounding noise); beyond 64 texels the direct convolution gets slow.
         if (!(p.correlation > 0.f && p.correlation <= float(std::min(n, 64))))
-            throw InputError("microgeom.correlation: value " + to_text(p.correlation) + " is out of range (0, " +
+            throw InputError(p.group + ".correlation: value " + to_text(p.correlation) + " is out of range (0, " +
                              std::to_string(std::min(n, 64)) + "] (texels, at most the resolution and 64)");
         make_gaussian(f, n, double(p.correlation), double(p.rms_slope), p.seed);
     }  // "flat": zero

@@ -56,7 +56,7 @@ struct Heightfield {
 //              slope sqrt(<|grad h|^2>) from central differences in texel units (Beckmann m)
 //              is `rms_slope` exactly.
 //   flat       h = 0.
-// Out-of-range values are InputErrors naming microgeom.<key>.
+// Out-of-range values are InputErrors naming <group>.<key> (microgeom.<key> by default).
 struct ProceduralParams {
     std::string name;            // triangles | bricks | bumps | vgrooves | gaussian | flat
     int resolution = 64;         // width = height = resolution
@@ -68,6 +68,7 @@ struct ProceduralParams {
     float correlation = 4.f;     // gaussian: correlation length, texels, in (0, min(resolution, 64)]
     uint32_t seed = 1;           // gaussian: seed (deterministic for a seed)
     vec3 albedo{0.8f};           // base albedo; the rules above modulate it
+    std::string group = "microgeom";  // the parameter group named in errors (bumpsynth reads the same keys)
 };
 
 // The known procedural names.

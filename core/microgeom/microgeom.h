@@ -31,6 +31,7 @@
 #include "core/microgeom/visibility.h"
 #include "core/param.h"
 #include "core/per_object.h"
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -52,4 +53,14 @@ struct LightsScatter {
 };
 
 ProceduralParams procedural_params(const ParamTable& material);
+
+// The heightfield's own parameters (heightfield_keys(): the procedural name or image, resolution,
+// height_scale, texel_size, periodic and the procedural shapes' parameters), declared once here and
+// shared by bumpsynth (ndf = heightfield), so that both techniques can show the same surface. `each`
+// may amend every declaration (e.g. bumpsynth marks them used only when ndf is heightfield).
+const std::vector<std::string>& heightfield_keys();
+void declare_heightfield_params(ParamGroup& p, const std::function<void(ParamDecl&)>& each = {});
+// The heightfield a material describes (procedural or image), without the albedo map; errors name
+// the material's group (microgeom.resolution, bumpsynth.resolution, ...).
+Heightfield heightfield_from_material(const Scene& s, const ParamTable& material);
 }  // namespace mesolab::microgeom

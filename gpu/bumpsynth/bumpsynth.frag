@@ -27,6 +27,10 @@ uniform float u_octave_gain[16];     // gain^o
 uniform int u_noise_texture;         // 1: noise = texture
 uniform sampler2D u_noise;           // RG: uniformised inputs, level l = K - l octaves
 uniform int u_noise_levels;
+uniform int u_index_map;             // 1: §7 index texture (core/bumpsynth/bump_map.h)
+uniform sampler2D u_index;           // W x H: RG = look-up-table inputs, row 0 at the top (v = 1)
+uniform ivec2 u_index_size;
+uniform float u_index_noise;         // detail amplitude; u_base_frequency is then W
 uniform sampler2D u_smith;           // 64 (phi) x 65 (theta): G1
 uniform int u_masking;
 uniform int u_fresnel;
@@ -94,7 +98,41 @@ float input_cdf(int k, int c, float r) {
     return b.x > a.x ? a.y + (r - a.x) / (b.x - a.x) * (b.y - a.y) : b.y;
 }
 
+// [SECTION] Index texture and detail (core/bumpsynth/bump_map.cpp)
+vec2 index_at(int x, int y) { return texelFetch(u_index, ivec2(x, y), 0).rg; }
+
+vec2 index_bilinear(vec2 uv) {
+    float fx = uv.x * float(u_index_size.x) - 0.5, fy = (1.0 - uv.y) * float(u_index_size.y) - 0.5;
+    float x0f = floor(fx), y0f = floor(fy);
+    float tx = fx - x0f, ty = fy - y0f;
+    int x0 = wrap_i(int(x0f), u_index_size.x), y0 = wrap_i(int(y0f), u_index_size.y);
+    int x1 = x0 + 1 == u_index_size.x ? 0 : x0 + 1, y1 = y0 + 1 == u_index_size.y ? 0 : y0 + 1;
+    vec2 a = index_at(x0, y0) + tx * (index_at(x1, y0) - index_at(x0, y0));
+    vec2 b = index_at(x0, y1) + tx * (index_at(x1, y1) - index_at(x0, y1));
+    return a + ty * (b - a);
+}
+
+float reflect_unit(float r) {
+    r -= 2.0 * floor(r * 0.5);
+    return r > 1.0 ? 2.0 - r : r;
+}
+
+vec2 index_inputs(vec2 uv, int k) {
+    vec2 u = index_bilinear(uv);
+    if (k < 2 || !(u_index_noise > 0.0)) return u;
+    vec2 T = vec2(0.0);
+    for (int o = 0; o < k - 1; ++o)
+        for (int c = 0; c < 2; ++c) {
+            int period = (u_base_frequency + c) << o;
+            vec2 p = uv * float(period) + u_octave_offset[2 * o + c];
+            T[c] += u_octave_gain[o] * gradient_noise(p, period, u_octave_seed[2 * o + c]);
+        }
+    u += (u_index_noise / kS) * T;
+    return vec2(reflect_unit(u.x), reflect_unit(u.y));
+}
+
 vec2 inputs(vec2 uv, int k) {
+    if (u_index_map != 0) return index_inputs(uv, k);
     if (u_noise_texture != 0) return textureLod(u_noise, uv, float(clamp(u_octaves_max - k, 0, u_noise_levels - 1))).rg;
     return vec2(input_cdf(k, 0, fractal_noise(uv, k, 0)), input_cdf(k, 1, fractal_noise(uv, k, 1)));
 }

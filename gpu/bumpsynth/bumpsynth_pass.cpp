@@ -62,18 +62,21 @@ public:
         auto cdfss = ctx.eval.get<PerObject<NoiseCdfs>>("bumpsynth.noise_cdf");
         auto texs = ctx.eval.get<PerObject<NoiseTexture>>("bumpsynth.noise_texture");
         auto smiths = ctx.eval.get<PerObject<SmithTable>>("bumpsynth.masking");
+        auto indexes = ctx.eval.get<PerObject<IndexMap>>("bumpsynth.index_map");
         auto maps = ctx.eval.get<basic::AlbedoMaps>("bumpsynth.albedo");
-        ndf_.prune(), lut_.prune(), noise_.prune(), smith_.prune();
+        ndf_.prune(), lut_.prune(), noise_.prune(), smith_.prune(), index_.prune();
         for (auto it = cdfs_.begin(); it != cdfs_.end();) it = it->second.keep.use_count() == 1 ? cdfs_.erase(it) : std::next(it);
         // Upload first: creating a texture binds it to the active unit.
-        struct Bound { GLuint ndf, lut, noise, smith, albedo; const CdfBuffer* cdf; };
+        struct Bound { GLuint ndf, lut, noise, smith, albedo, index; const CdfBuffer* cdf; };
         std::map<int, Bound> bound;
         for (int i : ctx.objects) {
             const SceneObject& o = ctx.scene.objects[size_t(i)];
             Bound b{};
             b.ndf = ndf_.get(ndfs->items[size_t(i)], upload_ndf).get();
             b.lut = lut_.get(luts->items[size_t(i)], upload_lut).get();
-            b.cdf = &cdf_buffer(cdfss->items[size_t(i)]);
+            const bool index = indexes && indexes->get(i);
+            b.index = index ? index_.get(indexes->items[size_t(i)], upload_index).get() : 0;
+            b.cdf = !index && cdfss && cdfss->get(i) ? &cdf_buffer(cdfss->items[size_t(i)]) : nullptr;
             const bool tex = o.material.get_string("noise") == "texture" && texs && texs->get(i);
             b.noise = tex ? noise_.get(texs->items[size_t(i)], upload_noise).get() : 0;
             const bool masking = o.material.get_bool("masking") && smiths && smiths->get(i);
@@ -89,19 +92,26 @@ public:
             const SceneObject& o = ctx.scene.objects[size_t(i)];
             const ParamTable& m = o.material;
             const Bound& b = bound.at(i);
-            const NoiseCdfs& cdfs = *cdfss->get(i);
-            const NoiseParams& np = cdfs.params;
+            const Synthesis syn = synthesis_for(ctx.scene, ctx.eval, i);
+            if (!syn.index_map && !syn.cdfs) throw std::logic_error("bumpsynth: neither an index map nor noise CDFs were evaluated");
+            const NoiseParams np = syn.index_map ? syn.index_detail.noise : syn.cdfs->params;
             ctx.renderer.set_camera_uniforms(program_, ctx.camera, object_to_world(o));
             program_.bind_texture(1, GL_TEXTURE_2D, b.ndf, "u_ndf");
             program_.bind_texture(2, GL_TEXTURE_2D_ARRAY, b.lut, "u_lut");
             program_.bind_texture(3, GL_TEXTURE_2D, b.noise, "u_noise");
             program_.bind_texture(4, GL_TEXTURE_2D, b.smith, "u_smith");
             program_.bind_texture(5, GL_TEXTURE_2D, b.albedo, "u_albedo");
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, b.cdf->knots.get());
+            program_.bind_texture(6, GL_TEXTURE_2D, b.index, "u_index");
+            glUniform1i(program_.uniform("u_index_map"), syn.index_map ? 1 : 0);
+            glUniform2i(program_.uniform("u_index_size"), syn.index_map ? syn.index_map->width : 1, syn.index_map ? syn.index_map->height : 1);
+            glUniform1f(program_.uniform("u_index_noise"), syn.index_map ? syn.index_detail.amplitude : 0.f);
+            if (b.cdf) {
+                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, b.cdf->knots.get());
+                glUniform1iv(program_.uniform("u_cdf_offset"), GLsizei(b.cdf->offset.size()), b.cdf->offset.data());
+                glUniform1iv(program_.uniform("u_cdf_count"), GLsizei(b.cdf->count.size()), b.cdf->count.data());
+            }
             glUniform1i(program_.uniform("u_ndf_res"), ndfs->get(i)->resolution());
             glUniform1i(program_.uniform("u_lut_size"), luts->get(i)->size());
-            glUniform1iv(program_.uniform("u_cdf_offset"), GLsizei(b.cdf->offset.size()), b.cdf->offset.data());
-            glUniform1iv(program_.uniform("u_cdf_count"), GLsizei(b.cdf->count.size()), b.cdf->count.data());
             glUniform1i(program_.uniform("u_octaves_max"), np.octaves_max);
             glUniform1i(program_.uniform("u_base_frequency"), np.base_frequency);
             std::vector<GLuint> seeds;
@@ -184,6 +194,13 @@ private:
         return t;
     }
 
+    // Index texture: RG32F, fetched texel by texel (bilinear in the shader, as on the CPU).
+    static Texture upload_index(const IndexMap& m) {
+        Texture t(make_texture(GL_TEXTURE_2D));
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RG32F, m.width, m.height, 0, GL_RG, GL_FLOAT, m.u.data());
+        return t;
+    }
+
     static Texture upload_smith(const SmithTable& s) {
         Texture t(make_texture(GL_TEXTURE_2D));
         glTexImage2D(GL_TEXTURE_2D, 0, GL_R32F, SmithTable::kPhi, SmithTable::kTheta, 0, GL_RED, GL_FLOAT, s.values().data());
@@ -210,6 +227,7 @@ private:
     Uploads<Lut> lut_;
     Uploads<NoiseTexture> noise_;
     Uploads<SmithTable> smith_;
+    Uploads<IndexMap> index_;
     std::map<const void*, CdfBuffer> cdfs_;
 };
 }  // namespace

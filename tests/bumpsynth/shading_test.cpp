@@ -189,7 +189,7 @@ TEST(BumpsynthLod, FarFieldIsTheMeanOfTheNearFieldWithinTheFractalModelsToleranc
     const Lut lut = build_lut(ndf);
     const NoiseCdfs cdfs = small_noise(6, 64);
     Synthesis syn;
-    syn.ndf = &ndf, syn.lut = &lut, syn.cdfs = &cdfs;
+    syn.ndf = &ndf, syn.lut = &lut, syn.cdfs = &cdfs, syn.octaves_max = cdfs.params.octaves_max;
     const vec3 wo = direction_from_degrees(20.f, 0.f), wi = direction_from_degrees(35.f, 180.f);
     test::Rng rng(3);
     const int n = 40000;
@@ -232,7 +232,7 @@ TEST(BumpsynthLod, ShadingIsContinuousWhileOctavesFadeIn) {
     const Lut lut = build_lut(ndf);
     const NoiseCdfs cdfs = small_noise(6, 8);
     Synthesis syn;
-    syn.ndf = &ndf, syn.lut = &lut, syn.cdfs = &cdfs;
+    syn.ndf = &ndf, syn.lut = &lut, syn.cdfs = &cdfs, syn.octaves_max = cdfs.params.octaves_max;
     syn.model.kd = vec3(0.2f);
     const vec3 wo = direction_from_degrees(30.f, 10.f), wi = direction_from_degrees(40.f, 200.f);
     const auto L = [&](vec2 uv, float o) {
@@ -276,7 +276,7 @@ TEST(BumpsynthHardCases, ExtremeNdfsAndGrazingDirectionsStayFinite) {
         const SmithTable smith = SmithTable::build(ndf);
         for (const float g : smith.values()) ASSERT_TRUE(std::isfinite(g) && g >= 0.f && g <= 1.f) << name;
         Synthesis syn;
-        syn.ndf = &ndf, syn.lut = &lut, syn.cdfs = &cdfs, syn.smith = &smith;
+        syn.ndf = &ndf, syn.lut = &lut, syn.cdfs = &cdfs, syn.smith = &smith, syn.octaves_max = cdfs.params.octaves_max;
         for (bool masking : {false, true})
             for (bool fresnel : {false, true}) {
                 syn.model.masking = masking, syn.model.fresnel = fresnel;
@@ -300,7 +300,7 @@ TEST(BumpsynthHardCases, ExtremeNdfsAndGrazingDirectionsStayFinite) {
     const Ndf ndf = Ndf::from_lobe(Lobe::beckmann(0.3f, 0.3f));
     const Lut lut = build_lut(ndf, 64);
     Synthesis syn;
-    syn.ndf = &ndf, syn.lut = &lut, syn.cdfs = &cdfs;
+    syn.ndf = &ndf, syn.lut = &lut, syn.cdfs = &cdfs, syn.octaves_max = cdfs.params.octaves_max;
     for (float o : {std::nanf(""), -3.f, 1e9f, INFINITY}) {
         const FacetBlend b = facets_at(syn, vec2(0.3f, 0.7f), o);
         EXPECT_TRUE(std::isfinite(b.coarse.m.x) && std::isfinite(b.fine.m.z) && b.w >= 0.f && b.w <= 1.f) << o;
