@@ -315,3 +315,50 @@ TEST(BumpsynthBumpMap, CpuAndGpuAgreeWithAnIndexMapAndDetail) {
         test::expect_frames_agree(cpu, gpu, {"radiance", "normal", "octaves"}, 1e-3, 2e-2, 0.97, 0.995);
     }
 }
+
+// The same surface in both techniques: a heightfield shaded as microgeom's bump map (Lambert, no
+// shadows, no scattering) and as bumpsynth's index map with a Lambert term only (ks = 0) give the
+// same image in texture space, up to the look-up table's quantisation of the normals.
+TEST(BumpsynthBumpMap, IndexMapShowsTheSameSurfaceAsMicrogeomsBumpMap) {
+    const auto scene = [](const char* technique) {
+        Scene s = default_scene(technique);
+        apply_set(s, "geometry.type", "plane");
+        apply_set(s, "camera.mode", "texture");
+        apply_set(s, "env.color", "0,0,0");
+        const std::string t = technique;
+        for (const auto& [k, v] : std::vector<std::pair<std::string, std::string>>{{"heightfield", "gaussian"}, {"resolution", "64"}, {"rms_slope", "0.5"}})
+            apply_set(s, t + "." + k, v);
+        return s;
+    };
+    Scene g = scene("microgeom");
+    apply_set(g, "microgeom.shadows", "none");
+    apply_set(g, "microgeom.depth", "0");
+    apply_set(g, "microgeom.albedo", "0.8,0.8,0.8");
+    apply_set(g, "effects.indirect", "false");
+    Scene b = scene("bumpsynth");
+    apply_set(b, "bumpsynth.ndf", "heightfield");
+    apply_set(b, "bumpsynth.index_map", "true");
+    apply_set(b, "bumpsynth.octaves_max", "1");
+    apply_set(b, "bumpsynth.lut_size", "1024");
+    apply_set(b, "bumpsynth.ks", "0,0,0");
+    apply_set(b, "bumpsynth.kd", "0.8,0.8,0.8");
+    Workbench wb;
+    RenderRequest req;
+    req.backend = Backend::Cpu;
+    const Image ig = wb.render(g, req).frame.aov("radiance"), ib = wb.render(b, req).frame.aov("radiance");
+    ASSERT_EQ(ig.width, 64);
+    ASSERT_EQ(ib.width, 64);
+    std::vector<double> rel;
+    double mean_g = 0.0, mean_b = 0.0;
+    for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 64; ++x) {
+            const double a = ig.at(x, y)[0], c = ib.at(x, y)[0];
+            mean_g += a, mean_b += c;
+            rel.push_back(std::fabs(a - c) / std::max(1e-3, a));
+        }
+    std::sort(rel.begin(), rel.end());
+    std::printf("[          ] microgeom vs bumpsynth: mean %.4f vs %.4f; relative difference median %.2e, 99th percentile %.2e\n", mean_g / 4096,
+                mean_b / 4096, rel[rel.size() / 2], rel[rel.size() * 99 / 100]);
+    EXPECT_NEAR(mean_b / mean_g, 1.0, 0.01);
+    EXPECT_LT(rel[rel.size() / 2], 0.01);
+}
