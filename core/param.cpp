@@ -45,6 +45,7 @@ const char* expected_text(const ParamDecl& d) {
         case ParamType::Color: return "a colour [r, g, b]";
         case ParamType::Enum: return "one of the listed names";
         case ParamType::Path: return "a file path (string)";
+        case ParamType::Text: return "a string";
     }
     return "?";
 }
@@ -66,6 +67,7 @@ const char* to_string(ParamType t) {
         case ParamType::Color: return "color";
         case ParamType::Enum: return "enum";
         case ParamType::Path: return "path";
+        case ParamType::Text: return "text";
     }
     return "?";
 }
@@ -103,6 +105,7 @@ ParamDecl& ParamGroup::add_enum(std::string n, std::vector<std::string> choices,
     return add({.name = std::move(n), .type = ParamType::Enum, .def = std::move(def), .choices = std::move(choices)});
 }
 ParamDecl& ParamGroup::add_path(std::string n, std::string def) { return add({.name = std::move(n), .type = ParamType::Path, .def = std::move(def)}); }
+ParamDecl& ParamGroup::add_text(std::string n, std::string def) { return add({.name = std::move(n), .type = ParamType::Text, .def = std::move(def)}); }
 
 const ParamDecl* ParamGroup::find(std::string_view n) const {
     for (const auto& d : decls_)
@@ -173,7 +176,7 @@ bool ParamTable::is_used(const ParamDecl& d) const {
 std::string describe_range(const ParamDecl& d) {
     if (d.type == ParamType::Enum) return choices_text(d);
     if (d.type == ParamType::Path) return d.choices.empty() ? "" : choices_text(d) + " or a file";
-    if (d.type == ParamType::Bool) return "";
+    if (d.type == ParamType::Bool || d.type == ParamType::Text) return "";
     auto b = [](double v) { return std::isinf(v) ? std::string(v < 0 ? "-inf" : "inf") : fmt_double(v); };
     return "[" + b(d.min) + ", " + b(d.max) + "]";
 }
@@ -200,6 +203,10 @@ void validate_value(const ParamDecl& d, const Value& v, const std::string& where
             }
             break;
         }
+        case ParamType::Text:
+            if (d.syntax)
+                if (const std::string what = d.syntax(std::get<std::string>(v)); !what.empty()) fail(where, what);
+            break;
         case ParamType::Bool:
         case ParamType::Path: break;
     }
@@ -245,6 +252,7 @@ Value value_from_json(const ParamDecl& d, const json& j, const std::string& wher
         }
         case ParamType::Enum:
         case ParamType::Path:
+        case ParamType::Text:
             if (!j.is_string()) return bad();
             v = j.get<std::string>();
             break;
@@ -262,7 +270,8 @@ json value_to_json(const ParamDecl& d, const Value& v) {
         case ParamType::Vec3:
         case ParamType::Color: { const auto& a = std::get<std::array<double, 3>>(v); return json::array({a[0], a[1], a[2]}); }
         case ParamType::Enum:
-        case ParamType::Path: return std::get<std::string>(v);
+        case ParamType::Path:
+        case ParamType::Text: return std::get<std::string>(v);
     }
     return nullptr;
 }
@@ -316,7 +325,8 @@ Value value_from_text(const ParamDecl& d, std::string_view text, const std::stri
             break;
         }
         case ParamType::Enum:
-        case ParamType::Path: v = std::string(text); break;
+        case ParamType::Path:
+        case ParamType::Text: v = std::string(text); break;
     }
     validate_value(d, v, where);
     return v;
@@ -331,7 +341,8 @@ std::string value_to_text(const ParamDecl& d, const Value& v) {
         case ParamType::Vec3:
         case ParamType::Color: { const auto& a = std::get<std::array<double, 3>>(v); return fmt_double(a[0]) + "," + fmt_double(a[1]) + "," + fmt_double(a[2]); }
         case ParamType::Enum:
-        case ParamType::Path: return std::get<std::string>(v);
+        case ParamType::Path:
+        case ParamType::Text: return std::get<std::string>(v);
     }
     return {};
 }

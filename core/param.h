@@ -9,6 +9,7 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -20,7 +21,7 @@ namespace mesolab {
 
 using json = nlohmann::ordered_json;
 
-enum class ParamType { Bool, Int, Float, Vec2, Vec3, Color, Enum, Path };
+enum class ParamType { Bool, Int, Float, Vec2, Vec3, Color, Enum, Path, Text };
 // What a change costs: only redraw the frame, rebuild GPU resources, or recompute a stage.
 enum class Cost { Redraw, Rebuild, Recompute };
 // Which way of a knob is more accurate (used by `sweep` to pick its reference).
@@ -50,6 +51,9 @@ struct ParamDecl {
     // only when geometry.type is mesh). A preset that sets an unused key is an error.
     std::string used_when_key;
     std::vector<std::string> used_when_values;
+    // Text only: the syntax check of a value (returns what is wrong, empty when it is fine), so a
+    // bad value is refused where it is set (preset, --set, widget) with the key named.
+    std::function<std::string(const std::string&)> syntax;
 
     // Fluent setters for concise declarations.
     ParamDecl& range(double lo, double hi) { min = lo; max = hi; return *this; }
@@ -61,6 +65,7 @@ struct ParamDecl {
     ParamDecl& builtins(std::vector<std::string> names) { choices = std::move(names); return *this; }
     // A Path value that names a file (not one of the built-in names, not empty).
     bool is_file(const Value& v) const;
+    ParamDecl& checked(std::function<std::string(const std::string&)> f) { syntax = std::move(f); return *this; }
     ParamDecl& used_when(std::string key, std::vector<std::string> values) { used_when_key = std::move(key); used_when_values = std::move(values); return *this; }
 };
 
@@ -79,6 +84,7 @@ public:
     ParamDecl& add_color(std::string name, std::array<double, 3> def);
     ParamDecl& add_enum(std::string name, std::vector<std::string> choices, std::string def);
     ParamDecl& add_path(std::string name, std::string def = "");
+    ParamDecl& add_text(std::string name, std::string def = "");  // free text, e.g. a small expression (see ParamDecl::syntax)
 
     const std::string& name() const { return name_; }
     const std::string& title() const { return title_; }

@@ -4,6 +4,8 @@
 #include <imgui.h>
 #include <cmath>
 #include <cstring>
+#include <map>
+#include <utility>
 
 namespace mesolab::panels {
 
@@ -114,6 +116,27 @@ bool param_widget(const ParamDecl& d, ParamTable& t, Dirty& dirty, const char* i
                 v = std::string(buf);
                 changed = true;
             }
+            break;
+        }
+        case ParamType::Text: {
+            // Applied on Enter; a value its syntax check refuses stays in the field, with the reason
+            // under it, and changes nothing.
+            static std::map<std::string, std::pair<std::string, std::string>> pending;  // label -> (text, error)
+            auto& [text, error] = pending[label];
+            const std::string cur = std::get<std::string>(v);
+            if (error.empty()) text = cur;
+            char buf[2048];
+            std::strncpy(buf, text.c_str(), sizeof buf - 1);
+            buf[sizeof buf - 1] = 0;
+            if (ImGui::InputText(label.c_str(), buf, sizeof buf, ImGuiInputTextFlags_EnterReturnsTrue)) {
+                text = buf;
+                error = d.syntax ? d.syntax(text) : std::string();
+                if (error.empty() && text != cur) {
+                    v = text;
+                    changed = true;
+                }
+            }
+            if (!error.empty()) ImGui::TextColored(ImVec4(1.f, 0.4f, 0.35f, 1.f), "%s", error.c_str());
             break;
         }
     }

@@ -22,8 +22,7 @@ std::vector<std::string> source_keys() {
 }
 const std::vector<std::string> kSourceKeys = source_keys();
 const std::vector<std::string> kNdfKeys = [] {
-    std::vector<std::string> k{"alpha_x", "alpha_y", "rotation", "exponent", "lobe2_kind", "lobe2_alpha",
-                               "lobe2_rotation", "lobe2_weight", "ndf_image", "ndf_resolution"};
+    std::vector<std::string> k{"alpha_x", "alpha_y", "rotation", "exponent", "lobes", "ndf_image", "ndf_resolution"};
     k.insert(k.begin(), kSourceKeys.begin(), kSourceKeys.end());
     return k;
 }();
@@ -83,10 +82,11 @@ Ndf ndf_from_material(const Scene& s, const ParamTable& m, const BumpNormals* no
     const float rotation = float(m.get_float("rotation"));
     if (kind == "phong") return Ndf::from_lobe(Lobe::blinn_phong(float(m.get_float("exponent"))), R);
     if (kind == "lobes") {
-        const vec2 a2 = m.get_vec2("lobe2_alpha");
-        return Ndf::from_lobes({Lobe::beckmann(alpha.x, alpha.y, rotation, 1.f),
-                                lobe_of(m.get_string("lobe2_kind"), a2, float(m.get_float("lobe2_rotation")), float(m.get_float("lobe2_weight")))},
-                               R);
+        try {
+            return Ndf::from_lobes(parse_lobes(m.get_string("lobes")), R);
+        } catch (const InputError& e) {
+            throw InputError("bumpsynth.lobes: " + std::string(e.what()));
+        }
     }
     if (kind == "image") {
         const std::string path = s.resolve(m.get_string("ndf_image"));
@@ -162,26 +162,22 @@ class BumpsynthTechnique final : public Technique {
 public:
     BumpsynthTechnique() : Technique("bumpsynth", "Bump map synthesis (Kautz et al. 2001)") {
         auto& p = params_;
-        const std::vector<std::string> lobed{"beckmann", "ggx", "ward", "lobes"};
+        const std::vector<std::string> lobed{"beckmann", "ggx", "ward"};
         p.add_enum("ndf", {"phong", "beckmann", "ggx", "ward", "lobes", "image", "normal_map", "heightfield"}, "beckmann").costs(Cost::Recompute)
-            .doc("Normal density function: an analytic lobe, a sum of two lobes, an image of D over the normal's (x, y) disk, or the "
+            .doc("Normal density function: an analytic lobe, a weighted sum of lobes (bumpsynth.lobes), an image of D over the normal's (x, y) disk, or the "
                  "histogram of an existing bump map's normals (a normal map, or a heightfield as in microgeom; §7)");
         p.add_float("alpha_x", 0.3).range(1e-4, 1.0).log().costs(Cost::Recompute).used_when("ndf", lobed)
-            .doc("Roughness along the lobe's x axis (RMS slope for Beckmann; the first lobe of 'lobes')");
+            .doc("Roughness along the lobe's x axis (RMS slope for Beckmann)");
         p.add_float("alpha_y", 0.3).range(1e-4, 1.0).log().costs(Cost::Recompute).used_when("ndf", lobed)
             .doc("Roughness along the lobe's y axis (alpha_x != alpha_y: anisotropic)");
         p.add_float("rotation", 0.0).range(-360.0, 360.0).in("degrees").costs(Cost::Recompute).used_when("ndf", lobed)
             .doc("Rotation of the lobe's x axis from the surface tangent towards the bitangent");
         p.add_float("exponent", 50.0).range(0.0, 2e8).log().costs(Cost::Recompute).used_when("ndf", {"phong"})
             .doc("Blinn-Phong exponent e: D = (e + 2)/(2 pi) cos^e");
-        p.add_enum("lobe2_kind", {"beckmann", "ggx", "ward"}, "ggx").costs(Cost::Recompute).used_when("ndf", {"lobes"})
-            .doc("Kind of the second lobe of 'lobes' (the first is Beckmann alpha_x, alpha_y, rotation)");
-        p.add_vec2("lobe2_alpha", {0.05, 0.5}).range(1e-4, 1.0).costs(Cost::Recompute).used_when("ndf", {"lobes"})
-            .doc("Roughness (alpha_x, alpha_y) of the second lobe");
-        p.add_float("lobe2_rotation", 45.0).range(-360.0, 360.0).in("degrees").costs(Cost::Recompute).used_when("ndf", {"lobes"})
-            .doc("Rotation of the second lobe");
-        p.add_float("lobe2_weight", 0.5).range(0.0, 1e3).costs(Cost::Recompute).used_when("ndf", {"lobes"})
-            .doc("Weight of the second lobe (the first has weight 1; the sum is normalised)");
+        p.add_text("lobes", "beckmann(0.3) + 0.5 * ggx(0.05, 0.5, 45)").checked(lobes_syntax_error).costs(Cost::Recompute).used_when("ndf", {"lobes"})
+            .doc("A weighted sum of any number of lobes, e.g. 'beckmann(0.08, 0.3) + 0.5 * ggx(0.3, 0.05, 45)': phong(exponent), "
+                 "beckmann | ggx | ward(alpha) or (alpha_x, alpha_y) or (alpha_x, alpha_y, rotation in degrees), each optionally "
+                 "times a weight (default 1; the sum is normalised)");
         p.add_path("ndf_image", "").costs(Cost::Recompute).used_when("ndf", {"image"})
             .doc("Image of D over [-1, 1]^2 (x right, y up; any positive scale; channels averaged; pixels outside the disk ignored)");
         p.add_path("normal_map", "").costs(Cost::Recompute).used_when("ndf", {"normal_map"})

@@ -5,6 +5,9 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <cstdlib>
 #include <cmath>
 #include <sstream>
 #include <string>
@@ -467,5 +470,134 @@ float Ndf::eval(vec3 m) const {
     const double len = std::sqrt(double(m.x) * m.x + double(m.y) * m.y + double(m.z) * m.z);
     if (!(len > 0.0) || m.z < 0.f) return 0.f;
     return eval(vec2(float(m.x / len), float(m.y / len)));
+}
+// [SECTION] Lists of lobes as text
+namespace {
+
+class LobeParser {
+public:
+    explicit LobeParser(std::string_view t) : t_(t) {}
+
+    std::vector<Lobe> parse() {
+        std::vector<Lobe> out;
+        skip();
+        if (pos_ == t_.size()) fail("the list is empty; write e.g. beckmann(0.3) + 0.5 * ggx(0.05, 0.5, 45)");
+        do out.push_back(term(int(out.size()) + 1));
+        while (accept('+'));
+        if (pos_ != t_.size()) fail("expected '+' or the end, found '" + std::string(1, t_[pos_]) + "'");
+        return out;
+    }
+
+private:
+    [[noreturn]] void fail(const std::string& what) const {
+        throw InputError("at character " + std::to_string(pos_ + 1) + ": " + what);
+    }
+    void skip() {
+        while (pos_ < t_.size() && std::isspace(static_cast<unsigned char>(t_[pos_]))) ++pos_;
+    }
+    bool accept(char c) {
+        skip();
+        if (pos_ < t_.size() && t_[pos_] == c) {
+            ++pos_;
+            skip();
+            return true;
+        }
+        return false;
+    }
+    void expect(char c, const char* after) {
+        if (!accept(c)) fail(std::string("expected '") + c + "' " + after);
+    }
+    bool at_number() const {
+        return pos_ < t_.size() && (std::isdigit(static_cast<unsigned char>(t_[pos_])) || t_[pos_] == '.' || t_[pos_] == '-' || t_[pos_] == '+');
+    }
+    double number(const char* what) {
+        skip();
+        const char* b = t_.data() + pos_;
+        char* e = nullptr;
+        const std::string s(b, t_.size() - pos_);
+        const double v = std::strtod(s.c_str(), &e);
+        const size_t n = size_t(e - s.c_str());
+        if (n == 0) fail(std::string("expected a number (") + what + ")");
+        pos_ += n;
+        skip();
+        return v;
+    }
+    Lobe term(int index) {
+        double w = 1.0;
+        if (at_number()) {
+            w = number("a weight");
+            expect('*', "after the weight");
+        }
+        size_t b = pos_;
+        while (pos_ < t_.size() && std::isalpha(static_cast<unsigned char>(t_[pos_]))) ++pos_;
+        const std::string kind(t_.substr(b, pos_ - b));
+        if (kind.empty()) fail("expected a lobe: phong, beckmann, ggx or ward");
+        if (kind != "phong" && kind != "beckmann" && kind != "ggx" && kind != "ward") {
+            pos_ = b;
+            fail("unknown lobe '" + kind + "' (expected phong, beckmann, ggx or ward)");
+        }
+        expect('(', ("after '" + kind + "'").c_str());
+        std::vector<double> a{number("a lobe parameter")};
+        while (accept(',')) a.push_back(number("a lobe parameter"));
+        expect(')', "after the lobe's parameters");
+        if (accept('*')) w *= number("a weight");
+        const size_t most = kind == "phong" ? 1 : 3;
+        if (a.size() > most) fail(kind + " takes " + (kind == "phong" ? std::string("1 parameter (the exponent)") : "1 to 3 parameters (alpha_x, alpha_y, rotation)") +
+                                  ", got " + std::to_string(a.size()));
+        try {
+            if (kind == "phong") return Lobe::blinn_phong(float(a[0]), float(w));
+            const float ax = float(a[0]), ay = float(a.size() > 1 ? a[1] : a[0]), rot = float(a.size() > 2 ? a[2] : 0.0);
+            if (kind == "ggx") return Lobe::ggx(ax, ay, rot, float(w));
+            if (kind == "ward") return Lobe::ward(ax, ay, rot, float(w));
+            return Lobe::beckmann(ax, ay, rot, float(w));
+        } catch (const InputError& e) {
+            std::string msg = e.what();
+            if (msg.rfind("bumpsynth.", 0) == 0) msg = msg.substr(10);  // the lobe's own field, not a key
+            throw InputError("lobe " + std::to_string(index) + " (" + kind + "): " + msg);
+        }
+    }
+
+    std::string_view t_;
+    size_t pos_ = 0;
+};
+
+std::string short_number(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.6g", v);
+    return buf;
+}
+}  // namespace
+
+std::vector<Lobe> parse_lobes(std::string_view text) {
+    std::vector<Lobe> lobes = LobeParser(text).parse();
+    double sum = 0.0;
+    for (const Lobe& l : lobes) sum += l.weight();
+    if (!(sum > 0.0)) throw InputError("the lobe weights sum to 0; at least one lobe needs a positive weight");
+    return lobes;
+}
+
+std::string lobes_syntax_error(const std::string& text) {
+    try {
+        parse_lobes(text);
+        return {};
+    } catch (const InputError& e) {
+        return e.what();
+    }
+}
+
+std::string format_lobe(const Lobe& l) {
+    std::string s = l.weight() == 1.f ? "" : short_number(l.weight()) + " * ";
+    if (l.kind() == LobeKind::blinn_phong) return s + "phong(" + short_number(l.exponent()) + ")";
+    s += l.kind() == LobeKind::ggx ? "ggx(" : l.kind() == LobeKind::ward ? "ward(" : "beckmann(";
+    s += short_number(l.alpha_x());
+    if (l.alpha_y() != l.alpha_x() || l.rotation_deg() != 0.f) s += ", " + short_number(l.alpha_y());
+    if (l.rotation_deg() != 0.f) s += ", " + short_number(l.rotation_deg());
+    return s + ")";
+}
+
+std::string format_lobes(const std::vector<Lobe>& lobes) {
+    std::string s;
+    for (const Lobe& l : lobes) s += (s.empty() ? "" : " + ") + format_lobe(l);
+    return s;
 }
 }  // namespace mesolab::bumpsynth

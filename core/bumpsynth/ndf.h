@@ -60,6 +60,8 @@
 // up to (h |∇ ln D|)² / 6: about 1% in a lobe's core, a few % far out in a Gaussian tail at R = 128.
 // eval(m): eval at (m_x, m_y) of m normalised; 0 for m_z < 0 (and for a zero or NaN m).
 #include "core/math.h"
+#include <string>
+#include <string_view>
 #include <vector>
 
 namespace mesolab::bumpsynth {
@@ -97,6 +99,19 @@ private:
 
 // Closed form of a weighted sum, Σ w_i D_i(m) / Σ w_i (InputError if empty or Σ w_i = 0).
 double D(const std::vector<Lobe>& lobes, vec3 m);
+
+// [SECTION] Lists of lobes as text (bumpsynth.lobes)
+//   sum  := term ('+' term)*          term := [w '*'] lobe | lobe ['*' w]
+//   lobe := phong(e) | K(α) | K(α_x, α_y) | K(α_x, α_y, rotation°)     K = beckmann | ggx | ward
+// e.g. "beckmann(0.3) + 0.5 * ggx(0.05, 0.5, 45)"; any number of lobes, weights default to 1 and are
+// normalised by their sum. InputError naming the character position and the lobe for bad syntax or
+// values ("lobe 2 (ggx): alpha_y ... must be in [1e-4, 1]").
+std::vector<Lobe> parse_lobes(std::string_view text);
+// "" when `text` parses, else what parse_lobes would say (the parameter's syntax check).
+std::string lobes_syntax_error(const std::string& text);
+// The canonical text of a list (round trip: parse_lobes(format_lobes(l)) equals l within 6 digits).
+std::string format_lobes(const std::vector<Lobe>& lobes);
+std::string format_lobe(const Lobe& lobe);  // one term, with its weight when it is not 1
 
 // The exact Ward constant K(α_x, α_y) above (any α_x, α_y > 0).
 double ward_constant(double alpha_x, double alpha_y);

@@ -188,8 +188,6 @@ double round_significant(double v, int digits) {
     return std::round(v * p) / p;
 }
 
-bool analytic_single(const std::string& k) { return k == "phong" || k == "beckmann" || k == "ggx" || k == "ward"; }
-
 float phong_alpha(double e) { return float(std::sqrt(2.0 / (std::max(e, 0.0) + 2.0))); }
 
 // Sets a parameter if the value differs; marks its declared cost (recompute for every NDF key).
@@ -206,17 +204,72 @@ double clamp_to(const ParamTable& m, const char* name, double v) {
 }
 }  // namespace
 
-std::vector<LobeShape> lobes_of(const ParamTable& m) {
+namespace {
+// The lobes of an NDF parameter set as a list: a single analytic lobe from its keys, or the parsed
+// bumpsynth.lobes (empty while it does not parse, or for image NDFs).
+std::vector<bumpsynth::Lobe> lobe_list(const ParamTable& m) {
+    using bumpsynth::Lobe;
     const std::string kind = m.get_string("ndf");
-    const vec2 a(float(m.get_float("alpha_x")), float(m.get_float("alpha_y")));
-    const float rot = float(m.get_float("rotation"));
-    if (kind == "phong") {
-        const float al = phong_alpha(m.get_float("exponent"));
-        return {{"phong", vec2(al), 0.f}};
+    const float ax = float(m.get_float("alpha_x")), ay = float(m.get_float("alpha_y")), rot = float(m.get_float("rotation"));
+    try {
+        if (kind == "phong") return {Lobe::blinn_phong(float(m.get_float("exponent")))};
+        if (kind == "beckmann") return {Lobe::beckmann(ax, ay, rot)};
+        if (kind == "ggx") return {Lobe::ggx(ax, ay, rot)};
+        if (kind == "ward") return {Lobe::ward(ax, ay, rot)};
+        if (kind == "lobes") return bumpsynth::parse_lobes(m.get_string("lobes"));
+    } catch (const InputError&) {
     }
-    if (kind == "beckmann" || kind == "ggx" || kind == "ward") return {{kind, a, rot}};
-    if (kind == "lobes") return {{"beckmann", a, rot}, {m.get_string("lobe2_kind"), m.get_vec2("lobe2_alpha"), float(m.get_float("lobe2_rotation"))}};
     return {};
+}
+
+const char* kind_name(bumpsynth::LobeKind k) {
+    switch (k) {
+        case bumpsynth::LobeKind::blinn_phong: return "phong";
+        case bumpsynth::LobeKind::beckmann: return "beckmann";
+        case bumpsynth::LobeKind::ggx: return "ggx";
+        case bumpsynth::LobeKind::ward: return "ward";
+    }
+    return "beckmann";
+}
+
+bumpsynth::Lobe make_lobe(bumpsynth::LobeKind k, float ax, float ay, float rot, float w) {
+    using bumpsynth::Lobe;
+    if (k == bumpsynth::LobeKind::ggx) return Lobe::ggx(ax, ay, rot, w);
+    if (k == bumpsynth::LobeKind::ward) return Lobe::ward(ax, ay, rot, w);
+    return Lobe::beckmann(ax, ay, rot, w);
+}
+
+// The lobe a new one starts from: a narrow anisotropic GGX at half weight.
+bumpsynth::Lobe new_lobe() { return bumpsynth::Lobe::ggx(0.05f, 0.5f, 45.f, 0.5f); }
+
+// Writes a list back: `lobes` for two or more, the single lobe's own keys for one.
+void set_lobe_list(ParamTable& m, const std::vector<bumpsynth::Lobe>& lobes) {
+    if (lobes.size() >= 2) {
+        m.set("lobes", bumpsynth::format_lobes(lobes));
+        m.set("ndf", std::string("lobes"));
+        return;
+    }
+    const bumpsynth::Lobe& l = lobes.front();
+    // The list's text holds 6 significant digits: so do the keys (no float noise like 0.1199999973).
+    const auto exact = [](float v) { return round_significant(double(v), 6); };
+    m.set("ndf", std::string(kind_name(l.kind())));
+    if (l.kind() == bumpsynth::LobeKind::blinn_phong) {
+        m.set("exponent", exact(l.exponent()));
+        return;
+    }
+    m.set("alpha_x", clamp_to(m, "alpha_x", exact(l.alpha_x())));
+    m.set("alpha_y", clamp_to(m, "alpha_y", exact(l.alpha_y())));
+    m.set("rotation", clamp_to(m, "rotation", exact(l.rotation_deg())));
+}
+}  // namespace
+
+std::vector<LobeShape> lobes_of(const ParamTable& m) {
+    std::vector<LobeShape> out;
+    for (const bumpsynth::Lobe& l : lobe_list(m)) {
+        if (l.kind() == bumpsynth::LobeKind::blinn_phong) out.push_back({"phong", vec2(phong_alpha(l.exponent())), 0.f});
+        else out.push_back({kind_name(l.kind()), vec2(l.alpha_x(), l.alpha_y()), l.rotation_deg()});
+    }
+    return out;
 }
 
 std::vector<Handle> handles_of(const ParamTable& m) {
@@ -238,57 +291,58 @@ std::vector<Handle> handles_of(const ParamTable& m) {
 }
 
 bool drag_handle(ParamTable& m, const Handle& h, vec2 p, Dirty& dirty) {
-    const auto lobes = lobes_of(m);
+    std::vector<bumpsynth::Lobe> lobes = lobe_list(m);
     if (h.lobe < 0 || size_t(h.lobe) >= lobes.size() || !std::isfinite(p.x) || !std::isfinite(p.y)) return false;
-    const LobeShape& l = lobes[size_t(h.lobe)];
-    if (l.kind == "phong") {
+    const bumpsynth::Lobe& l = lobes[size_t(h.lobe)];
+    const bool single = m.get_string("ndf") != "lobes";
+    // A single lobe: the key itself; in a list: the term, rewritten in bumpsynth.lobes.
+    const auto commit = [&](const char* key, double v, const bumpsynth::Lobe& changed) {
+        if (single) return set_if_changed(m, key, v, dirty);
+        lobes[size_t(h.lobe)] = changed;
+        return set_if_changed(m, "lobes", bumpsynth::format_lobes(lobes), dirty);
+    };
+    if (l.kind() == bumpsynth::LobeKind::blinn_phong) {
         if (h.kind != HandleKind::alpha_x) return false;
         const double a = std::clamp(double(glm::length(p)), 1e-4, 1.0);
         const double e = clamp_to(m, "exponent", round_significant(2.0 / (a * a) - 2.0, 4));
-        return set_if_changed(m, "exponent", e, dirty);
+        return commit("exponent", e, bumpsynth::Lobe::blinn_phong(float(e), l.weight()));
     }
-    const double r = radians(l.rotation_deg);
+    const double r = radians(l.rotation_deg());
     const vec2 ex(float(std::cos(r)), float(std::sin(r))), ey(float(-std::sin(r)), float(std::cos(r)));
     if (h.kind == HandleKind::rotation) {
         if (glm::length(p) < 1e-6f) return false;
         double deg = std::round(std::atan2(double(p.y), double(p.x)) * kDeg * 10.0) / 10.0;
         // The turn nearest the current angle, within the declared range.
-        const double cur = h.lobe == 0 ? m.get_float("rotation") : m.get_float("lobe2_rotation");
+        const double cur = single ? m.get_float("rotation") : double(l.rotation_deg());
         deg += 360.0 * std::round((cur - deg) / 360.0);
-        const char* name = h.lobe == 0 ? "rotation" : "lobe2_rotation";
-        const ParamDecl& d = *m.group().find(name);
+        const ParamDecl& d = *m.group().find("rotation");
         while (deg > d.max) deg -= 360.0;
         while (deg < d.min) deg += 360.0;
-        return set_if_changed(m, name, deg, dirty);
+        return commit("rotation", deg, make_lobe(l.kind(), l.alpha_x(), l.alpha_y(), float(deg), l.weight()));
     }
-    const double along = std::fabs(double(glm::dot(p, h.kind == HandleKind::alpha_x ? ex : ey)));
-    if (h.lobe == 0) {
-        const char* name = h.kind == HandleKind::alpha_x ? "alpha_x" : "alpha_y";
-        return set_if_changed(m, name, clamp_to(m, name, round_significant(std::max(along, 1e-4), 4)), dirty);
-    }
-    auto a = std::get<std::array<double, 2>>(m.get("lobe2_alpha"));
-    a[h.kind == HandleKind::alpha_x ? 0 : 1] = clamp_to(m, "lobe2_alpha", round_significant(std::max(along, 1e-4), 4));
-    return set_if_changed(m, "lobe2_alpha", a, dirty);
+    const bool along_x = h.kind == HandleKind::alpha_x;
+    const double along = std::fabs(double(glm::dot(p, along_x ? ex : ey)));
+    const double a = clamp_to(m, "alpha_x", round_significant(std::max(along, 1e-4), 4));
+    return commit(along_x ? "alpha_x" : "alpha_y", a,
+                  make_lobe(l.kind(), along_x ? float(a) : l.alpha_x(), along_x ? l.alpha_y() : float(a), l.rotation_deg(), l.weight()));
 }
 
-bool can_add_lobe(const ParamTable& m) { return analytic_single(m.get_string("ndf")); }
-bool can_remove_lobe(const ParamTable& m) { return m.get_string("ndf") == "lobes"; }
+bool can_add_lobe(const ParamTable& m) { return !lobe_list(m).empty(); }
+bool can_remove_lobe(const ParamTable& m) { return m.get_string("ndf") == "lobes" && lobe_list(m).size() >= 2; }
 
 void add_lobe(ParamTable& m, Dirty& dirty) {
-    if (!can_add_lobe(m)) return;
-    if (m.get_string("ndf") == "phong") {
-        const double a = clamp_to(m, "alpha_x", round_significant(phong_alpha(m.get_float("exponent")), 4));
-        m.set("alpha_x", a);
-        m.set("alpha_y", a);
-    }
-    for (const char* n : {"lobe2_kind", "lobe2_alpha", "lobe2_rotation", "lobe2_weight"}) m.set(n, m.group().find(n)->def);
-    m.set("ndf", std::string("lobes"));
+    std::vector<bumpsynth::Lobe> lobes = lobe_list(m);
+    if (lobes.empty()) return;
+    lobes.push_back(new_lobe());
+    set_lobe_list(m, lobes);
     dirty.mark(Cost::Recompute);
 }
 
 void remove_lobe(ParamTable& m, Dirty& dirty) {
     if (!can_remove_lobe(m)) return;
-    m.set("ndf", std::string("beckmann"));
+    std::vector<bumpsynth::Lobe> lobes = lobe_list(m);
+    lobes.pop_back();
+    set_lobe_list(m, lobes);
     dirty.mark(Cost::Recompute);
 }
 

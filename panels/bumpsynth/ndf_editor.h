@@ -113,7 +113,7 @@ private:
 // [SECTION] Analytic lobes and their handles
 // The lobes an NDF parameter set draws as ellipses: the q = 1 contour x'²/α_x² + y'²/α_y² = 1 in
 // the lobe frame (rotated by `rotation` from +x towards +y). Phong has one circular lobe of the
-// equivalent width α = sqrt(2 / (e + 2)); image has none; lobes has two (the second from lobe2_*).
+// equivalent width α = sqrt(2 / (e + 2)); image has none; lobes has one per term of bumpsynth.lobes.
 struct LobeShape {
     std::string kind;  // phong, beckmann, ggx, ward
     vec2 alpha{0.f};
@@ -123,7 +123,7 @@ std::vector<LobeShape> lobes_of(const ParamTable& m);
 
 enum class HandleKind { alpha_x, alpha_y, rotation };
 struct Handle {
-    int lobe = 0;  // 0: alpha_x / alpha_y / rotation (exponent for phong); 1: lobe2_alpha / lobe2_rotation
+    int lobe = 0;  // index in lobes_of(): the single lobe's keys, or a term of bumpsynth.lobes
     HandleKind kind = HandleKind::alpha_x;
     vec2 pos{0.f};  // in disk coordinates; rotation handles sit just outside the rim
 };
@@ -135,9 +135,9 @@ std::vector<Handle> handles_of(const ParamTable& m);
 // Changes go through ParamTable::set and mark a recompute; returns whether anything changed.
 bool drag_handle(ParamTable& m, const Handle& h, vec2 p, Dirty& dirty);
 
-// Add a second lobe: a single analytic lobe becomes ndf = lobes (its first lobe is always Beckmann
-// with alpha_x, alpha_y, rotation; Phong's equivalent width becomes its α), the second lobe takes
-// the declared defaults of lobe2_*. Remove: lobes becomes the Beckmann of its first lobe.
+// Add a lobe: the lobes so far (a single analytic lobe, Phong included, or the terms of
+// bumpsynth.lobes) plus a narrow GGX at weight 0.5, as ndf = lobes. Remove: the last term goes; when
+// one is left, ndf becomes that lobe's kind with its own keys (alpha_x, ... or exponent).
 bool can_add_lobe(const ParamTable& m);
 bool can_remove_lobe(const ParamTable& m);
 void add_lobe(ParamTable& m, Dirty& dirty);

@@ -31,9 +31,9 @@ void text_tooltip(const char* text) {
 const char* handle_name(const Handle& h, const std::string& kind) {
     if (kind == "phong") return "exponent (the circle is the equivalent width sqrt(2 / (e + 2)))";
     switch (h.kind) {
-        case HandleKind::alpha_x: return h.lobe == 0 ? "alpha_x" : "lobe2_alpha x";
-        case HandleKind::alpha_y: return h.lobe == 0 ? "alpha_y" : "lobe2_alpha y";
-        case HandleKind::rotation: return h.lobe == 0 ? "rotation" : "lobe2_rotation";
+        case HandleKind::alpha_x: return "alpha_x";
+        case HandleKind::alpha_y: return "alpha_y";
+        case HandleKind::rotation: return "rotation";
     }
     return "";
 }
@@ -266,7 +266,8 @@ void NdfEditor::draw_view(PanelContext& ctx, int object, const bumpsynth::Ndf* n
         ImGui::BeginTooltip();
         if (!painting_ && hot >= 0) {
             const Handle& h = handles[size_t(hot)];
-            ImGui::Text("drag: %s", handle_name(h, lobes[size_t(h.lobe)].kind));
+            if (lobes.size() > 1) ImGui::Text("drag: lobe %d (%s) %s", h.lobe + 1, lobes[size_t(h.lobe)].kind.c_str(), handle_name(h, lobes[size_t(h.lobe)].kind));
+            else ImGui::Text("drag: %s", handle_name(h, lobes[size_t(h.lobe)].kind));
         } else if (glm::dot(xy, xy) <= 1.f) {
             const float mz = std::sqrt(std::max(0.f, 1.f - glm::dot(xy, xy)));
             ImGui::Text("x %.3f  y %.3f", double(xy.x), double(xy.y));
@@ -305,13 +306,13 @@ void NdfEditor::draw_lobe_buttons(PanelContext& ctx, SceneObject& o) {
     ImGui::BeginDisabled(!can_add_lobe(m));
     if (ImGui::Button("Add lobe")) add_lobe(m, ctx.dirty);
     ImGui::EndDisabled();
-    help_marker("A single analytic lobe becomes ndf = lobes: the first lobe is Beckmann with alpha_x, alpha_y, rotation (a GGX or Ward lobe "
-                "becomes Beckmann, Phong its equivalent width), the second lobe (orange) gets the default lobe2_* values.");
+    help_marker("Adds a lobe (a narrow GGX at weight 0.5) to the NDF: ndf becomes lobes, a weighted sum written in bumpsynth.lobes, "
+                "which you can also edit as text, e.g. beckmann(0.08, 0.3) + 0.5 * ggx(0.3, 0.05, 45).");
     ImGui::SameLine();
     ImGui::BeginDisabled(!can_remove_lobe(m));
     if (ImGui::Button("Remove lobe")) remove_lobe(m, ctx.dirty);
     ImGui::EndDisabled();
-    help_marker("ndf = lobes goes back to the Beckmann lobe of alpha_x, alpha_y, rotation (the second lobe is dropped).");
+    help_marker("Removes the last lobe of bumpsynth.lobes; with one lobe left, ndf becomes that lobe (its kind, alpha_x, alpha_y, rotation).");
 }
 
 void NdfEditor::draw_paint_controls(PanelContext& ctx, int object, const bumpsynth::Ndf* ndf) {

@@ -358,15 +358,18 @@ TEST(NdfEditorLobes, DraggingHandlesSetsAlphaAndRotation) {
     EXPECT_FALSE(drag_handle(m, hs[2], vec2(0.f, 1.1f), none)) << "no change, nothing dirty";
     EXPECT_FALSE(none.any());
 
-    // The second lobe of 'lobes'.
+    // The second term of 'lobes': dragging rewrites that term only.
     m.set("ndf", std::string("lobes"));
+    m.set("lobes", std::string("beckmann(0.3) + 0.5 * ggx(0.05, 0.5, 45)"));
     const auto h2 = handles_of(m);
     ASSERT_EQ(h2.size(), 6u);
     EXPECT_EQ(h2[3].lobe, 1);
-    drag_handle(m, h2[3], vec2(0.f, 0.25f), dirty);  // lobe2_rotation 45: project onto (cos 45, sin 45)
-    EXPECT_NEAR(m.get_vec2("lobe2_alpha").x, 0.25 * std::sqrt(0.5), 1e-4);
+    drag_handle(m, h2[3], vec2(0.f, 0.25f), dirty);  // rotation 45: project onto (cos 45, sin 45)
+    EXPECT_EQ(m.get_string("lobes"), "beckmann(0.3) + 0.5 * ggx(0.1768, 0.5, 45)");
     drag_handle(m, h2[5], vec2(-1.1f, 0.f), dirty);
-    EXPECT_DOUBLE_EQ(m.get_float("lobe2_rotation"), 180.0);
+    EXPECT_EQ(m.get_string("lobes"), "beckmann(0.3) + 0.5 * ggx(0.1768, 0.5, 180)");
+    EXPECT_EQ(lobes_of(m)[1].kind, "ggx");
+    EXPECT_FLOAT_EQ(lobes_of(m)[1].rotation_deg, 180.f);
 
     // Phong: one handle, the equivalent width sqrt(2 / (e + 2)).
     m.set("ndf", std::string("phong"));
@@ -383,19 +386,22 @@ TEST(NdfEditorLobes, AddingAndRemovingLobesSwitchesTheNdf) {
     ParamTable m = g.defaults();
     m.set("ndf", std::string("ggx"));
     m.set("alpha_x", 0.12);
-    m.set("lobe2_rotation", 10.0);
     Dirty dirty;
     ASSERT_TRUE(can_add_lobe(m));
     EXPECT_FALSE(can_remove_lobe(m));
     add_lobe(m, dirty);
     EXPECT_EQ(m.get_string("ndf"), "lobes");
     EXPECT_TRUE(dirty.recompute);
-    EXPECT_DOUBLE_EQ(m.get_float("alpha_x"), 0.12);
-    EXPECT_EQ(m.get("lobe2_rotation"), g.find("lobe2_rotation")->def) << "the second lobe starts from the defaults";
+    EXPECT_EQ(m.get_string("lobes"), "ggx(0.12, 0.3) + 0.5 * ggx(0.05, 0.5, 45)") << "the single lobe keeps its kind";
     EXPECT_EQ(lobes_of(m).size(), 2u);
-    EXPECT_FALSE(can_add_lobe(m));
+    ASSERT_TRUE(can_add_lobe(m)) << "any number of lobes";
+    add_lobe(m, dirty);
+    EXPECT_EQ(lobes_of(m).size(), 3u);
+    EXPECT_TRUE(can_remove_lobe(m));
     remove_lobe(m, dirty);
-    EXPECT_EQ(m.get_string("ndf"), "beckmann");
+    EXPECT_EQ(lobes_of(m).size(), 2u);
+    remove_lobe(m, dirty);
+    EXPECT_EQ(m.get_string("ndf"), "ggx") << "one lobe left: back to its own keys";
     EXPECT_DOUBLE_EQ(m.get_float("alpha_x"), 0.12);
     EXPECT_EQ(lobes_of(m).size(), 1u);
 
@@ -403,7 +409,11 @@ TEST(NdfEditorLobes, AddingAndRemovingLobesSwitchesTheNdf) {
     m.set("exponent", 48.0);
     add_lobe(m, dirty);
     EXPECT_EQ(m.get_string("ndf"), "lobes");
-    EXPECT_NEAR(m.get_float("alpha_x"), 0.2, 1e-4) << "Phong's equivalent width sqrt(2 / 50)";
+    EXPECT_EQ(m.get_string("lobes"), "phong(48) + 0.5 * ggx(0.05, 0.5, 45)");
+    EXPECT_NEAR(lobes_of(m)[0].alpha.x, 0.2, 1e-4) << "Phong's circle: the equivalent width sqrt(2 / 50)";
+    remove_lobe(m, dirty);
+    EXPECT_EQ(m.get_string("ndf"), "phong");
+    EXPECT_DOUBLE_EQ(m.get_float("exponent"), 48.0);
     m.set("ndf", std::string("image"));
     EXPECT_FALSE(can_add_lobe(m));
     EXPECT_FALSE(can_remove_lobe(m));
