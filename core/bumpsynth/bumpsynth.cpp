@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace mesolab::bumpsynth {
 namespace {
@@ -238,7 +239,22 @@ public:
                .run = [](StageContext& ctx) {
                    auto normals = ctx.input<PerObject<BumpNormals>>("bumpsynth.bump_normals");
                    return stage_result(per_object<Ndf>(ctx.scene, "bumpsynth", kNdfKeys, [&](int i, const SceneObject& o) {
-                       return ndf_from_material(ctx.scene, o.material, normals ? normals->get(i) : nullptr);
+                       const BumpNormals* n = normals ? normals->get(i) : nullptr;
+                       if (n) {
+                           // A histogram with fewer normals than cells is spiky: highlights sparkle.
+                           const double R = double(o.material.get_int("ndf_resolution")), cells = 0.785398 * R * R;
+                           const double per_cell = double(n->m.size()) / cells;
+                           if (per_cell < 2.0) {
+                               char msg[320];
+                               std::snprintf(msg, sizeof msg,
+                                             "%s: the NDF of a %dx%d bump map at %dx%d cells has %.2g normals per cell of the disk, so it is "
+                                             "spiky (highlights sparkle); lower bumpsynth.ndf_resolution (to %d or less) or use a larger map",
+                                             o.name.c_str(), n->width, n->height, int(R), int(R), per_cell,
+                                             std::max(64, int(std::sqrt(double(n->m.size()) / (2.0 * 0.785398)))));
+                               ctx.warn(msg);
+                           }
+                       }
+                       return ndf_from_material(ctx.scene, o.material, n);
                    }));
                }});
         g.add({.name = "bumpsynth.lut",

@@ -248,6 +248,11 @@ TEST(BumpsynthBumpMap, StagesRunOnlyWhenTheBumpMapIsUsed) {
     EXPECT_EQ(b.eval.run("bumpsynth.bump_normals")->status, StageStatus::Ran);
     EXPECT_EQ(b.eval.run("bumpsynth.index_map")->status, StageStatus::Skipped);
     EXPECT_EQ(b.eval.run("bumpsynth.noise_cdf")->status, StageStatus::Cached);
+    // 64² normals over 128² cells: the user is told the histogram is spiky and what to do.
+    const auto& warnings = b.eval.run("bumpsynth.ndf")->warnings;
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings[0].find("bumpsynth.ndf_resolution"), std::string::npos) << warnings[0];
+    EXPECT_TRUE(a.eval.run("bumpsynth.ndf")->warnings.empty());
     const RenderResult c = wb.render(heightfield_scene("bumps", true, false), req);
     EXPECT_EQ(c.eval.run("bumpsynth.bump_normals")->status, StageStatus::Cached);
     EXPECT_EQ(c.eval.run("bumpsynth.index_map")->status, StageStatus::Ran);
