@@ -21,6 +21,12 @@
 // brdf shades a smooth surface with the table: AOV direct = the lights' part (their scattering
 // included), indirect = the environment's part (exact for a constant environment, scaled by the
 // irradiance at the macro normal for a map), shadow = the masked average shadow fraction.
+// Micro-BRDF (microgeom.brdf), per pixel with the bilinear, renormalised micro-normal n, the
+// bilinear albedo rho, s = microgeom.shininess and h = normalize(wi + wo):
+//   lambert      f = rho/pi
+//   blinn-phong  f = rho/pi + ks (s + 8)/(8 pi) max(0, n.h)^s   (the normalised lobe, as goniometer.h)
+// applied to the direct light only: L_direct = sum over lights f E max(0, n.wi) V; the scattered
+// and environment light are Lambert, L_indirect = rho/pi E_indirect (shade_cpu, microgeom.frag).
 // Scope (see the issue notes): micro-BRDF Lambertian for every bounce (the Blinn-Phong lobe
 // applies to the direct light seen by the viewer); the scattering solution uses the first light;
 // on non-planar base geometry its light-driven part is computed for light along the macro normal

@@ -10,7 +10,11 @@
 #include "support/frames.h"
 
 #include <gtest/gtest.h>
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
 
 using namespace mesolab;
 using namespace mesolab::microgeom;
@@ -87,6 +91,55 @@ TEST(FlatField, NoShadowsNoIndirectAnalyticLambert) {
         }
 }
 
+// The normalised Blinn-Phong lobe of microgeom.h on a flat field, texture mode: from every view
+// (camera.orbit = the view direction wo) and on both backends the radiance is
+//   L = (rho/pi + ks (s + 8)/(8 pi) (n.h)^s) E cos(theta_i) + rho/pi * pi L_env,   h = normalize(wi + wo),
+// with n = +z; the lobe is on the direct term only (the environment part is Lambert). Tolerance
+// 1e-5 (CPU) and 1e-4 (GPU: pow and normalize in GLSL; llvmpipe measures 3e-7 like the CPU),
+// relative to the value. The views go from the mirror direction (lobe ~2x the Lambert term) to
+// far off it (lobe < 1% of it), so a wrong normalisation, exponent or half vector fails.
+TEST(FlatField, BlinnPhongAnalyticLambertPlusLobe) {
+    const glm::dvec3 rho(0.5, 0.4, 0.3), ks(0.3, 0.2, 0.1), env(0.2, 0.1, 0.05);
+    const double shininess = 20.0, E = 2.0;
+    const glm::dvec3 wi(direction_from_degrees(40.f, 25.f));
+    double lobe_ratio_max = 0, lobe_ratio_min = 1e30;  // lobe / Lambert term over the views
+    Workbench wb;
+    for (const vec2 view : {vec2(0.f, 0.f), vec2(40.f, 205.f), vec2(30.f, 215.f), vec2(55.f, 100.f)}) {
+        Scene s = default_scene("microgeom");
+        for (const char* set : {"camera.mode=texture", "geometry.type=plane", "microgeom.heightfield=flat", "microgeom.resolution=16",
+                                "microgeom.albedo=0.5,0.4,0.3", "microgeom.brdf=blinn-phong", "microgeom.ks=0.3,0.2,0.1", "microgeom.shininess=20",
+                                "light.direction=40,25", "light.intensity=2", "env.color=0.2,0.1,0.05", "microgeom.depth=3"})
+            apply_set(s, set);
+        apply_set(s, "camera.orbit", std::to_string(view.x) + "," + std::to_string(view.y));
+        const glm::dvec3 wo(direction_from_degrees(view.x, view.y)), h = glm::normalize(wi + wo);
+        const glm::dvec3 lobe = ks * (shininess + 8.0) / (8.0 * kPi) * std::pow(std::max(0.0, h.z), shininess);
+        const glm::dvec3 direct = (rho / double(kPi) + lobe) * E * wi.z, indirect = rho * env;
+        lobe_ratio_max = std::max(lobe_ratio_max, lobe.x / (rho.x / double(kPi)));
+        lobe_ratio_min = std::min(lobe_ratio_min, lobe.x / (rho.x / double(kPi)));
+        for (Backend backend : {Backend::Cpu, Backend::Gpu}) {
+            SCOPED_TRACE(std::string(backend == Backend::Cpu ? "cpu" : "gpu") + " view " + std::to_string(view.x) + "," + std::to_string(view.y));
+            const double tol = backend == Backend::Cpu ? 1e-5 : 1e-4;
+            RenderRequest req;
+            req.backend = backend;
+            const Frame f = wb.render(s, req).frame;
+            ASSERT_EQ(f.width, 16);
+            double worst = 0;
+            for (int y = 0; y < f.height; ++y)
+                for (int x = 0; x < f.width; ++x)
+                    for (int c = 0; c < 3; ++c) {
+                        worst = std::max(worst, std::fabs(f.aov("radiance").at(x, y)[c] - (direct[c] + indirect[c])) / (direct[c] + indirect[c]));
+                        ASSERT_NEAR(f.aov("radiance").at(x, y)[c], direct[c] + indirect[c], tol * (direct[c] + indirect[c])) << x << "," << y;
+                        ASSERT_NEAR(f.aov("direct").at(x, y)[c], direct[c], tol * direct[c]) << x << "," << y;
+                        ASSERT_NEAR(f.aov("indirect").at(x, y)[c], indirect[c], tol * indirect[c]) << x << "," << y;
+                    }
+            std::printf("[ blinn-phong ] %s view (%g, %g): L = %.5f %.5f %.5f, worst relative error %.2e\n", backend == Backend::Cpu ? "cpu" : "gpu",
+                        double(view.x), double(view.y), direct.x + indirect.x, direct.y + indirect.y, direct.z + indirect.z, worst);
+        }
+    }
+    EXPECT_GT(lobe_ratio_max, 1.5) << "no view near the mirror direction: the lobe's peak is not tested";
+    EXPECT_LT(lobe_ratio_min, 0.01) << "no view far from the mirror direction: the lobe's fall-off is not tested";
+}
+
 TEST(HardCases, StayFinite) {
     struct Case {
         const char* sets[4];
@@ -159,6 +212,38 @@ TEST(Stages, MovingTheLightNeverRecomputesVisibility) {
     apply_set(s, "microgeom.depth=0");
     EXPECT_EQ(g.key(s, "microgeom.scatter"), 0u) << "depth 0: the light's scattering stage is skipped";
     EXPECT_EQ(g.key(s, "microgeom.visibility"), vis);
+}
+
+// The "changing the light or curvature never recomputes S_i", for the curvature: through
+// the stage graph, every change of microgeom.curvature_u / curvature_v (including back to 0)
+// leaves microgeom.visibility Cached, and with ellipse shadows the five curved ellipse fits too
+// (they are interpolated, not refitted); the importance and the interpolated ellipses do rerun,
+// and the picture changes (the curvature is not ignored).
+TEST(Stages, ChangingTheCurvatureNeverRecomputesVisibility) {
+    Scene s = default_scene("microgeom");
+    for (const char* set : {"camera.mode=texture", "geometry.type=plane", "microgeom.resolution=24", "microgeom.shadows=ellipse", "microgeom.curvature_u=17"})
+        apply_set(s, set);
+    StageGraph& g = Registry::instance().stages();
+    const uint64_t vis = g.key(s, "microgeom.visibility"), fits = g.key(s, "microgeom.ellipses_curved");
+    Workbench wb;
+    RenderRequest req;
+    req.backend = Backend::Cpu;
+    std::vector<float> prev = wb.render(s, req).frame.aov("radiance").data;
+    for (const char* set : {"microgeom.curvature_u=-43", "microgeom.curvature_v=29", "microgeom.curvature_u=0", "microgeom.curvature_v=-11"}) {
+        SCOPED_TRACE(set);
+        apply_set(s, set);
+        EXPECT_EQ(g.key(s, "microgeom.visibility"), vis);
+        EXPECT_EQ(g.key(s, "microgeom.ellipses_curved"), fits);
+        const RenderResult r = wb.render(s, req);
+        ASSERT_NE(r.eval.run("microgeom.visibility"), nullptr);
+        EXPECT_EQ(r.eval.run("microgeom.visibility")->status, StageStatus::Cached);
+        EXPECT_EQ(r.eval.run("microgeom.ellipses_curved")->status, StageStatus::Cached);
+        EXPECT_EQ(r.eval.run("microgeom.importance")->status, StageStatus::Ran);
+        EXPECT_EQ(r.eval.run("microgeom.ellipses")->status, StageStatus::Ran);
+        const std::vector<float>& now = r.frame.aov("radiance").data;
+        EXPECT_NE(now, prev) << "the curvature change did not reach the picture";
+        prev = now;
+    }
 }
 
 // CPU and GPU (llvmpipe) agree on every AOV. Texture space (one pixel per texel): to 1e-4 on
@@ -333,3 +418,69 @@ TEST(Curvature, FoldingIsFlaggedNotHidden) {
     for (float w : imp.w) ASSERT_TRUE(std::isfinite(w) && w >= 0.f);
 }
 
+
+// Fold-over through the stage graph (texture mode, one pixel per texel): a bend that folds the
+// triangulation at some texels reports the microgeom.importance warning, whose texel count is
+// exactly the number of 1s in the `folded` AOV (values 0 or 1 only), on both backends; a gentle
+// bend and curvature 0 give no warning and an all-zero AOV.
+TEST(Curvature, FoldOverIsWarnedAndMaskedThroughTheStages) {
+    auto render = [](Workbench& wb, Backend backend, const char* curvature) {
+        Scene s = default_scene("microgeom");
+        for (const char* set : {"camera.mode=texture", "geometry.type=plane", "microgeom.heightfield=bricks", "microgeom.resolution=32"}) apply_set(s, set);
+        apply_set(s, curvature);
+        RenderRequest req;
+        req.backend = backend;
+        return wb.render(s, req);
+    };
+    auto fold_warnings = [](const Evaluation& ev) {
+        std::vector<std::string> found;
+        for (const StageRun& run : ev.runs)
+            for (const std::string& w : run.warnings)
+                if (w.find("folds the direction triangulation over") != std::string::npos) found.push_back(run.name + ": " + w);
+        return found;
+    };
+    Workbench wb;
+    for (Backend backend : {Backend::Cpu, Backend::Gpu}) {
+        SCOPED_TRACE(backend == Backend::Cpu ? "cpu" : "gpu");
+        const RenderResult bent = render(wb, backend, "microgeom.curvature_u=200");
+        const std::vector<std::string> warnings = fold_warnings(bent.eval);
+        ASSERT_EQ(warnings.size(), 1u);
+        EXPECT_EQ(warnings[0].rfind("microgeom.importance: ", 0), 0u) << warnings[0];
+        EXPECT_NE(warnings[0].find("'folded' AOV"), std::string::npos) << warnings[0];
+        const Image& folded = bent.frame.aov("folded");
+        ASSERT_EQ(folded.width, 32);
+        size_t ones = 0;
+        for (float v : folded.data) {
+            ASSERT_TRUE(v == 0.f || v == 1.f) << v;
+            ones += v == 1.f;
+        }
+        size_t count = 0, texels = 0;
+        const size_t at = warnings[0].find(" at ");
+        ASSERT_NE(at, std::string::npos);
+        ASSERT_EQ(std::sscanf(warnings[0].c_str() + at, " at %zu of %zu texels", &count, &texels), 2) << warnings[0];
+        std::printf("[ fold-over ] %s: %zu of %zu texels folded; warning: %s\n", backend == Backend::Cpu ? "cpu" : "gpu", ones, folded.data.size(),
+                    warnings[0].c_str());
+        EXPECT_EQ(texels, 32u * 32u);
+        EXPECT_EQ(count, ones) << "the warning and the AOV disagree";
+        EXPECT_GT(ones, 0u);
+        EXPECT_LT(ones, folded.data.size());
+
+        struct Calm {
+            const char* set;
+            bool importance_runs;
+        };
+        for (const Calm& calm : {Calm{"microgeom.curvature_u=30", true}, Calm{"microgeom.curvature_u=0", false}}) {
+            SCOPED_TRACE(calm.set);
+            const RenderResult r = render(wb, backend, calm.set);
+            const std::vector<std::string> none = fold_warnings(r.eval);
+            EXPECT_TRUE(none.empty()) << none.front();
+            const StageStatus st = r.eval.run("microgeom.importance")->status;
+            if (calm.importance_runs) {
+                EXPECT_TRUE(st == StageStatus::Ran || st == StageStatus::Cached) << to_string(st);
+            } else {
+                EXPECT_EQ(st, StageStatus::Skipped) << to_string(st);
+            }
+            for (float v : r.frame.aov("folded").data) ASSERT_EQ(v, 0.f);
+        }
+    }
+}
