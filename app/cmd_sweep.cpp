@@ -1,4 +1,5 @@
-// mesolab sweep: accuracy vs time for one knob against a reference rendering.
+// mesolab sweep: accuracy vs time for one knob against a reference setting, measured by the radiance
+// RMSE against the reference rendering (default) or a technique's metric (--metric, Technique::sweep_metrics).
 #include "app/commands.h"
 #include "app/workbench.h"
 #include "core/error.h"
@@ -6,16 +7,21 @@
 #include "core/plot.h"
 #include "core/profile.h"
 #include "core/scene.h"
+#include "core/technique.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <set>
 #include <sstream>
 
 namespace fs = std::filesystem;
 
 namespace mesolab {
 namespace {
+
+constexpr const char* kDefaultMetric = "rmse";
 
 std::vector<std::string> split(const std::string& s, char sep) {
     std::vector<std::string> r;
@@ -48,47 +54,230 @@ double as_number(const ParamDecl& d, const std::string& text) {
     if (auto* f = std::get_if<double>(&v)) return *f;
     return 0;
 }
+
+// [SECTION] Metrics
+std::vector<SweepMetricDecl> technique_metrics() {
+    std::vector<SweepMetricDecl> r;
+    for (const Technique* t : Registry::instance().techniques())
+        for (auto& m : t->sweep_metrics()) r.push_back(std::move(m));
+    return r;
+}
+
+// The technique metric named `name`, or none for the default radiance RMSE; InputError naming the value otherwise.
+std::optional<SweepMetricDecl> find_metric(const std::string& name) {
+    if (name == kDefaultMetric) return std::nullopt;
+    std::vector<std::string> known{kDefaultMetric};
+    for (auto& m : technique_metrics()) {
+        if (m.name == name) return m;
+        known.push_back(m.name);
+    }
+    const std::string near = nearest_key(name, known);
+    throw InputError("--metric: unknown metric '" + name + "'" + (near.empty() ? "" : " (did you mean '" + near + "'?)") + "; known: " + sweep_metric_names());
+}
+
+// [SECTION] Knob and reference
+struct Knob {
+    std::string key;
+    std::vector<std::string> values;
+    const ParamDecl* decl = nullptr;
+    std::vector<std::string> stages;  // the stages whose cache key changes with the knob's value
+};
+
+// The stages a knob controls: those whose cache key differs between two of its values.
+std::vector<std::string> knob_stages(const Scene& base, const Knob& k) {
+    const StageGraph& g = Registry::instance().stages();
+    std::vector<std::string> r;
+    for (const StageDecl& d : g.stages()) {
+        std::set<uint64_t> keys;
+        for (const auto& v : k.values) {
+            Scene s = base;
+            apply_set(s, k.key, v);
+            keys.insert(g.key(s, d.name));
+        }
+        if (keys.size() > 1) r.push_back(d.name);
+    }
+    return r;
+}
+
+Knob parse_knob(const Scene& base, const std::string& text) {
+    const auto eq = text.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == text.size())
+        throw InputError("--knob expects KEY=V1,V2,... (e.g. geometry.resolution=8,16,32), got '" + text + "'");
+    Knob k{text.substr(0, eq), split(text.substr(eq + 1), ','), nullptr, {}};
+    k.decl = &decl_of(base, k.key);
+    for (const auto& v : k.values) {
+        Scene probe = base;
+        apply_set(probe, k.key, v);  // validates every value before any work
+    }
+    k.stages = knob_stages(base, k);
+    return k;
+}
+
+// The reference scene: --reference settings, else the knob's declared reference, else its most accurate value.
+Scene reference_scene(const Scene& base, const Knob& k, const std::vector<std::string>& settings, std::string& text) {
+    Scene ref = base;
+    const ParamDecl& decl = *k.decl;
+    if (!settings.empty()) {
+        for (const auto& r : settings) {
+            apply_set(ref, r);
+            text += (text.empty() ? "" : ", ") + r;
+        }
+    } else if (decl.reference) {
+        text = k.key + "=" + value_to_text(decl, *decl.reference);
+        apply_set(ref, k.key, value_to_text(decl, *decl.reference));
+    } else if (decl.accuracy != Accuracy::None && (decl.type == ParamType::Int || decl.type == ParamType::Float)) {
+        std::string best = k.values.front();
+        for (const auto& v : k.values) {
+            const bool better = decl.accuracy == Accuracy::Higher ? as_number(decl, v) > as_number(decl, best) : as_number(decl, v) < as_number(decl, best);
+            if (better) best = v;
+        }
+        text = k.key + "=" + best;
+        apply_set(ref, k.key, best);
+    } else {
+        throw InputError("--knob " + k.key + ": this parameter declares no most-accurate setting; give one with --reference KEY=VALUE");
+    }
+    return ref;
+}
+
+// [SECTION] Measuring
+struct Point {
+    std::string value;
+    double ms, err, rel;
+    double knob_ms = 0;  // of ms: the stages the knob controls
+};
+
+double stages_ms(const Evaluation& ev, const std::vector<std::string>& names) {
+    double ms = 0;
+    for (const StageRun& r : ev.runs)
+        if (r.status == StageStatus::Ran && std::find(names.begin(), names.end(), r.name) != names.end()) ms += r.ms;
+    return ms;
+}
+
+// The error of one setting against the reference: the radiance RMSE (and relative RMSE), or the technique metric's.
+struct Measure {
+    std::optional<SweepMetricDecl> metric;
+    SweepMeasure technique;
+    Image reference;
+    double ref_mean = 0;
+
+    void prepare(const Scene& ref, RenderResult& rr) {
+        if (metric) {
+            technique = metric->prepare(ref, rr.eval);
+        } else {
+            reference = std::move(rr.frame.aov("radiance"));
+            ref_mean = mean(reference);
+        }
+    }
+    Point measure(const Scene& s, const std::string& key, const std::string& v, RenderResult& res) const {
+        if (metric) return {v, 0, technique.error(s, res.eval), 0};
+        const Image& img = res.frame.aov("radiance");
+        if (img.width != reference.width || img.height != reference.height)
+            throw InputError("--knob " + key + "=" + v + ": the frame size changed (" + std::to_string(img.width) + "x" + std::to_string(img.height) +
+                             "), so it cannot be compared with the reference");
+        const double e = rmse(img, reference);
+        return {v, 0, e, ref_mean > 0 ? e / ref_mean : 0};
+    }
+};
+
+Point sweep_point(Workbench& wb, const Scene& base, const Knob& k, const std::string& v, const RenderRequest& req, int repeat, const Measure& m) {
+    Scene s = base;
+    apply_set(s, k.key, v);
+    std::vector<double> times, knob_times;
+    RenderResult res = wb.render(s, req);  // untimed warm-up: first-touch allocations, GPU resources
+    for (int r = 0; r < repeat; ++r) {
+        wb.stages().clear_cache();  // the cost of this setting includes its stages
+        res = wb.render(s, req);
+        times.push_back(res.stages_ms + res.render_ms);
+        knob_times.push_back(stages_ms(res.eval, k.stages));
+    }
+    Point p = m.measure(s, k.key, v, res);
+    p.ms = median_of(times);
+    p.knob_ms = median_of(knob_times);
+    return p;
+}
+
+// [SECTION] Outputs: CSV, Markdown, PNG plot
+struct Report {
+    std::string csv, md;
+    PlotSpec plot;
+};
+
+std::string header_md(const SweepOptions& o, const Scene& base, const Knob& k, const std::string& ref_text, int w, int h, const Measure& m) {
+    std::ostringstream md;
+    md << "Sweep of `" << k.key << "` on `" << base.name << "` (" << o.backend << ", " << w << "x" << h << ", median of " << o.repeat
+       << " cold-cache runs); reference " << ref_text << ".";
+    if (m.metric) {
+        std::string names;
+        for (const auto& st : k.stages) names += (names.empty() ? "" : ", ") + st;
+        md << " Time: the frame's stages from a cold cache plus the frame; of which the stages the knob changes ("
+           << (names.empty() ? "none" : names + "; the plot's time axis") << "). Error: `" << m.metric->name << "`, " << m.metric->help << " (" << m.metric->unit
+           << ").\n\n| " << k.key << " | time (ms) | of which knob's stages (ms) | " << m.metric->label << " |\n|---|---|---|---|\n";
+    } else
+        md << "\n\n| " << k.key << " | time (ms) | RMSE | relative RMSE |\n|---|---|---|---|\n";
+    return md.str();
+}
+
+Report report(const SweepOptions& o, const Scene& base, const Knob& k, const std::string& ref_text, int w, int h, const Measure& m,
+              const std::vector<Point>& points) {
+    std::ostringstream csv, md;
+    csv << (m.metric ? "value,time_ms,knob_stages_ms," + m.metric->name + "\n" : "value,time_ms,rmse,relative_rmse\n");
+    md << header_md(o, base, k, ref_text, w, h, m);
+    // A technique metric is plotted against the time of the stages the knob changes (when there are
+    // any): the whole frame's time is dominated by what every setting shares.
+    const bool knob_time = m.metric && !k.stages.empty();
+    PlotSeries series;
+    series.label = k.key;
+    for (const auto& p : points) {
+        char line[256];
+        if (m.metric) {
+            csv << p.value << "," << p.ms << "," << p.knob_ms << "," << p.err << "\n";
+            std::snprintf(line, sizeof line, "| %s | %.3f | %.3f | %.3e |\n", p.value.c_str(), p.ms, p.knob_ms, p.err);
+        } else {
+            csv << p.value << "," << p.ms << "," << p.err << "," << p.rel << "\n";
+            std::snprintf(line, sizeof line, "| %s | %.3f | %.3e | %.3e |\n", p.value.c_str(), p.ms, p.err, p.rel);
+        }
+        md << line;
+        series.x.push_back(knob_time ? p.knob_ms : p.ms);
+        series.y.push_back(p.err);
+        series.point_labels.push_back(p.value);
+    }
+    if (m.metric && !m.technique.notes.empty()) md << "\n" << m.technique.notes;
+    Report r{csv.str(), md.str(), {}};
+    r.plot.title = "error vs time: " + k.key + " (" + base.name + ")";
+    r.plot.xlabel = knob_time ? "time of the knob's stages, cold cache (ms)" : "time per frame incl. stages (ms)";
+    r.plot.ylabel = (m.metric ? m.metric->label : std::string("RMSE")) + " vs reference";
+    r.plot.series.push_back(series);
+    const auto [lo, hi] = std::minmax_element(series.x.begin(), series.x.end());
+    for (const auto& [label, value] : m.metric ? m.technique.levels : std::vector<std::pair<std::string, double>>{})
+        if (lo != series.x.end()) r.plot.series.push_back({label, {*lo, *hi}, {value, value}, {}});
+    return r;
+}
 }  // namespace
+
+std::string sweep_metric_names() {
+    std::string r = std::string(kDefaultMetric) + " (default: radiance RMSE against the reference rendering)";
+    for (const auto& m : technique_metrics()) r += ", " + m.name;
+    return r;
+}
 
 int run_sweep(const SweepOptions& o) {
     int w = 0, h = 0;
     parse_size(o.size, w, h);
     if (o.repeat < 1 || o.repeat > 100) throw InputError("--repeat: " + std::to_string(o.repeat) + " is out of range [1, 100]");
+    Measure m;
+    m.metric = find_metric(o.metric);
     Scene base = load_preset(o.preset);
     for (const auto& s : o.sets) apply_set(base, s);
-    const auto eq = o.knob.find('=');
-    if (eq == std::string::npos || eq == 0 || eq + 1 == o.knob.size())
-        throw InputError("--knob expects KEY=V1,V2,... (e.g. geometry.resolution=8,16,32), got '" + o.knob + "'");
-    const std::string key = o.knob.substr(0, eq);
-    const std::vector<std::string> values = split(o.knob.substr(eq + 1), ',');
-    const ParamDecl& decl = decl_of(base, key);
-    for (const auto& v : values) {
-        Scene probe = base;
-        apply_set(probe, key, v);  // validates every value before any work
+    if (m.metric) {
+        try {
+            m.metric->check(base);
+        } catch (const InputError& e) {
+            throw InputError("--metric " + m.metric->name + ": " + o.preset + ": " + e.what());
+        }
     }
-
-    // Reference: --reference settings, else the knob's declared reference, else its most accurate value.
-    Scene ref = base;
+    const Knob k = parse_knob(base, o.knob);
     std::string ref_text;
-    if (!o.reference.empty()) {
-        for (const auto& r : o.reference) {
-            apply_set(ref, r);
-            ref_text += (ref_text.empty() ? "" : ", ") + r;
-        }
-    } else if (decl.reference) {
-        ref_text = key + "=" + value_to_text(decl, *decl.reference);
-        apply_set(ref, key, value_to_text(decl, *decl.reference));
-    } else if (decl.accuracy != Accuracy::None && (decl.type == ParamType::Int || decl.type == ParamType::Float)) {
-        std::string best = values.front();
-        for (const auto& v : values) {
-            const bool better = decl.accuracy == Accuracy::Higher ? as_number(decl, v) > as_number(decl, best) : as_number(decl, v) < as_number(decl, best);
-            if (better) best = v;
-        }
-        ref_text = key + "=" + best;
-        apply_set(ref, key, best);
-    } else {
-        throw InputError("--knob " + key + ": this parameter declares no most-accurate setting; give one with --reference KEY=VALUE");
-    }
+    const Scene ref = reference_scene(base, k, o.reference, ref_text);
 
     Workbench wb;
     RenderRequest req;
@@ -96,60 +285,23 @@ int run_sweep(const SweepOptions& o) {
     req.width = w;
     req.height = h;
     std::fprintf(stderr, "reference: %s\n", ref_text.c_str());
-    const Image reference = wb.render(ref, req).frame.aov("radiance");
-    const double ref_mean = mean(reference);
+    RenderResult rr = wb.render(ref, req);
+    m.prepare(ref, rr);
 
-    struct Point {
-        std::string value;
-        double ms, err, rel;
-    };
     std::vector<Point> points;
-    for (const auto& v : values) {
-        Scene s = base;
-        apply_set(s, key, v);
-        std::vector<double> times;
-        Image img;
-        wb.render(s, req);  // untimed warm-up: first-touch allocations, GPU resources
-        for (int r = 0; r < o.repeat; ++r) {
-            wb.stages().clear_cache();  // the cost of this setting includes its stages
-            RenderResult res = wb.render(s, req);
-            times.push_back(res.stages_ms + res.render_ms);
-            img = std::move(res.frame.aov("radiance"));
-        }
-        if (img.width != reference.width || img.height != reference.height)
-            throw InputError("--knob " + key + "=" + v + ": the frame size changed (" + std::to_string(img.width) + "x" + std::to_string(img.height) +
-                             "), so it cannot be compared with the reference");
-        const double e = rmse(img, reference);
-        points.push_back({v, median_of(times), e, ref_mean > 0 ? e / ref_mean : 0});
-        std::fprintf(stderr, "  %s=%-10s %10.3f ms  rmse %.3e\n", key.c_str(), v.c_str(), points.back().ms, e);
+    const std::string err_name = m.metric ? m.metric->name : "rmse";
+    for (const auto& v : k.values) {
+        points.push_back(sweep_point(wb, base, k, v, req, o.repeat, m));
+        std::fprintf(stderr, "  %s=%-10s %10.3f ms  %s %.3e\n", k.key.c_str(), v.c_str(), points.back().ms, err_name.c_str(), points.back().err);
     }
 
-    // [SECTION] Outputs: CSV, Markdown, PNG plot
-    const std::string stem = (fs::path(o.out_dir) / (base.name + "." + key)).string();
-    std::ostringstream csv, md;
-    csv << "value,time_ms,rmse,relative_rmse\n";
-    md << "Sweep of `" << key << "` on `" << base.name << "` (" << o.backend << ", " << w << "x" << h << ", median of " << o.repeat
-       << " cold-cache runs); reference " << ref_text << ".\n\n| " << key << " | time (ms) | RMSE | relative RMSE |\n|---|---|---|---|\n";
-    PlotSeries series;
-    series.label = key;
-    for (const auto& p : points) {
-        csv << p.value << "," << p.ms << "," << p.err << "," << p.rel << "\n";
-        char line[256];
-        std::snprintf(line, sizeof line, "| %s | %.3f | %.3e | %.3e |\n", p.value.c_str(), p.ms, p.err, p.rel);
-        md << line;
-        series.x.push_back(p.ms);
-        series.y.push_back(p.err);
-        series.point_labels.push_back(p.value);
-    }
-    write_text_atomic(stem + ".csv", csv.str());
-    write_text_atomic(stem + ".md", md.str());
-    PlotSpec spec;
-    spec.title = "error vs time: " + key + " (" + base.name + ")";
-    spec.xlabel = "time per frame incl. stages (ms)";
-    spec.ylabel = "RMSE vs reference";
-    spec.series.push_back(series);
-    write_png_srgb(stem + ".png", render_plot(spec));
-    std::printf("%s", md.str().c_str());
+    // A technique metric's outputs are named after it too, so they do not replace the RMSE sweep's.
+    const std::string stem = (fs::path(o.out_dir) / (base.name + "." + k.key + (m.metric ? "." + m.metric->name : ""))).string();
+    const Report r = report(o, base, k, ref_text, w, h, m, points);
+    write_text_atomic(stem + ".csv", r.csv);
+    write_text_atomic(stem + ".md", r.md);
+    write_png_srgb(stem + ".png", render_plot(r.plot));
+    std::printf("%s", r.md.c_str());
     std::printf("\nwrote %s.csv, %s.md, %s.png\n", stem.c_str(), stem.c_str(), stem.c_str());
     return 0;
 }

@@ -36,8 +36,10 @@ struct SweepOptions {
     std::string backend = "cpu";
     std::vector<std::string> sets;
     int repeat = 3;
+    std::string metric = "rmse";          // rmse or a technique's (Technique::sweep_metrics)
 };
 int run_sweep(const SweepOptions& o);
+std::string sweep_metric_names();  // "rmse (default: ...), bumpsynth.ndf_histogram" for help texts and errors
 
 struct ExportOptions {
     std::string name;                  // a technique's export, e.g. btf

@@ -72,6 +72,7 @@ int main(int argc, char** argv) {
     s->add_option("--backend", sweep.backend, "cpu or gpu")->capture_default_str();
     s->add_option("--set", sweep.sets, "Override a parameter: KEY=VALUE (repeatable)");
     s->add_option("--repeat", sweep.repeat, "Timed runs per value (median)")->capture_default_str();
+    s->add_option("--metric", sweep.metric, "Error measure: " + sweep_metric_names())->capture_default_str();
 
     auto* p = app.add_subcommand("preset", "Validate, describe and show presets");
     p->require_subcommand(1);

@@ -14,6 +14,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace mesolab {
@@ -44,6 +45,32 @@ struct ExportDecl {
                               const std::string& path, const ProgressFn& progress)> run;
 };
 
+// [SECTION] Sweep metrics
+// An error metric of a technique for `mesolab sweep --metric NAME`: a distance between what a knob
+// setting computes and what the reference setting computes, for a quantity the default metric (the
+// radiance RMSE against the reference rendering) sees only indirectly, e.g. bumpsynth's distribution
+// of synthesised normals against its NDF. The sweep still times every setting as its frame's stages
+// (cold cache) plus the frame; measuring is not timed. Both functions get the scene and the
+// evaluation of a rendered frame, so they read the results of the technique's frame_stages().
+struct SweepMeasure {
+    // The error of one knob setting (its scene and its frame's evaluation).
+    std::function<double(const Scene&, const Evaluation&)> error;
+    std::string notes;  // Markdown printed under the sweep's table (e.g. the metric's noise floor)
+    // Reference levels drawn as horizontal lines in the plot: (legend, value), e.g. noise floors.
+    std::vector<std::pair<std::string, double>> levels;
+};
+
+struct SweepMetricDecl {
+    std::string name;   // the value of --metric: "<technique>.<metric>"
+    std::string label;  // column header and plot axis, e.g. "TV distance"
+    std::string unit;   // what the values are in ("" when dimensionless)
+    std::string help;   // what it measures, one sentence
+    // Before any work: InputError when the metric cannot apply to the scene (no object uses the technique).
+    std::function<void(const Scene&)> check;
+    // The measure against the reference setting, from the reference's scene and frame evaluation.
+    std::function<SweepMeasure(const Scene& ref, const Evaluation& ref_eval)> prepare;
+};
+
 class Technique {
 public:
     Technique(std::string name, std::string title) : params_(std::move(name), std::move(title)) {}
@@ -69,6 +96,8 @@ public:
     virtual std::vector<ExportDecl> exports() const { return {}; }
     // Timing tables reproducing the paper's (bench NAME).
     virtual std::vector<BenchTable> bench_tables() const { return {}; }
+    // Error metrics for `mesolab sweep --metric NAME`, besides the default radiance RMSE.
+    virtual std::vector<SweepMetricDecl> sweep_metrics() const { return {}; }
 
 protected:
     ParamGroup params_;

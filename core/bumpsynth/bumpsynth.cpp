@@ -1,5 +1,6 @@
 // Technique bumpsynth: declarations, stages, CPU shading and the timing table (see bumpsynth.h).
 #include "core/bumpsynth/bumpsynth.h"
+#include "core/bumpsynth/sweep_metric.h"
 #include "core/error.h"
 #include "core/image.h"
 #include "core/microgeom/microgeom.h"
@@ -350,6 +351,8 @@ public:
 
     void shade_cpu(const ShadeContext& ctx) const override;
     std::vector<BenchTable> bench_tables() const override;
+    // The distance of the synthesised normals' histogram from the NDF (sweep_metric.h).
+    std::vector<SweepMetricDecl> sweep_metrics() const override { return {ndf_histogram_metric()}; }
 };
 
 // [SECTION] CPU shading

@@ -12,6 +12,7 @@
 // A frame shades every pixel with shading.h's synthesis at o(d) octaves (d: eye distance; all
 // octaves in camera.mode=texture). AOVs: radiance, normal (the microfacet normal in the surface's
 // tangent frame, blended while an octave fades in), octaves (o at the pixel).
+// Sweep metric: bumpsynth.ndf_histogram, the synthesised normals' histogram against the NDF (sweep_metric.h).
 #include "core/basic/basic.h"
 #include "core/bumpsynth/bump_map.h"
 #include "core/bumpsynth/lut.h"

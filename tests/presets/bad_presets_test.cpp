@@ -89,6 +89,19 @@ TEST(BadInput, SetErrorsNameTheKeyAndSuggest) {
     EXPECT_EQ(r.status, 2);
 }
 
+// An unknown --metric is refused before any rendering, naming the value and listing the known ones.
+TEST(BadInput, SweepMetricErrorsNameTheValueAndListTheKnownOnes) {
+    const std::string preset = source_path("presets/basic/sphere.json");
+    CliResult r = run_mesolab("sweep '" + preset + "' --knob geometry.resolution=8 --metric nosuchmetric -o /tmp/mesolab-never");
+    EXPECT_EQ(r.status, 2) << r.err;
+    for (const char* s : {"--metric", "unknown metric 'nosuchmetric'", "known: rmse", "bumpsynth.ndf_histogram"})
+        EXPECT_NE(r.err.find(s), std::string::npos) << "must say '" << s << "': " << r.err;
+    r = run_mesolab("sweep '" + preset + "' --knob geometry.resolution=8 --metric bumpsynth.ndf_histgram -o /tmp/mesolab-never");
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find("did you mean 'bumpsynth.ndf_histogram'"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("internal error"), std::string::npos) << r.err;
+}
+
 TEST(BadInput, BadImageIsAClearErrorNotACrash) {
     TempDir dir("badimage");
     write_file(dir / "fake.png", "this is not a png");
