@@ -104,6 +104,7 @@ float reflect_unit(float r) {
 vec2 index_inputs(const IndexMap& map, const IndexDetail& d, vec2 uv, int k) {
     vec2 u = map.bilinear(uv);
     if (k < 2 || !(d.amplitude > 0.f)) return u;
+    uv -= glm::floor(uv);  // the periodic square (the GLSL noise needs it; the same noise either way)
     vec2 T(0.f);
     for (int o = 0; o < k - 1; ++o) T += vec2(noise_octave(d.noise, uv, o, 0), noise_octave(d.noise, uv, o, 1));
     u += (d.amplitude / kS) * T;

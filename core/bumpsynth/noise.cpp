@@ -15,7 +15,25 @@ constexpr float kGrad[8][2] = {{1.f, 0.f}, {-1.f, 0.f}, {0.f, 1.f}, {0.f, -1.f},
 
 float fade(float t) { return t * t * t * (t * (t * 6.f - 15.f) + 10.f); }
 
-int wrap(int i, int n) { return ((i % n) + n) % n; }
+// i mod n in [0, n) (also for negative i); the lattice coordinates are mostly in [0, n) already.
+int wrap(int i, int n) {
+    if (unsigned(i) < unsigned(n)) return i;
+    const int r = i % n;
+    return r < 0 ? r + n : r;
+}
+
+// r mapped to [0, 1] from the octave sums T and A.
+float to_unit(float T, float A) { return std::clamp(0.5f + T / (2.f * kS * A), 0.f, 1.f); }
+
+// uv reduced to the periodic square [0, 1] (see the header).
+vec2 wrap_uv(vec2 uv) { return uv - glm::floor(uv); }
+
+// Octave o of both channels at uv (wrapped), including gain^o.
+vec2 octave_pair(const NoiseOctaves& oc, vec2 uv, int o) {
+    const int p0 = oc.period[o][0], p1 = oc.period[o][1];
+    return oc.gain[o] * vec2(gradient_noise(uv * float(p0) + oc.offset[o][0], p0, oc.seed[o][0]),
+                             gradient_noise(uv * float(p1) + oc.offset[o][1], p1, oc.seed[o][1]));
+}
 }  // namespace
 
 uint32_t octave_seed(uint32_t seed, int octave, int channel) { return hash32(seed * 0x9E3779B1u + uint32_t(octave * 2 + channel) * 0x85EBCA77u + 0x165667B1u); }
@@ -47,21 +65,33 @@ float gradient_noise(vec2 p, int period, uint32_t seed) {
     const float fx = p.x - fx0, fy = p.y - fy0;
     const int x0 = wrap(int(fx0), period), y0 = wrap(int(fy0), period);
     const int x1 = x0 + 1 == period ? 0 : x0 + 1, y1 = y0 + 1 == period ? 0 : y0 + 1;
-    auto corner = [&](int x, int y, float dx, float dy) {
-        const uint32_t h = hash32(uint32_t(x) + hash32(uint32_t(y) + seed)) & 7u;
+    const uint32_t hy0 = hash32(uint32_t(y0) + seed), hy1 = hash32(uint32_t(y1) + seed);
+    auto corner = [&](int x, uint32_t hy, float dx, float dy) {
+        const uint32_t h = hash32(uint32_t(x) + hy) & 7u;
         return kGrad[h][0] * dx + kGrad[h][1] * dy;
     };
-    const float n00 = corner(x0, y0, fx, fy), n10 = corner(x1, y0, fx - 1.f, fy);
-    const float n01 = corner(x0, y1, fx, fy - 1.f), n11 = corner(x1, y1, fx - 1.f, fy - 1.f);
+    const float n00 = corner(x0, hy0, fx, fy), n10 = corner(x1, hy0, fx - 1.f, fy);
+    const float n01 = corner(x0, hy1, fx, fy - 1.f), n11 = corner(x1, hy1, fx - 1.f, fy - 1.f);
     const float u = fade(fx), v = fade(fy);
     const float a = n00 + u * (n10 - n00), b = n01 + u * (n11 - n01);
     return a + v * (b - a);
 }
 
 // [SECTION] Fractal noise
+NoiseOctaves::NoiseOctaves(const NoiseParams& n) : count(std::clamp(n.octaves_max, 0, kMax)) {
+    for (int o = 0; o < count; ++o) {
+        gain[o] = std::pow(n.gain, float(o));
+        for (int c = 0; c < 2; ++c) {
+            period[o][c] = (n.base_frequency + c) << o;  // see the header: decorrelated lattices
+            seed[o][c] = octave_seed(n.seed, o, c);
+            offset[o][c] = octave_offset(o, c);
+        }
+    }
+}
+
 float noise_octave(const NoiseParams& n, vec2 uv, int octave, int channel) {
-    const int period = (n.base_frequency + channel) << octave;  // see the header: decorrelated lattices
-    const vec2 p = uv * float(period) + octave_offset(octave, channel);
+    const int period = (n.base_frequency + channel) << octave;
+    const vec2 p = wrap_uv(uv) * float(period) + octave_offset(octave, channel);
     return std::pow(n.gain, float(octave)) * gradient_noise(p, period, octave_seed(n.seed, octave, channel));
 }
 
@@ -71,16 +101,19 @@ float fractal_noise(const NoiseParams& n, vec2 uv, int k, int channel) {
         T += noise_octave(n, uv, o, channel);
         A += std::pow(n.gain, float(o));
     }
-    return std::clamp(0.5f + T / (2.f * kS * A), 0.f, 1.f);
+    return to_unit(T, A);
 }
 
-void fractal_noise_all(const NoiseParams& n, vec2 uv, vec2* out) {
+void fractal_noise_all(const NoiseParams& n, vec2 uv, vec2* out) { fractal_noise_all(NoiseOctaves(n), uv, n.octaves_max, out); }
+
+void fractal_noise_all(const NoiseOctaves& oc, vec2 uv, int count, vec2* out) {
+    uv = wrap_uv(uv);
     vec2 T(0.f);
     float A = 0.f;
-    for (int o = 0; o < n.octaves_max; ++o) {
-        T += vec2(noise_octave(n, uv, o, 0), noise_octave(n, uv, o, 1));
-        A += std::pow(n.gain, float(o));
-        out[o] = glm::clamp(vec2(0.5f) + T / (2.f * kS * A), vec2(0.f), vec2(1.f));
+    for (int o = 0; o < count; ++o) {
+        T += octave_pair(oc, uv, o);
+        A += oc.gain[o];
+        out[o] = vec2(to_unit(T.x, A), to_unit(T.y, A));
     }
 }
 
@@ -94,6 +127,7 @@ float octaves_at_distance(float distance, float detail_distance, int octaves_max
 NoiseCdfs measure_noise_cdfs(const NoiseParams& n, int samples) {
     n.validate();
     const int K = n.octaves_max, N = std::max(16, samples);
+    const NoiseOctaves oc(n);
     std::vector<std::vector<float>> r(size_t(2 * K), std::vector<float>(size_t(N) * size_t(N)));
     tbb::parallel_for(0, N, [&](int y) {
         std::mt19937 rng(uint32_t(y) * 7919u + n.seed);
@@ -101,20 +135,63 @@ NoiseCdfs measure_noise_cdfs(const NoiseParams& n, int samples) {
         std::vector<vec2> all(static_cast<size_t>(K));
         for (int x = 0; x < N; ++x) {
             const vec2 uv((float(x) + jitter(rng)) / float(N), (float(y) + jitter(rng)) / float(N));
-            fractal_noise_all(n, uv, all.data());
+            fractal_noise_all(oc, uv, K, all.data());
             const size_t i = size_t(y) * size_t(N) + size_t(x);
             for (int k = 0; k < K; ++k) r[size_t(2 * k)][i] = all[size_t(k)].x, r[size_t(2 * k + 1)][i] = all[size_t(k)].y;
         }
     });
     NoiseCdfs out;
     out.params = n;
+    out.octaves = oc;
     out.G.resize(size_t(2 * K));
-    tbb::parallel_for(0, 2 * K, [&](int k) { out.G[size_t(k)] = measure_input_cdf(r[size_t(k)]); });
+    out.table.resize(size_t(2 * K) * size_t(NoiseCdfs::kCdfNodes));
+    tbb::parallel_for(0, 2 * K, [&](int k) {
+        out.G[size_t(k)] = measure_input_cdf(r[size_t(k)]);
+        const std::vector<float> t = resample_input_cdf(out.G[size_t(k)]);
+        std::copy(t.begin(), t.end(), out.table.begin() + std::ptrdiff_t(size_t(k) * size_t(NoiseCdfs::kCdfNodes)));
+    });
     return out;
 }
 
+// [SECTION] The resampled input CDFs
+std::vector<float> resample_input_cdf(const InputCdf& G) {
+    const int n = NoiseCdfs::kCdfNodes;
+    std::vector<float> t(static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i) t[size_t(i)] = float(G(double(i) / double(n - 1)));
+    return t;
+}
+
+float NoiseCdfs::input(int k, int channel, float r) const {
+    const float x = (r > 0.f ? (r < 1.f ? r : 1.f) : 0.f) * float(kCdfNodes - 1);
+    const int i = std::min(int(x), kCdfNodes - 2);
+    const float t = x - float(i);
+    const float* g = table.data() + size_t(2 * (k - 1) + channel) * size_t(kCdfNodes) + size_t(i);
+    return g[0] + t * (g[1] - g[0]);
+}
+
 vec2 noise_inputs(const NoiseCdfs& cdfs, vec2 uv, int k) {
-    return {float(cdfs.of(k, 0)(fractal_noise(cdfs.params, uv, k, 0))), float(cdfs.of(k, 1)(fractal_noise(cdfs.params, uv, k, 1)))};
+    uv = wrap_uv(uv);
+    vec2 T(0.f);
+    float A = 0.f;
+    for (int o = 0; o < k; ++o) {
+        T += octave_pair(cdfs.octaves, uv, o);
+        A += cdfs.octaves.gain[o];
+    }
+    return {cdfs.input(k, 0, to_unit(T.x, A)), cdfs.input(k, 1, to_unit(T.y, A))};
+}
+
+void noise_inputs_fading(const NoiseCdfs& cdfs, vec2 uv, int k, vec2& coarse, vec2& fine) {
+    uv = wrap_uv(uv);
+    vec2 T(0.f);
+    float A = 0.f;
+    for (int o = 0; o < k; ++o) {
+        T += octave_pair(cdfs.octaves, uv, o);
+        A += cdfs.octaves.gain[o];
+    }
+    if (k > 0) coarse = {cdfs.input(k, 0, to_unit(T.x, A)), cdfs.input(k, 1, to_unit(T.y, A))};
+    T += octave_pair(cdfs.octaves, uv, k);
+    A += cdfs.octaves.gain[k];
+    fine = {cdfs.input(k + 1, 0, to_unit(T.x, A)), cdfs.input(k + 1, 1, to_unit(T.y, A))};
 }
 
 // [SECTION] Mip-mapped noise texture

@@ -88,6 +88,13 @@ FacetBlend facets_at(const Synthesis& s, vec2 uv, float octaves) {
     int k = int(std::floor(o));
     b.w = o - float(k);
     if (k >= K) k = K, b.w = 0.f;
+    if (!s.index_map && !s.noise_texture && b.w > 0.f) {  // one pass over k + 1 octaves for both (noise.h)
+        vec2 uc(0.f), uf(0.f);
+        noise_inputs_fading(*s.cdfs, uv, k, uc, uf);
+        if (k > 0) b.coarse = s.lut->lookup(uc);
+        b.fine = s.lut->lookup(uf);
+        return b;
+    }
     if (k > 0) b.coarse = s.lut->lookup(synthesis_inputs(s, uv, k));
     b.fine = b.w > 0.f ? s.lut->lookup(synthesis_inputs(s, uv, k + 1)) : b.coarse;
     return b;

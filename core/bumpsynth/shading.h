@@ -20,7 +20,9 @@
 // [SECTION] Synthesis at a pixel (§5.1)
 // The microfacet at uv with o(d) = k + w octaves: k octaves (k = 0: the macro frame, no bumps) and
 // k + 1 octaves, each the nearest look-up-table entry of its inputs u = G_k(r_k) (procedural noise),
-// of the noise texture's level K - k, or of the index map with k - 1 octaves of detail (bump_map.h); the two shadings blend with weight w. The half vector is
+// of the noise texture's level K - k, or of the index map with k - 1 octaves of detail (bump_map.h);
+// the two shadings blend with weight w (procedural noise: both inputs from one pass over k + 1
+// octaves, noise_inputs_fading). The half vector is
 // projected into the microfacet's frame {t_m, b_m, m} and the NDF looked up there (§5.1), i.e. the
 // BRDF above is evaluated in that frame: with n = m, wo and wi expressed in {t_m, b_m, m}.
 // Both must also be above the macro surface (wo·n > 0 and wi·n > 0); a facet facing away from the

@@ -1,7 +1,8 @@
 #version 430 core
 // Technique bumpsynth: bump map synthesis from an NDF (Kautz et al. 2001), the GLSL twin of
-// core/bumpsynth/{noise,lut,shading,bumpsynth}.cpp: the same bits of noise, the same input CDFs,
-// the same nearest look-up-table entries and the same BRDF.
+// core/bumpsynth/{noise,lut,shading,bumpsynth}.cpp: the same bits of noise, the same resampled input
+// CDFs, the same nearest look-up-table entries and the same BRDF. bumpsynth_pass.cpp draws a depth
+// pre-pass first (depth.frag), so this runs once per visible pixel.
 #include "common.glsl"
 #include "camera.glsl"
 #include "lighting.glsl"
@@ -12,16 +13,15 @@ in vec3 v_tangent;
 in vec2 v_uv;
 
 // [SECTION] Data
-uniform sampler2D u_ndf;             // R x R: (value, 1 where the cell meets the disk)
+uniform sampler2D u_ndf;             // (R + 2)²: (value, 1 where the cell meets the disk), an empty border
 uniform int u_ndf_res;
 uniform sampler2DArray u_lut;        // S x S x 3: m, t, b
 uniform int u_lut_size;
-layout(std430, binding = 0) readonly buffer Cdfs { vec2 cdf_knots[]; };  // (r, G(r)) of G_k,c at [2 (k-1) + c]
-uniform int u_cdf_offset[32];
-uniform int u_cdf_count[32];
+layout(std430, binding = 0) readonly buffer Cdfs { float cdf_table[]; };  // G_k,c at u_cdf_nodes nodes, from [(2 (k-1) + c) u_cdf_nodes]
+uniform int u_cdf_nodes;
 uniform int u_octaves_max;
-uniform int u_base_frequency;
-uniform uint u_octave_seed[32];      // [2 o + c]
+uniform int u_octave_period[32];     // [2 o + c]
+uniform uint u_octave_seed[32];
 uniform vec2 u_octave_offset[32];
 uniform float u_octave_gain[16];     // gain^o
 uniform int u_noise_texture;         // 1: noise = texture
@@ -30,7 +30,7 @@ uniform int u_noise_levels;
 uniform int u_index_map;             // 1: §7 index texture (core/bumpsynth/bump_map.h)
 uniform sampler2D u_index;           // W x H: RG = look-up-table inputs, row 0 at the top (v = 1)
 uniform ivec2 u_index_size;
-uniform float u_index_noise;         // detail amplitude; u_base_frequency is then W
+uniform float u_index_noise;         // detail amplitude; the octave uniforms are then the detail noise's (period W + c)
 uniform sampler2D u_smith;           // 64 (phi) x 65 (theta): G1
 uniform int u_masking;
 uniform int u_fresnel;
@@ -46,7 +46,8 @@ layout(location = 2) out vec4 o_octaves;
 
 // [SECTION] Noise (core/bumpsynth/noise.cpp)
 const float kS = 0.70710678;
-const vec2 kGrad[8] = vec2[8](vec2(1, 0), vec2(-1, 0), vec2(0, 1), vec2(0, -1), vec2(kS, kS), vec2(-kS, kS), vec2(kS, -kS), vec2(-kS, -kS));
+// The 8 unit gradients (noise.cpp kGrad[h]): (1, 0), (-1, 0), (0, 1), (0, -1), (±√½, ±√½) with the
+// x sign from bit 0 of h and the y sign from bit 1.
 
 uint hash32(uint x) {
     x ^= x >> 16;
@@ -57,49 +58,53 @@ uint hash32(uint x) {
     return x;
 }
 
-int wrap_i(int i, int n) { return ((i % n) + n) % n; }
 float fade(float t) { return t * t * t * (t * (t * 6.0 - 15.0) + 10.0); }
 
+// Gradient h dotted with d, by selects (no indexed array): the same bits as the table.
+float grad_dot(uint h, vec2 d) {
+    float sx = (h & 1u) != 0u ? -d.x : d.x, sy = (h & 2u) != 0u ? -d.y : d.y;
+    float axis = (h & 2u) != 0u ? ((h & 1u) != 0u ? -d.y : d.y) : sx;
+    return h < 4u ? axis : kS * sx + kS * sy;
+}
+
+// p in [0, 2 period): uv was wrapped to [0, 1] (noise.h), so the cell wraps by one subtraction.
 float gradient_noise(vec2 p, int period, uint seed) {
     vec2 f0 = floor(p);
     vec2 f = p - f0;
-    int x0 = wrap_i(int(f0.x), period), y0 = wrap_i(int(f0.y), period);
+    ivec2 c0 = ivec2(f0);
+    int x0 = c0.x >= period ? c0.x - period : c0.x, y0 = c0.y >= period ? c0.y - period : c0.y;
     int x1 = x0 + 1 == period ? 0 : x0 + 1, y1 = y0 + 1 == period ? 0 : y0 + 1;
-    vec2 g00 = kGrad[hash32(uint(x0) + hash32(uint(y0) + seed)) & 7u];
-    vec2 g10 = kGrad[hash32(uint(x1) + hash32(uint(y0) + seed)) & 7u];
-    vec2 g01 = kGrad[hash32(uint(x0) + hash32(uint(y1) + seed)) & 7u];
-    vec2 g11 = kGrad[hash32(uint(x1) + hash32(uint(y1) + seed)) & 7u];
-    float n00 = dot(g00, f), n10 = dot(g10, f - vec2(1, 0)), n01 = dot(g01, f - vec2(0, 1)), n11 = dot(g11, f - vec2(1, 1));
+    uint hy0 = hash32(uint(y0) + seed), hy1 = hash32(uint(y1) + seed);
+    float n00 = grad_dot(hash32(uint(x0) + hy0) & 7u, f), n10 = grad_dot(hash32(uint(x1) + hy0) & 7u, f - vec2(1, 0));
+    float n01 = grad_dot(hash32(uint(x0) + hy1) & 7u, f - vec2(0, 1)), n11 = grad_dot(hash32(uint(x1) + hy1) & 7u, f - vec2(1, 1));
     float u = fade(f.x), v = fade(f.y);
     float a = n00 + u * (n10 - n00), b = n01 + u * (n11 - n01);
     return a + v * (b - a);
 }
 
-float fractal_noise(vec2 uv, int k, int c) {
-    float T = 0.0, A = 0.0;
-    for (int o = 0; o < k; ++o) {
-        int period = (u_base_frequency + c) << o;
-        vec2 p = uv * float(period) + u_octave_offset[2 * o + c];
-        T += u_octave_gain[o] * gradient_noise(p, period, u_octave_seed[2 * o + c]);
-        A += u_octave_gain[o];
-    }
-    return clamp(0.5 + T / (2.0 * kS * A), 0.0, 1.0);
+// Octave o of both channels at uv in [0, 1]², including gain^o.
+vec2 octave_pair(vec2 uv, int o) {
+    int i0 = 2 * o, i1 = 2 * o + 1;
+    int p0 = u_octave_period[i0], p1 = u_octave_period[i1];
+    return u_octave_gain[o] * vec2(gradient_noise(uv * float(p0) + u_octave_offset[i0], p0, u_octave_seed[i0]),
+                                   gradient_noise(uv * float(p1) + u_octave_offset[i1], p1, u_octave_seed[i1]));
 }
 
-// G_k,c(r): piecewise linear through the knots (core/bumpsynth/lut.cpp InputCdf::operator()).
+vec2 to_unit(vec2 T, float A) { return clamp(0.5 + T / (2.0 * kS * A), 0.0, 1.0); }
+
+// G_k,c(r) from the resampled table (core/bumpsynth/noise.cpp NoiseCdfs::input).
 float input_cdf(int k, int c, float r) {
-    int off = u_cdf_offset[2 * (k - 1) + c], n = u_cdf_count[2 * (k - 1) + c];
-    int lo = 0, hi = n - 1;  // the last knot with knot.r <= r, in [0, n - 2]
-    while (hi - lo > 1) {
-        int mid = (lo + hi) / 2;
-        if (cdf_knots[off + mid].x <= r) lo = mid; else hi = mid;
-    }
-    vec2 a = cdf_knots[off + lo], b = cdf_knots[off + lo + 1];
-    return b.x > a.x ? a.y + (r - a.x) / (b.x - a.x) * (b.y - a.y) : b.y;
+    float x = (r > 0.0 ? (r < 1.0 ? r : 1.0) : 0.0) * float(u_cdf_nodes - 1);
+    int i = min(int(x), u_cdf_nodes - 2);
+    float t = x - float(i);
+    int at = (2 * (k - 1) + c) * u_cdf_nodes + i;
+    float g0 = cdf_table[at], g1 = cdf_table[at + 1];
+    return g0 + t * (g1 - g0);
 }
 
 // [SECTION] Index texture and detail (core/bumpsynth/bump_map.cpp)
 vec2 index_at(int x, int y) { return texelFetch(u_index, ivec2(x, y), 0).rg; }
+int wrap_i(int i, int n) { return ((i % n) + n) % n; }
 
 vec2 index_bilinear(vec2 uv) {
     float fx = uv.x * float(u_index_size.x) - 0.5, fy = (1.0 - uv.y) * float(u_index_size.y) - 0.5;
@@ -120,21 +125,42 @@ float reflect_unit(float r) {
 vec2 index_inputs(vec2 uv, int k) {
     vec2 u = index_bilinear(uv);
     if (k < 2 || !(u_index_noise > 0.0)) return u;
+    uv -= floor(uv);  // the periodic square, as the noise needs (bump_map.cpp)
     vec2 T = vec2(0.0);
-    for (int o = 0; o < k - 1; ++o)
-        for (int c = 0; c < 2; ++c) {
-            int period = (u_base_frequency + c) << o;
-            vec2 p = uv * float(period) + u_octave_offset[2 * o + c];
-            T[c] += u_octave_gain[o] * gradient_noise(p, period, u_octave_seed[2 * o + c]);
-        }
+    for (int o = 0; o < k - 1; ++o) T += octave_pair(uv, o);
     u += (u_index_noise / kS) * T;
     return vec2(reflect_unit(u.x), reflect_unit(u.y));
 }
 
-vec2 inputs(vec2 uv, int k) {
-    if (u_index_map != 0) return index_inputs(uv, k);
-    if (u_noise_texture != 0) return textureLod(u_noise, uv, float(clamp(u_octaves_max - k, 0, u_noise_levels - 1))).rg;
-    return vec2(input_cdf(k, 0, fractal_noise(uv, k, 0)), input_cdf(k, 1, fractal_noise(uv, k, 1)));
+vec2 input_cdfs(int k, vec2 r) { return vec2(input_cdf(k, 0, r.x), input_cdf(k, 1, r.y)); }
+
+// The inputs of k octaves (coarse, k >= 1) and, with fine, of k + 1 octaves: one pass over the
+// octaves, the fine sums being the coarse sums plus octave k (noise.cpp noise_inputs_fading).
+void inputs(vec2 uv, int k, bool fine, inout vec2 coarse, out vec2 finer) {
+    finer = vec2(0.5);
+    if (u_index_map != 0) {
+        if (k > 0) coarse = index_inputs(uv, k);
+        if (fine) finer = index_inputs(uv, k + 1);
+        return;
+    }
+    if (u_noise_texture != 0) {
+        if (k > 0) coarse = textureLod(u_noise, uv, float(clamp(u_octaves_max - k, 0, u_noise_levels - 1))).rg;
+        if (fine) finer = textureLod(u_noise, uv, float(clamp(u_octaves_max - k - 1, 0, u_noise_levels - 1))).rg;
+        return;
+    }
+    uv -= floor(uv);  // the periodic square (noise.cpp wrap_uv)
+    vec2 T = vec2(0.0);
+    float A = 0.0;
+    for (int o = 0; o < k; ++o) {
+        T += octave_pair(uv, o);
+        A += u_octave_gain[o];
+    }
+    if (k > 0) coarse = input_cdfs(k, to_unit(T, A));
+    if (fine) {
+        T += octave_pair(uv, k);
+        A += u_octave_gain[k];
+        finer = input_cdfs(k + 1, to_unit(T, A));
+    }
 }
 
 // [SECTION] Look-up table and NDF (core/bumpsynth/lut.cpp, ndf.cpp)
@@ -146,6 +172,10 @@ void lut_lookup(vec2 r, out vec3 m, out vec3 t, out vec3 b) {
     b = texelFetch(u_lut, ivec3(a, c, 2), 0).xyz;
 }
 
+// u_ndf has a border of one empty cell, (0, 0), all round (bumpsynth_pass.cpp upload_ndf): the four
+// taps need no bounds test, and since D is 0 wherever the disk flag is 0, summing every tap with
+// weights w·flag is the sum over the cells in the disk, the same bits. When no tap meets the disk the
+// cell holding xy is outside it too, and D is 0 there.
 float ndf_eval(vec3 m) {
     float len = length(m);
     if (!(len > 0.0) || m.z < 0.0) return 0.0;
@@ -155,22 +185,15 @@ float ndf_eval(vec3 m) {
     if (r2 > 1.0) xy /= sqrt(r2);
     float h = 2.0 / float(u_ndf_res);
     vec2 f = (xy + 1.0) / h - 0.5;
-    ivec2 c0 = ivec2(floor(f));
-    vec2 t = f - vec2(c0);
-    float sum = 0.0, sum_w = 0.0;
-    for (int dj = 0; dj < 2; ++dj)
-        for (int di = 0; di < 2; ++di) {
-            ivec2 c = c0 + ivec2(di, dj);
-            if (c.x < 0 || c.y < 0 || c.x >= u_ndf_res || c.y >= u_ndf_res) continue;
-            vec2 v = texelFetch(u_ndf, c, 0).rg;
-            if (v.y <= 0.0) continue;
-            float w = (di != 0 ? t.x : 1.0 - t.x) * (dj != 0 ? t.y : 1.0 - t.y);
-            sum += w * v.x;
-            sum_w += w;
-        }
-    if (sum_w > 0.0) return sum / sum_w;
-    ivec2 c = clamp(ivec2(floor((xy + 1.0) / h)), ivec2(0), ivec2(u_ndf_res - 1));
-    return texelFetch(u_ndf, c, 0).r;
+    vec2 f0 = floor(f);
+    ivec2 c = ivec2(f0) + 1;
+    vec2 t = f - f0, s = 1.0 - t;
+    vec2 v00 = texelFetch(u_ndf, c, 0).rg, v10 = texelFetch(u_ndf, c + ivec2(1, 0), 0).rg;
+    vec2 v01 = texelFetch(u_ndf, c + ivec2(0, 1), 0).rg, v11 = texelFetch(u_ndf, c + ivec2(1, 1), 0).rg;
+    float w00 = s.x * s.y, w10 = t.x * s.y, w01 = s.x * t.y, w11 = t.x * t.y;
+    float sum = w00 * v00.x + w10 * v10.x + w01 * v01.x + w11 * v11.x;
+    float sum_w = w00 * v00.y + w10 * v10.y + w01 * v01.y + w11 * v11.y;
+    return sum_w > 0.0 ? sum / sum_w : 0.0;
 }
 
 float smith_g1(vec3 w) {
@@ -233,9 +256,11 @@ void main() {
     if (k >= u_octaves_max) { k = u_octaves_max; w = 0.0; }
 
     vec3 cm = vec3(0, 0, 1), ct = vec3(1, 0, 0), cb = vec3(0, 1, 0);
-    if (k > 0) lut_lookup(inputs(v_uv, k), cm, ct, cb);
+    vec2 uc = vec2(0.5), uf;
+    inputs(v_uv, k, w > 0.0, uc, uf);
+    if (k > 0) lut_lookup(uc, cm, ct, cb);
     vec3 fm = cm, ft = ct, fb = cb;
-    if (w > 0.0) lut_lookup(inputs(v_uv, k + 1), fm, ft, fb);
+    if (w > 0.0) lut_lookup(uf, fm, ft, fb);
 
     vec3 albedo = u_has_albedo != 0 ? texture(u_albedo, vec2(v_uv.x, 1.0 - v_uv.y)).rgb : vec3(1.0);
     vec3 Lc = vec3(0.0), Lf = vec3(0.0);

@@ -1,5 +1,6 @@
-// GPU pass of technique bumpsynth: uploads the NDF, the look-up table, the input CDFs, the noise
-// texture and the Smith table (each once per stage result) and shades with bumpsynth.frag.
+// GPU pass of technique bumpsynth: uploads the NDF, the look-up table, the resampled input CDFs, the
+// noise texture and the Smith table (each once per stage result), draws a depth pre-pass and shades
+// with bumpsynth.frag.
 #include "core/bumpsynth/bumpsynth.h"
 #include "core/profile.h"
 #include "core/scene_stages.h"
@@ -47,13 +48,14 @@ private:
 
 struct CdfBuffer {
     std::shared_ptr<const NoiseCdfs> keep;
-    Buffer knots;
-    std::vector<int> offset, count;
+    Buffer table;
 };
 
 class BumpsynthPass final : public TechniquePass {
 public:
-    BumpsynthPass() : program_(Program::graphics("shaders/mesh.vert", "bumpsynth/bumpsynth.frag")) {}
+    BumpsynthPass()
+        : program_(Program::graphics("shaders/mesh.vert", "bumpsynth/bumpsynth.frag")),
+          depth_(Program::graphics("shaders/mesh.vert", "bumpsynth/depth.frag")) {}
 
     void draw(DrawContext& ctx) override {
         PROFILE_SCOPE("bumpsynth.draw");
@@ -85,6 +87,20 @@ public:
             b.albedo = !path.empty() && maps && maps->count(path) ? ctx.renderer.texture(maps->at(path), &maps->at(path)) : 0;
             bound[i] = b;
         }
+        // Depth pre-pass: the shading pass (noise, look-ups, BRDF) then runs once per visible pixel,
+        // not for every hidden fragment drawn before the nearest one (the teapot's back, its handle).
+        // Texture mode draws everything at depth 0 in uv: nothing is hidden there.
+        const bool prepass = !ctx.camera.texture_mode;
+        if (prepass) {
+            depth_.use();
+            glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+            for (int i : ctx.objects) {
+                ctx.renderer.set_camera_uniforms(depth_, ctx.camera, object_to_world(ctx.scene.objects[size_t(i)]));
+                ctx.renderer.draw_object(ctx.scene, ctx.eval, i);
+            }
+            glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+            glDepthFunc(GL_LEQUAL);
+        }
         program_.use();
         ctx.renderer.draw_buffers({"radiance", "normal", "octaves"});
         ctx.renderer.set_lighting_uniforms(program_, ctx.lighting, 0);
@@ -105,28 +121,26 @@ public:
             glUniform1i(program_.uniform("u_index_map"), syn.index_map ? 1 : 0);
             glUniform2i(program_.uniform("u_index_size"), syn.index_map ? syn.index_map->width : 1, syn.index_map ? syn.index_map->height : 1);
             glUniform1f(program_.uniform("u_index_noise"), syn.index_map ? syn.index_detail.amplitude : 0.f);
-            if (b.cdf) {
-                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, b.cdf->knots.get());
-                glUniform1iv(program_.uniform("u_cdf_offset"), GLsizei(b.cdf->offset.size()), b.cdf->offset.data());
-                glUniform1iv(program_.uniform("u_cdf_count"), GLsizei(b.cdf->count.size()), b.cdf->count.data());
-            }
+            if (b.cdf) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, b.cdf->table.get());
             glUniform1i(program_.uniform("u_ndf_res"), ndfs->get(i)->resolution());
             glUniform1i(program_.uniform("u_lut_size"), luts->get(i)->size());
+            glUniform1i(program_.uniform("u_cdf_nodes"), NoiseCdfs::kCdfNodes);
             glUniform1i(program_.uniform("u_octaves_max"), np.octaves_max);
-            glUniform1i(program_.uniform("u_base_frequency"), np.base_frequency);
+            // The octaves of the noise, or of the index map's detail noise (one lattice cell per texel).
+            const NoiseOctaves oc = syn.index_map ? NoiseOctaves(np) : syn.cdfs->octaves;
+            std::vector<GLint> periods;
             std::vector<GLuint> seeds;
-            std::vector<float> offsets, gains;
-            for (int oct = 0; oct < np.octaves_max; ++oct) {
-                gains.push_back(std::pow(np.gain, float(oct)));
+            std::vector<float> offsets;
+            for (int oct = 0; oct < oc.count; ++oct)
                 for (int c = 0; c < 2; ++c) {
-                    seeds.push_back(octave_seed(np.seed, oct, c));
-                    const vec2 off = octave_offset(oct, c);
-                    offsets.push_back(off.x), offsets.push_back(off.y);
+                    periods.push_back(oc.period[oct][c]);
+                    seeds.push_back(oc.seed[oct][c]);
+                    offsets.push_back(oc.offset[oct][c].x), offsets.push_back(oc.offset[oct][c].y);
                 }
-            }
+            glUniform1iv(program_.uniform("u_octave_period"), GLsizei(periods.size()), periods.data());
             glUniform1uiv(program_.uniform("u_octave_seed"), GLsizei(seeds.size()), seeds.data());
             glUniform2fv(program_.uniform("u_octave_offset"), GLsizei(offsets.size() / 2), offsets.data());
-            glUniform1fv(program_.uniform("u_octave_gain"), GLsizei(gains.size()), gains.data());
+            glUniform1fv(program_.uniform("u_octave_gain"), GLsizei(oc.count), oc.gain);
             glUniform1i(program_.uniform("u_noise_texture"), b.noise ? 1 : 0);
             glUniform1i(program_.uniform("u_noise_levels"), b.noise ? int(texs->get(i)->levels.size()) : 1);
             glUniform1i(program_.uniform("u_masking"), b.smith ? 1 : 0);
@@ -138,24 +152,26 @@ public:
             glUniform1i(program_.uniform("u_has_albedo"), b.albedo ? 1 : 0);
             ctx.renderer.draw_object(ctx.scene, ctx.eval, i);
         }
+        glDepthFunc(GL_LESS);
         glBindVertexArray(0);
         check_gl("bumpsynth.draw");
     }
 
 private:
 
-    // NDF: (value, 1 where the cell meets the disk).
+    // NDF: (value, 1 where the cell meets the disk), cell (i, j) at texel (i + 1, j + 1) inside a
+    // border of (0, 0) (bumpsynth.frag ndf_eval).
     static Texture upload_ndf(const Ndf& ndf) {
-        const int R = ndf.resolution();
-        std::vector<float> rg(size_t(R) * size_t(R) * 2);
+        const int R = ndf.resolution(), W = R + 2;
+        std::vector<float> rg(size_t(W) * size_t(W) * 2, 0.f);
         for (int j = 0; j < R; ++j)
             for (int i = 0; i < R; ++i) {
-                const size_t k = size_t(j) * size_t(R) + size_t(i);
+                const size_t k = size_t(j + 1) * size_t(W) + size_t(i + 1);
                 rg[k * 2] = ndf.value(i, j);
                 rg[k * 2 + 1] = ndf.cell_area(i, j) > 0.0 ? 1.f : 0.f;
             }
         Texture t(make_texture(GL_TEXTURE_2D));
-        glTexImage2D(GL_TEXTURE_2D, 0, GL_RG32F, R, R, 0, GL_RG, GL_FLOAT, rg.data());
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RG32F, W, W, 0, GL_RG, GL_FLOAT, rg.data());
         return t;
     }
 
@@ -212,17 +228,11 @@ private:
         if (it != cdfs_.end()) return it->second;
         CdfBuffer b;
         b.keep = c;
-        std::vector<float> knots;
-        for (const InputCdf& G : c->G) {
-            b.offset.push_back(int(knots.size() / 2));
-            b.count.push_back(int(G.knots_r().size()));
-            for (size_t k = 0; k < G.knots_r().size(); ++k) knots.push_back(float(G.knots_r()[k])), knots.push_back(float(G.knots_g()[k]));
-        }
-        b.knots = make_storage_buffer(knots.data(), knots.size() * sizeof(float));
+        b.table = make_storage_buffer(c->table.data(), c->table.size() * sizeof(float));
         return cdfs_.emplace(c.get(), std::move(b)).first->second;
     }
 
-    Program program_;
+    Program program_, depth_;
     Uploads<Ndf> ndf_;
     Uploads<Lut> lut_;
     Uploads<NoiseTexture> noise_;

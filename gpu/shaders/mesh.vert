@@ -13,6 +13,8 @@ out vec3 v_normal;
 out vec3 v_tangent;
 out vec2 v_uv;
 
+invariant gl_Position;  // the same depth in every pass that draws a mesh (bumpsynth: depth pre-pass, then shading with GL_LEQUAL)
+
 void main() {
     vec4 wp = u_model * vec4(a_position, 1.0);
     v_position = wp.xyz;

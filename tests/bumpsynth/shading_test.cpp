@@ -84,6 +84,91 @@ TEST(BumpsynthNoise, PerOctaveCdfsMakeTheInputsUniformForEveryOctaveCount) {
     }
 }
 
+TEST(BumpsynthNoise, ResampledInputCdfsFollowTheMeasuredKnots) {
+    // The frame's G_k,c (4097 nodes, linear in between) against the measured piecewise-linear G
+    // (up to ~8k knots), everywhere in [0, 1] (a grid 64 times finer than the nodes, plus every
+    // knot): within 2e-4 (noise.h: ~1e-4 at most, against the measured G's own sampling error of
+    // ~2e-3), for the default first octave, the frame benchmark's and the χ² tests' (K = 4).
+    struct Case { int F, K, samples; };
+    for (const Case& cs : {Case{8, 8, 512}, Case{48, 8, 512}, Case{256, 4, 1024}}) {
+        NoiseParams np;
+        np.base_frequency = cs.F;
+        np.octaves_max = cs.K;
+        const NoiseCdfs cdfs = measure_noise_cdfs(np, cs.samples);
+        ASSERT_EQ(cdfs.table.size(), size_t(2 * cs.K) * size_t(NoiseCdfs::kCdfNodes));
+        double worst = 0.0;
+        for (int k = 1; k <= cs.K; ++k)
+            for (int c = 0; c < 2; ++c) {
+                const InputCdf& G = cdfs.of(k, c);
+                auto check = [&](float r) {
+                    const double d = std::fabs(double(cdfs.input(k, c, r)) - G(r));
+                    worst = std::max(worst, d);
+                    ASSERT_LE(d, 2e-4) << "F " << cs.F << " k " << k << " channel " << c << " r " << r;
+                };
+                const int n = 64 * (NoiseCdfs::kCdfNodes - 1);
+                for (int i = 0; i <= n; ++i) check(float(i) / float(n));
+                for (double r : G.knots_r()) check(float(r));
+                // The nodes themselves hold G exactly (to float).
+                for (int i = 0; i < NoiseCdfs::kCdfNodes; i += 97) {
+                    const float r = float(i) / float(NoiseCdfs::kCdfNodes - 1);
+                    EXPECT_NEAR(cdfs.input(k, c, r), G(r), 1e-7);
+                }
+            }
+        std::printf("  F = %d, K = %d: max |resampled G - measured G| = %.2e\n", cs.F, cs.K, worst);
+    }
+    // Out of range and NaN inputs clamp like G.
+    const NoiseCdfs cdfs = small_noise(2, 8);
+    EXPECT_EQ(cdfs.input(1, 0, -1.f), cdfs.input(1, 0, 0.f));
+    EXPECT_EQ(cdfs.input(1, 0, std::nanf("")), cdfs.input(1, 0, 0.f));
+    EXPECT_EQ(cdfs.input(2, 1, 2.f), 1.f);
+}
+
+TEST(BumpsynthNoise, InputsAreTheResampledCdfsOfTheFractalNoise) {
+    // noise_inputs = the table at r_k (bit for bit), and the one-pass pair of a fading octave is
+    // noise_inputs at k and k + 1 exactly (the fine sums continue the coarse ones).
+    const NoiseCdfs cdfs = small_noise(6, 8);
+    test::Rng rng(11);
+    for (int i = 0; i < 3000; ++i) {
+        const vec2 uv(float(rng.uniform()), float(rng.uniform()));
+        for (int k = 1; k <= 6; ++k) {
+            const vec2 u = noise_inputs(cdfs, uv, k);
+            EXPECT_EQ(u.x, cdfs.input(k, 0, fractal_noise(cdfs.params, uv, k, 0)));
+            EXPECT_EQ(u.y, cdfs.input(k, 1, fractal_noise(cdfs.params, uv, k, 1)));
+        }
+        for (int k = 0; k < 6; ++k) {
+            vec2 coarse(-1.f), fine(-1.f);
+            noise_inputs_fading(cdfs, uv, k, coarse, fine);
+            if (k > 0) {
+                EXPECT_EQ(coarse, noise_inputs(cdfs, uv, k)) << k;
+            } else {
+                EXPECT_EQ(coarse, vec2(-1.f));
+            }
+            EXPECT_EQ(fine, noise_inputs(cdfs, uv, k + 1)) << k;
+        }
+    }
+    // Outside the uv square: the same noise (it tiles) up to float rounding.
+    for (int i = 0; i < 500; ++i) {
+        const vec2 uv(float(rng.uniform()), float(rng.uniform()));
+        const vec2 a = noise_inputs(cdfs, uv, 6), b = noise_inputs(cdfs, uv + vec2(3.f, -2.f), 6);
+        EXPECT_NEAR(a.x, b.x, 2e-3f);
+        EXPECT_NEAR(a.y, b.y, 2e-3f);
+    }
+}
+
+TEST(BumpsynthNoise, GradientNoiseWrapsAnyLatticeCell) {
+    // The exact modulo for negative and far cells: noise(p) = noise(p + m period) for integer m.
+    test::Rng rng(5);
+    for (int i = 0; i < 2000; ++i) {
+        const int period = 1 + int(rng.uniform() * 40.0);
+        const vec2 p(float(rng.uniform() * period), float(rng.uniform() * period));
+        const float n = gradient_noise(p, period, 77u);
+        for (int m : {-3, -1, 1, 2, 5}) {
+            const vec2 q = p + vec2(float(m * period), float(-m * period));
+            EXPECT_NEAR(gradient_noise(q, period, 77u), n, 1e-4f) << "period " << period << " m " << m;
+        }
+    }
+}
+
 TEST(BumpsynthNoise, OctaveCountHalvesWithDistanceAndIsClamped) {
     EXPECT_EQ(octaves_at_distance(8.f, 4.f, 8), 0.f);     // beyond the detail distance: none
     EXPECT_EQ(octaves_at_distance(4.f, 4.f, 8), 0.f);
