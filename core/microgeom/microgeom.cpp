@@ -97,6 +97,8 @@ std::vector<std::string> with(std::vector<std::string> a, const std::vector<std:
 }
 
 bool planar(const SceneObject& o) { return o.geometry.get_string("type") == "plane"; }
+// The lights' scattering is solved (microgeom.scatter or microgeom.scatter_directions).
+bool wants_light_scatter(const SceneObject& o) { return o.material.get_int("depth") > 0 && lod(o) != "brdf"; }
 
 // The first line of an error message (EGL failures list every platform tried).
 std::string first_line(const std::string& text) { return text.substr(0, text.find('\n')); }
@@ -124,9 +126,9 @@ ScatterSettings scatter_settings(const ParamTable& m) {
     return st;
 }
 
-// Direction towards light `index` in the heightfield's local frame, for the scattering solution.
+// Direction towards light `index` in a planar base's local frame, for its scattering solution.
 vec3 light_local(const Scene& s, const SceneObject& o, size_t index) {
-    if (!planar(o) || index >= s.lights.size()) return {0.f, 0.f, 1.f};
+    if (index >= s.lights.size()) return {0.f, 0.f, 1.f};
     const ParamTable& l = s.lights[index];
     vec3 wi;
     if (l.get_string("type") == "directional") {
@@ -500,19 +502,34 @@ public:
                .run = [](StageContext& ctx) {
                    return stage_result(scatter_env(ctx));
                }});
-        // Every light scattered (their direct part is shaded per pixel).
+        // Every light scattered (their direct part is shaded per pixel): planar bases.
         g.add({.name = "microgeom.scatter",
-               .help = "Each light scattered inside the heightfield (dependent tests), one solution per light",
+               .help = "Each light scattered inside the heightfield (dependent tests), one solution per light (planar bases)",
                .params = with(with(keys(kScatterKeys), keys({"device"})), {"light.*", "geometry.type"}),
                .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "microgeom.ellipses"},
                .effects = {"indirect"},
                .when = [](const Scene& s) {
-                   return !s.lights.empty() && any_object(s, [](const SceneObject& o) { return o.material.get_int("depth") > 0 && lod(o) != "brdf"; });
+                   return !s.lights.empty() && any_object(s, [](const SceneObject& o) { return wants_light_scatter(o) && planar(o); });
                },
-               .when_text = "the scene has a light, microgeom.depth > 0 and microgeom.lod is not brdf",
+               .when_text = "the scene has a light, microgeom.depth > 0, microgeom.lod is not brdf and the base is a plane",
                .paper = PaperFigure{12e3, "Heidrich et al. 2000, Table 1: Bricks 128x128, software render, 100 samples (SGI Octane)"},
                .run = [](StageContext& ctx) {
                    return stage_result(scatter_lights(ctx));
+               }});
+        // Non-planar bases: the light-driven scattering for every set direction above the horizon,
+        // blended per pixel for each light's tangent-space direction; never depends on the light.
+        g.add({.name = "microgeom.scatter_directions",
+               .help = "Light scattered inside the heightfield for each of the ~N/2 set directions above the horizon, at unit irradiance (non-planar bases; "
+                       "blended per pixel over the light's spherical triangle)",
+               .params = with(with(keys(kScatterKeys), keys({"device"})), {"geometry.type"}),
+               .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "microgeom.ellipses"},
+               .effects = {"indirect"},
+               .when = [](const Scene& s) {
+                   return !s.lights.empty() && any_object(s, [](const SceneObject& o) { return wants_light_scatter(o) && !planar(o); });
+               },
+               .when_text = "the scene has a light, microgeom.depth > 0, microgeom.lod is not brdf and the base is not a plane",
+               .run = [](StageContext& ctx) {
+                   return stage_result(scatter_directions_stage(ctx));
                }});
     }
 
@@ -564,15 +581,14 @@ public:
             st.env = &env;
             const auto gatherer = make_gatherer(ctx, o);
             st.gatherer = gatherer.get();
-            ls.planar = planar(o);
             ls.result = scatter_on(ctx, o, *hf->get(int(i)), *dirs->get(int(i)), *vis->get(int(i)), st, [&](double f) { ctx.progress((double(i) + f) / double(out.items.size())); });
             out.items[i] = std::make_shared<const LightScatter>(std::move(ls));
         }
         return out;
     }
 
-    // One solution per object and light, at unit irradiance (planar bases: the light's own
-    // direction; curved bases: along the macro normal, scaled by the macro cosine when shading).
+    // One solution per planar object and light, at unit irradiance from the light's direction
+    // (non-planar bases: scatter_directions).
     static PerObject<LightsScatter> scatter_lights(StageContext& ctx) {
         const auto [hf, dirs, vis, imp, ell] = FieldInputs(ctx);
         PerObject<LightsScatter> out;
@@ -580,7 +596,7 @@ public:
         const size_t L = ctx.scene.lights.size();
         for (size_t i = 0; i < out.items.size(); ++i) {
             const SceneObject& o = ctx.scene.objects[i];
-            if (!hf->get(int(i)) || lod(o) == "brdf") continue;
+            if (!hf->get(int(i)) || !wants_light_scatter(o) || !planar(o)) continue;
             LightsScatter all;
             const auto gatherer = make_gatherer(ctx, o);
             for (size_t li = 0; li < L; ++li) {
@@ -588,16 +604,10 @@ public:
                 ScatterSettings st = scatter_settings(o.material);
                 st.importance = imp ? imp->get(int(i)) : nullptr;
                 st.ellipses = ell ? ell->get(int(i)) : nullptr;
-                ls.planar = planar(o);
                 ls.light_dir = light_local(ctx.scene, o, li);
                 st.light_dir = ls.light_dir;
                 st.light_E = vec3(1.f);
                 st.gatherer = gatherer.get();
-                // Curved bases: every light is solved along the macro normal, the same solution.
-                if (!ls.planar && li > 0) {
-                    all.lights.push_back(all.lights.front());
-                    continue;
-                }
                 ls.result = scatter_on(ctx, o, *hf->get(int(i)), *dirs->get(int(i)), *vis->get(int(i)), st, [&](double f) {
                     ctx.progress((double(i) + (double(li) + f) / double(L)) / double(out.items.size()));
                 });
@@ -608,9 +618,44 @@ public:
         return out;
     }
 
+    // Non-planar objects: the light-driven scattering for every set direction above the horizon
+    // (scatter.h DirectionalScatter), on the object's device; the GPU's failure falls back to the CPU.
+    static PerObject<DirectionalScatter> scatter_directions_stage(StageContext& ctx) {
+        const auto [hf, dirs, vis, imp, ell] = FieldInputs(ctx);
+        PerObject<DirectionalScatter> out;
+        out.items.resize(ctx.scene.objects.size());
+        for (size_t i = 0; i < out.items.size(); ++i) {
+            const SceneObject& o = ctx.scene.objects[i];
+            if (!hf->get(int(i)) || !wants_light_scatter(o) || planar(o)) continue;
+            ScatterSettings st = scatter_settings(o.material);
+            st.importance = imp ? imp->get(int(i)) : nullptr;
+            st.ellipses = ell ? ell->get(int(i)) : nullptr;
+            const auto progress = [&](double f) { ctx.progress((double(i) + f) / double(out.items.size())); };
+            const auto solve = [&] { return scatter_directions(*hf->get(int(i)), *dirs->get(int(i)), *vis->get(int(i)), st, progress); };
+            const auto gatherer = make_gatherer(ctx, o);
+            std::optional<DirectionalScatter> table;
+            if (gatherer) {
+                st.gatherer = gatherer.get();
+                try {
+                    table = solve();
+                } catch (const Cancelled&) {
+                    throw;
+                } catch (const InputError&) {
+                    throw;
+                } catch (const std::runtime_error& e) {
+                    ctx.warn(o.name + ": scattering computed on the CPU: the GPU could not (" + first_line(e.what()) + ")");
+                }
+                st.gatherer = nullptr;
+            }
+            if (!table) table = solve();
+            out.items[i] = std::make_shared<const DirectionalScatter>(std::move(*table));
+        }
+        return out;
+    }
+
     std::vector<std::string> frame_stages() const override {
         return {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "microgeom.ellipses_curved", "microgeom.ellipses",
-                "microgeom.scatter_env", "microgeom.scatter", "microgeom.displaced", "microgeom.brdf"};
+                "microgeom.scatter_env", "microgeom.scatter", "microgeom.scatter_directions", "microgeom.displaced", "microgeom.brdf"};
     }
 
     std::shared_ptr<const TriMesh> object_mesh(const Scene&, const Evaluation& ev, int object) const override {
@@ -638,6 +683,7 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
     auto viss = ctx.eval.get<PerObject<Visibility>>("microgeom.visibility");
     auto envs = ctx.eval.get<PerObject<LightScatter>>("microgeom.scatter_env");
     auto lights = ctx.eval.get<PerObject<LightsScatter>>("microgeom.scatter");
+    auto tables = ctx.eval.get<PerObject<DirectionalScatter>>("microgeom.scatter_directions");
     const GBuffer& gb = ctx.gbuffer;
     Image& rad = ctx.frame.aov("radiance");
     Image& nrm = ctx.frame.aov("normal");
@@ -754,7 +800,7 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
             }
 
             // Scattered light: environment part, plus each light's part scaled by its irradiance
-            // (on curved bases: computed for light along the macro normal, scaled by the macro cosine).
+            // (non-planar bases: blended over the spherical triangle of its tangent-space direction).
             vec3 E_ind(0.f);
             const LightScatter* es = envs ? envs->get(obj) : nullptr;
             if (es) E_ind += sample_bilinear(es->result.E_indirect, hf.width, hf.height, true, c, r);
@@ -762,9 +808,13 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
             for (size_t li = 0; ls && li < std::min(ls->lights.size(), ctx.lighting.lights.size()); ++li) {
                 vec3 wi, E;
                 ctx.lighting.lights[li].sample(p, wi, E);
-                const LightScatter& one = ls->lights[li];
-                const float scale = one.planar ? 1.f : std::max(0.f, glm::dot(N, wi));
-                E_ind += sample_bilinear(one.result.E_indirect, hf.width, hf.height, true, c, r) * E * scale;
+                E_ind += sample_bilinear(ls->lights[li].result.E_indirect, hf.width, hf.height, true, c, r) * E;
+            }
+            const DirectionalScatter* table = tables ? tables->get(obj) : nullptr;
+            for (size_t li = 0; table && li < ctx.lighting.lights.size(); ++li) {
+                vec3 wi, E;
+                ctx.lighting.lights[li].sample(p, wi, E);
+                E_ind += table->irradiance(dirs, glm::normalize(to_local(wi)), c, r) * E;
             }
             const vec3 indirect = albedo * kInvPi * E_ind;
             store(x, y, direct + indirect, n, direct, indirect, shadow0);
@@ -886,11 +936,13 @@ std::vector<BenchTable> MicrogeomTechnique::bench_tables() const {
         auto vis = ev.get<PerObject<Visibility>>("microgeom.visibility");
         auto ell = ev.get<PerObject<EllipseMap>>("microgeom.ellipses");
         auto sc = ev.get<PerObject<LightsScatter>>("microgeom.scatter");
+        auto table = ev.get<PerObject<DirectionalScatter>>("microgeom.scatter_directions");
         (void)s;
         const size_t v = vis && vis->get(0) ? vis->get(0)->bytes() : 0, e = ell && ell->get(0) ? ell->get(0)->bytes() : 0;
         size_t l = 0;
         if (sc && sc->get(0))
             for (const LightScatter& one : sc->get(0)->lights) l += one.result.E_indirect.size() * sizeof(vec3);
+        if (table && table->get(0)) l += table->get(0)->bytes();
         return mb(v) + " / " + mb(e) + " / " + mb(l);
     };
     BenchColumn vis_col{"S_i precompute", "microgeom.visibility"};
@@ -940,7 +992,26 @@ std::vector<BenchTable> MicrogeomTechnique::bench_tables() const {
                      apply_set(s, "geometry.type", "sphere");
                      return s;
                  }, {}}};
-    return {t, lod, geo};
+    BenchTable curved_t;
+    curved_t.name = "microgeom-curved";
+    curved_t.title = "Scattering on a non-planar base: Bricks 128x128 on a sphere, 100 directions (50 above the horizon), depth 2";
+    BenchColumn table_col{"scattering for 50 light directions", "microgeom.scatter_directions"};
+    table_col.gpu_set = "microgeom.device=gpu";
+    BenchColumn table_mem;
+    table_mem.name = "memory: scattered light";
+    table_mem.info = [mb](const Scene&, const Evaluation& ev) {
+        auto table = ev.get<PerObject<DirectionalScatter>>("microgeom.scatter_directions");
+        if (!table || !table->get(0)) return std::string("—");
+        return mb(table->get(0)->bytes()) + " (" + std::to_string(table->get(0)->count) + " directions)";
+    };
+    curved_t.columns = {table_col, {"frame 512x512", "", 512, 512, true, true}, table_mem};
+    curved_t.rows = {{"Bricks 128x128 on a sphere", [scene] {
+                          Scene s = scene("bricks", 128, {{"microgeom.shadows", "exact"}})();
+                          apply_set(s, "camera.mode", "orbit");
+                          apply_set(s, "geometry.type", "sphere");
+                          return s;
+                      }, {}}};
+    return {t, lod, geo, curved_t};
 }
 }  // namespace
 }  // namespace mesolab::microgeom

@@ -13,7 +13,9 @@
 //   microgeom.ellipses_curved  ellipses at 5 curvatures      (ellipse_bend)                    shadows = ellipse, curved
 //   microgeom.ellipses         ellipses (fitted, or interpolated at the curvature)             shadows = ellipse
 //   microgeom.scatter_env      environment light scattered   (env.*, depth)                    effects.environment
-//   microgeom.scatter          the first light scattered     (light.*, depth)                  effects.indirect
+//   microgeom.scatter          every light scattered         (light.*, depth)                  effects.indirect, planar bases
+//   microgeom.scatter_directions  light scattered for each direction above the horizon
+//                                 (depth; never the light)                                     effects.indirect, non-planar bases
 //   microgeom.displaced        displaced geometry            (lod, tiling, geometry.*)         lod = geometry (lod.h)
 //   microgeom.brdf             simulated BRDF (goniometer)   (lod, brdf_*, depth, shadows)     lod = brdf (goniometer.h)
 //
@@ -28,9 +30,14 @@
 // applied to the direct light only: L_direct = sum over lights f E max(0, n.wi) V; the scattered
 // and environment light are Lambert, L_indirect = rho/pi E_indirect (shade_cpu, microgeom.frag).
 // Scope (see the issue notes): micro-BRDF Lambertian for every bounce (the Blinn-Phong lobe
-// applies to the direct light seen by the viewer); the scattering solution uses the first light;
-// on non-planar base geometry its light-driven part is computed for light along the macro normal
-// and scaled by the macro cosine (every light gets its own solution); exact shadows ignore the base curvature (ellipse shadows follow it).
+// applies to the direct light seen by the viewer); every light gets its own scattering solution:
+// on a planar base one solve for the light's direction (microgeom.scatter); on a non-planar base
+// (sphere, cylinder, torus, teapot, mesh), where the tangent-space light direction changes from
+// pixel to pixel, the light-driven scattering is tabulated once for the M ~ N/2 set directions
+// above the horizon (microgeom.scatter_directions, DirectionalScatter in scatter.h: M x texels x
+// RGB floats, M solves) and blended per pixel and light over the spherical triangle containing
+// the light's tangent-space direction, as the exact shadows are; moving a light never recomputes
+// it. Exact shadows ignore the base curvature (ellipse shadows follow it).
 #include "core/microgeom/directions.h"
 #include "core/microgeom/heightfield.h"
 #include "core/microgeom/scatter.h"
@@ -45,15 +52,17 @@ namespace mesolab::microgeom {
 
 using mesolab::PerObject;
 
-// The light-driven scattering solution of one object: unit irradiance from `light_dir`.
+// One scattering solution of one object: unit irradiance from `light_dir` (microgeom.scatter), or
+// the environment's (microgeom.scatter_env).
 struct LightScatter {
     ScatterResult result;
     vec3 light_dir{0, 0, 1};  // local frame
-    bool planar = true;       // light_dir is the real light's (plane) or the macro normal (curved base)
 };
 
-// microgeom.scatter: one solution per scene light (same order as Scene::lights), each at unit
-// irradiance; the shaders scale each by its light's irradiance at the pixel.
+// microgeom.scatter (planar bases): one solution per scene light (same order as Scene::lights),
+// each at unit irradiance; the shaders scale each by its light's irradiance at the pixel.
+// Non-planar bases have no entry here: their lights use microgeom.scatter_directions, a
+// PerObject<DirectionalScatter> (scatter.h).
 struct LightsScatter {
     std::vector<LightScatter> lights;
 };

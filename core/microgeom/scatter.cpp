@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <stdexcept>
 
 namespace mesolab::microgeom {
 
@@ -148,7 +149,8 @@ ScatterResult scatter(const Heightfield& hf, const DirectionSet& dirs, const Vis
         return s.gatherer ? s.gatherer->gather(L_prev, J, primary) : gather(L_prev, J, primary);
     };
     const std::vector<std::vector<int>> J = scatter_subsets(s, N);
-    std::vector<vec3> E = run_gather(nullptr, J[0], K == 0);
+    // Without an environment E^0 is 0 (the light-driven solves): the gather is skipped.
+    std::vector<vec3> E = s.env ? run_gather(nullptr, J[0], K == 0) : std::vector<vec3>(T, vec3(0.f));
     for (int k = 1; k <= K; ++k) {
         std::vector<vec3> L(T);
         for (size_t p = 0; p < T; ++p) L[p] = out.direct[p] + hf.albedo[p] * kInvPi * E[p];
@@ -156,6 +158,72 @@ ScatterResult scatter(const Heightfield& hf, const DirectionSet& dirs, const Vis
         if (progress) progress(double(k) / double(K));
     }
     out.E_indirect = std::move(E);
+    return out;
+}
+
+// [SECTION] Scattering tabulated over light directions (non-planar bases)
+namespace {
+// Bilinear, wrapping look-up in one direction's layer (the arithmetic of sample_bilinear).
+vec3 layer_bilinear(const vec3* layer, int w, int h, float c, float r) {
+    const float c0f = std::floor(c), r0f = std::floor(r);
+    const float fc = c - c0f, fr = r - r0f;
+    auto wrap = [](int i, int n) { return ((i % n) + n) % n; };
+    const int c0 = wrap(int(c0f), w), c1 = wrap(int(c0f) + 1, w), r0 = wrap(int(r0f), h), r1 = wrap(int(r0f) + 1, h);
+    auto at = [&](int x, int y) { return layer[size_t(y) * size_t(w) + size_t(x)]; };
+    return (at(c0, r0) * (1.f - fc) + at(c1, r0) * fc) * (1.f - fr) + (at(c0, r1) * (1.f - fc) + at(c1, r1) * fc) * fr;
+}
+constexpr int kDirectionBlock = 8;  // directions solved in parallel between progress calls
+}  // namespace
+
+vec3 DirectionalScatter::irradiance(const DirectionSet& dirs, vec3 l, float c, float r) const {
+    vec3 bary;
+    const auto& tri = dirs.triangles[size_t(dirs.locate(l, bary))];
+    return irradiance(tri, bary, c, r);
+}
+
+vec3 DirectionalScatter::irradiance(const std::array<int, 3>& tri, vec3 bary, float c, float r) const {
+    const size_t T = size_t(width) * size_t(height);
+    vec3 sum(0.f);
+    for (int k = 0; k < 3; ++k)
+        if (tri[size_t(k)] < count) sum += bary[k] * layer_bilinear(E.data() + size_t(tri[size_t(k)]) * T, width, height, c, r);
+    return sum;
+}
+
+int directions_above_horizon(const DirectionSet& dirs) {
+    int m = 0;
+    while (m < dirs.size() && dirs.d[size_t(m)].z > 0.f) ++m;
+    for (int j = m; j < dirs.size(); ++j)
+        if (dirs.d[size_t(j)].z > 0.f) throw std::logic_error("microgeom: the directions above the horizon are not the first of the set");
+    return m;
+}
+
+DirectionalScatter scatter_directions(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, const ScatterSettings& s,
+                                      const std::function<void(double)>& progress) {
+    DirectionalScatter out;
+    out.width = hf.width;
+    out.height = hf.height;
+    out.count = directions_above_horizon(dirs);
+    const size_t T = size_t(hf.width) * size_t(hf.height);
+    out.E.assign(size_t(out.count) * T, vec3(0.f));
+    auto solve = [&](int j) {
+        ScatterSettings st = s;
+        st.light_dir = dirs.d[size_t(j)];
+        st.light_E = vec3(1.f);
+        st.env = nullptr;
+        const ScatterResult r = scatter(hf, dirs, vis, st);
+        std::copy(r.E_indirect.begin(), r.E_indirect.end(), out.E.begin() + std::ptrdiff_t(size_t(j) * T));
+    };
+    if (progress) progress(0.0);
+    const int block = s.gatherer ? 1 : kDirectionBlock;
+    for (int j0 = 0; j0 < out.count; j0 += block) {
+        const int j1 = std::min(out.count, j0 + block);
+        if (s.gatherer) {
+            solve(j0);
+        } else {
+            tbb::parallel_for(j0, j1, [&](int j) { solve(j); });
+        }
+        if (progress) progress(double(j1) / double(out.count));
+    }
     return out;
 }
 }  // namespace mesolab::microgeom

@@ -98,6 +98,40 @@ std::vector<std::vector<int>> scatter_subsets(const ScatterSettings& s, int N);
 ScatterResult scatter(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, const ScatterSettings& s,
                       const std::function<void(double)>& progress = {});
 
+// Light-driven scattering tabulated over light directions, for non-planar bases (where the
+// tangent-space light direction varies from pixel to pixel): for each direction d_j of the set
+// above the horizon (d_j.z > 0), E_j = scatter(...).E_indirect with light_dir = d_j, light_E = 1
+// and no environment, i.e. the light's meaning is the planar solution's: unit irradiance at
+// normal incidence from d_j (the cosines n_q . d_j are inside E_j). On the Fibonacci set
+// (directions.h: z decreasing with the index) those are the first M ~ N/2 directions; directions
+// at or below the horizon hold 0. At shading the light's tangent-space direction l is located in
+// the spherical triangulation as for the exact shadows (DirectionSet::locate), and
+//   E(p, l) = sum_{k < 3} b_k E_{j_k}(p)        (b: barycentrics of l; bilinear over texels)
+// times the light's irradiance (microgeom.frag does the same). At l = d_j it is E_j exactly;
+// between directions, the interpolation error is measured in tests/microgeom/scatter_directions_test.cpp.
+// Memory M x texels x 12 bytes (RGB float): ~9.4 MB for 128x128 and N = 100.
+struct DirectionalScatter {
+    int width = 0, height = 0;
+    int count = 0;           // M: directions 0..M-1 of the set (above the horizon) have a solution
+    std::vector<vec3> E;     // [direction < M][row][column]
+
+    size_t bytes() const { return E.size() * sizeof(vec3); }
+    // E(p, l) at continuous texel coordinates (c, r), wrapping, for unit l in the local frame.
+    vec3 irradiance(const DirectionSet& dirs, vec3 l, float c, float r) const;
+    // The same for l's triangle and barycentrics (DirectionSet::locate) found by the caller.
+    vec3 irradiance(const std::array<int, 3>& tri, vec3 bary, float c, float r) const;
+};
+
+// M: how many leading directions of the set lie above the horizon (throws std::logic_error if
+// those above are not a prefix, i.e. the set is not ordered by decreasing z).
+int directions_above_horizon(const DirectionSet& dirs);
+
+// The table for s (its light_dir, light_E and env ignored): on the CPU, directions in parallel
+// (TBB) in blocks, progress between blocks on the calling thread; with s.gatherer (the GPU), one
+// direction after the other through it.
+DirectionalScatter scatter_directions(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, const ScatterSettings& s,
+                                      const std::function<void(double)>& progress = {});
+
 // Bilinear, wrapping (periodic) or clamped look-up of a per-texel quantity at continuous texel
 // coordinates (c, r) (texel (x, y) at (x, y)).
 template <class T>

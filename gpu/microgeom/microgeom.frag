@@ -3,7 +3,8 @@
 // (core/microgeom/microgeom.cpp). Exact shadows from the visibility textures S_i (a texture
 // array, one layer per direction), the spherical triangle of the light located with a grid
 // guess and a walk across edges (the same triangle and barycentrics as DirectionSet::locate),
-// scattered light from the stages' irradiance textures. All look-ups are texelFetch with the
+// scattered light from the stages' irradiance textures (non-planar bases: blended over the
+// light's triangle from the per-direction table, located as for the shadows). All look-ups are texelFetch with the
 // CPU's bilinear weights, so the two paths agree to rounding.
 #include "common.glsl"
 #include "camera.glsl"
@@ -24,6 +25,8 @@ uniform sampler2D u_normals;    // heightfield normals (local frame), rgb
 uniform sampler2D u_albedo;
 uniform sampler2D u_E_env;      // microgeom.scatter_env: irradiance, rgb
 uniform sampler2D u_E_light;    // microgeom.scatter: irradiance per unit light irradiance, rgb; light i at rows i * u_size.y
+uniform sampler2DArray u_E_dirs;  // microgeom.scatter_directions (non-planar bases): layer j = direction j, j < u_dir_scatters
+uniform int u_dir_scatters;     // M, the directions above the horizon (0: no table)
 uniform sampler2D u_folded;     // microgeom.importance: 1 where the curvature folds the triangulation
 uniform int u_has_folded;
 uniform int u_use_ellipse;      // microgeom.shadows == ellipse
@@ -34,7 +37,7 @@ uniform ivec2 u_size;           // heightfield texels
 uniform ivec2 u_grid;           // grid cells (phi, theta)
 uniform int u_tri_count;
 uniform float u_tiling;
-uniform int u_has_env, u_light_scatters, u_light_planar, u_shadows, u_phong;
+uniform int u_has_env, u_light_scatters, u_shadows, u_phong;
 uniform vec3 u_ks;
 uniform float u_shininess;
 // BRDF level of detail (microgeom.lod = brdf): SimulatedBrdf's table, as SimulatedBrdf::eval.
@@ -105,6 +108,23 @@ float visible(ivec2 t, int tri, vec3 bary, vec3 w) {
     f += bary.y * (texelFetch(u_vis, ivec3(t, v.y), 0).r == 0xFFFFFFFFu ? 1.0 : 0.0);
     f += bary.z * (texelFetch(u_vis, ivec3(t, v.z), 0).r == 0xFFFFFFFFu ? 1.0 : 0.0);
     return f;
+}
+
+// Light-driven irradiance per unit light irradiance from local direction w (microgeom.scatter_directions):
+// the 3 corners of w's triangle, bilinear over the 4 texels, blended with the barycentrics
+// (DirectionalScatter::irradiance; corners at or below the horizon hold 0).
+vec3 directional_irradiance(vec3 w, ivec2 tk[4], float wk[4]) {
+    vec3 bary;
+    ivec4 v = tris[locate(w, bary)];
+    vec3 sum = vec3(0.0);
+    for (int corner = 0; corner < 3; ++corner) {
+        int j = v[corner];
+        if (j >= u_dir_scatters) continue;
+        vec3 e = vec3(0.0);
+        for (int k = 0; k < 4; ++k) e += wk[k] * texelFetch(u_E_dirs, ivec3(wrap(tk[k]), j), 0).rgb;
+        sum += bary[corner] * e;
+    }
+    return sum;
 }
 
 // Table nodes and bilinear weights of a direction (see core/microgeom/goniometer.h).
@@ -232,10 +252,14 @@ void main() {
     for (int i = 0; i < u_light_scatters; ++i) {
         vec3 wi, E;
         light_sample(i, p, wi, E);
-        float scale = u_light_planar != 0 ? 1.0 : max(0.0, dot(N, wi));
         vec3 E_light = vec3(0.0);
         for (int k = 0; k < 4; ++k) E_light += wk[k] * texelFetch(u_E_light, wrap(tk[k]) + ivec2(0, i * u_size.y), 0).rgb;
-        E_ind += E_light * E * scale;
+        E_ind += E_light * E;
+    }
+    for (int i = 0; u_dir_scatters > 0 && i < u_light_count; ++i) {
+        vec3 wi, E;
+        light_sample(i, p, wi, E);
+        E_ind += directional_irradiance(normalize(vec3(dot(wi, T), dot(wi, B), dot(wi, N))), tk, wk) * E;
     }
     vec3 indirect = albedo / PI * E_ind;
     o_radiance = vec4(direct + indirect, 1.0);

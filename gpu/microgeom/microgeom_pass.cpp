@@ -8,6 +8,7 @@
 #include "gpu/renderer.h"
 
 #include <glm/gtc/type_ptr.hpp>
+#include <algorithm>
 #include <map>
 
 namespace mesolab::gpu {
@@ -71,6 +72,7 @@ public:
         auto viss = ctx.eval.get<PerObject<Visibility>>("microgeom.visibility");
         auto envs = ctx.eval.get<PerObject<LightScatter>>("microgeom.scatter_env");
         auto lights = ctx.eval.get<PerObject<LightsScatter>>("microgeom.scatter");
+        auto tables = ctx.eval.get<PerObject<DirectionalScatter>>("microgeom.scatter_directions");
         auto imps = ctx.eval.get<PerObject<Importance>>("microgeom.importance");
         auto ells = ctx.eval.get<PerObject<EllipseMap>>("microgeom.ellipses");
         auto brdfs = ctx.eval.get<PerObject<SimulatedBrdf>>("microgeom.brdf");
@@ -81,6 +83,7 @@ public:
             geometry(hfs->items[size_t(i)], dirss->items[size_t(i)], viss->items[size_t(i)]);
             if (envs && envs->get(i)) irradiance(envs->items[size_t(i)], *hfs->get(i));
             if (lights && lights->get(i)) irradiance_per_light(lights->items[size_t(i)], *hfs->get(i));
+            if (tables && tables->get(i)) irradiance_per_direction(tables->items[size_t(i)]);
             if (imps && imps->get(i)) folded(imps->items[size_t(i)]);
             if (ells && ells->get(i)) ellipses(ells->items[size_t(i)]);
             if (brdfs && brdfs->get(i)) brdf_tables(brdfs->items[size_t(i)]);
@@ -123,7 +126,9 @@ public:
             glUniform1f(program_.uniform("u_tiling"), float(m.get_float("tiling")));
             glUniform1i(program_.uniform("u_has_env"), es ? 1 : 0);
             glUniform1i(program_.uniform("u_light_scatters"), light_scatters);
-            glUniform1i(program_.uniform("u_light_planar"), light_scatters > 0 && ls->lights.front().planar ? 1 : 0);
+            const DirectionalScatter* table = tables ? tables->get(i) : nullptr;
+            program_.bind_texture(11, GL_TEXTURE_2D_ARRAY, table ? irradiance_per_direction(tables->items[size_t(i)]) : 0, "u_E_dirs");
+            glUniform1i(program_.uniform("u_dir_scatters"), table ? table->count : 0);
             glUniform1i(program_.uniform("u_shadows"), m.get_string("shadows") != "none" ? 1 : 0);
             const bool phong = m.get_string("brdf") == "blinn-phong";
             glUniform1i(program_.uniform("u_phong"), phong ? 1 : 0);
@@ -253,6 +258,29 @@ private:
         Irradiance r;
         r.keep = s;
         r.tex = Texture(make_rgb_texture(stacked, hf.width, int(stacked.size() / size_t(hf.width))));
+        return (irradiance_[s.get()] = std::move(r)).tex.get();
+    }
+
+    // microgeom.scatter_directions: one RGBA32F layer per direction above the horizon (at least one layer).
+    GLuint irradiance_per_direction(const std::shared_ptr<const DirectionalScatter>& s) {
+        auto it = irradiance_.find(s.get());
+        if (it != irradiance_.end()) return it->second.tex.get();
+        PROFILE_SCOPE("microgeom.upload_directions");
+        const int layers = std::max(1, s->count);
+        std::vector<float> rgba(size_t(s->width) * size_t(s->height) * size_t(layers) * 4, 0.f);
+        for (size_t k = 0; k < s->E.size(); ++k)
+            for (int c = 0; c < 3; ++c) rgba[k * 4 + size_t(c)] = s->E[k][c];
+        GLuint id = 0;
+        glGenTextures(1, &id);
+        glBindTexture(GL_TEXTURE_2D_ARRAY, id);
+        glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+        glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_RGBA32F, s->width, s->height, layers, 0, GL_RGBA, GL_FLOAT, rgba.data());
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        check_gl("microgeom.upload_directions");
+        Irradiance r;
+        r.keep = s;
+        r.tex = Texture(id);
         return (irradiance_[s.get()] = std::move(r)).tex.get();
     }
 
