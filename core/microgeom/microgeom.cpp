@@ -83,7 +83,8 @@ const std::vector<std::string> kBrdfKeys{"lod", "brdf_fit", "brdf_resolution", "
 constexpr int kMaxDisplacementSegments = 2048;
 
 std::string lod(const SceneObject& o) { return o.material.get_string("lod"); }
-bool any_object(const Scene& s, bool (*pred)(const SceneObject&)) {
+template <class Pred>
+bool any_object(const Scene& s, const Pred& pred) {
     for (const auto& o : s.objects)
         if (o.technique == "microgeom" && pred(o)) return true;
     return false;
@@ -97,6 +98,13 @@ std::vector<std::string> with(std::vector<std::string> a, const std::vector<std:
 }
 
 bool planar(const SceneObject& o) { return o.geometry.get_string("type") == "plane"; }
+bool any_point_light(const Scene& s) {
+    return std::any_of(s.lights.begin(), s.lights.end(), [](const ParamTable& l) { return l.get_string("type") != "directional"; });
+}
+// Whether an object's light-driven scattering is the table over set directions, blended per pixel
+// (scatter_directions): on curved bases, and on planes under a point light, whose direction varies
+// over the plane; else one solve per (directional) light.
+bool direction_table(const Scene& s, const SceneObject& o) { return !planar(o) || any_point_light(s); }
 // The lights' scattering is solved (microgeom.scatter or microgeom.scatter_directions).
 bool wants_light_scatter(const SceneObject& o) { return o.material.get_int("depth") > 0 && lod(o) != "brdf"; }
 
@@ -509,9 +517,9 @@ public:
                .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "microgeom.ellipses"},
                .effects = {"indirect"},
                .when = [](const Scene& s) {
-                   return !s.lights.empty() && any_object(s, [](const SceneObject& o) { return wants_light_scatter(o) && planar(o); });
+                   return !s.lights.empty() && any_object(s, [&](const SceneObject& o) { return wants_light_scatter(o) && !direction_table(s, o); });
                },
-               .when_text = "the scene has a light, microgeom.depth > 0, microgeom.lod is not brdf and the base is a plane",
+               .when_text = "the scene has a light, microgeom.depth > 0, microgeom.lod is not brdf, the base is a plane and every light is directional",
                .paper = PaperFigure{12e3, "Heidrich et al. 2000, Table 1: Bricks 128x128, software render, 100 samples (SGI Octane)"},
                .run = [](StageContext& ctx) {
                    return stage_result(scatter_lights(ctx));
@@ -525,9 +533,9 @@ public:
                .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "microgeom.ellipses"},
                .effects = {"indirect"},
                .when = [](const Scene& s) {
-                   return !s.lights.empty() && any_object(s, [](const SceneObject& o) { return wants_light_scatter(o) && !planar(o); });
+                   return !s.lights.empty() && any_object(s, [&](const SceneObject& o) { return wants_light_scatter(o) && direction_table(s, o); });
                },
-               .when_text = "the scene has a light, microgeom.depth > 0, microgeom.lod is not brdf and the base is not a plane",
+               .when_text = "the scene has a light, microgeom.depth > 0, microgeom.lod is not brdf, and the base is not a plane or a light is a point light",
                .run = [](StageContext& ctx) {
                    return stage_result(scatter_directions_stage(ctx));
                }});
@@ -596,7 +604,7 @@ public:
         const size_t L = ctx.scene.lights.size();
         for (size_t i = 0; i < out.items.size(); ++i) {
             const SceneObject& o = ctx.scene.objects[i];
-            if (!hf->get(int(i)) || !wants_light_scatter(o) || !planar(o)) continue;
+            if (!hf->get(int(i)) || !wants_light_scatter(o) || direction_table(ctx.scene, o)) continue;
             LightsScatter all;
             const auto gatherer = make_gatherer(ctx, o);
             for (size_t li = 0; li < L; ++li) {
@@ -626,7 +634,7 @@ public:
         out.items.resize(ctx.scene.objects.size());
         for (size_t i = 0; i < out.items.size(); ++i) {
             const SceneObject& o = ctx.scene.objects[i];
-            if (!hf->get(int(i)) || !wants_light_scatter(o) || planar(o)) continue;
+            if (!hf->get(int(i)) || !wants_light_scatter(o) || !direction_table(ctx.scene, o)) continue;
             ScatterSettings st = scatter_settings(o.material);
             st.importance = imp ? imp->get(int(i)) : nullptr;
             st.ellipses = ell ? ell->get(int(i)) : nullptr;

@@ -13,9 +13,9 @@
 //   microgeom.ellipses_curved  ellipses at 5 curvatures      (ellipse_bend)                    shadows = ellipse, curved
 //   microgeom.ellipses         ellipses (fitted, or interpolated at the curvature)             shadows = ellipse
 //   microgeom.scatter_env      environment light scattered   (env.*, depth)                    effects.environment
-//   microgeom.scatter          every light scattered         (light.*, depth)                  effects.indirect, planar bases
+//   microgeom.scatter          every light scattered         (light.*, depth)                  effects.indirect, planes, directional lights
 //   microgeom.scatter_directions  light scattered for each direction above the horizon
-//                                 (depth; never the light)                                     effects.indirect, non-planar bases
+//                                 (depth; never the light)                                     effects.indirect, non-planar bases, point lights
 //   microgeom.displaced        displaced geometry            (lod, tiling, geometry.*)         lod = geometry (lod.h)
 //   microgeom.brdf             simulated BRDF (goniometer)   (lod, brdf_*, depth, shadows)     lod = brdf (goniometer.h)
 //
@@ -31,9 +31,9 @@
 // and environment light are Lambert, L_indirect = rho/pi E_indirect (shade_cpu, microgeom.frag).
 // Scope (see the issue notes): micro-BRDF Lambertian for every bounce (the Blinn-Phong lobe
 // applies to the direct light seen by the viewer); every light gets its own scattering solution:
-// on a planar base one solve for the light's direction (microgeom.scatter); on a non-planar base
-// (sphere, cylinder, torus, teapot, mesh), where the tangent-space light direction changes from
-// pixel to pixel, the light-driven scattering is tabulated once for the M ~ N/2 set directions
+// on a planar base under directional lights one solve for each light's direction
+// (microgeom.scatter); on a non-planar base (sphere, cylinder, torus, teapot, mesh) or under a point
+// light, where the tangent-space light direction changes from pixel to pixel, the light-driven scattering is tabulated once for the M ~ N/2 set directions
 // above the horizon (microgeom.scatter_directions, DirectionalScatter in scatter.h: M x texels x
 // RGB floats, M solves) and blended per pixel and light over the spherical triangle containing
 // the light's tangent-space direction, as the exact shadows are; moving a light never recomputes
@@ -59,9 +59,9 @@ struct LightScatter {
     vec3 light_dir{0, 0, 1};  // local frame
 };
 
-// microgeom.scatter (planar bases): one solution per scene light (same order as Scene::lights),
+// microgeom.scatter (planar bases, directional lights only): one solution per scene light (same order as Scene::lights),
 // each at unit irradiance; the shaders scale each by its light's irradiance at the pixel.
-// Non-planar bases have no entry here: their lights use microgeom.scatter_directions, a
+// Non-planar bases and scenes with a point light have no entry here: they use microgeom.scatter_directions, a
 // PerObject<DirectionalScatter> (scatter.h).
 struct LightsScatter {
     std::vector<LightScatter> lights;

@@ -199,6 +199,33 @@ TEST(ScatterDirections, PlanarBasesKeepTheirPerLightSolve) {
     EXPECT_EQ(r.eval.run("microgeom.scatter_directions")->status, StageStatus::Skipped);
 }
 
+// A point light's direction varies over the plane: the plane then takes the table too, so each
+// texel scatters the light arriving from its own direction (the per-light solve could only take one
+// direction, from the plane's centre). Moving the light reuses the table and changes the image.
+TEST(ScatterDirections, PointLightsOnAPlaneUseTheTable) {
+    Workbench wb;
+    Scene s = small_sphere();
+    apply_set(s, "geometry.type=plane");
+    apply_set(s, "camera.mode=texture");
+    apply_set(s, "light.type=point");
+    apply_set(s, "light.position=0,0,0.6");
+    const RenderResult r = render(wb, s);
+    EXPECT_EQ(r.eval.run("microgeom.scatter")->status, StageStatus::Skipped);
+    EXPECT_EQ(r.eval.run("microgeom.scatter_directions")->status, StageStatus::Ran);
+    const Image& ind = r.frame.aov("indirect");
+    double sum = 0.0;
+    for (float v : ind.data) {
+        ASSERT_TRUE(std::isfinite(v));
+        sum += v;
+    }
+    EXPECT_GT(sum, 0.0);
+    // Moving the point light reuses the table.
+    apply_set(s, "light.position=0.3,0.2,0.5");
+    const RenderResult moved = render(wb, s);
+    EXPECT_EQ(moved.eval.run("microgeom.scatter_directions")->status, StageStatus::Cached);
+    EXPECT_NE(moved.frame.aov("indirect").data, ind.data);
+}
+
 // The frame's scattered light on a sphere: the GLSL blend (microgeom.frag) against shade_cpu.
 TEST(ScatterDirections, CpuAndGpuAgreeOnASphere) {
     Workbench wb;
