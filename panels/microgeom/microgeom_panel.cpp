@@ -66,6 +66,15 @@ void register_microgeom_panel(PanelRegistry& r) {
             ImGui::TextDisabled("moving the light or the view never recomputes S_i (see Timings)");
             ImGui::TreePop();
         }
+        // Environment (the scene's, also in the Scene panel): looked up wherever a visibility ray
+        // leaves the heightfield; effects.environment / effects.indirect switch the stages on.
+        if (ImGui::TreeNodeEx("Environment and effects")) {
+            ImGui::PushID("mg-env");
+            param_table_widgets(ctx.scene.env, ctx.dirty, "##mg");
+            param_table_widgets(ctx.scene.effects, ctx.dirty, "##mg");
+            ImGui::PopID();
+            ImGui::TreePop();
+        }
         // Only while the three spheres are still there (a preset loaded since forgets the way back).
         if (saved_scene() && !(ctx.scene.objects.size() == 3 && ctx.scene.objects[0].name == "lod-geometry")) saved_scene().reset();
         if (saved_scene()) {
