@@ -169,25 +169,31 @@ float NoiseCdfs::input(int k, int channel, float r) const {
     return g[0] + t * (g[1] - g[0]);
 }
 
+namespace {
+// The first k octaves' sums T (both channels) and amplitude A at uv (wrapped).
+void octave_sums(const NoiseOctaves& oc, vec2 uv, int k, vec2& T, float& A) {
+    T = vec2(0.f);
+    A = 0.f;
+    for (int o = 0; o < k; ++o) {
+        T += octave_pair(oc, uv, o);
+        A += oc.gain[o];
+    }
+}
+}  // namespace
+
 vec2 noise_inputs(const NoiseCdfs& cdfs, vec2 uv, int k) {
     uv = wrap_uv(uv);
-    vec2 T(0.f);
-    float A = 0.f;
-    for (int o = 0; o < k; ++o) {
-        T += octave_pair(cdfs.octaves, uv, o);
-        A += cdfs.octaves.gain[o];
-    }
+    vec2 T;
+    float A;
+    octave_sums(cdfs.octaves, uv, k, T, A);
     return {cdfs.input(k, 0, to_unit(T.x, A)), cdfs.input(k, 1, to_unit(T.y, A))};
 }
 
 void noise_inputs_fading(const NoiseCdfs& cdfs, vec2 uv, int k, vec2& coarse, vec2& fine) {
     uv = wrap_uv(uv);
-    vec2 T(0.f);
-    float A = 0.f;
-    for (int o = 0; o < k; ++o) {
-        T += octave_pair(cdfs.octaves, uv, o);
-        A += cdfs.octaves.gain[o];
-    }
+    vec2 T;
+    float A;
+    octave_sums(cdfs.octaves, uv, k, T, A);
     if (k > 0) coarse = {cdfs.input(k, 0, to_unit(T.x, A)), cdfs.input(k, 1, to_unit(T.y, A))};
     T += octave_pair(cdfs.octaves, uv, k);
     A += cdfs.octaves.gain[k];

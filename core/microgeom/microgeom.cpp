@@ -553,12 +553,12 @@ public:
         }
     }
 
-    // scatter() on the gatherer in st (the GPU), or on the CPU with a warning where the GPU fails.
-    static ScatterResult scatter_on(StageContext& ctx, const SceneObject& o, const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis,
-                                    ScatterSettings st, const std::function<void(double)>& progress) {
+    // solve(st) on the gatherer in st (the GPU), or on the CPU with a warning where the GPU fails.
+    template <class Solve>
+    static auto on_gpu_or_cpu(StageContext& ctx, const SceneObject& o, ScatterSettings st, const Solve& solve) {
         if (st.gatherer) {
             try {
-                return scatter(hf, dirs, vis, st, progress);
+                return solve(st);
             } catch (const Cancelled&) {
                 throw;
             } catch (const InputError&) {
@@ -568,7 +568,12 @@ public:
                 st.gatherer = nullptr;
             }
         }
-        return scatter(hf, dirs, vis, st, progress);
+        return solve(st);
+    }
+
+    static ScatterResult scatter_on(StageContext& ctx, const SceneObject& o, const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis,
+                                    const ScatterSettings& st, const std::function<void(double)>& progress) {
+        return on_gpu_or_cpu(ctx, o, st, [&](const ScatterSettings& s) { return scatter(hf, dirs, vis, s, progress); });
     }
 
     // The environment's scattering solution per object.
@@ -639,24 +644,12 @@ public:
             st.importance = imp ? imp->get(int(i)) : nullptr;
             st.ellipses = ell ? ell->get(int(i)) : nullptr;
             const auto progress = [&](double f) { ctx.progress((double(i) + f) / double(out.items.size())); };
-            const auto solve = [&] { return scatter_directions(*hf->get(int(i)), *dirs->get(int(i)), *vis->get(int(i)), st, progress); };
             const auto gatherer = make_gatherer(ctx, o);
-            std::optional<DirectionalScatter> table;
-            if (gatherer) {
-                st.gatherer = gatherer.get();
-                try {
-                    table = solve();
-                } catch (const Cancelled&) {
-                    throw;
-                } catch (const InputError&) {
-                    throw;
-                } catch (const std::runtime_error& e) {
-                    ctx.warn(o.name + ": scattering computed on the CPU: the GPU could not (" + first_line(e.what()) + ")");
-                }
-                st.gatherer = nullptr;
-            }
-            if (!table) table = solve();
-            out.items[i] = std::make_shared<const DirectionalScatter>(std::move(*table));
+            st.gatherer = gatherer.get();
+            DirectionalScatter table = on_gpu_or_cpu(ctx, o, st, [&](const ScatterSettings& s) {
+                return scatter_directions(*hf->get(int(i)), *dirs->get(int(i)), *vis->get(int(i)), s, progress);
+            });
+            out.items[i] = std::make_shared<const DirectionalScatter>(std::move(table));
         }
         return out;
     }
