@@ -51,12 +51,6 @@ bool index_mode(const SceneObject& o) { return from_bump_map(o) && o.material.ge
 bool noise_inputs_needed(const SceneObject& o) { return !index_mode(o); }
 bool texture_noise(const SceneObject& o) { return !index_mode(o) && o.material.get_string("noise") == "texture"; }
 bool masking(const SceneObject& o) { return o.material.get_bool("masking"); }
-
-Lobe lobe_of(const std::string& kind, vec2 alpha, float rotation, float weight) {
-    if (kind == "ggx") return Lobe::ggx(alpha.x, alpha.y, rotation, weight);
-    if (kind == "ward") return Lobe::ward(alpha.x, alpha.y, rotation, weight);
-    return Lobe::beckmann(alpha.x, alpha.y, rotation, weight);
-}
 }  // namespace
 
 // [SECTION] Materials
@@ -107,7 +101,9 @@ Ndf ndf_from_material(const Scene& s, const ParamTable& m, const BumpNormals* no
             throw InputError(path + ": " + e.what());
         }
     }
-    return Ndf::from_lobe(lobe_of(kind, alpha, rotation, 1.f), R);
+    LobeKind k = LobeKind::beckmann;
+    lobe_kind(kind, k);  // beckmann, ggx or ward: the enum's remaining choices
+    return Ndf::from_lobe(Lobe::anisotropic(k, alpha.x, alpha.y, rotation), R);
 }
 
 NoiseParams noise_from_material(const ParamTable& m) {

@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 
 namespace mesolab::bumpsynth {
@@ -215,6 +216,7 @@ Lobe Lobe::ggx(float ax, float ay, float rot, float w) { return anisotropic(Lobe
 Lobe Lobe::ward(float ax, float ay, float rot, float w) { return anisotropic(LobeKind::ward, ax, ay, rot, w); }
 
 Lobe Lobe::anisotropic(LobeKind kind, float ax, float ay, float rot, float w) {
+    if (kind == LobeKind::blinn_phong) throw std::logic_error("Lobe::anisotropic: Blinn-Phong takes an exponent (Lobe::blinn_phong)");
     check_alpha("bumpsynth.alpha_x", ax);
     check_alpha("bumpsynth.alpha_y", ay);
     check_rotation(rot);
@@ -532,7 +534,8 @@ private:
         while (pos_ < t_.size() && std::isalpha(static_cast<unsigned char>(t_[pos_]))) ++pos_;
         const std::string kind(t_.substr(b, pos_ - b));
         if (kind.empty()) fail("expected a lobe: phong, beckmann, ggx or ward");
-        if (kind != "phong" && kind != "beckmann" && kind != "ggx" && kind != "ward") {
+        LobeKind k = LobeKind::beckmann;
+        if (!lobe_kind(kind, k)) {
             pos_ = b;
             fail("unknown lobe '" + kind + "' (expected phong, beckmann, ggx or ward)");
         }
@@ -545,11 +548,8 @@ private:
         if (a.size() > most) fail(kind + " takes " + (kind == "phong" ? std::string("1 parameter (the exponent)") : "1 to 3 parameters (alpha_x, alpha_y, rotation)") +
                                   ", got " + std::to_string(a.size()));
         try {
-            if (kind == "phong") return Lobe::blinn_phong(float(a[0]), float(w));
-            const float ax = float(a[0]), ay = float(a.size() > 1 ? a[1] : a[0]), rot = float(a.size() > 2 ? a[2] : 0.0);
-            if (kind == "ggx") return Lobe::ggx(ax, ay, rot, float(w));
-            if (kind == "ward") return Lobe::ward(ax, ay, rot, float(w));
-            return Lobe::beckmann(ax, ay, rot, float(w));
+            if (k == LobeKind::blinn_phong) return Lobe::blinn_phong(float(a[0]), float(w));
+            return Lobe::anisotropic(k, float(a[0]), float(a.size() > 1 ? a[1] : a[0]), float(a.size() > 2 ? a[2] : 0.0), float(w));
         } catch (const InputError& e) {
             std::string msg = e.what();
             if (msg.rfind("bumpsynth.", 0) == 0) msg = msg.substr(10);  // the lobe's own field, not a key
@@ -567,6 +567,25 @@ std::string short_number(double v) {
     return buf;
 }
 }  // namespace
+
+const char* lobe_name(LobeKind kind) {
+    switch (kind) {
+        case LobeKind::blinn_phong: return "phong";
+        case LobeKind::beckmann: return "beckmann";
+        case LobeKind::ggx: return "ggx";
+        case LobeKind::ward: return "ward";
+    }
+    return "beckmann";
+}
+
+bool lobe_kind(std::string_view name, LobeKind& kind) {
+    for (LobeKind k : {LobeKind::blinn_phong, LobeKind::beckmann, LobeKind::ggx, LobeKind::ward})
+        if (name == lobe_name(k)) {
+            kind = k;
+            return true;
+        }
+    return false;
+}
 
 std::vector<Lobe> parse_lobes(std::string_view text) {
     std::vector<Lobe> lobes = LobeParser(text).parse();
@@ -588,7 +607,7 @@ std::string lobes_syntax_error(const std::string& text) {
 std::string format_lobe(const Lobe& l) {
     std::string s = l.weight() == 1.f ? "" : short_number(l.weight()) + " * ";
     if (l.kind() == LobeKind::blinn_phong) return s + "phong(" + short_number(l.exponent()) + ")";
-    s += l.kind() == LobeKind::ggx ? "ggx(" : l.kind() == LobeKind::ward ? "ward(" : "beckmann(";
+    s += std::string(lobe_name(l.kind())) + "(";
     s += short_number(l.alpha_x());
     if (l.alpha_y() != l.alpha_x() || l.rotation_deg() != 0.f) s += ", " + short_number(l.alpha_y());
     if (l.rotation_deg() != 0.f) s += ", " + short_number(l.rotation_deg());

@@ -76,6 +76,8 @@ public:
     static Lobe beckmann(float alpha_x, float alpha_y, float rotation_deg = 0.f, float weight = 1.f);
     static Lobe ggx(float alpha_x, float alpha_y, float rotation_deg = 0.f, float weight = 1.f);
     static Lobe ward(float alpha_x, float alpha_y, float rotation_deg = 0.f, float weight = 1.f);
+    // Beckmann, GGX or Ward by kind (blinn_phong: std::logic_error; it takes an exponent).
+    static Lobe anisotropic(LobeKind kind, float alpha_x, float alpha_y, float rotation_deg = 0.f, float weight = 1.f);
 
     LobeKind kind() const { return kind_; }
     float exponent() const { return exponent_; }      // Blinn-Phong only
@@ -91,11 +93,14 @@ public:
     double D_xy(double x, double y) const;
 
 private:
-    static Lobe anisotropic(LobeKind kind, float alpha_x, float alpha_y, float rotation_deg, float weight);
     LobeKind kind_ = LobeKind::beckmann;
     float exponent_ = 0.f, alpha_x_ = 1.f, alpha_y_ = 1.f, rotation_deg_ = 0.f, weight_ = 1.f;
     double cos_ = 1.0, sin_ = 0.0, ward_k_ = 0.0;
 };
+
+// The names of the kinds in parameters and lobe lists: phong, beckmann, ggx, ward.
+const char* lobe_name(LobeKind kind);
+bool lobe_kind(std::string_view name, LobeKind& kind);  // false for an unknown name
 
 // Closed form of a weighted sum, Σ w_i D_i(m) / Σ w_i (InputError if empty or Σ w_i = 0).
 double D(const std::vector<Lobe>& lobes, vec3 m);

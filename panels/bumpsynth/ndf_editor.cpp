@@ -212,31 +212,14 @@ std::vector<bumpsynth::Lobe> lobe_list(const ParamTable& m) {
     const std::string kind = m.get_string("ndf");
     const float ax = float(m.get_float("alpha_x")), ay = float(m.get_float("alpha_y")), rot = float(m.get_float("rotation"));
     try {
-        if (kind == "phong") return {Lobe::blinn_phong(float(m.get_float("exponent")))};
-        if (kind == "beckmann") return {Lobe::beckmann(ax, ay, rot)};
-        if (kind == "ggx") return {Lobe::ggx(ax, ay, rot)};
-        if (kind == "ward") return {Lobe::ward(ax, ay, rot)};
         if (kind == "lobes") return bumpsynth::parse_lobes(m.get_string("lobes"));
+        bumpsynth::LobeKind k = bumpsynth::LobeKind::beckmann;
+        if (!bumpsynth::lobe_kind(kind, k)) return {};  // image, normal_map, heightfield: no lobes
+        if (k == bumpsynth::LobeKind::blinn_phong) return {Lobe::blinn_phong(float(m.get_float("exponent")))};
+        return {Lobe::anisotropic(k, ax, ay, rot)};
     } catch (const InputError&) {
     }
     return {};
-}
-
-const char* kind_name(bumpsynth::LobeKind k) {
-    switch (k) {
-        case bumpsynth::LobeKind::blinn_phong: return "phong";
-        case bumpsynth::LobeKind::beckmann: return "beckmann";
-        case bumpsynth::LobeKind::ggx: return "ggx";
-        case bumpsynth::LobeKind::ward: return "ward";
-    }
-    return "beckmann";
-}
-
-bumpsynth::Lobe make_lobe(bumpsynth::LobeKind k, float ax, float ay, float rot, float w) {
-    using bumpsynth::Lobe;
-    if (k == bumpsynth::LobeKind::ggx) return Lobe::ggx(ax, ay, rot, w);
-    if (k == bumpsynth::LobeKind::ward) return Lobe::ward(ax, ay, rot, w);
-    return Lobe::beckmann(ax, ay, rot, w);
 }
 
 // The lobe a new one starts from: a narrow anisotropic GGX at half weight.
@@ -252,7 +235,7 @@ void set_lobe_list(ParamTable& m, const std::vector<bumpsynth::Lobe>& lobes) {
     const bumpsynth::Lobe& l = lobes.front();
     // The list's text holds 6 significant digits: so do the keys (no float noise like 0.1199999973).
     const auto exact = [](float v) { return round_significant(double(v), 6); };
-    m.set("ndf", std::string(kind_name(l.kind())));
+    m.set("ndf", std::string(bumpsynth::lobe_name(l.kind())));
     if (l.kind() == bumpsynth::LobeKind::blinn_phong) {
         m.set("exponent", exact(l.exponent()));
         return;
@@ -267,7 +250,7 @@ std::vector<LobeShape> lobes_of(const ParamTable& m) {
     std::vector<LobeShape> out;
     for (const bumpsynth::Lobe& l : lobe_list(m)) {
         if (l.kind() == bumpsynth::LobeKind::blinn_phong) out.push_back({"phong", vec2(phong_alpha(l.exponent())), 0.f});
-        else out.push_back({kind_name(l.kind()), vec2(l.alpha_x(), l.alpha_y()), l.rotation_deg()});
+        else out.push_back({bumpsynth::lobe_name(l.kind()), vec2(l.alpha_x(), l.alpha_y()), l.rotation_deg()});
     }
     return out;
 }
@@ -318,13 +301,13 @@ bool drag_handle(ParamTable& m, const Handle& h, vec2 p, Dirty& dirty) {
         const ParamDecl& d = *m.group().find("rotation");
         while (deg > d.max) deg -= 360.0;
         while (deg < d.min) deg += 360.0;
-        return commit("rotation", deg, make_lobe(l.kind(), l.alpha_x(), l.alpha_y(), float(deg), l.weight()));
+        return commit("rotation", deg, bumpsynth::Lobe::anisotropic(l.kind(), l.alpha_x(), l.alpha_y(), float(deg), l.weight()));
     }
     const bool along_x = h.kind == HandleKind::alpha_x;
     const double along = std::fabs(double(glm::dot(p, along_x ? ex : ey)));
     const double a = clamp_to(m, "alpha_x", round_significant(std::max(along, 1e-4), 4));
     return commit(along_x ? "alpha_x" : "alpha_y", a,
-                  make_lobe(l.kind(), along_x ? float(a) : l.alpha_x(), along_x ? l.alpha_y() : float(a), l.rotation_deg(), l.weight()));
+                  bumpsynth::Lobe::anisotropic(l.kind(), along_x ? float(a) : l.alpha_x(), along_x ? l.alpha_y() : float(a), l.rotation_deg(), l.weight()));
 }
 
 bool can_add_lobe(const ParamTable& m) { return !lobe_list(m).empty(); }
