@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <thread>
 
@@ -18,6 +19,7 @@ namespace {
 
 struct Cell {
     std::string table, row, column, device;
+    std::string step;  // a frame step's own row under the frame column ("" for the cell itself)
     double median = 0, min = 0, max = 0;
     std::optional<double> paper;
     std::string info;  // report columns (BenchColumn::info): the text, no timing
@@ -69,6 +71,8 @@ int run_bench(const BenchOptions& o) {
     }
 
     Workbench wb;
+    wb.session().set_memory_limit(memory_limit_bytes(o.memory_limit));
+    Session& session = wb.session();
     const bool want_gpu = o.backend != "cpu", want_cpu = o.backend != "gpu";
     std::string gl = "none";
     if (want_gpu) {
@@ -79,7 +83,17 @@ int run_bench(const BenchOptions& o) {
         }
     }
     const std::string machine = cpu_model() + ", " + std::to_string(std::thread::hardware_concurrency()) + " threads; GL: " + gl;
-    StageGraph& graph = wb.stages();
+    // A stage's time in an evaluation: the sum over the objects it ran for.
+    const auto stage_ms = [](const Evaluation& ev, const std::string& stage) {
+        double ms = 0;
+        for (const StageRun* r : ev.runs_of(stage)) ms += r->ms;
+        return ms;
+    };
+    const auto stage_warning = [](const Evaluation& ev, const std::string& stage) -> std::string {
+        for (const StageRun* r : ev.runs_of(stage))
+            if (!r->warnings.empty()) return r->warnings.front();
+        return {};
+    };
 
     std::vector<Cell> cells;
     for (const auto& t : tables) {
@@ -88,14 +102,17 @@ int run_bench(const BenchOptions& o) {
             for (size_t ci = 0; ci < t.columns.size(); ++ci) {
                 const BenchColumn& col = t.columns[ci];
                 const std::optional<double> paper = ci < row.paper_ms.size() ? row.paper_ms[ci] : std::nullopt;
-                auto add = [&](const char* device, const std::vector<double>& v) {
-                    Cell c{t.name, row.name, col.name, device, median_of(v), *std::min_element(v.begin(), v.end()), *std::max_element(v.begin(), v.end()), paper};
+                auto add = [&](const char* device, const std::vector<double>& v, const std::string& step = "") {
+                    if (v.empty()) return;
+                    Cell c{t.name, row.name, col.name, device, step, median_of(v), *std::min_element(v.begin(), v.end()), *std::max_element(v.begin(), v.end()),
+                           step.empty() ? paper : std::nullopt};
                     cells.push_back(c);
-                    std::fprintf(stderr, "  %-10s %-22s %-22s %-4s %s\n", t.name.c_str(), row.name.c_str(), col.name.c_str(), device, fmt_ms(c.median).c_str());
+                    std::fprintf(stderr, "  %-10s %-22s %-22s %-4s %s\n", t.name.c_str(), (step.empty() ? row.name : row.name + " / " + step).c_str(), col.name.c_str(),
+                                 device, fmt_ms(c.median).c_str());
                 };
                 if (col.info) {
-                    const Evaluation ev = graph.evaluate(scene, Registry::instance().frame_stages(scene));
-                    Cell c{t.name, row.name, col.name, "-", 0, 0, 0, std::nullopt, col.info(scene, ev)};
+                    const Evaluation ev = session.evaluate_frame(scene);
+                    Cell c{t.name, row.name, col.name, "-", "", 0, 0, 0, std::nullopt, col.info(scene, ev)};
                     std::fprintf(stderr, "  %-10s %-22s %-22s %s\n", t.name.c_str(), row.name.c_str(), col.name.c_str(), c.info.c_str());
                     cells.push_back(c);
                     continue;
@@ -107,18 +124,23 @@ int run_bench(const BenchOptions& o) {
                         if ((gpu && (col.gpu_set.empty() || !want_gpu)) || (!gpu && !want_cpu)) continue;
                         Scene on = scene;
                         if (gpu) apply_set(on, col.gpu_set);
-                        const Evaluation first = graph.evaluate(on, {col.stage});
-                        if (gpu && !first.run(col.stage)->warnings.empty()) {
+                        session.cache().invalidate(col.stage);
+                        const Evaluation first = session.evaluate(on, {col.stage});
+                        if (first.runs_of(col.stage).empty() || first.run(col.stage)->status != StageStatus::Ran) {
+                            std::fprintf(stderr, "  %-10s %-22s %-22s %-4s not measured: the stage did not run for this row\n", t.name.c_str(), row.name.c_str(),
+                                         col.name.c_str(), gpu ? "gpu" : "cpu");
+                            continue;
+                        }
+                        if (gpu && !stage_warning(first, col.stage).empty()) {
                             std::fprintf(stderr, "  %-10s %-22s %-22s gpu  not measured: %s\n", t.name.c_str(), row.name.c_str(), col.name.c_str(),
-                                         first.run(col.stage)->warnings.front().c_str());
+                                         stage_warning(first, col.stage).c_str());
                             continue;
                         }
                         // A stage that took over kSlowMs on its first run is timed by that run alone.
-                        const double first_ms = first.run(col.stage)->ms;
+                        const double first_ms = stage_ms(first, col.stage);
                         add(gpu ? "gpu" : "cpu", first_ms > kSlowMs ? std::vector<double>{first_ms} : time_runs(o.repeat, [&] {
-                            graph.invalidate(col.stage);
-                            const Evaluation ev = graph.evaluate(on, {col.stage});
-                            return ev.run(col.stage)->ms;
+                            session.cache().invalidate(col.stage);
+                            return stage_ms(session.evaluate(on, {col.stage}), col.stage);
                         }));
                     }
                     continue;
@@ -130,8 +152,19 @@ int run_bench(const BenchOptions& o) {
                     req.backend = gpu ? Backend::Gpu : Backend::Cpu;
                     req.width = col.frame_width;
                     req.height = col.frame_height;
+                    req.aovs = {"radiance"};
                     wb.render(scene, req);  // warm-up: stages cached, GPU resources built
-                    add(gpu ? "gpu" : "cpu", time_runs(o.repeat, [&] { return wb.render(scene, req).render_ms; }));
+                    // Frame steps (offscreen work before the frame) get rows of their own. They are
+                    // timed from scratch in every run: their reuse between frames is disabled here.
+                    std::map<std::string, std::vector<double>> steps;
+                    add(gpu ? "gpu" : "cpu", time_runs(o.repeat, [&] {
+                        wb.forget_frame_steps();
+                        const RenderResult r = wb.render(scene, req);
+                        for (const auto& st : r.frame.steps)
+                            if (std::isfinite(st.ms)) steps[st.name].push_back(st.ms);
+                        return r.render_ms;
+                    }));
+                    for (const auto& [name, v] : steps) add(gpu ? "gpu" : "cpu", v, name);
                 }
             }
         }
@@ -143,7 +176,7 @@ int run_bench(const BenchOptions& o) {
         out << "table,row,column,device,median_ms,min_ms,max_ms,paper_ms,paper_over_ours\n";
         for (const auto& c : cells)
             if (!c.info.empty()) out << c.table << ",\"" << c.row << "\",\"" << c.column << "\",info,,,,,\"" << c.info << "\"\n";
-            else out << c.table << ",\"" << c.row << "\",\"" << c.column << "\"," << c.device << "," << c.median << "," << c.min << "," << c.max << ","
+            else out << c.table << ",\"" << (c.step.empty() ? c.row : c.row + " / step " + c.step) << "\",\"" << c.column << "\"," << c.device << "," << c.median << "," << c.min << "," << c.max << ","
                 << (c.paper ? std::to_string(*c.paper) : "") << "," << (c.paper ? std::to_string(*c.paper / c.median) : "") << "\n";
     } else if (o.format == "json") {
         json j;
@@ -153,6 +186,7 @@ int run_bench(const BenchOptions& o) {
         j["cells"] = json::array();
         for (const auto& c : cells) {
             json x{{"table", c.table}, {"row", c.row}, {"column", c.column}};
+            if (!c.step.empty()) x["step"] = c.step;
             if (!c.info.empty()) {
                 x["info"] = c.info;
                 j["cells"].push_back(x);
@@ -175,37 +209,46 @@ int run_bench(const BenchOptions& o) {
             out << "\n|---|";
             for (size_t i = 0; i < t.columns.size(); ++i) out << "---|";
             out << "\n";
+            // One line per row, then one per frame step of that row ("↳ step NAME"), its time under the frame column.
             for (const auto& row : t.rows) {
-                out << "| " << row.name << " |";
-                for (const auto& col : t.columns) {
-                    std::string cell;
-                    std::optional<double> paper;
-                    for (const auto& c : cells) {
-                        if (c.table != t.name || c.row != row.name || c.column != col.name) continue;
-                        if (!c.info.empty()) {
-                            cell = c.info;
-                            continue;
+                std::vector<std::string> row_steps{""};
+                for (const auto& c : cells)
+                    if (c.table == t.name && c.row == row.name && !c.step.empty() &&
+                        std::find(row_steps.begin(), row_steps.end(), c.step) == row_steps.end())
+                        row_steps.push_back(c.step);
+                for (const std::string& step : row_steps) {
+                    out << "| " << (step.empty() ? row.name : "↳ step " + step) << " |";
+                    for (const auto& col : t.columns) {
+                        std::string cell;
+                        std::optional<double> paper;
+                        for (const auto& c : cells) {
+                            if (c.table != t.name || c.row != row.name || c.column != col.name || c.step != step) continue;
+                            if (!c.info.empty()) {
+                                cell = c.info;
+                                continue;
+                            }
+                            cell += (cell.empty() ? "" : "<br>") + std::string(c.device == "gpu" ? "GPU " : "CPU ") + fmt_ms(c.median) + " [" + fmt_ms(c.min) +
+                                    "–" + fmt_ms(c.max) + "]";
+                            paper = c.paper;
                         }
-                        cell += (cell.empty() ? "" : "<br>") + std::string(c.device == "gpu" ? "GPU " : "CPU ") + fmt_ms(c.median) + " [" + fmt_ms(c.min) + "–" +
-                                fmt_ms(c.max) + "]";
-                        paper = c.paper;
+                        if (paper) {
+                            double best = 1e300;
+                            for (const auto& c : cells)
+                                if (c.table == t.name && c.row == row.name && c.column == col.name && c.step == step && c.info.empty())
+                                    best = std::min(best, c.median);
+                            char r[64];
+                            std::snprintf(r, sizeof r, " (×%.3g faster)", *paper / best);
+                            cell += "<br>paper " + fmt_ms(*paper) + r;
+                        }
+                        out << " " << (cell.empty() ? (step.empty() ? "—" : "") : cell) << " |";
                     }
-                    if (paper) {
-                        double best = 1e300;
-                        for (const auto& c : cells)
-                            if (c.table == t.name && c.row == row.name && c.column == col.name && c.info.empty()) best = std::min(best, c.median);
-                        char r[64];
-                        std::snprintf(r, sizeof r, " (×%.3g faster)", *paper / best);
-                        cell += "<br>paper " + fmt_ms(*paper) + r;
-                    }
-                    out << " " << (cell.empty() ? "—" : cell) << " |";
+                    out << "\n";
                 }
-                out << "\n";
             }
             out << "\n";
         }
     }
-    if (o.profile) print_profile();
+    if (o.profile) print_profile(session.profiler());
     if (o.out.empty()) {
         std::fputs(out.str().c_str(), stdout);
     } else {

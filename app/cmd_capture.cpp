@@ -8,6 +8,7 @@
 #include "core/technique.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -48,6 +49,8 @@ std::vector<std::string> expand_presets(const std::vector<std::string>& args) {
     return files;
 }
 
+uint64_t memory_limit_bytes(const std::string& text) { return text.empty() ? 0 : parse_memory_size(text); }
+
 namespace {
 
 Image radiance_rgb(const Frame& f) { return f.aov("radiance"); }
@@ -64,6 +67,10 @@ json sidecar(const Scene& s, const std::string& file, const RenderResult& r, con
     for (const auto& run : r.eval.runs) {
         json st;
         st["name"] = run.name;
+        if (run.object >= 0) {
+            st["object"] = run.object;
+            st["object_name"] = s.objects[size_t(run.object)].name;
+        }
         st["status"] = to_string(run.status);
         st["ms"] = run.ms;
         if (!run.reason.empty()) st["reason"] = run.reason;
@@ -71,22 +78,33 @@ json sidecar(const Scene& s, const std::string& file, const RenderResult& r, con
         stages.push_back(st);
     }
     j["stages"] = stages;
+    json steps = json::array();
+    for (const auto& st : r.frame.steps) {
+        json x;
+        x["name"] = st.name;
+        x["status"] = to_string(st.status);
+        if (std::isfinite(st.ms)) x["ms"] = st.ms;
+        steps.push_back(x);
+    }
+    j["frame_steps"] = steps;
     json t;
     t["stages_ms"] = r.stages_ms;
     t["render_ms"] = r.render_ms;
     if (r.renderer != "cpu") t["gpu_ms"] = r.gpu_ms;
     j["timings"] = t;
-    json aovs = json::array();
-    for (const auto& a : r.frame.layout) aovs.push_back(a.name);
+    json aovs = json::array(), rendered = json::array();
+    for (const auto& a : Registry::instance().aovs(s)) aovs.push_back(a.name);
+    for (const auto& a : r.frame.layout) rendered.push_back(a.name);
     j["aovs_available"] = aovs;
+    j["aovs_rendered"] = rendered;
     j["outputs"] = written;
     return j;
 }
 }  // namespace
 
-void print_profile() {
+void print_profile(const Profiler& profiler) {
     std::fprintf(stderr, "\n%-44s %-4s %10s %10s %10s %10s %6s\n", "scope", "dev", "last ms", "median", "min", "max", "n");
-    for (const auto& s : Profiler::global().stats()) {
+    for (const auto& s : profiler.stats()) {
         // Indent by depth so the hierarchy reads at a glance.
         const size_t depth = size_t(std::count(s.path.begin(), s.path.end(), '/'));
         const std::string name = std::string(2 * depth, ' ') + s.path.substr(s.path.rfind('/') == std::string::npos ? 0 : s.path.rfind('/') + 1);
@@ -104,22 +122,22 @@ int run_capture(const CaptureOptions& o) {
     req.width = w;
     req.height = h;
     req.progress = tty_progress();
+    req.aovs = o.aovs;
     const auto files = expand_presets(o.presets);
     // Validate everything first, so that bad input fails before any work.
     std::vector<Scene> scenes;
     for (const auto& f : files) {
         Scene s = load_preset(f);
         for (const auto& set : o.sets) apply_set(s, set);
-        const auto aovs = Registry::instance().aovs(s);
-        for (const auto& a : o.aovs)
-            if (std::none_of(aovs.begin(), aovs.end(), [&](const AovDecl& d) { return d.name == a; })) {
-                std::string names;
-                for (const auto& d : aovs) names += (names.empty() ? "" : ", ") + d.name;
-                throw InputError("--aov " + a + ": " + f + " has no such AOV (available: " + names + ")");
-            }
+        try {
+            frame_layout(s, o.aovs);  // every requested AOV exists in this scene
+        } catch (const InputError& e) {
+            throw InputError(f + ": " + e.what());
+        }
         scenes.push_back(std::move(s));
     }
     Workbench wb;
+    wb.session().set_memory_limit(memory_limit_bytes(o.memory_limit));
     if (req.backend == Backend::Gpu) {
         try {
             wb.gpu();
@@ -146,7 +164,8 @@ int run_capture(const CaptureOptions& o) {
         write_text_atomic(side, sidecar(s, files[i], r, written).dump(2) + "\n");
         int ran = 0, cached = 0, skipped = 0;
         for (const auto& run : r.eval.runs)
-            for (const auto& w : run.warnings) std::fprintf(stderr, "mesolab: warning: %s: stage %s: %s\n", files[i].c_str(), run.name.c_str(), w.c_str());
+            for (const auto& w : run.warnings)
+                std::fprintf(stderr, "mesolab: warning: %s: stage %s: %s\n", files[i].c_str(), run.label(s).c_str(), w.c_str());
         for (const auto& run : r.eval.runs) {
             ran += run.status == StageStatus::Ran;
             cached += run.status == StageStatus::Cached;
@@ -155,7 +174,7 @@ int run_capture(const CaptureOptions& o) {
         std::printf("%-28s %4dx%-4d %-6s stages %7.2f ms (%d ran, %d cached, %d skipped)  render %7.2f ms  -> %s\n", s.name.c_str(), r.frame.width,
                     r.frame.height, req.backend == Backend::Cpu ? "cpu" : "gpu", r.stages_ms, ran, cached, skipped, r.render_ms, png.c_str());
     }
-    if (o.profile) print_profile();
+    if (o.profile) print_profile(wb.session().profiler());
     return 0;
 }
 }  // namespace mesolab

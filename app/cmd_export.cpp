@@ -42,8 +42,9 @@ int run_export(const ExportOptions& o) {
 
     const auto t0 = std::chrono::steady_clock::now();
     Workbench wb;
+    wb.session().set_memory_limit(memory_limit_bytes(o.memory_limit));
     ProgressFn progress = tty_progress();
-    const Evaluation ev = wb.stages().evaluate(s, decl.stages, progress);
+    const Evaluation ev = wb.evaluate(s, decl.stages, progress);
     const std::string summary = decl.run(s, ev, object, options, o.out, progress);
     tty_progress_done();
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

@@ -88,11 +88,13 @@ std::vector<std::string> knob_stages(const Scene& base, const Knob& k) {
     const StageGraph& g = Registry::instance().stages();
     std::vector<std::string> r;
     for (const StageDecl& d : g.stages()) {
-        std::set<uint64_t> keys;
+        std::set<std::vector<uint64_t>> keys;  // the stage's keys over its objects, per value
         for (const auto& v : k.values) {
             Scene s = base;
             apply_set(s, k.key, v);
-            keys.insert(g.key(s, d.name));
+            std::vector<uint64_t> per_object;
+            for (int o : g.subjects(s, d)) per_object.push_back(g.key(s, d.name, o));
+            keys.insert(per_object);
         }
         if (keys.size() > 1) r.push_back(d.name);
     }
@@ -185,7 +187,7 @@ Point sweep_point(Workbench& wb, const Scene& base, const Knob& k, const std::st
     std::vector<double> times, knob_times;
     RenderResult res = wb.render(s, req);  // untimed warm-up: first-touch allocations, GPU resources
     for (int r = 0; r < repeat; ++r) {
-        wb.stages().clear_cache();  // the cost of this setting includes its stages
+        wb.session().cache().clear();  // the cost of this setting includes its stages
         res = wb.render(s, req);
         times.push_back(res.stages_ms + res.render_ms);
         knob_times.push_back(stages_ms(res.eval, k.stages));
@@ -280,7 +282,9 @@ int run_sweep(const SweepOptions& o) {
     const Scene ref = reference_scene(base, k, o.reference, ref_text);
 
     Workbench wb;
+    wb.session().set_memory_limit(memory_limit_bytes(o.memory_limit));
     RenderRequest req;
+    req.aovs = {"radiance"};
     req.backend = parse_backend(o.backend);
     req.width = w;
     req.height = h;

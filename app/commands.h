@@ -1,12 +1,16 @@
 #pragma once
 // Subcommands of `mesolab`. Each returns the process exit status: 0 success, 2 bad input,
 // 1 internal failure (main() maps exceptions: InputError -> 2, anything else -> 1).
+#include <cstdint>
 #include <string>
 #include <vector>
 
 namespace mesolab {
 
+class Profiler;
+
 struct CaptureOptions {
+    std::string memory_limit;  // --memory-limit: a stage above it stops with exit status 2 (empty: the available memory)
     std::vector<std::string> presets;  // files or folders (every *.json below)
     std::string out_dir = "screenshots";
     std::string size = "512x512";
@@ -18,6 +22,7 @@ struct CaptureOptions {
 int run_capture(const CaptureOptions& o);
 
 struct BenchOptions {
+    std::string memory_limit;  // --memory-limit: a stage above it stops with exit status 2 (empty: the available memory)
     std::vector<std::string> tables;
     std::string format = "md";
     int repeat = 5;
@@ -28,6 +33,7 @@ struct BenchOptions {
 int run_bench(const BenchOptions& o);
 
 struct SweepOptions {
+    std::string memory_limit;  // --memory-limit: a stage above it stops with exit status 2 (empty: the available memory)
     std::string preset;
     std::string knob;                     // KEY=V1,V2,...
     std::vector<std::string> reference;   // KEY=V
@@ -42,6 +48,7 @@ int run_sweep(const SweepOptions& o);
 std::string sweep_metric_names();  // "rmse (default: ...), bumpsynth.ndf_histogram" for help texts and errors
 
 struct ExportOptions {
+    std::string memory_limit;  // --memory-limit: a stage above it stops with exit status 2 (empty: the available memory)
     std::string name;                  // a technique's export, e.g. btf
     std::string preset;
     std::string out;                   // output file
@@ -58,6 +65,7 @@ int run_info();
 std::string export_names();  // "btf (microgeom), ..." for help texts
 
 struct GuiOptions {
+    std::string memory_limit;  // --memory-limit: a stage above it stops with exit status 2 (empty: the available memory)
     std::string preset;
     std::string script;          // scripted mode: one command per line
     int frames = 0;              // > 0: render N frames then exit
@@ -68,8 +76,10 @@ struct GuiOptions {
 int run_gui(const GuiOptions& o);
 
 // Helpers shared by the commands.
-// The profiler's hierarchy (PROFILE_SCOPE paths) as a table on stderr.
-void print_profile();
+// A profiler's hierarchy (PROFILE_SCOPE paths) as a table on stderr.
+void print_profile(const Profiler& profiler);
+// --memory-limit's value in bytes (0: none given, the machine's available memory applies).
+uint64_t memory_limit_bytes(const std::string& text);
 void parse_size(const std::string& s, int& w, int& h);  // "WxH", InputError otherwise
 std::vector<std::string> expand_presets(const std::vector<std::string>& args);  // folders -> *.json
 }  // namespace mesolab

@@ -19,6 +19,7 @@
 #include "core/profile.h"
 #include "core/render.h"
 #include "core/scene.h"
+#include "core/session.h"
 #include "core/stage.h"
 #include "core/technique.h"
 #include "gpu/context.h"
@@ -46,6 +47,7 @@
 #include <deque>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <stop_token>
@@ -102,16 +104,6 @@ void ignore_imgui_log(void*, const char*, ...) {}
 
 ImTextureID texture_id(GLuint tex) { return reinterpret_cast<ImTextureID>(static_cast<intptr_t>(tex)); }
 
-// [SECTION] Stage keys of a scene's frame stages
-using StageKeys = std::vector<std::pair<std::string, uint64_t>>;
-
-StageKeys stage_keys(const Scene& s) {
-    Registry& reg = Registry::instance();
-    StageKeys keys;
-    for (const auto& name : reg.frame_stages(s)) keys.emplace_back(name, reg.stages().key(s, name));
-    return keys;
-}
-
 // [SECTION] Background evaluation
 // One worker thread evaluates the latest submitted snapshot. Submitting while a job runs sets its
 // cancel flag (StageContext::progress then throws Cancelled) and queues the new snapshot.
@@ -133,7 +125,8 @@ public:
         bool running = false;
     };
 
-    Evaluator() : thread_([this](std::stop_token st) { loop(st); }) {}
+    using EvaluateFn = std::function<Evaluation(const Scene&, const ProgressFn&, const std::atomic<bool>*)>;
+    explicit Evaluator(EvaluateFn evaluate) : evaluate_(std::move(evaluate)), thread_([this](std::stop_token st) { loop(st); }) {}
     ~Evaluator() {  // then the jthread member (declared last) stops and joins, first of all members
         std::lock_guard lock(mutex_);
         pending_.reset();
@@ -205,8 +198,7 @@ private:
                 fraction_ = f;
             };
             try {
-                Registry& reg = Registry::instance();
-                out.eval = reg.stages().evaluate(job.scene, reg.frame_stages(job.scene), progress, &cancel_);
+                out.eval = evaluate_(job.scene, progress, &cancel_);
             } catch (const Cancelled&) {
                 out.kind = Outcome::Kind::Cancelled;
             } catch (const InputError& e) {
@@ -236,6 +228,7 @@ private:
     double fraction_ = 0;
     Clock::time_point started_{};
     std::deque<Outcome> outcomes_;
+    EvaluateFn evaluate_;
     std::jthread thread_;  // last: stops before the members it uses go
 };
 
@@ -506,6 +499,7 @@ private:
     std::unique_ptr<gpu::Renderer> renderer_;
     std::unique_ptr<gpu::DisplayPass> display_;
     std::string gl_renderer_;
+    Session session_;  // the stage cache and timings of this window (before the evaluator, which uses it)
     Evaluator evaluator_;
 
     // Scene
@@ -518,6 +512,7 @@ private:
 
     // Evaluation
     std::optional<Evaluation> eval_;
+    Scene eval_scene_;  // the scene eval_ was computed for (names the objects of its stage runs)
     StageKeys eval_keys_, inflight_keys_, failed_keys_;
     uint64_t wanted_id_ = 0;
     std::vector<StageRun> shown_runs_;
@@ -567,7 +562,12 @@ private:
 
 Gui::Gui(const GuiOptions& o, GLFWwindow* window, std::vector<ScriptCommand> script, bool scripted, std::optional<Scene> initial,
          std::string initial_file, std::string initial_error)
-    : opts_(o), window_(window), scripted_(scripted), script_(std::move(script)) {
+    : opts_(o),
+      window_(window),
+      scripted_(scripted),
+      evaluator_([this](const Scene& s, const ProgressFn& p, const std::atomic<bool>* cancel) { return session_.evaluate_frame(s, p, cancel); }),
+      script_(std::move(script)) {
+    session_.set_memory_limit(memory_limit_bytes(o.memory_limit));
     renderer_ = std::make_unique<gpu::Renderer>();
     display_ = std::make_unique<gpu::DisplayPass>();
     gl_renderer_ = gpu::query_gl_info("glfw").renderer;
@@ -716,7 +716,7 @@ void Gui::handle(const panels::PresetRequest& r) {
 
 // [SECTION] Scene changes: redraw or evaluate
 void Gui::on_scene_changed() {
-    StageKeys keys = stage_keys(scene_);
+    StageKeys keys = session_.frame_keys(scene_);
     if (eval_ && keys == eval_keys_) {
         // Only redraw-cost edits since the last completed evaluation: no stage runs.
         if (evaluator_.busy()) evaluator_.cancel();  // an older edit's evaluation is not needed any more
@@ -742,13 +742,14 @@ void Gui::poll_evaluator() {
         using K = Evaluator::Outcome::Kind;
         if (o->kind == K::Done) {
             eval_ = std::move(o->eval);
+            eval_scene_ = o->scene;
             eval_keys_ = o->keys;
             failed_keys_.clear();
             shown_runs_ = eval_->runs;
             eval_note_.clear();
             last_eval_ms_ = o->ms;
             // Edits made meanwhile that only cost a redraw are shown at once.
-            render_scene_ = stage_keys(scene_) == o->keys ? scene_ : std::move(o->scene);
+            render_scene_ = session_.frame_keys(scene_) == o->keys ? scene_ : std::move(o->scene);
             need_render_ = true;
             if (!error_.empty() && error_origin_ == ErrorOrigin::Evaluation) error_.clear();  // fixed by this edit
         } else if (o->kind == K::Failed) {
@@ -774,7 +775,7 @@ void Gui::render_now(bool interacting) {
     const ivec2 req{std::max(16, int(float(view_size_.x) * scale)), std::max(16, int(float(view_size_.y) * scale))};
     const ivec2 size = frame_size(render_scene_, *eval_, req);
     const auto t0 = Clock::now();
-    renderer_->render(render_scene_, *eval_, size.x, size.y);
+    renderer_->render(render_scene_, *eval_, size.x, size.y, {aov_});  // radiance and the AOV shown
     last_render_ms_ = ms_since(t0);
     reduced_frame_ = scale < 1.f;
     if (!reduced_frame_) full_render_ms_ = last_render_ms_;
@@ -915,6 +916,7 @@ bool Gui::run_command(ScriptCommand& c) {
 }
 
 int Gui::run() {
+    ProfilerBinding bind(session_.profiler());  // the main thread's scopes (frames, uploads) time this window's session
     while (!quit_) {
         wait_or_poll();
         const auto t0 = Clock::now();
@@ -937,7 +939,7 @@ int Gui::run() {
         build_ui();
         after_ui();
         present();
-        Profiler::global().record("gui.frame", ms_since(t0));
+        session_.profiler().record("gui.frame", ms_since(t0));
         if (script_error_) break;
     }
     if (script_error_) {
@@ -968,7 +970,7 @@ void Gui::build_ui() {
         report(e.what(), dynamic_cast<const InputError*>(&e) != nullptr, ErrorOrigin::Action);
     }
     ImGui::Render();
-    Profiler::global().record("gui.ui", ms_since(t0));
+    session_.profiler().record("gui.ui", ms_since(t0));
 }
 
 void Gui::after_ui() {
@@ -1008,7 +1010,7 @@ void Gui::present() {
         }
     }
     glfwSwapBuffers(window_);
-    Profiler::global().record("gui.draw", ms_since(t0));
+    session_.profiler().record("gui.draw", ms_since(t0));
 }
 
 // [SECTION] Layout
@@ -1064,7 +1066,7 @@ void Gui::menu_bar() {
         for (const auto& a : Registry::instance().aovs(have_frame_ ? rendered_scene_ : scene_)) {
             if (ImGui::MenuItem(a.name.c_str(), nullptr, aov_ == a.name)) {
                 aov_ = a.name;
-                display_stale_ = true;
+                if (have_frame_) need_render_ = true;  // a frame holds radiance and the AOV shown only
             }
             if (ImGui::IsItemHovered() && !a.help.empty()) ImGui::SetTooltip("%s", a.help.c_str());
         }
@@ -1325,7 +1327,7 @@ void Gui::timings_window() {
         if (ImGui::Button("Re-evaluate")) {
             // Picks up edits of files on disk (their size and time are in the keys).
             failed_keys_.clear();
-            StageKeys keys = stage_keys(scene_);
+            StageKeys keys = session_.frame_keys(scene_);
             if (!eval_ || keys != eval_keys_) {
                 inflight_keys_ = keys;
                 eval_cancelled_ = false;
@@ -1338,7 +1340,7 @@ void Gui::timings_window() {
         ImGui::SameLine();
         if (eval_) ImGui::TextDisabled("last evaluation %.1f ms, render %.2f ms", last_eval_ms_, last_render_ms_);
         ImGui::SameLine();
-        panels::timings_panel(shown_runs_, eval_note_);
+        panels::timings_panel(eval_scene_, shown_runs_, renderer_->last_steps(), session_.profiler(), eval_note_);
     }
     ImGui::End();
     relayout_ = false;
@@ -1368,7 +1370,7 @@ void Gui::status_bar() {
         else if (eval_) ImGui::TextDisabled("up to date");
         TimingStat fs{};
         char right[256];
-        const bool have = Profiler::global().find("gui.frame", fs);
+        const bool have = session_.profiler().find("gui.frame", fs);
         std::snprintf(right, sizeof right, "frame %.1f ms  |  %.0f fps  |  %s", have ? fs.median : 0.0, double(ImGui::GetIO().Framerate), gl_renderer_.c_str());
         ImGui::SameLine(ds.x - ImGui::CalcTextSize(right).x - 12.f);
         ImGui::TextDisabled("%s", right);

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <iostream>
+#include <new>
 
 using namespace mesolab;
 
@@ -21,6 +22,12 @@ int main(int argc, char** argv) {
     static char gui_word[] = "gui";
     if (!known) args.insert(args.begin() + 1, gui_word);
 
+    // --memory-limit, for every command that evaluates stages.
+    const auto add_memory_limit = [](CLI::App* cmd, std::string& value) {
+        cmd->add_option("--memory-limit", value,
+                        "Largest allocation a stage may make, e.g. 2G or 512M (default: the available memory); above it the stage stops "
+                        "with exit status 2 naming the parameters to lower");
+    };
     CLI::App app{"mesolab: interactive workbench for meso-scale appearance (micro-geometry, bump synthesis, translucency, cloth)"};
     app.set_version_flag("--version", std::string(version_string()));
     app.require_subcommand(1);
@@ -33,6 +40,7 @@ int main(int argc, char** argv) {
     g->add_option("--screenshot", gui.screenshot, "With --frames: save the viewport to this PNG");
     g->add_option("--window-screenshot", gui.window_screenshot, "With --frames: save the whole window with its panels to this PNG");
     g->add_option("--size", gui.size, "Window size WxH")->capture_default_str();
+    add_memory_limit(g, gui.memory_limit);
 
     CaptureOptions cap;
     auto* c = app.add_subcommand("capture", "Render presets headless: DIR/<name>.png (8-bit sRGB), DIR/<name>.<aov>.exr (float), DIR/<name>.json (parameters, renderer, timings, stages, version)");
@@ -42,7 +50,8 @@ int main(int argc, char** argv) {
     c->add_option("--backend", cap.backend, "gpu (EGL, headless) or cpu")->capture_default_str();
     c->add_option("--set", cap.sets, "Override a parameter: KEY=VALUE (repeatable), e.g. camera.distance=4");
     c->add_flag("--profile", cap.profile, "Print the scoped CPU/GPU timing hierarchy at the end");
-    c->add_option("--aov", cap.aovs, "Also write this AOV as 32-bit float EXR (repeatable): radiance, normal, ...");
+    c->add_option("--aov", cap.aovs, "Also render this AOV and write it as 32-bit float EXR (repeatable): radiance, normal, ...");
+    add_memory_limit(c, cap.memory_limit);
 
     ExportOptions exp;
     auto* x = app.add_subcommand("export", "Write a technique's data export for a preset's object (e.g. btf: microgeom's view x light grid of heightfield images, EXR)");
@@ -52,6 +61,7 @@ int main(int argc, char** argv) {
     x->add_option("--object", exp.object, "Scene object (default: the first that uses the export's technique)");
     x->add_option("--option", exp.options, "Export option KEY=VALUE (repeatable), e.g. grid=4x8");
     x->add_option("--set", exp.sets, "Override a parameter: KEY=VALUE (repeatable)");
+    add_memory_limit(x, exp.memory_limit);
 
     BenchOptions bench;
     auto* b = app.add_subcommand("bench", "Timing tables laid out like the papers' tables (all tables when none is named)");
@@ -61,6 +71,7 @@ int main(int argc, char** argv) {
     b->add_option("-o,--output", bench.out, "Write to FILE instead of standard output");
     b->add_option("--backend", bench.backend, "cpu, gpu or both")->capture_default_str();
     b->add_flag("--profile", bench.profile, "Print the scoped CPU/GPU timing hierarchy at the end");
+    add_memory_limit(b, bench.memory_limit);
 
     SweepOptions sweep;
     auto* s = app.add_subcommand("sweep", "Accuracy vs time: render a preset at each value of a knob, measure time and error against a reference");
@@ -73,6 +84,7 @@ int main(int argc, char** argv) {
     s->add_option("--set", sweep.sets, "Override a parameter: KEY=VALUE (repeatable)");
     s->add_option("--repeat", sweep.repeat, "Timed runs per value (median)")->capture_default_str();
     s->add_option("--metric", sweep.metric, "Error measure: " + sweep_metric_names())->capture_default_str();
+    add_memory_limit(s, sweep.memory_limit);
 
     auto* p = app.add_subcommand("preset", "Validate, describe and show presets");
     p->require_subcommand(1);
@@ -118,6 +130,12 @@ int main(int argc, char** argv) {
     } catch (const InputError& e) {
         tty_progress_done();
         std::fprintf(stderr, "mesolab: error: %s\n", e.what());
+        return 2;
+    } catch (const std::bad_alloc&) {
+        // A stage's estimate should have caught this first (core/session.h); settings still too large.
+        tty_progress_done();
+        std::fprintf(stderr, "mesolab: error: out of memory: the settings need more memory than this machine has; lower the resolutions, "
+                             "direction counts or frame size (mesolab preset schema lists them)\n");
         return 2;
     } catch (const std::exception& e) {
         tty_progress_done();

@@ -22,13 +22,16 @@ Workbench::~Workbench() {
     context_.reset();
 }
 
-StageGraph& Workbench::stages() { return Registry::instance().stages(); }
-
 gpu::Renderer& Workbench::gpu() {
     if (!context_) context_ = gpu::HeadlessContext::create();
     context_->make_current();
     if (!renderer_) renderer_ = std::make_unique<gpu::Renderer>();
     return *renderer_;
+}
+
+void Workbench::forget_frame_steps() {
+    cpu_steps_.entries.clear();
+    if (renderer_) renderer_->forget_frame_steps();
 }
 
 std::string Workbench::gl_renderer() {
@@ -40,19 +43,20 @@ RenderResult Workbench::render(const Scene& s, const RenderRequest& req) {
     using clock = std::chrono::steady_clock;
     RenderResult r;
     auto t0 = clock::now();
-    r.eval = stages().evaluate(s, Registry::instance().frame_stages(s), req.progress);
+    r.eval = session_.evaluate_frame(s, req.progress);
+    ProfilerBinding bind(session_.profiler());
     r.stages_ms = std::chrono::duration<double, std::milli>(clock::now() - t0).count();
     const ivec2 size = frame_size(s, r.eval, {req.width, req.height});
     if (req.backend == Backend::Cpu) {
         t0 = clock::now();
-        r.frame = render_cpu(s, r.eval, size.x, size.y);
+        r.frame = render_cpu(s, r.eval, size.x, size.y, req.aovs, &cpu_steps_);
         r.render_ms = std::chrono::duration<double, std::milli>(clock::now() - t0).count();
         r.renderer = "cpu";
     } else {
         gpu::Renderer& g = gpu();
         r.renderer = context_->info().renderer;
         t0 = clock::now();
-        g.render(s, r.eval, size.x, size.y);
+        g.render(s, r.eval, size.x, size.y, req.aovs);
         glFinish();
         r.render_ms = std::chrono::duration<double, std::milli>(clock::now() - t0).count();
         r.gpu_ms = g.last_gpu_ms();

@@ -1,10 +1,15 @@
 #pragma once
-// Headless rendering shared by capture, sweep, bench and info: evaluates the stage graph,
-// renders on the CPU or through an EGL context on the GPU, and reports what ran.
+// Headless rendering shared by capture, sweep, bench, export and info. A Workbench is one
+// evaluation session (core/session.h: the stage cache, the timings, the memory budget) with its
+// GPU resources (an EGL context made on first use and its renderer), so two workbenches in one
+// process share nothing. It evaluates the stage graph, renders on the CPU or the GPU, and
+// reports what ran.
 #include "core/render.h"
+#include "core/session.h"
 #include "core/stage.h"
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace mesolab::gpu {
 class HeadlessContext;
@@ -21,6 +26,7 @@ Backend parse_backend(const std::string& s);  // "cpu" | "gpu", InputError other
 struct RenderRequest {
     Backend backend = Backend::Gpu;
     int width = 512, height = 512;
+    std::vector<std::string> aovs;  // besides radiance (frame_layout); empty = every AOV of the scene
     ProgressFn progress;
 };
 
@@ -41,9 +47,16 @@ public:
     // The headless GL context, created on first use; throws with an explanation when none can be made.
     gpu::Renderer& gpu();
     std::string gl_renderer();
-    StageGraph& stages();
+    Session& session() { return session_; }
+    // The next frame runs every frame step again (bench times them from scratch).
+    void forget_frame_steps();
+    Evaluation evaluate(const Scene& s, const std::vector<std::string>& targets, const ProgressFn& progress = {}) {
+        return session_.evaluate(s, targets, progress);
+    }
 
 private:
+    Session session_;
+    FrameStepCache cpu_steps_;
     std::unique_ptr<gpu::HeadlessContext> context_;
     std::unique_ptr<gpu::Renderer> renderer_;
 };

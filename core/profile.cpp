@@ -5,7 +5,8 @@
 namespace mesolab {
 namespace {
 thread_local std::vector<std::string> t_stack;
-}
+thread_local Profiler* t_bound = nullptr;
+}  // namespace
 
 double median_of(std::vector<double> v) {
     if (v.empty()) return 0;
@@ -15,10 +16,15 @@ double median_of(std::vector<double> v) {
 }
 
 // [SECTION] Profiler
-Profiler& Profiler::global() {
+Profiler& Profiler::fallback() {
     static Profiler p;
     return p;
 }
+
+Profiler& Profiler::current() { return t_bound ? *t_bound : fallback(); }
+
+ProfilerBinding::ProfilerBinding(Profiler& p) : previous_(t_bound) { t_bound = &p; }
+ProfilerBinding::~ProfilerBinding() { t_bound = previous_; }
 
 void Profiler::record(const std::string& path, double ms, Device device) {
     std::lock_guard lock(mutex_);
@@ -59,7 +65,7 @@ void Profiler::clear() {
 }
 
 // [SECTION] Scopes
-ProfileScope::ProfileScope(std::string name) : t0_(std::chrono::steady_clock::now()) {
+ProfileScope::ProfileScope(std::string name) : profiler_(&Profiler::current()), t0_(std::chrono::steady_clock::now()) {
     path_ = t_stack.empty() ? std::move(name) : t_stack.back() + "/" + name;
     t_stack.push_back(path_);
 }
@@ -67,7 +73,7 @@ ProfileScope::ProfileScope(std::string name) : t0_(std::chrono::steady_clock::no
 ProfileScope::~ProfileScope() {
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0_).count();
     t_stack.pop_back();
-    Profiler::global().record(path_, ms, Device::Cpu);
+    profiler_->record(path_, ms, Device::Cpu);
 }
 
 std::string ProfileScope::current_path() { return t_stack.empty() ? std::string() : t_stack.back(); }

@@ -4,6 +4,9 @@
 // GL_TIME_ELAPSED results under the same kind of path with device = Gpu. Each path keeps a
 // history of its last samples, from which the Timings panel and the capture sidecar show
 // last / median / min / max.
+// Each session (core/session.h) owns a Profiler and binds it to the thread that evaluates or
+// renders for it (ProfilerBinding), so two sessions in one process never mix their timings.
+// Scopes opened on a thread with no binding record into Profiler::fallback().
 #include <chrono>
 #include <deque>
 #include <map>
@@ -24,7 +27,10 @@ struct TimingStat {
 
 class Profiler {
 public:
-    static Profiler& global();
+    // The profiler bound to this thread (ProfilerBinding), else fallback().
+    static Profiler& current();
+    // Where timings go on threads that no session has bound (tools, tests, worker threads).
+    static Profiler& fallback();
     void record(const std::string& path, double ms, Device device = Device::Cpu);
     std::vector<TimingStat> stats() const;  // sorted by path
     bool find(const std::string& path, TimingStat& out) const;
@@ -38,6 +44,18 @@ private:
     };
     mutable std::mutex mutex_;
     std::map<std::string, Entry> entries_;
+};
+
+// Binds a profiler to the calling thread for the binding's lifetime (nests; restores the previous).
+class ProfilerBinding {
+public:
+    explicit ProfilerBinding(Profiler& p);
+    ~ProfilerBinding();
+    ProfilerBinding(const ProfilerBinding&) = delete;
+    ProfilerBinding& operator=(const ProfilerBinding&) = delete;
+
+private:
+    Profiler* previous_;
 };
 
 // Median of a set of samples (mean of the middle two for an even count).
@@ -54,6 +72,7 @@ public:
 
 private:
     std::string path_;
+    Profiler* profiler_;
     std::chrono::steady_clock::time_point t0_;
 };
 

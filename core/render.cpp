@@ -6,6 +6,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <tbb/parallel_for.h>
 #include <algorithm>
+#include <chrono>
 
 namespace mesolab {
 
@@ -108,6 +109,43 @@ TangentFrame tangent_frame(vec3 normal, vec3 tangent, vec3 wo) {
     return {T, glm::cross(N, T), N};
 }
 
+std::vector<AovDecl> frame_layout(const Scene& s, const std::vector<std::string>& requested) {
+    const std::vector<AovDecl> all = Registry::instance().aovs(s);
+    if (requested.empty()) return all;
+    std::vector<AovDecl> r{all.front()};  // radiance
+    for (const auto& name : requested) {
+        if (std::any_of(r.begin(), r.end(), [&](const AovDecl& a) { return a.name == name; })) continue;
+        auto it = std::find_if(all.begin(), all.end(), [&](const AovDecl& a) { return a.name == name; });
+        if (it == all.end()) {
+            std::string names;
+            for (const auto& a : all) names += (names.empty() ? "" : ", ") + a.name;
+            throw InputError("--aov " + name + ": the scene has no such AOV (available: " + names + ")");
+        }
+        r.push_back(*it);
+    }
+    return r;
+}
+
+// [SECTION] AOV writer
+AovWriter::AovWriter(Frame& f, const Technique& t) : outputs_(t.outputs()) {
+    for (const auto& o : outputs_) images_.push_back(f.has(o.name) ? &f.aov(o.name) : nullptr);
+}
+
+int AovWriter::index(std::string_view name) const {
+    for (size_t k = 0; k < outputs_.size(); ++k)
+        if (outputs_[k].name == name) return int(k);
+    throw std::logic_error("AovWriter: the technique declares no output named " + std::string(name));
+}
+
+// [SECTION] Frame steps
+std::string frame_step_fingerprint(const Scene& s, const Evaluation& ev, const FrameStepDecl& d) {
+    std::string fp = d.name;
+    for (const auto& p : d.params) fp += param_fingerprint(s, p);
+    for (const auto& st : d.stages)
+        for (const StageRun* r : ev.runs_of(st)) fp += "<" + st + "#" + std::to_string(r->object) + ":" + std::to_string(r->key) + ">";
+    return fp;
+}
+
 bool ShadeContext::mine(size_t pixel) const {
     const int o = gbuffer.object[pixel];
     return o >= 0 && std::find(objects.begin(), objects.end(), o) != objects.end();
@@ -117,17 +155,15 @@ std::shared_ptr<const TriMesh> drawn_mesh(const Scene& s, const Evaluation& ev, 
     const Technique* t = Registry::instance().technique(s.objects.at(size_t(object)).technique);
     if (t)
         if (auto m = t->object_mesh(s, ev, object)) return m;
-    auto geo = ev.get<SceneGeometry>("scene.geometry");
-    if (!geo || size_t(object) >= geo->meshes.size()) return nullptr;
-    return std::shared_ptr<const TriMesh>(geo, &geo->meshes[size_t(object)]);
+    return ev.get<TriMesh>("scene.geometry", object);
 }
 
 std::vector<Bounds> world_bounds(const Scene& s, const Evaluation& ev) {
     std::vector<Bounds> r;
-    auto geo = ev.get<SceneGeometry>("scene.geometry");
-    if (!geo) return r;
-    for (size_t i = 0; i < s.objects.size() && i < geo->meshes.size(); ++i) {
-        const Bounds b = bounds(*drawn_mesh(s, ev, int(i)));
+    for (size_t i = 0; i < s.objects.size(); ++i) {
+        const auto mesh = drawn_mesh(s, ev, int(i));
+        if (!mesh) continue;
+        const Bounds b = bounds(*mesh);
         const mat4 m = object_to_world(s.objects[i]);
         Bounds w{vec3(1e30f), vec3(-1e30f)};
         for (int k = 0; k < 8; ++k) {
@@ -149,16 +185,46 @@ ivec2 frame_size(const Scene& s, const Evaluation& ev, ivec2 requested) {
     return requested;
 }
 
-Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height) {
+Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height, const std::vector<std::string>& aovs, FrameStepCache* cache) {
     PROFILE_SCOPE("frame.cpu");
     if (width < 1 || height < 1 || width > 16384 || height > 16384)
         throw InputError("frame size " + std::to_string(width) + "x" + std::to_string(height) + " is out of range (1..16384 per side)");
     const Registry& reg = Registry::instance();
-    Frame f = make_frame(reg.aovs(s), width, height);
-    auto geo = ev.get<SceneGeometry>("scene.geometry");
-    if (!geo) throw std::logic_error("render_cpu: scene.geometry was not evaluated");
+    Frame f = make_frame(frame_layout(s, aovs), width, height);
     const FrameCamera cam = make_camera(s, world_bounds(s, ev), width, height);
     const Lighting lighting = make_lighting(s, ev);
+    const auto objects_of = [&](const Technique& t) {
+        std::vector<int> r;
+        for (size_t i = 0; i < s.objects.size(); ++i)
+            if (s.objects[i].technique == t.name()) r.push_back(int(i));
+        return r;
+    };
+
+    // Frame steps: offscreen work before shading, reused while their inputs are unchanged.
+    std::map<std::string, std::any> step_out;
+    for (const Technique* t : reg.techniques()) {
+        const std::vector<int> objs = objects_of(*t);
+        if (objs.empty()) continue;
+        for (const FrameStepDecl& d : t->frame_steps()) {
+            FrameStepRun run{d.name};
+            const std::string fp = frame_step_fingerprint(s, ev, d);
+            if (cache)
+                if (auto it = cache->entries.find(d.name); it != cache->entries.end() && it->second.fingerprint == fp) {
+                    run.status = StageStatus::Cached;
+                    step_out[d.name] = it->second.output;
+                    f.steps.push_back(run);
+                    continue;
+                }
+            const auto t0 = std::chrono::steady_clock::now();
+            {
+                PROFILE_SCOPE("step." + d.name);
+                step_out[d.name] = t->run_step_cpu(d.name, FrameStepContext{s, ev, cam, lighting, objs, step_out});
+            }
+            run.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+            if (cache) cache->entries[d.name] = {fp, step_out[d.name]};
+            f.steps.push_back(run);
+        }
+    }
 
     // The G-buffer is reused between frames of a thread: first-touch of ~50 bytes per pixel
     // costs more than the rasterisation of a simple scene.
@@ -170,6 +236,7 @@ Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height) {
         std::vector<std::shared_ptr<const TriMesh>> keep;
         for (size_t i = 0; i < s.objects.size(); ++i) {
             keep.push_back(drawn_mesh(s, ev, int(i)));
+            if (!keep.back()) throw std::logic_error("render_cpu: scene.geometry was not evaluated for object " + std::to_string(i));
             items.push_back({keep.back().get(), object_to_world(s.objects[i]), int(i)});
         }
         rasterize(items, cam.raster, gb);
@@ -188,10 +255,10 @@ Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height) {
             });
     }
     for (const Technique* t : reg.techniques()) {
-        ShadeContext ctx{s, ev, gb, cam, lighting, {}, f};
-        for (size_t i = 0; i < s.objects.size(); ++i)
-            if (s.objects[i].technique == t->name()) ctx.objects.push_back(int(i));
-        if (ctx.objects.empty()) continue;
+        const std::vector<int> objs = objects_of(*t);
+        if (objs.empty()) continue;
+        const AovWriter out(f, *t);
+        ShadeContext ctx{s, ev, gb, cam, lighting, objs, f, out, step_out};
         PROFILE_SCOPE("shade." + t->name());
         t->shade_cpu(ctx);
     }

@@ -10,7 +10,10 @@
 #include "core/scene.h"
 #include "core/stage.h"
 #include "core/technique.h"
+#include <any>
 #include <map>
+#include <stdexcept>
+#include <string_view>
 #include <memory>
 #include <string>
 #include <vector>
@@ -52,15 +55,85 @@ struct Lighting {
 };
 Lighting make_lighting(const Scene& s, const Evaluation& ev);
 
+// A frame step's run in one frame (Technique::frame_steps), for the timing rows.
+struct FrameStepRun {
+    std::string name;
+    StageStatus status = StageStatus::Ran;  // Ran, or Cached when its inputs were unchanged
+    double ms = 0;                          // CPU: wall time; GPU: the step's GL timer query (NaN: no valid answer)
+};
+
 // AOV images of one frame, all width x height, row 0 at the top.
 struct Frame {
     int width = 0, height = 0;
     std::vector<AovDecl> layout;
     std::map<std::string, Image> aovs;
+    std::vector<FrameStepRun> steps;  // the frame steps that ran before shading, in order
     Image& aov(const std::string& name) { return aovs.at(name); }
     const Image& aov(const std::string& name) const { return aovs.at(name); }
+    bool has(const std::string& name) const { return aovs.count(name) != 0; }
 };
 Frame make_frame(const std::vector<AovDecl>& layout, int width, int height);
+
+// The AOVs a frame holds: radiance, then the requested ones, in request order without duplicates.
+// An empty request means every AOV of the scene (Registry::aovs). A name no technique of the scene
+// writes is an InputError listing the scene's AOVs.
+std::vector<AovDecl> frame_layout(const Scene& s, const std::vector<std::string>& requested);
+
+// Writes one technique's outputs (Technique::outputs, declared once) into a frame: output k goes
+// to the frame's image of that name, or nowhere when the frame does not hold it (not requested),
+// so shading can skip the work of AOVs nobody asked for (wanted()).
+class AovWriter {
+public:
+    AovWriter(Frame& f, const Technique& t);
+    static constexpr int kRadiance = 0, kNormal = 1;  // the first two outputs of every technique
+    // Position of a declared output (std::logic_error when the technique does not declare it).
+    int index(std::string_view name) const;
+    bool wanted(int output) const { return images_[size_t(output)] != nullptr; }
+    void put(int output, int x, int y, vec3 v) const {
+        if (Image* img = images_[size_t(output)]) {
+            float* p = img->at(x, y);
+            for (int c = 0; c < img->channels && c < 3; ++c) p[c] = v[c];
+        }
+    }
+    void put(int output, int x, int y, float v) const {
+        if (Image* img = images_[size_t(output)]) img->at(x, y)[0] = v;
+    }
+
+private:
+    std::vector<AovDecl> outputs_;
+    std::vector<Image*> images_;
+};
+
+// Everything a technique's frame step needs (Technique::run_step_cpu).
+struct FrameStepContext {
+    const Scene& scene;
+    const Evaluation& eval;
+    const FrameCamera& camera;
+    const Lighting& lighting;
+    std::vector<int> objects;  // indices of the scene objects that use this technique
+    const std::map<std::string, std::any>& steps;  // outputs of the steps that ran before, by name
+    // An earlier step's output (std::logic_error when it has none).
+    template <class T>
+    const T& step(const std::string& name) const {
+        auto it = steps.find(name);
+        if (it == steps.end() || !it->second.has_value()) throw std::logic_error("frame step " + name + " has no output");
+        return *std::any_cast<std::shared_ptr<const T>>(it->second);
+    }
+};
+
+// Outputs of frame steps kept between frames, reused while their declared inputs are unchanged.
+// Owned by whoever renders frames one after another (a Workbench, the window).
+class FrameStepCache {
+public:
+    struct Entry {
+        std::string fingerprint;
+        std::any output;
+    };
+    std::map<std::string, Entry> entries;
+};
+
+// The fingerprint of a frame step's declared inputs for a scene and an evaluation.
+std::string frame_step_fingerprint(const Scene& s, const Evaluation& ev, const FrameStepDecl& d);
 
 // Everything a technique's shade_cpu needs.
 struct ShadeContext {
@@ -71,8 +144,17 @@ struct ShadeContext {
     const Lighting& lighting;
     std::vector<int> objects;  // indices of the scene objects that use this technique
     Frame& frame;
+    const AovWriter& out;      // the technique's outputs into `frame`
+    const std::map<std::string, std::any>& steps;  // this frame's step outputs, by step name
     // Whether a pixel shows one of `objects`.
     bool mine(size_t pixel) const;
+    // A frame step's output (std::logic_error when the step did not run).
+    template <class T>
+    const T& step(const std::string& name) const {
+        auto it = steps.find(name);
+        if (it == steps.end() || !it->second.has_value()) throw std::logic_error("frame step " + name + " has no output");
+        return *std::any_cast<std::shared_ptr<const T>>(it->second);
+    }
 };
 
 // The shading frame at a pixel: N the interpolated normal turned towards the viewer (surfaces are
@@ -87,9 +169,11 @@ TangentFrame tangent_frame(vec3 normal, vec3 tangent, vec3 wo);
 // Frame size for a scene: texture mode asks the techniques for a native texture size first.
 ivec2 frame_size(const Scene& s, const Evaluation& ev, ivec2 requested);
 
-// The CPU render path: G-buffer, background, then each technique's shade_cpu. Times itself
-// under "frame.cpu/..." in the profiler.
-Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height);
+// The CPU render path: the techniques' frame steps, the G-buffer, the background, then each
+// technique's shade_cpu. `aovs`: see frame_layout. `steps`: outputs of frame steps kept from the
+// previous frame (null: every step runs). Times itself under "frame.cpu/..." in the profiler.
+Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height, const std::vector<std::string>& aovs = {},
+                 FrameStepCache* steps = nullptr);
 
 // The mesh drawn for an object (object space): its technique's object_mesh() if any, else the
 // scene.geometry tessellation. Both render paths and the camera bounds use this.

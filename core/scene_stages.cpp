@@ -15,24 +15,30 @@ void declare_scene_stages(StageGraph& g) {
     // Tessellation / mesh files: one mesh per object, object space.
     g.add({.name = "scene.geometry",
            .help = "Tessellate procedural shapes and read mesh files (OpenMesh)",
+           .scope = StageScope::Object,
            .params = {"geometry.type", "geometry.path", "geometry.resolution", "geometry.minor_ratio"},
+           .memory = [](const Scene&, const SceneObject* o) {
+               MemoryEstimate e;
+               const ParamTable& g = o->geometry;
+               if (g.get_string("type") == "mesh") return e;  // the file's size bounds it
+               const double n = double(g.get_int("resolution"));
+               // Tessellations have about n x n/2 (sphere) to n x n (torus, plane) vertices; the teapot 32 x (n/8)^2.
+               const double vertices = g.get_string("type") == "teapot" ? 32.0 * (n / 8.0 + 1.0) * (n / 8.0 + 1.0) : (n + 1.0) * (n + 1.0);
+               constexpr double kVertexBytes = 3 * sizeof(vec3) + sizeof(vec2), kTriangleBytes = 3 * sizeof(uint32_t);
+               e.bytes = vertices * (kVertexBytes + 2.0 * kTriangleBytes);
+               e.what = "about " + std::to_string(int64_t(vertices)) + " vertices";
+               e.lower = {"geometry.resolution"};
+               return e;
+           },
            .run = [](StageContext& ctx) {
-               SceneGeometry out;
-               const auto& objs = ctx.scene.objects;
-               out.meshes.resize(objs.size());
-               for (size_t i = 0; i < objs.size(); ++i) {
-                   const ParamTable& g = objs[i].geometry;
-                   const std::string& type = g.get_string("type");
-                   if (type == "mesh") {
-                       const std::string path = ctx.scene.resolve(g.get_string("path"));
-                       if (path.empty()) throw InputError("objects[" + std::to_string(i) + "].geometry.path: geometry.type is 'mesh' but no mesh file is given");
-                       out.meshes[i] = load_mesh(path);
-                   } else {
-                       out.meshes[i] = make_primitive(primitive_named(type), int(g.get_int("resolution")), float(g.get_float("minor_ratio")));
-                   }
-                   ctx.progress(double(i + 1) / double(objs.size()));
+               const ParamTable& g = ctx.obj().geometry;
+               const std::string& type = g.get_string("type");
+               if (type == "mesh") {
+                   const std::string path = ctx.scene.resolve(g.get_string("path"));
+                   if (path.empty()) throw InputError("objects[" + std::to_string(ctx.object) + "].geometry.path: geometry.type is 'mesh' but no mesh file is given");
+                   return stage_result(load_mesh(path));
                }
-               return stage_result(std::move(out));
+               return stage_result(make_primitive(primitive_named(type), int(g.get_int("resolution")), float(g.get_float("minor_ratio"))));
            }});
     // Environment map: absent when env.map is empty.
     g.add({.name = "env.map",

@@ -1,6 +1,7 @@
 #pragma once
 // Scene-level stages every frame uses, whatever the techniques:
-//   scene.geometry  — tessellate procedural shapes / read mesh files (object space)
+//   scene.geometry  — per object: tessellate its procedural shape / read its mesh file (object
+//                     space, a TriMesh); loading one object's mesh never reloads the others'
 //   env.map         — read the lat-long environment EXR (absent when env.map is "")
 //   env.irradiance  — SH9 projection of env.map, needed only by effects.environment
 #include "core/env.h"
@@ -9,10 +10,6 @@
 #include <vector>
 
 namespace mesolab {
-
-struct SceneGeometry {
-    std::vector<TriMesh> meshes;  // one per scene object, object space
-};
 
 void declare_scene_stages(StageGraph& g);
 // The object -> world matrix of an object (geometry.scale, geometry.position).

@@ -1,20 +1,10 @@
 #include "core/stage.h"
 #include "core/error.h"
-#include "core/profile.h"
 
-#include <chrono>
-#include <set>
+#include <algorithm>
 
 namespace mesolab {
 namespace {
-
-uint64_t fnv1a(std::string_view s, uint64_t h = 1469598103934665603ull) {
-    for (unsigned char c : s) {
-        h ^= c;
-        h *= 1099511628211ull;
-    }
-    return h;
-}
 
 void append_table(std::string& out, const Scene& s, const ParamTable& t, const std::string& param) {
     for (const auto& d : t.group().decls()) {
@@ -36,10 +26,33 @@ const char* to_string(StageStatus s) {
     return "?";
 }
 
-const StageRun* Evaluation::run(const std::string& stage) const {
+std::string StageRun::label(const Scene& s) const {
+    if (object < 0) return name;
+    const std::string o = size_t(object) < s.objects.size() && !s.objects[size_t(object)].name.empty() ? s.objects[size_t(object)].name
+                                                                                                      : "objects." + std::to_string(object);
+    return name + " [" + o + "]";
+}
+
+// [SECTION] Evaluation
+const std::any* Evaluation::find(const std::string& stage, int object) const {
+    auto it = results.find(stage);
+    if (it == results.end()) return nullptr;
+    if (it->second.scene.has_value() || it->second.objects.empty()) return &it->second.scene;
+    if (object < 0 || size_t(object) >= it->second.objects.size()) return nullptr;
+    return &it->second.objects[size_t(object)];
+}
+
+const StageRun* Evaluation::run(const std::string& stage, int object) const {
     for (const auto& r : runs)
-        if (r.name == stage) return &r;
+        if (r.name == stage && (object < 0 || r.object == object)) return &r;
     return nullptr;
+}
+
+std::vector<const StageRun*> Evaluation::runs_of(const std::string& stage) const {
+    std::vector<const StageRun*> r;
+    for (const auto& x : runs)
+        if (x.name == stage) r.push_back(&x);
+    return r;
 }
 
 void StageContext::progress(double fraction) const {
@@ -48,7 +61,7 @@ void StageContext::progress(double fraction) const {
 }
 
 // [SECTION] Fingerprints of parameter values
-std::string param_fingerprint(const Scene& s, const std::string& pattern) {
+std::string param_fingerprint(const Scene& s, const std::string& pattern, int object) {
     const auto dot = pattern.find('.');
     const std::string group = pattern.substr(0, dot), param = dot == std::string::npos ? "*" : pattern.substr(dot + 1);
     std::string out = pattern + "{";
@@ -59,10 +72,19 @@ std::string param_fingerprint(const Scene& s, const std::string& pattern) {
         out.append(std::to_string(s.lights.size())).append(":");
         for (const auto& l : s.lights) append_table(out, s, l, param);
     } else if (group == "geometry") {
-        out.append(std::to_string(s.objects.size())).append(":");
-        for (const auto& o : s.objects) append_table(out, s, o.geometry, param);
+        if (object >= 0) {
+            append_table(out, s, s.objects.at(size_t(object)).geometry, param);
+        } else {
+            out.append(std::to_string(s.objects.size())).append(":");
+            for (const auto& o : s.objects) append_table(out, s, o.geometry, param);
+        }
+    } else if (object >= 0) {
+        // A technique, for one object: its material when it uses that technique.
+        const SceneObject& o = s.objects.at(size_t(object));
+        if (o.technique == group) append_table(out, s, o.material, param);
+        else out += "-";
     } else {
-        // A technique: every object using it, in order (the object index is part of the key).
+        // A technique: every object using it, in order (the object index is part of the text).
         for (size_t i = 0; i < s.objects.size(); ++i)
             if (s.objects[i].technique == group) {
                 out.append("#").append(std::to_string(i)).append(":");
@@ -72,11 +94,17 @@ std::string param_fingerprint(const Scene& s, const std::string& pattern) {
     return out + "}";
 }
 
-// [SECTION] Graph
+// [SECTION] Declarations
 void StageGraph::add(StageDecl d) {
     if (find(d.name)) throw std::logic_error("stage declared twice: " + d.name);
     for (const auto& in : d.inputs)
         if (!find(in)) throw std::logic_error("stage " + d.name + " reads unknown stage " + in + " (declare upstream stages first)");
+    if (d.scope == StageScope::Scene && d.applies) throw std::logic_error("stage " + d.name + ": `applies` is for object stages (use `when`)");
+    if (d.scope == StageScope::Object && d.when) throw std::logic_error("stage " + d.name + ": `when` is for scene stages (use `applies`)");
+    if (d.scope == StageScope::Object)
+        for (const auto& in : d.inputs)
+            if (find(in)->scope == StageScope::Object && !find(in)->technique.empty() && find(in)->technique != d.technique)
+                throw std::logic_error("stage " + d.name + " reads " + in + ", an object stage of another technique");
     stages_.push_back(std::move(d));
 }
 
@@ -86,8 +114,37 @@ const StageDecl* StageGraph::find(const std::string& name) const {
     return nullptr;
 }
 
-bool StageGraph::enabled(const Scene& scene, const StageDecl& d, std::string* reason) const {
-    if (d.when && !d.when(scene)) {
+const StageDecl& StageGraph::at(const std::string& name) const {
+    const StageDecl* d = find(name);
+    if (!d) throw std::logic_error("unknown stage " + name);
+    return *d;
+}
+
+bool StageGraph::covers(const Scene& scene, const StageDecl& d, int object) const {
+    if (d.scope == StageScope::Scene) return true;
+    if (object < 0 || size_t(object) >= scene.objects.size()) return false;
+    return d.technique.empty() || scene.objects[size_t(object)].technique == d.technique;
+}
+
+std::vector<int> StageGraph::subjects(const Scene& scene, const StageDecl& d) const {
+    if (d.scope == StageScope::Scene) return {-1};
+    std::vector<int> r;
+    for (size_t i = 0; i < scene.objects.size(); ++i)
+        if (covers(scene, d, int(i))) r.push_back(int(i));
+    return r;
+}
+
+bool StageGraph::enabled(const Scene& scene, const StageDecl& d, int object, std::string* reason) const {
+    if (d.scope == StageScope::Object) {
+        if (!covers(scene, d, object)) {
+            if (reason) *reason = "the object does not use " + d.technique;
+            return false;
+        }
+        if (d.applies && !d.applies(scene, scene.objects[size_t(object)])) {
+            if (reason) *reason = "not needed unless " + d.when_text;
+            return false;
+        }
+    } else if (d.when && !d.when(scene)) {
         if (reason) *reason = "not needed unless " + d.when_text;
         return false;
     }
@@ -102,120 +159,54 @@ bool StageGraph::enabled(const Scene& scene, const StageDecl& d, std::string* re
     return false;
 }
 
-uint64_t StageGraph::key_rec(const Scene& scene, const StageDecl& d, std::map<std::string, uint64_t>& memo) const {
-    if (auto it = memo.find(d.name); it != memo.end()) return it->second;
-    uint64_t h = 0;
-    if (enabled(scene, d)) {
-        h = fnv1a(d.name);
-        for (const auto& p : d.params) h = fnv1a(param_fingerprint(scene, p), h);
+// [SECTION] Fingerprints and keys
+uint64_t StageGraph::hash(std::string_view s) {
+    uint64_t h = 1469598103934665603ull;  // FNV-1a
+    for (unsigned char c : s) {
+        h ^= c;
+        h *= 1099511628211ull;
+    }
+    return h == 0 ? 1 : h;
+}
+
+const std::string& StageGraph::fingerprint(const Scene& scene, const StageDecl& d, int object, Memo& memo) const {
+    const int subject = d.scope == StageScope::Object ? object : -1;
+    const std::string memo_key = d.name + "#" + std::to_string(subject);
+    if (auto it = memo.find(memo_key); it != memo.end()) return it->second;
+    std::string fp;
+    if (enabled(scene, d, subject)) {
+        fp = d.name;
+        fp += d.scope == StageScope::Object ? "(object)" : "(scene)";
+        for (const auto& p : d.params) fp += param_fingerprint(scene, p, subject);
         for (const auto& in : d.inputs) {
-            const uint64_t k = key_rec(scene, *find(in), memo);
-            h = fnv1a(std::string_view(reinterpret_cast<const char*>(&k), sizeof k), h);
+            const StageDecl& u = at(in);
+            fp += "<";
+            if (u.scope == StageScope::Object && subject < 0) {
+                // A scene stage reading an object stage: every object's fingerprint.
+                for (int o : subjects(scene, u)) fp += "#" + std::to_string(o) + ":" + fingerprint(scene, u, o, memo) + ";";
+            } else {
+                fp += fingerprint(scene, u, subject, memo);
+            }
+            fp += ">";
         }
-        if (h == 0) h = 1;
     }
-    memo[d.name] = h;
-    return h;
+    return memo[memo_key] = std::move(fp);
 }
 
-uint64_t StageGraph::key(const Scene& scene, const std::string& stage) const {
-    const StageDecl* d = find(stage);
-    if (!d) throw std::logic_error("unknown stage " + stage);
-    std::map<std::string, uint64_t> memo;
-    return key_rec(scene, *d, memo);
-}
-
-Evaluation StageGraph::evaluate(const Scene& scene, const std::vector<std::string>& targets, const ProgressFn& progress,
-                                const std::atomic<bool>* cancel) {
-    Evaluation ev;
-    std::map<std::string, uint64_t> memo;
-    std::set<std::string> visited;
-
-    std::function<void(const StageDecl&)> visit = [&](const StageDecl& d) {
-        if (!visited.insert(d.name).second) return;
-        StageRun run{d.name};
-        std::string reason;
-        if (!enabled(scene, d, &reason)) {
-            run.reason = reason;
-            ev.results[d.name] = std::any();
-            ev.runs.push_back(run);
-            return;
-        }
-        for (const auto& in : d.inputs) visit(*find(in));
-        run.key = key_rec(scene, d, memo);
-        const auto t0 = std::chrono::steady_clock::now();
-        auto ms_since = [&] { return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count(); };
-        {
-            std::lock_guard lock(mutex_);
-            auto& entries = cache_[d.name];
-            for (auto it = entries.begin(); it != entries.end(); ++it)
-                if (it->key == run.key) {
-                    entries.splice(entries.begin(), entries, it);  // most recently used first
-                    ev.results[d.name] = entries.front().result;
-                    run.warnings = entries.front().warnings;
-                    run.status = StageStatus::Cached;
-                    run.ms = ms_since();
-                    ev.runs.push_back(run);
-                    return;
-                }
-        }
-        StageContext ctx(scene, ev, d.name, progress, cancel);
-        if (progress) progress(d.name, 0.0);  // lets a UI name the stage that is running
-        std::any result;
-        try {
-            if (cancel && cancel->load()) throw Cancelled();
-            ProfileScope scope("stage/" + d.name);
-            result = d.run(ctx);
-        } catch (const Cancelled&) {
-            run.status = StageStatus::Cancelled;
-            run.ms = ms_since();
-            ev.runs.push_back(run);
-            throw;
-        } catch (const InputError& e) {
-            run.status = StageStatus::Failed;
-            run.reason = e.what();
-            throw InputError("stage " + d.name + ": " + e.what());  // bad input stays exit status 2
-        } catch (const std::exception& e) {
-            run.status = StageStatus::Failed;
-            run.reason = e.what();
-            throw std::runtime_error("stage " + d.name + ": " + e.what());
-        }
-        run.status = StageStatus::Ran;
-        run.ms = ms_since();
-        run.warnings = ctx.warnings;
-        if (progress) progress(d.name, 1.0);
-        {
-            std::lock_guard lock(mutex_);
-            auto& entries = cache_[d.name];
-            entries.push_front({run.key, result, run.warnings});
-            while (entries.size() > cache_capacity_per_stage) entries.pop_back();
-        }
-        ev.results[d.name] = std::move(result);
-        ev.runs.push_back(run);
-    };
-
-    for (const auto& t : targets) {
-        const StageDecl* d = find(t);
-        if (!d) throw std::logic_error("unknown stage " + t);
-        visit(*d);
+std::string StageGraph::fingerprint(const Scene& scene, const std::string& stage, int object) const {
+    const StageDecl& d = at(stage);
+    if (d.scope == StageScope::Object && object < 0) {
+        // The first object the stage computes for (convenient with one object).
+        const std::vector<int> objs = subjects(scene, d);
+        if (objs.empty()) return {};
+        object = objs.front();
     }
-    return ev;
+    Memo memo;
+    return fingerprint(scene, d, object, memo);
 }
 
-void StageGraph::clear_cache() {
-    std::lock_guard lock(mutex_);
-    cache_.clear();
-}
-
-void StageGraph::invalidate(const std::string& stage) {
-    std::lock_guard lock(mutex_);
-    cache_.erase(stage);
-}
-
-size_t StageGraph::cache_entries() const {
-    std::lock_guard lock(mutex_);
-    size_t n = 0;
-    for (const auto& [k, v] : cache_) n += v.size();
-    return n;
+uint64_t StageGraph::key(const Scene& scene, const std::string& stage, int object) const {
+    const std::string fp = fingerprint(scene, stage, object);
+    return fp.empty() ? 0 : hash(fp);
 }
 }  // namespace mesolab

@@ -1,22 +1,27 @@
 #pragma once
-// [SECTION] The stage graph.
+// [SECTION] The stage graph: declarations.
 // Computation is a graph of named stages ("scene.geometry", "env.irradiance", "basic.albedo",
-// later "microgeom.visibility"...). Each stage declares the parameters it reads (public keys,
-// or "group.*"), the upstream stages whose results it reads, and the effects that need it.
+// "microgeom.visibility"...). Each stage declares the parameters it reads (public keys, or
+// "group.*"), the upstream stages whose results it reads, and the effects that need it.
 //  - A stage runs only if it is upstream of what a frame needs and, when it lists effects, one
 //    of them is enabled in the scene; otherwise it is reported as skipped.
-//  - Its result is cached under a hash of its declared parameter values and its inputs' keys,
-//    so a change recomputes exactly the stages that depend on it (moving the light recomputes
-//    nothing). A few results per stage are kept, so toggling a value back is a cache hit.
-//  - Stages may run off the UI thread; they report progress and can be cancelled.
+//  - A scene stage computes one result for the scene. An object stage computes one result per
+//    scene object it applies to (the objects using its technique, or every object), and its key
+//    hashes that object's geometry and material parameters only, plus the scene-level keys it
+//    declares (light.*, env.*, ...): changing object 2 never recomputes object 1's results, and
+//    objects with equal settings share one result.
+//  - Results are cached under the fingerprint of their declared parameter values and their
+//    inputs' fingerprints, so a change recomputes exactly the stages that depend on it (moving
+//    the light recomputes nothing that does not read light.*).
+// This file holds the immutable declarations; the cache, the evaluation and its history belong
+// to a session (core/session.h), so two sessions in one process share nothing.
 #include "core/scene.h"
 #include <any>
 #include <atomic>
+#include <cstdint>
 #include <functional>
-#include <list>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -29,18 +34,35 @@ struct PaperFigure {
     std::string source;  // e.g. "Heidrich 2000, Table 1, Bricks 128x128 (SGI Octane)"
 };
 
+// What a stage is about to allocate, estimated before it allocates (see StageDecl::memory).
+struct MemoryEstimate {
+    double bytes = 0;
+    std::string what;                // how the figure comes about, e.g. "S_i: 4096x4096 texels x 1024 directions x 4 bytes"
+    std::vector<std::string> lower;  // the public keys that reduce it, e.g. {"microgeom.resolution", "microgeom.directions"}
+};
+
 class StageContext;
+
+enum class StageScope { Scene, Object };
 
 struct StageDecl {
     std::string name;
     std::string help;
+    StageScope scope = StageScope::Scene;
+    // Object stages: the technique whose objects it computes for ("" = every object).
+    std::string technique;
     std::vector<std::string> params;   // public keys or "group.*"
     std::vector<std::string> inputs;   // upstream stage names
     std::vector<std::string> effects;  // empty: needed whenever downstream needs it
-    // Also needed only when this holds (e.g. microgeom.shadows == ellipse); `when_text` says so.
+    // Scene stages: also needed only when this holds. Object stages: computed only for the objects
+    // for which `applies` holds (the others are reported skipped). `when_text` says when.
     std::function<bool(const Scene&)> when;
+    std::function<bool(const Scene&, const SceneObject&)> applies;
     std::string when_text;
     std::optional<PaperFigure> paper;
+    // The memory the stage will allocate for these settings (object stages: for that object),
+    // checked against the session's budget before it runs (core/session.h).
+    std::function<MemoryEstimate(const Scene&, const SceneObject*)> memory;
     // Returns the result as std::shared_ptr<const T> wrapped in std::any (or an empty any).
     std::function<std::any(StageContext&)> run;
 };
@@ -50,40 +72,72 @@ const char* to_string(StageStatus s);
 
 struct StageRun {
     std::string name;
+    int object = -1;       // object stages: the scene object; -1 for scene stages
     StageStatus status = StageStatus::Skipped;
     double ms = 0;         // time to compute (Ran) or look up (Cached)
     uint64_t key = 0;
     std::string reason;    // why skipped ("effects.environment is off") or the error
     std::vector<std::string> warnings;  // results that are valid but need the user's attention (kept with the cached result)
+    // "microgeom.visibility" or, for object stages, "microgeom.visibility [object name]".
+    std::string label(const Scene& s) const;
 };
 
 using ProgressFn = std::function<void(const std::string& stage, double fraction)>;
 
 // Results of one evaluation.
 struct Evaluation {
-    std::map<std::string, std::any> results;
+    struct Results {
+        std::any scene;                // scene stages
+        std::vector<std::any> objects; // object stages, by object index (empty where not computed)
+    };
+    std::map<std::string, Results> results;
     std::vector<StageRun> runs;  // in execution order, skipped stages included
 
+    // A scene stage's result (null when it did not run).
     template <class T>
     std::shared_ptr<const T> get(const std::string& stage) const {
-        auto it = results.find(stage);
-        if (it == results.end() || !it->second.has_value()) return nullptr;
-        return std::any_cast<std::shared_ptr<const T>>(it->second);
+        return cast<T>(find(stage, -1));
     }
-    const StageRun* run(const std::string& stage) const;
+    // An object stage's result for `object` (null when it did not run for that object).
+    template <class T>
+    std::shared_ptr<const T> get(const std::string& stage, int object) const {
+        return cast<T>(find(stage, object));
+    }
+    // The run of a stage (object stages: for `object`; -1 = the first object it ran for).
+    const StageRun* run(const std::string& stage, int object = -1) const;
+    // Every run of a stage (one per object for object stages).
+    std::vector<const StageRun*> runs_of(const std::string& stage) const;
+    // The raw result (an empty any when absent).
+    const std::any* find(const std::string& stage, int object) const;
+
+private:
+    template <class T>
+    static std::shared_ptr<const T> cast(const std::any* a) {
+        if (!a || !a->has_value()) return nullptr;
+        return std::any_cast<std::shared_ptr<const T>>(*a);
+    }
 };
 
 class StageContext {
 public:
-    StageContext(const Scene& s, const Evaluation& e, std::string name, const ProgressFn& p, const std::atomic<bool>* cancel)
-        : scene(s), eval_(e), name_(std::move(name)), progress_(p), cancel_(cancel) {}
+    StageContext(const Scene& s, const Evaluation& e, std::string name, int object, const ProgressFn& p, const std::atomic<bool>* cancel)
+        : scene(s), object(object), eval_(e), name_(std::move(name)), progress_(p), cancel_(cancel) {}
     const Scene& scene;
+    const int object;  // object stages: the object computed for; -1 for scene stages
+    // The object computed for (object stages only).
+    const SceneObject& obj() const { return scene.objects.at(size_t(object)); }
+    const ParamTable& material() const { return obj().material; }
+    // An upstream result: a scene stage's, or an object stage's for this stage's object.
     template <class T>
-    std::shared_ptr<const T> input(const std::string& stage) const { return eval_.get<T>(stage); }
+    std::shared_ptr<const T> input(const std::string& stage) const { return eval_.get<T>(stage, object); }
+    // An upstream object stage's result for another object (scene stages reading object stages).
+    template <class T>
+    std::shared_ptr<const T> input(const std::string& stage, int other_object) const { return eval_.get<T>(stage, other_object); }
     // Report progress in [0,1]; throws Cancelled when cancellation was requested.
     void progress(double fraction) const;
     bool cancelled() const { return cancel_ && cancel_->load(std::memory_order_relaxed); }
-    // A warning shown with the stage (capture prints it, the sidecar and the GUI list it).
+    // A warning shown with the stage (capture prints it, the sidecar and the GUI list it, with
+    // the object's name for object stages).
     void warn(std::string message) { warnings.push_back(std::move(message)); }
     std::vector<std::string> warnings;
     const std::string& name() const { return name_; }
@@ -98,41 +152,44 @@ private:
 template <class T>
 std::any stage_result(T value) { return std::any(std::shared_ptr<const T>(std::make_shared<T>(std::move(value)))); }
 
+// The declarations: immutable once the registry is built (tests build graphs of their own).
 class StageGraph {
 public:
-    // Registers a stage; throws std::logic_error on a duplicate name or an unknown input.
+    // Registers a stage; throws std::logic_error on a duplicate name or an unknown input. Object
+    // stages read scene stages and their own object's object stages; scene stages may read every
+    // object's results of an object stage (StageContext::input(stage, object)).
     void add(StageDecl d);
     const StageDecl* find(const std::string& name) const;
+    const StageDecl& at(const std::string& name) const;  // std::logic_error when unknown
     const std::vector<StageDecl>& stages() const { return stages_; }
 
-    // Evaluate `targets` and what they need. Stage errors propagate (InputError for bad input
-    // files, Cancelled on cancellation) after being recorded in the profiler.
-    Evaluation evaluate(const Scene& scene, const std::vector<std::string>& targets,
-                        const ProgressFn& progress = {}, const std::atomic<bool>* cancel = nullptr);
-    // Cache key of a stage for a scene (0 if the stage would be skipped).
-    uint64_t key(const Scene& scene, const std::string& stage) const;
-    // Whether a stage is needed by an enabled effect (or has none listed).
-    bool enabled(const Scene& scene, const StageDecl& d, std::string* reason = nullptr) const;
+    // Whether object `object` is one an object stage computes for (its technique); true for scene stages.
+    bool covers(const Scene& scene, const StageDecl& d, int object) const;
+    // Whether a stage is needed: its `when` / `applies` holds and an enabled effect needs it (or it
+    // lists none). `object` is the object for object stages, -1 for scene stages.
+    bool enabled(const Scene& scene, const StageDecl& d, int object, std::string* reason = nullptr) const;
+    // The objects an object stage computes for (covers()), in order; {-1} for a scene stage.
+    std::vector<int> subjects(const Scene& scene, const StageDecl& d) const;
 
-    void clear_cache();
-    // Drop the cached results of one stage (bench: time it from a cold cache).
-    void invalidate(const std::string& stage);
-    size_t cache_entries() const;
-    size_t cache_capacity_per_stage = 4;
+    // The full fingerprint of a stage's inputs for a scene (object stages: for `object`): its
+    // name, its declared parameter values and its inputs' fingerprints. Empty when the stage
+    // would be skipped. Two inputs with equal fingerprints give equal results.
+    std::string fingerprint(const Scene& scene, const std::string& stage, int object = -1) const;
+    // 64-bit key of a fingerprint (FNV-1a; 0 stays for "skipped").
+    static uint64_t hash(std::string_view fingerprint);
+    // Cache key of a stage for a scene (0 if the stage would be skipped).
+    uint64_t key(const Scene& scene, const std::string& stage, int object = -1) const;
+
+    // Memo of fingerprints within one evaluation, keyed by "stage#object".
+    using Memo = std::map<std::string, std::string>;
+    const std::string& fingerprint(const Scene& scene, const StageDecl& d, int object, Memo& memo) const;
 
 private:
-    uint64_t key_rec(const Scene& scene, const StageDecl& d, std::map<std::string, uint64_t>& memo) const;
     std::vector<StageDecl> stages_;
-    mutable std::mutex mutex_;
-    struct Entry {
-        uint64_t key = 0;
-        std::any result;
-        std::vector<std::string> warnings;
-    };
-    std::map<std::string, std::list<Entry>> cache_;  // most recent first
 };
 
-// Hash of the values behind a parameter pattern ("basic.kd", "geometry.*", "light.*") over
-// every table of the scene it refers to.
-std::string param_fingerprint(const Scene& scene, const std::string& pattern);
+// Canonical values behind a parameter pattern ("basic.kd", "geometry.*", "light.*"). `object` >= 0
+// restricts geometry.* and technique keys to that object (nothing when it uses another
+// technique); -1 covers every object (their indices are part of the text).
+std::string param_fingerprint(const Scene& scene, const std::string& pattern, int object = -1);
 }  // namespace mesolab

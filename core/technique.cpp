@@ -7,6 +7,19 @@
 
 namespace mesolab {
 
+namespace {
+std::vector<std::function<std::unique_ptr<Technique>()>>& extra_techniques() {
+    static std::vector<std::function<std::unique_ptr<Technique>()>> v;
+    return v;
+}
+bool g_registry_built = false;
+}  // namespace
+
+void register_extra_technique(std::function<std::unique_ptr<Technique>()> make) {
+    if (g_registry_built) throw std::logic_error("register_extra_technique: the registry is already built");
+    extra_techniques().push_back(std::move(make));
+}
+
 // [SECTION] Scene-level declarations (camera, light, env, geometry, effects)
 Registry::Registry()
     : camera_("camera", "Camera"), light_("light", "Light"), env_("env", "Environment"), geometry_("geometry", "Geometry"), effects_("effects", "Effects") {
@@ -46,7 +59,9 @@ Registry::Registry()
 
     declare_scene_stages(stages_);
     register_core_techniques(*this);
+    for (const auto& make : extra_techniques()) add(make());
     finish();
+    g_registry_built = true;
 }
 
 Registry& Registry::instance() {
@@ -56,6 +71,11 @@ Registry& Registry::instance() {
 
 void Registry::add(std::unique_ptr<Technique> t) {
     if (technique(t->name())) throw std::logic_error("technique registered twice: " + t->name());
+    for (const auto& a : t->aovs())
+        for (const auto& c : common_aovs())
+            if (a.name == c.name) throw std::logic_error("technique " + t->name() + " declares the AOV " + a.name + ", which every technique writes");
+    for (const auto& st : t->frame_steps())
+        if (st.name.rfind(t->name() + ".", 0) != 0) throw std::logic_error("frame step " + st.name + " must be named " + t->name() + ".<step>");
     t->declare_stages(stages_);
     techniques_.push_back(std::move(t));
 }
@@ -104,9 +124,20 @@ std::vector<std::string> Registry::frame_stages(const Scene& s) const {
     return r;
 }
 
+const std::vector<AovDecl>& common_aovs() {
+    static const std::vector<AovDecl> r{{"radiance", 3, "Outgoing radiance towards the eye (linear RGB)"},
+                                        {"normal", 3, "Shading normal, world space (texture mode: tangent space)"}};
+    return r;
+}
+
+std::vector<AovDecl> Technique::outputs() const {
+    std::vector<AovDecl> r = common_aovs();
+    r.insert(r.end(), aovs_.begin(), aovs_.end());
+    return r;
+}
+
 std::vector<AovDecl> Registry::aovs(const Scene& s) const {
-    std::vector<AovDecl> r{{"radiance", 3, "Outgoing radiance towards the eye (linear RGB)"},
-                           {"normal", 3, "Shading normal, world space (texture mode: tangent space)"}};
+    std::vector<AovDecl> r = common_aovs();
     for (const auto& t : techniques_) {
         if (!s.uses_technique(t->name())) continue;
         for (const auto& a : t->aovs())
@@ -122,9 +153,4 @@ std::vector<BenchTable> bench_tables() {
     return r;
 }
 
-std::vector<AovDecl> Registry::all_aovs() const {
-    Scene everything;
-    for (const auto& t : techniques_) everything.objects.push_back({"", {}, t->name(), {}});
-    return aovs(everything);
-}
 }  // namespace mesolab

@@ -143,7 +143,7 @@ struct Assembler {
         return int(files.size()) - 1;
     }
 
-    void append(const std::string& name, const std::vector<std::string>& defines, bool top_level) {
+    void append(const std::string& name, const std::vector<std::string>& defines, bool top_level, const std::string& prelude = "") {
         const int index = file_index(name);
         included.insert(name);
         const std::string_view src = shader_source(name);
@@ -164,6 +164,8 @@ struct Assembler {
                 saw_version = true;
                 out += line + "\n";
                 for (const std::string& d : defines) out += "#define " + define_text(d) + "\n";
+                out += prelude;
+                if (!prelude.empty() && prelude.back() != '\n') out += "\n";
                 out += "#line " + std::to_string(line_no + 1) + " " + std::to_string(index) + "\n";
                 continue;
             }
@@ -234,9 +236,9 @@ std::string program_log(GLuint program) {
 }
 
 // Compiles one stage; the returned shader object must be deleted by the caller.
-GLuint compile(GLenum stage, const std::string& name, const std::vector<std::string>& defines) {
+GLuint compile(GLenum stage, const std::string& name, const std::vector<std::string>& defines, const std::string& prelude = "") {
     Assembler a;
-    a.append(name, defines, true);
+    a.append(name, defines, true, prelude);
     const GLuint shader = glCreateShader(stage);
     if (!shader) throw std::runtime_error(name + ": glCreateShader failed (is a GL context current?)");
     const char* text = a.out.c_str();
@@ -271,11 +273,11 @@ GlName<delete_program> link(const std::vector<GLuint>& shaders, const std::strin
 }  // namespace
 
 // [SECTION] Program
-Program Program::graphics(const std::string& vert, const std::string& frag, const std::vector<std::string>& defines) {
+Program Program::graphics(const std::string& vert, const std::string& frag, const std::vector<std::string>& defines, const std::string& frag_prelude) {
     const GLuint vs = compile(GL_VERTEX_SHADER, vert, defines);
     GLuint fs = 0;
     try {
-        fs = compile(GL_FRAGMENT_SHADER, frag, defines);
+        fs = compile(GL_FRAGMENT_SHADER, frag, defines, frag_prelude);
     } catch (...) {
         glDeleteShader(vs);
         throw;

@@ -44,12 +44,14 @@ Buffer make_storage_buffer(const void* data, size_t bytes, GLenum usage = GL_STA
 
 // A linked program. Sources are looked up by embedded name (e.g. "basic/basic.frag"); a line
 // `#include "common.glsl"` is replaced by the embedded file of that name (recursively, once).
-// `defines` lines ("NAME VALUE") are inserted after #version. Compile/link errors throw
+// `defines` lines ("NAME VALUE") are inserted after #version, then the fragment shader's
+// `frag_prelude` (generated declarations, e.g. fragment_outputs()). Compile/link errors throw
 // std::runtime_error with the file name and the driver's log.
 class Program {
 public:
     Program() = default;
-    static Program graphics(const std::string& vert, const std::string& frag, const std::vector<std::string>& defines = {});
+    static Program graphics(const std::string& vert, const std::string& frag, const std::vector<std::string>& defines = {},
+                            const std::string& frag_prelude = "");
     static Program compute(const std::string& comp, const std::vector<std::string>& defines = {});
     GLuint id() const { return id_.get(); }
     void use() const { glUseProgram(id_.get()); }

@@ -12,19 +12,8 @@ namespace mesolab::gpu {
 struct Renderer::Impl {
     Program background;
     std::map<std::string, std::unique_ptr<TechniquePass>> passes;
-    // Uploaded meshes per object, with the mesh they came from (kept alive: the key).
-    struct Mesh {
-        std::shared_ptr<const TriMesh> source;
-        GpuMesh gpu;
-    };
-    std::vector<Mesh> meshes;
-    // Textures by owner (the shared image keeps the key's address from being reused).
-    struct Tex {
-        Texture tex;
-        std::shared_ptr<const Image> keep;
-    };
-    std::map<const void*, Tex> textures;
-    GpuTimer timer;
+    std::map<std::string, std::string> step_fingerprints;  // frame steps' inputs in the last frame that ran them
+    GpuTimer timer, step_timer;
     VertexArray empty_vao;  // attribute-less draws (the full-screen triangle)
 
     void draw_fullscreen_triangle() const {
@@ -34,11 +23,35 @@ struct Renderer::Impl {
     }
 };
 
+namespace {
+std::map<std::string, PassFactory>& extra_passes() {
+    static std::map<std::string, PassFactory> m;
+    return m;
+}
+}  // namespace
+
+void register_extra_pass(const std::string& technique, PassFactory make) { extra_passes()[technique] = std::move(make); }
+
+std::string fragment_outputs(const Technique& t) {
+    std::string s;
+    const auto outs = t.outputs();
+    for (size_t k = 0; k < outs.size(); ++k) s += "layout(location = " + std::to_string(k) + ") out vec4 o_" + outs[k].name + ";\n";
+    return s;
+}
+
 Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
     impl_->background = Program::graphics("shaders/fullscreen.vert", "shaders/background.frag");
     std::map<std::string, PassFactory> factories;
     register_gpu_passes(factories);
-    for (auto& [name, make] : factories) impl_->passes[name] = make();
+    for (const auto& [name, make] : extra_passes()) factories[name] = make;
+    for (const Technique* t : Registry::instance().techniques()) {
+        if (int(t->outputs().size()) > max_attachments())
+            throw std::runtime_error("technique " + t->name() + " declares " + std::to_string(t->outputs().size()) + " outputs; this GL draws at most " +
+                                     std::to_string(max_attachments()) + " at once");
+        auto f = factories.find(t->name());
+        if (f == factories.end()) throw std::logic_error("technique " + t->name() + " has no GPU pass");
+        impl_->passes[t->name()] = f->second(*t);
+    }
     GLuint vao = 0;
     glGenVertexArrays(1, &vao);
     impl_->empty_vao = VertexArray(vao);
@@ -53,6 +66,16 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
 }
 
 Renderer::~Renderer() = default;
+
+void Renderer::forget_frame_steps() { impl_->step_fingerprints.clear(); }
+
+int Renderer::max_attachments() const {
+    GLint draw = 0, color = 0;
+    glGetIntegerv(GL_MAX_DRAW_BUFFERS, &draw);
+    glGetIntegerv(GL_MAX_COLOR_ATTACHMENTS, &color);
+    const int gl = std::max(1, std::min(draw, color));
+    return max_attachments_override_ > 0 ? std::min(gl, max_attachments_override_) : gl;
+}
 
 // [SECTION] Resources
 namespace {
@@ -96,56 +119,51 @@ void Renderer::draw_object(const Scene& s, const Evaluation& ev, int object) {
 }
 
 const GpuMesh& Renderer::mesh(const Scene& s, const Evaluation& ev, int object) {
-    // One upload per object, redone when the drawn mesh changes (new tessellation or LOD).
-    std::shared_ptr<const TriMesh> m = drawn_mesh(s, ev, object);
+    // One upload per drawn mesh (a tessellation or a level of detail), kept while it is cached.
+    const std::shared_ptr<const TriMesh> m = drawn_mesh(s, ev, object);
     if (!m) throw std::logic_error("gpu::Renderer: scene.geometry was not evaluated");
-    if (impl_->meshes.size() < s.objects.size()) impl_->meshes.resize(s.objects.size());
-    Impl::Mesh& slot = impl_->meshes[size_t(object)];
-    if (slot.source != m) {
+    return resources_.get<GpuMesh>(m, "mesh", [&] {
         PROFILE_SCOPE("upload.meshes");
-        slot.gpu = upload_mesh(*m);
-        slot.source = std::move(m);
+        GpuMesh g = upload_mesh(*m);
         check_gl("mesh upload");
-    }
-    return slot.gpu;
-}
-
-GLuint Renderer::texture(const Image& img, const void* owner_key, bool repeat) {
-    auto it = impl_->textures.find(owner_key);
-    if (it != impl_->textures.end()) return it->second.tex.get();
-    PROFILE_SCOPE("upload.texture");
-    GLuint id = 0;
-    glGenTextures(1, &id);
-    glBindTexture(GL_TEXTURE_2D, id);
-    std::vector<float> rgba(size_t(img.width) * size_t(img.height) * 4, 1.f);
-    for (size_t i = 0; i < size_t(img.width) * size_t(img.height); ++i)
-        for (int c = 0; c < 4; ++c) {
-            const int src = img.channels >= 3 ? std::min(c, img.channels - 1) : 0;
-            if (c < 3 || img.channels == 4) rgba[i * 4 + size_t(c)] = img.data[i * size_t(img.channels) + size_t(src)];
-        }
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, img.width, img.height, 0, GL_RGBA, GL_FLOAT, rgba.data());
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, repeat ? GL_REPEAT : GL_CLAMP_TO_EDGE);
-    check_gl("texture upload");
-    impl_->textures[owner_key].tex = Texture(id);
-    return id;
+        return g;
+    });
 }
 
 GLuint Renderer::texture(const std::shared_ptr<const Image>& img, bool repeat) {
-    const GLuint id = texture(*img, img.get(), repeat);
-    impl_->textures[img.get()].keep = img;
-    return id;
+    return resources_
+        .get<Texture>(img, repeat ? "texture.repeat" : "texture.clamp",
+                      [&] {
+                          PROFILE_SCOPE("upload.texture");
+                          GLuint id = 0;
+                          glGenTextures(1, &id);
+                          Texture t(id);
+                          glBindTexture(GL_TEXTURE_2D, id);
+                          std::vector<float> rgba(size_t(img->width) * size_t(img->height) * 4, 1.f);
+                          for (size_t i = 0; i < size_t(img->width) * size_t(img->height); ++i)
+                              for (int c = 0; c < 4; ++c) {
+                                  const int src = img->channels >= 3 ? std::min(c, img->channels - 1) : 0;
+                                  if (c < 3 || img->channels == 4) rgba[i * 4 + size_t(c)] = img->data[i * size_t(img->channels) + size_t(src)];
+                              }
+                          glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+                          glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, img->width, img->height, 0, GL_RGBA, GL_FLOAT, rgba.data());
+                          glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+                          glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+                          glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
+                          glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, repeat ? GL_REPEAT : GL_CLAMP_TO_EDGE);
+                          check_gl("texture upload");
+                          return t;
+                      })
+        .get();
 }
 
-void Renderer::draw_buffers(const std::vector<std::string>& aovs) const {
-    // Fragment output location k writes the attachment of the AOV named aovs[k].
-    std::vector<GLenum> bufs(aovs.size(), GL_NONE);
-    for (size_t k = 0; k < aovs.size(); ++k)
-        for (size_t i = 0; i < layout_.size(); ++i)
-            if (layout_[i].name == aovs[k]) bufs[k] = GLenum(GL_COLOR_ATTACHMENT0 + i);
+void Renderer::bind_outputs(const std::vector<AovDecl>& outputs, size_t batch) const {
+    // Fragment output location k writes the attachment of the AOV outputs[k] in this batch.
+    std::vector<GLenum> bufs(outputs.size(), GL_NONE);
+    const auto& b = batches_[batch];
+    for (size_t k = 0; k < outputs.size(); ++k)
+        for (size_t i = 0; i < b.size(); ++i)
+            if (b[i].name == outputs[k].name) bufs[k] = GLenum(GL_COLOR_ATTACHMENT0 + i);
     glDrawBuffers(GLsizei(bufs.size()), bufs.data());
 }
 
@@ -187,70 +205,114 @@ void Renderer::set_lighting_uniforms(const Program& p, const Lighting& L, int en
 }
 
 GLuint Renderer::aov_texture(const std::string& name) const {
-    for (size_t i = 0; i < layout_.size(); ++i)
-        if (layout_[i].name == name) return target_.color(int(i));
+    for (size_t b = 0; b < batches_.size(); ++b)
+        for (size_t i = 0; i < batches_[b].size(); ++i)
+            if (batches_[b][i].name == name) return targets_[b].color(int(i));
     return 0;
 }
 
 // [SECTION] Frame
-void Renderer::render(const Scene& s, const Evaluation& ev, int width, int height) {
+void Renderer::render(const Scene& s, const Evaluation& ev, int width, int height, const std::vector<std::string>& aovs) {
     PROFILE_SCOPE("frame.gpu");
     if (width < 1 || height < 1 || width > 16384 || height > 16384)
         throw InputError("frame size " + std::to_string(width) + "x" + std::to_string(height) + " is out of range (1..16384 per side)");
-    layout_ = Registry::instance().aovs(s);
-    target_.resize(width, height, int(layout_.size()));
+    resources_.collect();  // GL objects of results that are gone
+    layout_ = frame_layout(s, aovs);
+    width_ = width, height_ = height;
+    // Batches of attachments: radiance first; more AOVs than one framebuffer takes go in further batches.
+    const size_t per_batch = size_t(max_attachments());
+    batches_.clear();
+    for (size_t i = 0; i < layout_.size(); i += per_batch)
+        batches_.emplace_back(layout_.begin() + long(i), layout_.begin() + long(std::min(layout_.size(), i + per_batch)));
+    targets_.resize(batches_.size());
+    for (size_t b = 0; b < batches_.size(); ++b) targets_[b].resize(width, height, int(batches_[b].size()));
+
     const FrameCamera cam = make_camera(s, world_bounds(s, ev), width, height);
     const Lighting lighting = make_lighting(s, ev);
-
-    impl_->timer.begin();
-    target_.bind();
-    std::vector<std::string> all;
-    for (const auto& a : layout_) all.push_back(a.name);
-    draw_buffers(all);
-    glDisable(GL_BLEND);
-    glDisable(GL_CULL_FACE);
-    glDisable(GL_SCISSOR_TEST);
-    glClearColor(0.f, 0.f, 0.f, 0.f);
-    glClearDepth(1.0);
-    glDepthMask(GL_TRUE);
-    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-
-    if (!cam.texture_mode) {
-        // Background: the environment through each pixel; objects overwrite it.
-        glDisable(GL_DEPTH_TEST);
-        draw_buffers({"radiance"});
-        impl_->background.use();
-        glUniformMatrix4fv(impl_->background.uniform("u_inv_view_proj"), 1, GL_FALSE, glm::value_ptr(cam.inv_view_proj));
-        set_lighting_uniforms(impl_->background, lighting, 0);
-        impl_->draw_fullscreen_triangle();
-    }
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LESS);
-    for (const Technique* t : Registry::instance().techniques()) {
+    const auto context_for = [&](const Technique& t) {
         DrawContext ctx{s, ev, cam, lighting, {}, *this, cam.raster.proj * cam.raster.view};
         for (size_t i = 0; i < s.objects.size(); ++i)
-            if (s.objects[i].technique == t->name()) ctx.objects.push_back(int(i));
+            if (s.objects[i].technique == t.name()) ctx.objects.push_back(int(i));
+        return ctx;
+    };
+
+    // Frame steps: offscreen work before the frame, each timed on its own, reused while its inputs hold.
+    last_steps_.clear();
+    for (const Technique* t : Registry::instance().techniques()) {
+        DrawContext ctx = context_for(*t);
         if (ctx.objects.empty()) continue;
-        auto it = impl_->passes.find(t->name());
-        if (it == impl_->passes.end()) throw std::logic_error("technique " + t->name() + " has no GPU pass");
-        it->second->draw(ctx);
+        for (const FrameStepDecl& d : t->frame_steps()) {
+            FrameStepRun run{d.name};
+            const std::string fp = frame_step_fingerprint(s, ev, d);
+            auto& last = impl_->step_fingerprints[d.name];
+            if (last == fp) {
+                run.status = StageStatus::Cached;
+                last_steps_.push_back(run);
+                continue;
+            }
+            last.clear();  // a failure must not leave a stale "done" behind
+            {
+                PROFILE_SCOPE("step." + d.name);
+                impl_->step_timer.begin();
+                impl_->passes.at(t->name())->run_step(d.name, ctx);
+                impl_->step_timer.end();
+                run.ms = impl_->step_timer.elapsed_ms();
+            }
+            if (std::isfinite(run.ms)) Profiler::current().record("frame.gpu/step." + d.name + "/gpu", run.ms, Device::Gpu);
+            check_gl(("frame step " + d.name).c_str());
+            last = fp;
+            last_steps_.push_back(run);
+        }
+    }
+
+    impl_->timer.begin();
+    for (size_t b = 0; b < batches_.size(); ++b) {
+        targets_[b].bind();
+        glDisable(GL_BLEND);
+        glDisable(GL_CULL_FACE);
+        glDisable(GL_SCISSOR_TEST);
+        glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+        glClearColor(0.f, 0.f, 0.f, 0.f);
+        glClearDepth(1.0);
+        glDepthMask(GL_TRUE);
+        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+        const bool has_radiance = std::any_of(batches_[b].begin(), batches_[b].end(), [](const AovDecl& a) { return a.name == "radiance"; });
+        if (!cam.texture_mode && has_radiance) {
+            // Background: the environment through each pixel; objects overwrite it.
+            glDisable(GL_DEPTH_TEST);
+            bind_outputs({common_aovs().front()}, b);
+            impl_->background.use();
+            glUniformMatrix4fv(impl_->background.uniform("u_inv_view_proj"), 1, GL_FALSE, glm::value_ptr(cam.inv_view_proj));
+            set_lighting_uniforms(impl_->background, lighting, 0);
+            impl_->draw_fullscreen_triangle();
+        }
+        glEnable(GL_DEPTH_TEST);
+        glDepthFunc(GL_LESS);
+        for (const Technique* t : Registry::instance().techniques()) {
+            DrawContext ctx = context_for(*t);
+            if (ctx.objects.empty()) continue;
+            bind_outputs(t->outputs(), b);
+            impl_->passes.at(t->name())->draw(ctx);
+        }
     }
     impl_->timer.end();
     last_gpu_ms_ = impl_->timer.elapsed_ms();
     // An impossible driver answer (NaN, see GpuTimer) is left out rather than recorded.
-    if (std::isfinite(last_gpu_ms_)) Profiler::global().record("frame.gpu/gpu", last_gpu_ms_, Device::Gpu);
+    if (std::isfinite(last_gpu_ms_)) Profiler::current().record("frame.gpu/gpu", last_gpu_ms_, Device::Gpu);
     check_gl("Renderer::render");
 }
 
 Frame Renderer::read_frame() const {
     PROFILE_SCOPE("frame.gpu.readback");
-    Frame f = make_frame(layout_, target_.width(), target_.height());
-    for (size_t i = 0; i < layout_.size(); ++i) {
-        const std::vector<float> rgba = target_.read_rgba(int(i));
-        Image& img = f.aov(layout_[i].name);
-        for (size_t p = 0; p < size_t(f.width) * size_t(f.height); ++p)
-            for (int c = 0; c < img.channels; ++c) img.data[p * size_t(img.channels) + size_t(c)] = rgba[p * 4 + size_t(c)];
-    }
+    Frame f = make_frame(layout_, width_, height_);
+    f.steps = last_steps_;
+    for (size_t b = 0; b < batches_.size(); ++b)
+        for (size_t i = 0; i < batches_[b].size(); ++i) {
+            const std::vector<float> rgba = targets_[b].read_rgba(int(i));
+            Image& img = f.aov(batches_[b][i].name);
+            for (size_t p = 0; p < size_t(f.width) * size_t(f.height); ++p)
+                for (int c = 0; c < img.channels; ++c) img.data[p * size_t(img.channels) + size_t(c)] = rgba[p * 4 + size_t(c)];
+        }
     return f;
 }
 }  // namespace mesolab::gpu

@@ -3,6 +3,8 @@
 // Like the technique panels they only draw and edit; anything with side effects (loading,
 // saving, the clipboard) comes back to the caller as a request, so errors are handled in one
 // place and never unwind through an open ImGui window.
+#include "core/profile.h"
+#include "core/render.h"
 #include "panels/panel.h"
 #include <string>
 #include <vector>
@@ -38,7 +40,10 @@ PresetRequest preset_list(PresetBrowser& b, float height);
 // Timings: one row per stage of the last evaluation (status, reason tooltip, time) and one per
 // profiler path (last / median / min / max, device, the paper's figure and our ratio to it).
 // `note` is shown above the tables (e.g. the last evaluation's failure).
-void timings_panel(const std::vector<StageRun>& runs, const std::string& note);
+// The stages of the last evaluation (object stages name their object), the last frame's frame
+// steps, and the session profiler's history.
+void timings_panel(const Scene& scene, const std::vector<StageRun>& runs, const std::vector<FrameStepRun>& steps, Profiler& profiler,
+                   const std::string& note);
 
 // Colour for a stage status (ran, cached, skipped, failed, cancelled).
 unsigned status_color(StageStatus s);

@@ -1,10 +1,12 @@
 // Timings panel: stage statuses of the last evaluation and the profiler's history per path.
 #include "panels/app_panels.h"
 #include "core/profile.h"
+#include "core/render.h"
 #include "core/technique.h"
 
 #include <imgui.h>
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <string>
 
@@ -44,7 +46,7 @@ const PaperFigure* paper_of(const std::string& profiler_path) {
     return d && d->paper ? &*d->paper : nullptr;
 }
 
-void stages_table(const std::vector<StageRun>& runs) {
+void stages_table(const Scene& scene, const std::vector<StageRun>& runs, const std::vector<FrameStepRun>& steps) {
     if (!ImGui::BeginTable("##stages", 4, kTableFlags)) return;
     ImGui::TableSetupScrollFreeze(0, 1);
     ImGui::TableSetupColumn("Stage", ImGuiTableColumnFlags_WidthStretch);
@@ -56,7 +58,7 @@ void stages_table(const std::vector<StageRun>& runs) {
     for (const StageRun& r : runs) {
         ImGui::TableNextRow();
         ImGui::TableNextColumn();
-        ImGui::TextUnformatted(r.name.c_str());
+        ImGui::TextUnformatted(r.label(scene).c_str());
         if (ImGui::IsItemHovered()) {
             const StageDecl* d = Registry::instance().stages().find(r.name);
             if (d) ImGui::SetTooltip("%s\nkey %016llx", d->help.c_str(), static_cast<unsigned long long>(r.key));
@@ -90,6 +92,20 @@ void stages_table(const std::vector<StageRun>& runs) {
             right_aligned(ms_format(d->paper->ms), d->paper->ms);
             if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", d->paper->source.c_str());
         }
+    }
+    // Frame steps: offscreen work before the last frame, each its own row.
+    for (const FrameStepRun& st : steps) {
+        ImGui::TableNextRow();
+        ImGui::TableNextColumn();
+        ImGui::Text("frame step %s", st.name.c_str());
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("Offscreen work before the frame; reused while its declared inputs are unchanged");
+        ImGui::TableNextColumn();
+        ImGui::PushStyleColor(ImGuiCol_Text, status_color(st.status));
+        ImGui::TextUnformatted(to_string(st.status));
+        ImGui::PopStyleColor();
+        ImGui::TableNextColumn();
+        if (st.status == StageStatus::Ran && std::isfinite(st.ms)) right_aligned(ms_format(st.ms), st.ms);
+        ImGui::TableNextColumn();
     }
     if (runs.empty()) {
         ImGui::TableNextRow();
@@ -144,11 +160,12 @@ void profiler_table(const std::vector<TimingStat>& stats) {
 }
 }  // namespace
 
-void timings_panel(const std::vector<StageRun>& runs, const std::string& note) {
-    if (ImGui::Button("Reset")) Profiler::global().clear();
+void timings_panel(const Scene& scene, const std::vector<StageRun>& runs, const std::vector<FrameStepRun>& steps, Profiler& profiler,
+                   const std::string& note) {
+    if (ImGui::Button("Reset")) profiler.clear();
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("Clear the profiler's history");
     ImGui::SameLine();
-    ImGui::TextDisabled("all times in ms; medians over the last %zu samples", Profiler::global().history);
+    ImGui::TextDisabled("all times in ms; medians over the last %zu samples", profiler.history);
     if (!note.empty()) {
         ImGui::PushStyleColor(ImGuiCol_Text, IM_COL32(235, 120, 110, 255));
         ImGui::PushTextWrapPos(0.f);
@@ -160,13 +177,13 @@ void timings_panel(const std::vector<StageRun>& runs, const std::string& note) {
     const float left_w = std::clamp(avail.x * 0.36f, 260.f, 460.f);
     if (ImGui::BeginChild("##stages_child", ImVec2(left_w, 0))) {
         ImGui::TextDisabled("Stages of the last evaluation");
-        stages_table(runs);
+        stages_table(scene, runs, steps);
     }
     ImGui::EndChild();
     ImGui::SameLine();
     if (ImGui::BeginChild("##profiler_child", ImVec2(0, 0))) {
         ImGui::TextDisabled("Profiler");
-        profiler_table(Profiler::global().stats());
+        profiler_table(profiler.stats());
     }
     ImGui::EndChild();
 }

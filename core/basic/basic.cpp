@@ -40,14 +40,10 @@ vec3 sample_albedo(const Image& img, vec2 uv) {
     return glm::mix(glm::mix(texel(x0, y0), texel(x1, y0), ax), glm::mix(texel(x0, y1), texel(x1, y1), ax), ay);
 }
 
-AlbedoMaps read_albedo_maps(const Scene& s, const std::string& technique) {
-    AlbedoMaps maps;
-    for (const auto& o : s.objects) {
-        if (o.technique != technique) continue;
-        const std::string path = s.resolve(o.material.get_string("albedo_map"));
-        if (!path.empty() && !maps.count(path)) maps.emplace(path, read_image(path, true, true));
-    }
-    return maps;
+std::optional<Image> read_albedo_map(const Scene& s, const ParamTable& material) {
+    const std::string path = s.resolve(material.get_string("albedo_map"));
+    if (path.empty()) return std::nullopt;
+    return read_image(path, true, true);
 }
 
 namespace {
@@ -65,9 +61,14 @@ public:
     void declare_stages(StageGraph& g) const override {
         // Albedo textures: read once, reused until the file or the path changes.
         g.add({.name = "basic.albedo",
-               .help = "Read the albedo maps of the objects using basic",
+               .help = "Read the object's albedo map",
+               .scope = StageScope::Object,
+               .technique = "basic",
                .params = {"basic.albedo_map"},
-               .run = [](StageContext& ctx) { return stage_result(read_albedo_maps(ctx.scene, "basic")); }});
+               .run = [](StageContext& ctx) -> std::any {
+                   auto img = read_albedo_map(ctx.scene, ctx.material());
+                   return img ? stage_result(std::move(*img)) : std::any();
+               }});
     }
 
     std::vector<std::string> frame_stages() const override { return {"basic.albedo"}; }
@@ -97,25 +98,23 @@ public:
 
     void shade_cpu(const ShadeContext& ctx) const override {
         const GBuffer& gb = ctx.gbuffer;
-        auto maps = ctx.eval.get<AlbedoMaps>("basic.albedo");
-        std::map<int, Material> mats;
+        // Materials parsed once per frame; albedo maps by object.
+        std::map<int, std::pair<Material, std::shared_ptr<const Image>>> mats;
         for (int i : ctx.objects) {
             const auto& o = ctx.scene.objects[size_t(i)];
-            mats[i] = Material::from(o.material, ctx.scene.resolve(o.material.get_string("albedo_map")));
+            mats[i] = {Material::from(o.material, ctx.scene.resolve(o.material.get_string("albedo_map"))), ctx.eval.get<Image>("basic.albedo", i)};
         }
-        Image& rad = ctx.frame.aov("radiance");
-        Image& nrm = ctx.frame.aov("normal");
         tbb::parallel_for(0, gb.height, [&](int y) {
             for (int x = 0; x < gb.width; ++x) {
                 const size_t px = gb.index(x, y);
                 if (!ctx.mine(px)) continue;
-                const Material& m = mats.at(gb.object[px]);
+                const auto& [m, map] = mats.at(gb.object[px]);
                 const vec3 p = gb.position[px];
                 const vec3 wo = ctx.camera.wo(p);
                 vec3 n = gb.normal[px];
                 if (glm::dot(n, wo) < 0.f) n = -n;  // two-sided
                 vec3 tex(1.f);
-                if (!m.albedo_map.empty() && maps) tex = sample_albedo(maps->at(m.albedo_map), gb.uv[px]);
+                if (map) tex = sample_albedo(*map, gb.uv[px]);
                 vec3 L(0.f);
                 for (const Light& l : ctx.lighting.lights) {
                     vec3 wi, E;
@@ -125,10 +124,8 @@ public:
                     L += brdf(m, n, wo, wi, tex) * E * cos_i;
                 }
                 L += m.kd * tex * kInvPi * ctx.lighting.env_irradiance(n);
-                float* r = rad.at(x, y);
-                r[0] = L.x, r[1] = L.y, r[2] = L.z;
-                float* q = nrm.at(x, y);
-                q[0] = n.x, q[1] = n.y, q[2] = n.z;
+                ctx.out.put(AovWriter::kRadiance, x, y, L);
+                ctx.out.put(AovWriter::kNormal, x, y, n);
             }
         });
     }

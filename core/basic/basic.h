@@ -9,8 +9,8 @@
 #include "core/math.h"
 #include "core/param.h"
 #include "core/scene.h"
-#include <map>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace mesolab::basic {
@@ -32,8 +32,7 @@ vec3 brdf(const Material& m, vec3 n, vec3 wo, vec3 wi, vec3 albedo_tex = vec3(1.
 // sampled at (u, 1 - v).
 vec3 sample_albedo(const Image& img, vec2 uv);
 
-// Result of the stage basic.albedo (and bumpsynth.albedo): the albedo maps of the scene, by resolved path.
-using AlbedoMaps = std::map<std::string, Image>;
-// Reads the `albedo_map` images of the objects using `technique` (8-bit images are sRGB), once each.
-AlbedoMaps read_albedo_maps(const Scene& s, const std::string& technique);
+// The image an object's `albedo_map` names (8-bit images are sRGB), for the object stages
+// basic.albedo and bumpsynth.albedo; nullopt when it names none.
+std::optional<Image> read_albedo_map(const Scene& s, const ParamTable& material);
 }  // namespace mesolab::basic

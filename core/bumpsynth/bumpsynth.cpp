@@ -127,31 +127,28 @@ ShadingModel shading_from_material(const ParamTable& m) {
 
 Synthesis synthesis_for(const Scene& s, const Evaluation& ev, int object) {
     Synthesis syn;
-    const auto get = [&](auto tag, const char* stage) {
-        using T = typename decltype(tag)::type;
-        auto r = ev.get<PerObject<T>>(stage);
-        return r ? r->get(object) : nullptr;
-    };
-    syn.ndf = get(std::type_identity<Ndf>{}, "bumpsynth.ndf");
-    syn.lut = get(std::type_identity<Lut>{}, "bumpsynth.lut");
+    syn.ndf = ev.get<Ndf>("bumpsynth.ndf", object).get();
+    syn.lut = ev.get<Lut>("bumpsynth.lut", object).get();
     const SceneObject& o = s.objects[size_t(object)];
     const ParamTable& m = o.material;
     syn.octaves_max = int(m.get_int("octaves_max"));
+    syn.detail_distance = float(m.get_float("detail_distance"));
     if (index_mode(o)) {
-        syn.index_map = get(std::type_identity<IndexMap>{}, "bumpsynth.index_map");
+        syn.index_map = ev.get<IndexMap>("bumpsynth.index_map", object).get();
         if (syn.index_map) syn.index_detail = index_detail(*syn.index_map, noise_from_material(m), float(m.get_float("index_noise")));
     } else {
-        syn.cdfs = get(std::type_identity<NoiseCdfs>{}, "bumpsynth.noise_cdf");
-        if (texture_noise(o)) syn.noise_texture = get(std::type_identity<NoiseTexture>{}, "bumpsynth.noise_texture");
+        syn.cdfs = ev.get<NoiseCdfs>("bumpsynth.noise_cdf", object).get();
+        if (texture_noise(o)) syn.noise_texture = ev.get<NoiseTexture>("bumpsynth.noise_texture", object).get();
     }
     syn.model = shading_from_material(m);
-    if (syn.model.masking) syn.smith = get(std::type_identity<SmithTable>{}, "bumpsynth.masking");
+    if (syn.model.masking) syn.smith = ev.get<SmithTable>("bumpsynth.masking", object).get();
+    syn.albedo = ev.get<Image>("bumpsynth.albedo", object).get();
     return syn;
 }
 
-float pixel_octaves(const ParamTable& m, bool texture_mode, vec3 eye, vec3 p) {
-    const int K = int(m.get_int("octaves_max"));
-    return texture_mode ? float(K) : octaves_at_distance(glm::length(eye - p), float(m.get_float("detail_distance")), K);
+float pixel_octaves(const Synthesis& syn, bool texture_mode, vec3 eye, vec3 p) {
+    const int K = syn.octaves_max;
+    return texture_mode ? float(K) : octaves_at_distance(glm::length(eye - p), syn.detail_distance, K);
 }
 
 namespace {
@@ -219,103 +216,102 @@ public:
     }
 
     void declare_stages(StageGraph& g) const override {
-        g.add({.name = "bumpsynth.bump_normals",
-               .help = "Read the bump map (a normal map, or a heightfield's normals) whose histogram is the NDF (§7)",
-               .params = keys(kSourceKeys),
-               .when = [](const Scene& s) { return any_object(s, from_bump_map); },
-               .when_text = "bumpsynth.ndf is normal_map or heightfield",
-               .run = [](StageContext& ctx) {
-                   return stage_result(per_object<BumpNormals>(
-                       ctx.scene, "bumpsynth", kSourceKeys, [&](int, const SceneObject& o) { return bump_normals_from_material(ctx.scene, o.material); },
-                       from_bump_map));
-               }});
-        g.add({.name = "bumpsynth.ndf",
-               .help = "Tabulate the normal density function over the normal's (x, y) disk",
-               .params = keys(kNdfKeys),
-               .inputs = {"bumpsynth.bump_normals"},
-               .run = [](StageContext& ctx) {
-                   auto normals = ctx.input<PerObject<BumpNormals>>("bumpsynth.bump_normals");
-                   return stage_result(per_object<Ndf>(ctx.scene, "bumpsynth", kNdfKeys, [&](int i, const SceneObject& o) {
-                       const BumpNormals* n = normals ? normals->get(i) : nullptr;
-                       if (n) {
-                           // A histogram with fewer normals than cells is spiky: highlights sparkle.
-                           const double R = double(o.material.get_int("ndf_resolution")), cells = 0.785398 * R * R;
-                           const double per_cell = double(n->m.size()) / cells;
-                           if (per_cell < 2.0) {
-                               char msg[320];
-                               std::snprintf(msg, sizeof msg,
-                                             "%s: the NDF of a %dx%d bump map at %dx%d cells has %.2g normals per cell of the disk, so it is "
-                                             "spiky (highlights sparkle); lower bumpsynth.ndf_resolution (to %d or less) or use a larger map",
-                                             o.name.c_str(), n->width, n->height, int(R), int(R), per_cell,
-                                             std::max(64, int(std::sqrt(double(n->m.size()) / (2.0 * 0.785398)))));
-                               ctx.warn(msg);
-                           }
-                       }
-                       return ndf_from_material(ctx.scene, o.material, n);
-                   }));
-               }});
-        g.add({.name = "bumpsynth.lut",
-               .help = "Invert the NDF's marginal and conditional CDFs into the normal look-up table L(r1, r2) with tangent frames (§4)",
-               .params = keys(with(kNdfKeys, {"lut_size"})),
-               .inputs = {"bumpsynth.ndf"},
-               .paper = std::nullopt,
-               .run = [](StageContext& ctx) {
-                   auto ndfs = ctx.input<PerObject<Ndf>>("bumpsynth.ndf");
-                   return stage_result(per_object<Lut>(ctx.scene, "bumpsynth", with(kNdfKeys, {"lut_size"}), [&](int i, const SceneObject& o) {
-                       return build_lut(*ndfs->get(i), int(o.material.get_int("lut_size")));
-                   }));
-               }});
-        g.add({.name = "bumpsynth.index_map",
-               .help = "Turn the bump map's normals into an index texture of look-up-table inputs (§7)",
-               .params = keys(with(kNdfKeys, {"lut_size", "index_map"})),
-               .inputs = {"bumpsynth.bump_normals", "bumpsynth.lut"},
-               .when = [](const Scene& s) { return any_object(s, index_mode); },
-               .when_text = "bumpsynth.index_map is on",
-               .run = [](StageContext& ctx) {
-                   auto normals = ctx.input<PerObject<BumpNormals>>("bumpsynth.bump_normals");
-                   auto luts = ctx.input<PerObject<Lut>>("bumpsynth.lut");
-                   return stage_result(per_object<IndexMap>(
-                       ctx.scene, "bumpsynth", with(kNdfKeys, {"lut_size", "index_map"}),
-                       [&](int i, const SceneObject&) { return make_index_map(*normals->get(i), *luts->get(i)); }, index_mode));
-               }});
-        g.add({.name = "bumpsynth.noise_cdf",
-               .help = "Measure the CDF G_k of the fractal noise for every octave count k (§4)",
-               .params = keys(kNoiseKeys),
-               .when = [](const Scene& s) { return any_object(s, noise_inputs_needed); },
-               .when_text = "an object synthesises its bumps from noise (bumpsynth.index_map off)",
-               .run = [](StageContext& ctx) {
-                   return stage_result(per_object<NoiseCdfs>(
-                       ctx.scene, "bumpsynth", kNoiseKeys, [](int, const SceneObject& o) { return measure_noise_cdfs(noise_from_material(o.material)); },
-                       noise_inputs_needed));
-               }});
-        g.add({.name = "bumpsynth.noise_texture",
-               .help = "Bake the mip-mapped noise texture: each coarser level one octave less (§5.2.2)",
-               .params = keys(with(kNoiseKeys, {"noise", "noise_texture_size"})),
-               .inputs = {"bumpsynth.noise_cdf"},
-               .when = [](const Scene& s) { return any_object(s, texture_noise); },
-               .when_text = "bumpsynth.noise is texture",
-               .run = [](StageContext& ctx) {
-                   auto cdfs = ctx.input<PerObject<NoiseCdfs>>("bumpsynth.noise_cdf");
-                   return stage_result(per_object<NoiseTexture>(
-                       ctx.scene, "bumpsynth", with(kNoiseKeys, {"noise_texture_size"}),
-                       [&](int i, const SceneObject& o) { return make_noise_texture(*cdfs->get(i), int(o.material.get_int("noise_texture_size"))); },
-                       texture_noise));
-               }});
-        g.add({.name = "bumpsynth.masking",
-               .help = "Tabulate the Smith masking function G1 of the NDF",
-               .params = keys(with(kNdfKeys, {"masking"})),
-               .inputs = {"bumpsynth.ndf"},
-               .when = [](const Scene& s) { return any_object(s, masking); },
-               .when_text = "bumpsynth.masking is on",
-               .run = [](StageContext& ctx) {
-                   auto ndfs = ctx.input<PerObject<Ndf>>("bumpsynth.ndf");
-                   return stage_result(per_object<SmithTable>(
-                       ctx.scene, "bumpsynth", kNdfKeys, [&](int i, const SceneObject&) { return SmithTable::build(*ndfs->get(i)); }, masking));
-               }});
-        g.add({.name = "bumpsynth.albedo",
-               .help = "Read the albedo maps of the objects using bumpsynth",
-               .params = {"bumpsynth.albedo_map"},
-               .run = [](StageContext& ctx) { return stage_result(basic::read_albedo_maps(ctx.scene, "bumpsynth")); }});
+        // Every stage is an object stage: one result per object, shared by objects with equal keys.
+        const auto object = [](StageDecl d) {
+            d.scope = StageScope::Object;
+            d.technique = "bumpsynth";
+            return d;
+        };
+        const auto when = [](bool (*f)(const SceneObject&)) { return [f](const Scene&, const SceneObject& o) { return f(o); }; };
+        g.add(object({.name = "bumpsynth.bump_normals",
+                      .help = "Read the bump map (a normal map, or a heightfield's normals) whose histogram is the NDF (§7)",
+                      .params = keys(kSourceKeys),
+                      .applies = when(from_bump_map),
+                      .when_text = "bumpsynth.ndf is normal_map or heightfield",
+                      .run = [](StageContext& ctx) { return stage_result(bump_normals_from_material(ctx.scene, ctx.material())); }}));
+        g.add(object({.name = "bumpsynth.ndf",
+                      .help = "Tabulate the normal density function over the normal's (x, y) disk",
+                      .params = keys(kNdfKeys),
+                      .inputs = {"bumpsynth.bump_normals"},
+                      .memory = [](const Scene&, const SceneObject* o) {
+                          const double R = double(o->material.get_int("ndf_resolution"));
+                          return MemoryEstimate{R * R * 2.0 * sizeof(double), "NDF: " + std::to_string(int(R)) + "^2 cells", {"bumpsynth.ndf_resolution"}};
+                      },
+                      .run = [](StageContext& ctx) {
+                          const auto n = ctx.input<BumpNormals>("bumpsynth.bump_normals");
+                          const ParamTable& m = ctx.material();
+                          if (n) {
+                              // A histogram with fewer normals than cells is spiky: highlights sparkle.
+                              const double R = double(m.get_int("ndf_resolution")), cells = 0.785398 * R * R;
+                              const double per_cell = double(n->m.size()) / cells;
+                              if (per_cell < 2.0) {
+                                  char msg[320];
+                                  std::snprintf(msg, sizeof msg,
+                                                "the NDF of a %dx%d bump map at %dx%d cells has %.2g normals per cell of the disk, so it is "
+                                                "spiky (highlights sparkle); lower bumpsynth.ndf_resolution (to %d or less) or use a larger map",
+                                                n->width, n->height, int(R), int(R), per_cell,
+                                                std::max(64, int(std::sqrt(double(n->m.size()) / (2.0 * 0.785398)))));
+                                  ctx.warn(msg);
+                              }
+                          }
+                          return stage_result(ndf_from_material(ctx.scene, m, n.get()));
+                      }}));
+        g.add(object({.name = "bumpsynth.lut",
+                      .help = "Invert the NDF's marginal and conditional CDFs into the normal look-up table L(r1, r2) with tangent frames (§4)",
+                      .params = keys({"lut_size"}),
+                      .inputs = {"bumpsynth.ndf"},
+                      .memory = [](const Scene&, const SceneObject* o) {
+                          const double n = double(o->material.get_int("lut_size"));
+                          return MemoryEstimate{n * n * double(sizeof(LutEntry)), "look-up table: " + std::to_string(int(n)) + "^2 entries",
+                                                {"bumpsynth.lut_size"}};
+                      },
+                      .run = [](StageContext& ctx) {
+                          return stage_result(build_lut(*ctx.input<Ndf>("bumpsynth.ndf"), int(ctx.material().get_int("lut_size"))));
+                      }}));
+        g.add(object({.name = "bumpsynth.index_map",
+                      .help = "Turn the bump map's normals into an index texture of look-up-table inputs (§7)",
+                      .params = keys({"index_map"}),
+                      .inputs = {"bumpsynth.bump_normals", "bumpsynth.lut"},
+                      .applies = when(index_mode),
+                      .when_text = "bumpsynth.index_map is on",
+                      .run = [](StageContext& ctx) {
+                          return stage_result(make_index_map(*ctx.input<BumpNormals>("bumpsynth.bump_normals"), *ctx.input<Lut>("bumpsynth.lut")));
+                      }}));
+        g.add(object({.name = "bumpsynth.noise_cdf",
+                      .help = "Measure the CDF G_k of the fractal noise for every octave count k (§4)",
+                      .params = keys(kNoiseKeys),
+                      .applies = when(noise_inputs_needed),
+                      .when_text = "an object synthesises its bumps from noise (bumpsynth.index_map off)",
+                      .run = [](StageContext& ctx) { return stage_result(measure_noise_cdfs(noise_from_material(ctx.material()))); }}));
+        g.add(object({.name = "bumpsynth.noise_texture",
+                      .help = "Bake the mip-mapped noise texture: each coarser level one octave less (§5.2.2)",
+                      .params = keys({"noise", "noise_texture_size"}),
+                      .inputs = {"bumpsynth.noise_cdf"},
+                      .applies = when(texture_noise),
+                      .when_text = "bumpsynth.noise is texture",
+                      .memory = [](const Scene&, const SceneObject* o) {
+                          const double n = double(o->material.get_int("noise_texture_size"));
+                          // Two channels of floats over the mip chain (4/3 of the finest level).
+                          return MemoryEstimate{n * n * 4.0 / 3.0 * 2.0 * sizeof(float), "noise texture: " + std::to_string(int(n)) + "^2 texels with mip levels",
+                                                {"bumpsynth.noise_texture_size"}};
+                      },
+                      .run = [](StageContext& ctx) {
+                          return stage_result(make_noise_texture(*ctx.input<NoiseCdfs>("bumpsynth.noise_cdf"), int(ctx.material().get_int("noise_texture_size"))));
+                      }}));
+        g.add(object({.name = "bumpsynth.masking",
+                      .help = "Tabulate the Smith masking function G1 of the NDF",
+                      .params = keys({"masking"}),
+                      .inputs = {"bumpsynth.ndf"},
+                      .applies = when(masking),
+                      .when_text = "bumpsynth.masking is on",
+                      .run = [](StageContext& ctx) { return stage_result(SmithTable::build(*ctx.input<Ndf>("bumpsynth.ndf"))); }}));
+        g.add(object({.name = "bumpsynth.albedo",
+                      .help = "Read the object's albedo map",
+                      .params = {"bumpsynth.albedo_map"},
+                      .run = [](StageContext& ctx) -> std::any {
+                          auto img = basic::read_albedo_map(ctx.scene, ctx.material());
+                          return img ? stage_result(std::move(*img)) : std::any();
+                      }}));
     }
 
     std::vector<std::string> frame_stages() const override {
@@ -330,8 +326,7 @@ public:
             if (o.technique != "bumpsynth") continue;
             const ParamTable& m = o.material;
             if (index_mode(o)) {
-                auto maps = ev.get<PerObject<IndexMap>>("bumpsynth.index_map");
-                const IndexMap* map = maps ? maps->get(int(i)) : nullptr;
+                const auto map = ev.get<IndexMap>("bumpsynth.index_map", int(i));
                 if (!map) return std::nullopt;
                 const int K = int(m.get_int("octaves_max"));
                 const auto side = [&](int n) { return int(std::min<int64_t>(4096, int64_t(n) << (K - 1))); };
@@ -354,31 +349,23 @@ public:
 // [SECTION] CPU shading
 void BumpsynthTechnique::shade_cpu(const ShadeContext& ctx) const {
     const GBuffer& gb = ctx.gbuffer;
-    Image& rad = ctx.frame.aov("radiance");
-    Image& nrm = ctx.frame.aov("normal");
-    Image& oct = ctx.frame.aov("octaves");
-    auto maps = ctx.eval.get<basic::AlbedoMaps>("bumpsynth.albedo");
+    const int octaves_out = ctx.out.index("octaves");
+    // Materials parsed once per frame into each object's synthesis.
     std::map<int, Synthesis> syns;
-    std::map<int, const Image*> albedo;
-    for (int i : ctx.objects) {
-        syns[i] = synthesis_for(ctx.scene, ctx.eval, i);
-        const std::string path = ctx.scene.resolve(ctx.scene.objects[size_t(i)].material.get_string("albedo_map"));
-        albedo[i] = !path.empty() && maps && maps->count(path) ? &maps->at(path) : nullptr;
-    }
+    for (int i : ctx.objects) syns[i] = synthesis_for(ctx.scene, ctx.eval, i);
     tbb::parallel_for(0, gb.height, [&](int y) {
         for (int x = 0; x < gb.width; ++x) {
             const size_t px = gb.index(x, y);
             if (!ctx.mine(px)) continue;
             const int obj = gb.object[px];
             const Synthesis& syn = syns.at(obj);
-            const ParamTable& m = ctx.scene.objects[size_t(obj)].material;
             const vec3 p = gb.position[px];
             const vec3 wo = ctx.camera.wo(p);
             const TangentFrame frame = tangent_frame(gb.normal[px], gb.tangent[px], wo);
             const vec2 uv = gb.uv[px];
-            const float o = pixel_octaves(m, ctx.camera.texture_mode, ctx.camera.eye, p);
+            const float o = pixel_octaves(syn, ctx.camera.texture_mode, ctx.camera.eye, p);
             const FacetBlend fb = facets_at(syn, uv, o);
-            const vec3 tex = albedo.at(obj) ? basic::sample_albedo(*albedo.at(obj), uv) : vec3(1.f);
+            const vec3 tex = syn.albedo ? basic::sample_albedo(*syn.albedo, uv) : vec3(1.f);
             const vec3 wo_t = frame.to_local(wo);
             auto shade = [&](const LutEntry& f) {
                 vec3 L(0.f);
@@ -391,11 +378,9 @@ void BumpsynthTechnique::shade_cpu(const ShadeContext& ctx) const {
             };
             const vec3 L = fb.w > 0.f ? glm::mix(shade(fb.coarse), shade(fb.fine), fb.w) : shade(fb.coarse);
             const vec3 n = fb.w > 0.f ? glm::normalize(glm::mix(fb.coarse.m, fb.fine.m, fb.w)) : fb.coarse.m;
-            float* r = rad.at(x, y);
-            r[0] = L.x, r[1] = L.y, r[2] = L.z;
-            float* q = nrm.at(x, y);
-            q[0] = n.x, q[1] = n.y, q[2] = n.z;
-            oct.at(x, y)[0] = o;
+            ctx.out.put(AovWriter::kRadiance, x, y, L);
+            ctx.out.put(AovWriter::kNormal, x, y, n);
+            ctx.out.put(octaves_out, x, y, o);
         }
     });
 }

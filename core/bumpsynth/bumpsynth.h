@@ -8,7 +8,7 @@
 //   bumpsynth.noise_cdf      G_k of the fractal noise for k = 1..octaves_max (noise.h; not with index_map)
 //   bumpsynth.noise_texture  the paper's mip-mapped noise texture (noise = texture only)
 //   bumpsynth.masking        the Smith table of the NDF (masking on only)
-//   bumpsynth.albedo         the albedo maps
+//   bumpsynth.albedo         the albedo map
 // A frame shades every pixel with shading.h's synthesis at o(d) octaves (d: eye distance; all
 // octaves in camera.mode=texture). AOVs: radiance, normal (the microfacet normal in the surface's
 // tangent frame, blended while an octave fades in), octaves (o at the pixel).
@@ -19,7 +19,6 @@
 #include "core/bumpsynth/ndf.h"
 #include "core/bumpsynth/noise.h"
 #include "core/bumpsynth/shading.h"
-#include "core/per_object.h"
 #include "core/stage.h"
 
 namespace mesolab::bumpsynth {
@@ -37,5 +36,5 @@ ShadingModel shading_from_material(const ParamTable& m);
 Synthesis synthesis_for(const Scene& s, const Evaluation& ev, int object);
 
 // The octave count at a world point seen from `eye` (all octaves in texture mode).
-float pixel_octaves(const ParamTable& m, bool texture_mode, vec3 eye, vec3 p);
+float pixel_octaves(const Synthesis& syn, bool texture_mode, vec3 eye, vec3 p);
 }  // namespace mesolab::bumpsynth

@@ -31,6 +31,7 @@
 #include "core/bumpsynth/lut.h"
 #include "core/bumpsynth/ndf.h"
 #include "core/bumpsynth/noise.h"
+#include "core/image.h"
 #include "core/math.h"
 #include <vector>
 
@@ -72,7 +73,9 @@ struct Synthesis {
     IndexDetail index_detail;
     const SmithTable* smith = nullptr;
     ShadingModel model;
-    int octaves_max = 1;  // K
+    int octaves_max = 1;          // K
+    float detail_distance = 4.f;  // eye distance beyond which there are no bumps (scene units)
+    const Image* albedo = nullptr;  // albedo map (null: none)
 };
 
 // The two microfacets a pixel blends (coarse: k octaves, fine: k + 1, weight w of fine).

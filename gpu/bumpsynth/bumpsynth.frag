@@ -40,9 +40,8 @@ uniform float u_detail_distance;
 uniform int u_has_albedo;
 uniform sampler2D u_albedo;          // top row at t = 0: sampled at (u, 1 - v)
 
-layout(location = 0) out vec4 o_radiance;
-layout(location = 1) out vec4 o_normal;
-layout(location = 2) out vec4 o_octaves;
+// Fragment outputs o_<aov> (radiance, normal, then the technique's AOVs) are generated from the
+// technique's declaration (gpu/renderer.h fragment_outputs) and inserted after #version.
 
 // [SECTION] Noise (core/bumpsynth/noise.cpp)
 const float kS = 0.70710678;

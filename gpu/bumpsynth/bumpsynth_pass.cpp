@@ -24,67 +24,34 @@ GLuint make_texture(GLenum target) {
     return id;
 }
 
-// GPU resources made from one stage result, kept while the result is cached elsewhere.
-template <class T>
-class Uploads {
-public:
-    template <class Make>
-    auto& get(const std::shared_ptr<const T>& r, const Make& make) {
-        auto it = items_.find(r.get());
-        if (it == items_.end()) it = items_.emplace(r.get(), Item{r, make(*r)}).first;
-        return it->second.gl;
-    }
-    void prune() {
-        for (auto it = items_.begin(); it != items_.end();) it = it->second.keep.use_count() == 1 ? items_.erase(it) : std::next(it);
-    }
-
-private:
-    struct Item {
-        std::shared_ptr<const T> keep;
-        Texture gl;
-    };
-    std::map<const void*, Item> items_;
-};
-
-struct CdfBuffer {
-    std::shared_ptr<const NoiseCdfs> keep;
-    Buffer table;
-};
-
 class BumpsynthPass final : public TechniquePass {
 public:
-    BumpsynthPass()
-        : program_(Program::graphics("shaders/mesh.vert", "bumpsynth/bumpsynth.frag")),
+    explicit BumpsynthPass(const Technique& t)
+        : program_(Program::graphics("shaders/mesh.vert", "bumpsynth/bumpsynth.frag", {}, fragment_outputs(t))),
           depth_(Program::graphics("shaders/mesh.vert", "bumpsynth/depth.frag")) {}
 
     void draw(DrawContext& ctx) override {
         PROFILE_SCOPE("bumpsynth.draw");
-        auto ndfs = ctx.eval.get<PerObject<Ndf>>("bumpsynth.ndf");
-        auto luts = ctx.eval.get<PerObject<Lut>>("bumpsynth.lut");
-        auto cdfss = ctx.eval.get<PerObject<NoiseCdfs>>("bumpsynth.noise_cdf");
-        auto texs = ctx.eval.get<PerObject<NoiseTexture>>("bumpsynth.noise_texture");
-        auto smiths = ctx.eval.get<PerObject<SmithTable>>("bumpsynth.masking");
-        auto indexes = ctx.eval.get<PerObject<IndexMap>>("bumpsynth.index_map");
-        auto maps = ctx.eval.get<basic::AlbedoMaps>("bumpsynth.albedo");
-        ndf_.prune(), lut_.prune(), noise_.prune(), smith_.prune(), index_.prune();
-        for (auto it = cdfs_.begin(); it != cdfs_.end();) it = it->second.keep.use_count() == 1 ? cdfs_.erase(it) : std::next(it);
-        // Upload first: creating a texture binds it to the active unit.
-        struct Bound { GLuint ndf, lut, noise, smith, albedo, index; const CdfBuffer* cdf; };
+        // Upload first (once per stage result, kept in the renderer's resource cache): creating a
+        // texture binds it to the active unit.
+        GpuResources& res = ctx.renderer.resources();
+        struct Bound { GLuint ndf, lut, noise, smith, albedo, index; GLuint cdf; };
         std::map<int, Bound> bound;
         for (int i : ctx.objects) {
-            const SceneObject& o = ctx.scene.objects[size_t(i)];
+            const Evaluation& ev = ctx.eval;
             Bound b{};
-            b.ndf = ndf_.get(ndfs->items[size_t(i)], upload_ndf).get();
-            b.lut = lut_.get(luts->items[size_t(i)], upload_lut).get();
-            const bool index = indexes && indexes->get(i);
-            b.index = index ? index_.get(indexes->items[size_t(i)], upload_index).get() : 0;
-            b.cdf = !index && cdfss && cdfss->get(i) ? &cdf_buffer(cdfss->items[size_t(i)]) : nullptr;
-            const bool tex = o.material.get_string("noise") == "texture" && texs && texs->get(i);
-            b.noise = tex ? noise_.get(texs->items[size_t(i)], upload_noise).get() : 0;
-            const bool masking = o.material.get_bool("masking") && smiths && smiths->get(i);
-            b.smith = masking ? smith_.get(smiths->items[size_t(i)], upload_smith).get() : 0;
-            const std::string path = ctx.scene.resolve(o.material.get_string("albedo_map"));
-            b.albedo = !path.empty() && maps && maps->count(path) ? ctx.renderer.texture(maps->at(path), &maps->at(path)) : 0;
+            b.ndf = res.get<Texture>(ev.get<Ndf>("bumpsynth.ndf", i), "bumpsynth.ndf", [&] { return upload_ndf(*ev.get<Ndf>("bumpsynth.ndf", i)); }).get();
+            b.lut = res.get<Texture>(ev.get<Lut>("bumpsynth.lut", i), "bumpsynth.lut", [&] { return upload_lut(*ev.get<Lut>("bumpsynth.lut", i)); }).get();
+            if (auto index = ev.get<IndexMap>("bumpsynth.index_map", i)) {
+                b.index = res.get<Texture>(index, "bumpsynth.index_map", [&] { return upload_index(*index); }).get();
+            } else if (auto cdfs = ev.get<NoiseCdfs>("bumpsynth.noise_cdf", i)) {
+                b.cdf = res.get<Buffer>(cdfs, "bumpsynth.cdf", [&] { return make_storage_buffer(cdfs->table.data(), cdfs->table.size() * sizeof(float)); }).get();
+            }
+            if (auto tex = ev.get<NoiseTexture>("bumpsynth.noise_texture", i))
+                b.noise = res.get<Texture>(tex, "bumpsynth.noise_texture", [&] { return upload_noise(*tex); }).get();
+            if (auto smith = ev.get<SmithTable>("bumpsynth.masking", i))
+                b.smith = res.get<Texture>(smith, "bumpsynth.masking", [&] { return upload_smith(*smith); }).get();
+            if (auto albedo = ev.get<Image>("bumpsynth.albedo", i)) b.albedo = ctx.renderer.texture(albedo);
             bound[i] = b;
         }
         // Depth pre-pass: the shading pass (noise, look-ups, BRDF) then runs once per visible pixel,
@@ -102,13 +69,11 @@ public:
             glDepthFunc(GL_LEQUAL);
         }
         program_.use();
-        ctx.renderer.draw_buffers({"radiance", "normal", "octaves"});
         ctx.renderer.set_lighting_uniforms(program_, ctx.lighting, 0);
         for (int i : ctx.objects) {
             const SceneObject& o = ctx.scene.objects[size_t(i)];
-            const ParamTable& m = o.material;
             const Bound& b = bound.at(i);
-            const Synthesis syn = synthesis_for(ctx.scene, ctx.eval, i);
+            const Synthesis syn = synthesis_for(ctx.scene, ctx.eval, i);  // the material, parsed once
             if (!syn.index_map && !syn.cdfs) throw std::logic_error("bumpsynth: neither an index map nor noise CDFs were evaluated");
             const NoiseParams np = syn.index_map ? syn.index_detail.noise : syn.cdfs->params;
             ctx.renderer.set_camera_uniforms(program_, ctx.camera, object_to_world(o));
@@ -121,9 +86,9 @@ public:
             glUniform1i(program_.uniform("u_index_map"), syn.index_map ? 1 : 0);
             glUniform2i(program_.uniform("u_index_size"), syn.index_map ? syn.index_map->width : 1, syn.index_map ? syn.index_map->height : 1);
             glUniform1f(program_.uniform("u_index_noise"), syn.index_map ? syn.index_detail.amplitude : 0.f);
-            if (b.cdf) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, b.cdf->table.get());
-            glUniform1i(program_.uniform("u_ndf_res"), ndfs->get(i)->resolution());
-            glUniform1i(program_.uniform("u_lut_size"), luts->get(i)->size());
+            if (b.cdf) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, b.cdf);
+            glUniform1i(program_.uniform("u_ndf_res"), syn.ndf->resolution());
+            glUniform1i(program_.uniform("u_lut_size"), syn.lut->size());
             glUniform1i(program_.uniform("u_cdf_nodes"), NoiseCdfs::kCdfNodes);
             glUniform1i(program_.uniform("u_octaves_max"), np.octaves_max);
             // The octaves of the noise, or of the index map's detail noise (one lattice cell per texel).
@@ -142,13 +107,12 @@ public:
             glUniform2fv(program_.uniform("u_octave_offset"), GLsizei(offsets.size() / 2), offsets.data());
             glUniform1fv(program_.uniform("u_octave_gain"), GLsizei(oc.count), oc.gain);
             glUniform1i(program_.uniform("u_noise_texture"), b.noise ? 1 : 0);
-            glUniform1i(program_.uniform("u_noise_levels"), b.noise ? int(texs->get(i)->levels.size()) : 1);
+            glUniform1i(program_.uniform("u_noise_levels"), syn.noise_texture ? int(syn.noise_texture->levels.size()) : 1);
             glUniform1i(program_.uniform("u_masking"), b.smith ? 1 : 0);
-            glUniform1i(program_.uniform("u_fresnel"), m.get_bool("fresnel") ? 1 : 0);
-            const ShadingModel sm = shading_from_material(m);
-            glUniform3fv(program_.uniform("u_ks"), 1, glm::value_ptr(sm.ks));
-            glUniform3fv(program_.uniform("u_kd"), 1, glm::value_ptr(sm.kd));
-            glUniform1f(program_.uniform("u_detail_distance"), float(m.get_float("detail_distance")));
+            glUniform1i(program_.uniform("u_fresnel"), syn.model.fresnel ? 1 : 0);
+            glUniform3fv(program_.uniform("u_ks"), 1, glm::value_ptr(syn.model.ks));
+            glUniform3fv(program_.uniform("u_kd"), 1, glm::value_ptr(syn.model.kd));
+            glUniform1f(program_.uniform("u_detail_distance"), syn.detail_distance);
             glUniform1i(program_.uniform("u_has_albedo"), b.albedo ? 1 : 0);
             ctx.renderer.draw_object(ctx.scene, ctx.eval, i);
         }
@@ -223,26 +187,11 @@ private:
         return t;
     }
 
-    const CdfBuffer& cdf_buffer(const std::shared_ptr<const NoiseCdfs>& c) {
-        auto it = cdfs_.find(c.get());
-        if (it != cdfs_.end()) return it->second;
-        CdfBuffer b;
-        b.keep = c;
-        b.table = make_storage_buffer(c->table.data(), c->table.size() * sizeof(float));
-        return cdfs_.emplace(c.get(), std::move(b)).first->second;
-    }
-
     Program program_, depth_;
-    Uploads<Ndf> ndf_;
-    Uploads<Lut> lut_;
-    Uploads<NoiseTexture> noise_;
-    Uploads<SmithTable> smith_;
-    Uploads<IndexMap> index_;
-    std::map<const void*, CdfBuffer> cdfs_;
 };
 }  // namespace
 
 void register_bumpsynth_gpu(std::map<std::string, PassFactory>& out) {
-    out["bumpsynth"] = [] { return std::make_unique<BumpsynthPass>(); };
+    out["bumpsynth"] = [](const Technique& t) { return std::make_unique<BumpsynthPass>(t); };
 }
 }  // namespace mesolab::gpu

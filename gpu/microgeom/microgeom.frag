@@ -46,12 +46,8 @@ uniform sampler2D u_brdf;       // texel (view node, light node): rgb = T(l, v),
 uniform sampler2D u_brdf_env;   // texel (view node, 0): rgb = T_env(v)
 uniform ivec2 u_brdf_nodes;     // (n_theta, n_phi)
 
-layout(location = 0) out vec4 o_radiance;
-layout(location = 1) out vec4 o_normal;
-layout(location = 2) out vec4 o_direct;
-layout(location = 3) out vec4 o_indirect;
-layout(location = 4) out vec4 o_shadow;
-layout(location = 5) out vec4 o_folded;
+// Fragment outputs o_<aov> (radiance, normal, then the technique's AOVs) are generated from the
+// technique's declaration (gpu/renderer.h fragment_outputs) and inserted after #version.
 
 // Cone coordinates of w in triangle t; barycentrics once normalised.
 vec3 cone(int t, vec3 w) {

@@ -63,7 +63,7 @@ struct Irradiance {
 
 class MicrogeomPass final : public TechniquePass {
 public:
-    MicrogeomPass() : program_(Program::graphics("shaders/mesh.vert", "microgeom/microgeom.frag")) {}
+    explicit MicrogeomPass(const Technique& t) : program_(Program::graphics("shaders/mesh.vert", "microgeom/microgeom.frag", {}, fragment_outputs(t))) {}
 
     void draw(DrawContext& ctx) override {
         PROFILE_SCOPE("microgeom.draw");
@@ -89,7 +89,6 @@ public:
             if (brdfs && brdfs->get(i)) brdf_tables(brdfs->items[size_t(i)]);
         }
         program_.use();
-        ctx.renderer.draw_buffers({"radiance", "normal", "direct", "indirect", "shadow", "folded"});
         ctx.renderer.set_lighting_uniforms(program_, ctx.lighting, 0);
         for (int i : ctx.objects) {
             const SceneObject& o = ctx.scene.objects[size_t(i)];
@@ -320,6 +319,6 @@ private:
 }  // namespace
 
 void register_microgeom_gpu(std::map<std::string, PassFactory>& out) {
-    out["microgeom"] = [] { return std::make_unique<MicrogeomPass>(); };
+    out["microgeom"] = [](const Technique& t) { return std::make_unique<MicrogeomPass>(t); };
 }
 }  // namespace mesolab::gpu

@@ -85,7 +85,7 @@ void NdfEditor::draw(PanelContext& ctx, int object) {
     // The last evaluation's NDF of this object (it may lag behind the parameters while one runs).
     std::shared_ptr<const bumpsynth::Ndf> ndf;
     if (ctx.eval)
-        if (auto per = ctx.eval->get<PerObject<bumpsynth::Ndf>>("bumpsynth.ndf"); per && size_t(object) < per->items.size()) ndf = per->items[size_t(object)];
+        ndf = ctx.eval->get<bumpsynth::Ndf>("bumpsynth.ndf", object);
     if (ndf != shown_) {
         shown_ = ndf;
         shown_image_ = ndf ? image_from_ndf(*ndf) : NdfImage{};

@@ -6,6 +6,7 @@
 #include "core/bumpsynth/sweep_metric.h"
 #include "core/error.h"
 #include "core/scene.h"
+#include "core/session.h"
 #include "core/technique.h"
 #include "stats.h"
 #include "support/cli.h"
@@ -43,8 +44,8 @@ Scene fig1(const Sets& sets) {
 }
 
 Evaluation evaluate(const Scene& s) {
-    Registry& r = Registry::instance();
-    return r.stages().evaluate(s, r.frame_stages(s));
+    Session session;
+    return session.evaluate_frame(s);
 }
 
 // The metric of `point` against `ref` (and the reference's measure, for its floors).

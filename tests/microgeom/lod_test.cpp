@@ -8,6 +8,7 @@
 #include "core/microgeom/lod.h"
 #include "core/microgeom/microgeom.h"
 #include "core/scene.h"
+#include "core/session.h"
 #include "agreement.h"
 #include "support/cli.h"
 #include "support/frames.h"
@@ -215,14 +216,15 @@ TEST(Lod, TexelSizeAndAlbedoMap) {
     for (int c = 0; c < 3; ++c) a.at(0, 0)[c] = a.at(1, 0)[c] = a.at(0, 1)[c] = a.at(1, 1)[c] = 0.5f;
     write_exr(dir / "h.exr", h);
     write_exr(dir / "a.exr", a);
-    StageGraph& g = Registry::instance().stages();
+    const StageGraph& g = Registry::instance().stages();
     auto field = [&](const char* texel_size, const std::string& albedo_map) {
         Scene s = texture_scene("bump", "bricks", 8);
         apply_set(s, "microgeom.heightfield", dir / "h.exr");
         apply_set(s, "microgeom.texel_size", texel_size);
         apply_set(s, "microgeom.albedo", "1,1,1");
         apply_set(s, "microgeom.albedo_map", albedo_map);
-        const Evaluation ev = g.evaluate(s, {"microgeom.heightfield"});
+        Session session(g);
+        const Evaluation ev = session.evaluate(s, {"microgeom.heightfield"});
         return *ev.get<PerObject<Heightfield>>("microgeom.heightfield")->get(0);
     };
     const Heightfield h1 = field("1", ""), h05 = field("0.5", dir / "a.exr");

@@ -202,7 +202,7 @@ TEST(HardCases, NanInAnImageIsAClearError) {
 TEST(Stages, MovingTheLightNeverRecomputesVisibility) {
     Scene s = default_scene("microgeom");
     apply_set(s, "microgeom.resolution=24");
-    StageGraph& g = Registry::instance().stages();
+    const StageGraph& g = Registry::instance().stages();
     const uint64_t vis = g.key(s, "microgeom.visibility"), env = g.key(s, "microgeom.scatter_env");
     apply_set(s, "light.direction=10,300");
     apply_set(s, "microgeom.tiling=2");
@@ -223,7 +223,7 @@ TEST(Stages, ChangingTheCurvatureNeverRecomputesVisibility) {
     Scene s = default_scene("microgeom");
     for (const char* set : {"camera.mode=texture", "geometry.type=plane", "microgeom.resolution=24", "microgeom.shadows=ellipse", "microgeom.curvature_u=17"})
         apply_set(s, set);
-    StageGraph& g = Registry::instance().stages();
+    const StageGraph& g = Registry::instance().stages();
     const uint64_t vis = g.key(s, "microgeom.visibility"), fits = g.key(s, "microgeom.ellipses_curved");
     Workbench wb;
     RenderRequest req;

@@ -7,6 +7,7 @@
 #include "core/image.h"
 #include "core/per_object.h"
 #include "core/scene.h"
+#include "core/session.h"
 #include "core/stage.h"
 #include "core/technique.h"
 #include "panels/bumpsynth/ndf_editor.h"
@@ -256,16 +257,16 @@ TEST(NdfEditorFiles, AStrokeSavesAnExrWithTheMassWherePainted) {
     EXPECT_NEAR(a.mass, 1.0, 1e-9);
 
     // The stage reads it too; a second stroke re-saves the same file and the stage follows.
-    StageGraph& g = Registry::instance().stages();
-    const Evaluation e0 = g.evaluate(s, {"bumpsynth.ndf"});
-    EXPECT_NEAR(moments(*e0.get<PerObject<bumpsynth::Ndf>>("bumpsynth.ndf")->get(0)).x, 0.5, 0.02);
+    Session session;
+    const Evaluation e0 = session.evaluate(s, {"bumpsynth.ndf"});
+    EXPECT_NEAR(moments(*e0.get<bumpsynth::Ndf>("bumpsynth.ndf", 0)).x, 0.5, 0.02);
     p.begin_stroke(b);
     p.stroke_to({-0.5f, 0.f});
     ASSERT_TRUE(p.end_stroke());
     EXPECT_EQ(apply_painted(s, 0, p.image(), dirty), path);
-    const Evaluation e1 = g.evaluate(s, {"bumpsynth.ndf"});
+    const Evaluation e1 = session.evaluate(s, {"bumpsynth.ndf"});
     EXPECT_EQ(e1.run("bumpsynth.ndf")->status, StageStatus::Ran) << "the re-saved file is a new input";
-    const bumpsynth::Ndf& d1 = *e1.get<PerObject<bumpsynth::Ndf>>("bumpsynth.ndf")->get(0);
+    const bumpsynth::Ndf& d1 = *e1.get<bumpsynth::Ndf>("bumpsynth.ndf", 0);
     EXPECT_NEAR(moments(d1).x, 0.0, 0.02);
     EXPECT_NEAR(moments_in_half(d1, false).mass, 0.5, 0.02);
 }
@@ -442,7 +443,10 @@ TEST(NdfEditorDisplay, GridAveragesDownToTheDrawLimitAndMapsColours) {
 // [SECTION] The ImGui editor, headless
 namespace {
 // One evaluation of the NDF stage for the scene.
-Evaluation evaluate_ndf(const Scene& s) { return Registry::instance().stages().evaluate(s, {"bumpsynth.ndf"}); }
+Evaluation evaluate_ndf(const Scene& s) {
+    Session session;
+    return session.evaluate(s, {"bumpsynth.ndf"});
+}
 
 void mouse_to(HeadlessImGui& ui, const std::function<void()>& draw, std::array<float, 2> p) {
     ImGui::GetIO().MousePos = ImVec2(p[0], p[1]);

@@ -3,8 +3,8 @@
 #include "core/bumpsynth/ndf.h"
 #include "core/error.h"
 #include "core/image.h"
-#include "core/per_object.h"
 #include "core/scene.h"
+#include "core/session.h"
 #include "core/stage.h"
 #include "core/technique.h"
 #include "support/cli.h"
@@ -22,6 +22,7 @@ namespace {
 struct Counting {
     std::map<std::string, int> runs;
     StageGraph g;
+    std::unique_ptr<Session> session;
     Counting() {
         auto counter = [this](const char* name) {
             return [this, name](StageContext& ctx) {
@@ -34,8 +35,9 @@ struct Counting {
         g.add({.name = "t.shade", .params = {"light.*", "basic.kd"}, .inputs = {"t.geometry"}, .run = counter("t.shade")});
         g.add({.name = "t.env", .params = {"env.map"}, .run = counter("t.env")});
         g.add({.name = "t.envlight", .inputs = {"t.env"}, .effects = {"environment"}, .run = counter("t.envlight")});
+        session = std::make_unique<Session>(g);
     }
-    Evaluation eval(const Scene& s) { return g.evaluate(s, {"t.shade", "t.envlight"}); }
+    Evaluation eval(const Scene& s) { return session->evaluate(s, {"t.shade", "t.envlight"}); }
 };
 
 StageStatus status(const Evaluation& e, const std::string& n) { return e.run(n)->status; }
@@ -96,11 +98,11 @@ TEST(StageGraph, CancellationAndProgress) {
     Counting c;
     Scene s = default_scene("basic");
     std::atomic<bool> cancel{true};
-    EXPECT_THROW(c.g.evaluate(s, {"t.shade"}, {}, &cancel), Cancelled);
-    EXPECT_EQ(c.g.cache_entries(), 0u);
+    EXPECT_THROW(c.session->evaluate(s, {"t.shade"}, {}, &cancel), Cancelled);
+    EXPECT_EQ(c.session->cache().entries(), 0u);
     cancel = false;
     std::vector<std::string> seen;
-    c.g.evaluate(s, {"t.shade"}, [&](const std::string& n, double) { seen.push_back(n); }, &cancel);
+    c.session->evaluate(s, {"t.shade"}, [&](const std::string& n, double) { seen.push_back(n); }, &cancel);
     EXPECT_FALSE(seen.empty());
     EXPECT_EQ(seen.front(), "t.geometry");
 }
@@ -113,8 +115,9 @@ TEST(StageGraph, FailingStageReportsAndIsNotCached) {
                throw InputError("bad file");
            }});
     Scene s = default_scene("basic");
-    EXPECT_THROW(g.evaluate(s, {"x.fail"}), InputError);
-    EXPECT_THROW(g.evaluate(s, {"x.fail"}), InputError);
+    Session session(g);
+    EXPECT_THROW(session.evaluate(s, {"x.fail"}), InputError);
+    EXPECT_THROW(session.evaluate(s, {"x.fail"}), InputError);
     EXPECT_EQ(calls, 2);
 }
 
@@ -127,7 +130,7 @@ TEST(StageGraph, DeclarationErrorsAreCaught) {
 
 // The real graph: moving the light or the camera recomputes nothing; files invalidate by content.
 TEST(FrameStages, LightAndCameraNeverRecompute) {
-    StageGraph& g = Registry::instance().stages();
+    const StageGraph& g = Registry::instance().stages();
     Scene s = default_scene("basic");
     std::map<std::string, uint64_t> before;
     for (const auto& st : Registry::instance().frame_stages(s)) before[st] = g.key(s, st);
@@ -149,7 +152,7 @@ TEST(FrameStages, EditingAReferencedFileInvalidates) {
     write_file(dir / "m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     write_file(dir / "p.json", R"({"schema":1,"objects":[{"geometry":{"type":"mesh","path":"m.obj"},"material":{"technique":"basic"}}]})");
     const Scene s = load_preset(dir / "p.json");
-    StageGraph& g = Registry::instance().stages();
+    const StageGraph& g = Registry::instance().stages();
     const uint64_t k0 = g.key(s, "scene.geometry");
     write_file(dir / "m.obj", "v 0 0 0\nv 2 0 0\nv 0 1 0\nv 5 5 5\nf 1 2 3\n");
     EXPECT_NE(g.key(s, "scene.geometry"), k0);
@@ -174,11 +177,12 @@ TEST(FrameStages, AtomicRewriteOfASameSizeFileInvalidates) {
     s.objects[0].material.set("ndf", std::string("image"));
     s.objects[0].material.set("ndf_image", std::string("d.exr"));
     s.objects[0].material.set("ndf_resolution", int64_t(64));
-    StageGraph& g = Registry::instance().stages();
+    const StageGraph& g = Registry::instance().stages();
+    Session session;
     const uint64_t k0 = g.key(s, "bumpsynth.ndf");
-    const Evaluation e0 = g.evaluate(s, {"bumpsynth.ndf"});
+    const Evaluation e0 = session.evaluate(s, {"bumpsynth.ndf"});
     const auto centroid_x = [](const Evaluation& e) {
-        const bumpsynth::Ndf& d = *e.get<PerObject<bumpsynth::Ndf>>("bumpsynth.ndf")->get(0);
+        const bumpsynth::Ndf& d = *e.get<bumpsynth::Ndf>("bumpsynth.ndf", 0);
         double cx = 0;
         for (int j = 0; j < d.resolution(); ++j)
             for (int i = 0; i < d.resolution(); ++i) cx += d.mass(i, j) * double(d.cell_centre(i, j).x);
@@ -195,7 +199,7 @@ TEST(FrameStages, AtomicRewriteOfASameSizeFileInvalidates) {
     std::filesystem::last_write_time(dir / "d.exr", time0);
     ASSERT_EQ(std::filesystem::file_size(dir / "d.exr"), size0) << "the test wants two files of one size";
     EXPECT_NE(g.key(s, "bumpsynth.ndf"), k0);
-    const Evaluation e1 = g.evaluate(s, {"bumpsynth.ndf"});
+    const Evaluation e1 = session.evaluate(s, {"bumpsynth.ndf"});
     EXPECT_EQ(e1.run("bumpsynth.ndf")->status, StageStatus::Ran);
     EXPECT_NEAR(centroid_x(e1), -4.0 / (3.0 * M_PI), 0.01);
 }

@@ -1,0 +1,203 @@
+// The render-pass contract: outputs declared once, AOVs on demand within GL_MAX_DRAW_BUFFERS,
+// frame steps (offscreen work before the frame) timed and reused, on the CPU and the GPU.
+#include "app/workbench.h"
+#include "core/error.h"
+#include "core/technique.h"
+#include "gpu/renderer.h"
+#include "passes/probe.h"
+#include "support/frames.h"
+
+#include <gtest/gtest.h>
+#include <cmath>
+
+using namespace mesolab;
+using namespace mesolab::test;
+
+namespace {
+
+// One object of every registered technique (the probe included), side by side.
+Scene every_technique() {
+    Scene s = default_scene("basic");
+    s.objects.clear();
+    float x = -3.f;
+    for (const Technique* t : Registry::instance().techniques()) {
+        SceneObject o = default_scene(t->name()).objects[0];
+        o.name = t->name();
+        o.geometry.set("position", std::array<double, 3>{x, 0, 0});
+        x += 2.2f;
+        s.objects.push_back(o);
+    }
+    apply_set(s, "camera.distance=9");
+    apply_set(s, "microgeom.resolution=16");
+    apply_set(s, "microgeom.directions=32");
+    apply_set(s, "bumpsynth.lut_size=64");
+    apply_set(s, "bumpsynth.ndf_resolution=64");
+    apply_set(s, "bumpsynth.detail_distance=100");  // octaves of noise at this distance (the AOV is not empty)
+    return s;
+}
+
+std::vector<std::string> every_aov(const Scene& s) {
+    std::vector<std::string> r;
+    for (const auto& a : Registry::instance().aovs(s)) r.push_back(a.name);
+    return r;
+}
+
+Scene probe_scene() {
+    Scene s = default_scene("probe");
+    apply_set(s, "geometry.resolution=48");
+    return s;
+}
+
+const FrameStepRun* step(const Frame& f, const std::string& name) {
+    for (const auto& st : f.steps)
+        if (st.name == name) return &st;
+    return nullptr;
+}
+}  // namespace
+
+// [SECTION] Outputs declared once
+TEST(RenderPass, FragmentOutputsComeFromTheTechniquesDeclaration) {
+    for (const Technique* t : Registry::instance().techniques()) {
+        const std::string glsl = gpu::fragment_outputs(*t);
+        const auto outs = t->outputs();
+        ASSERT_GE(outs.size(), 2u);
+        EXPECT_EQ(outs[0].name, "radiance");
+        EXPECT_EQ(outs[1].name, "normal");
+        for (size_t k = 0; k < outs.size(); ++k)
+            EXPECT_NE(glsl.find("layout(location = " + std::to_string(k) + ") out vec4 o_" + outs[k].name + ";"), std::string::npos) << t->name() << " " << glsl;
+        // The CPU writer resolves the same positions.
+        Frame f = make_frame(Registry::instance().aovs(default_scene(t->name())), 1, 1);
+        const AovWriter w(f, *t);
+        for (size_t k = 0; k < outs.size(); ++k) EXPECT_EQ(w.index(outs[k].name), int(k));
+        EXPECT_THROW(w.index("no-such-aov"), std::logic_error);
+    }
+}
+
+// [SECTION] AOVs on demand
+TEST(RenderPass, AFrameHoldsRadianceAndTheRequestedAovsOnly) {
+    Workbench wb;
+    Scene s = default_scene("microgeom");
+    apply_set(s, "microgeom.resolution=16");
+    apply_set(s, "microgeom.directions=32");
+    RenderRequest req;
+    req.width = req.height = 48;
+    req.aovs = {"shadow"};
+    for (Backend b : {Backend::Cpu, Backend::Gpu}) {
+        req.backend = b;
+        const Frame f = wb.render(s, req).frame;
+        ASSERT_EQ(f.layout.size(), 2u);
+        EXPECT_EQ(f.layout[0].name, "radiance");
+        EXPECT_EQ(f.layout[1].name, "shadow");
+        EXPECT_FALSE(f.has("normal"));
+        EXPECT_FALSE(f.has("direct"));
+    }
+    EXPECT_EQ(wb.gpu().layout().size(), 2u) << "the GPU frame has two attachments";
+    req.aovs = {"octaves"};  // a bumpsynth AOV, not this scene's
+    EXPECT_THROW(wb.render(s, req), InputError);
+}
+
+TEST(RenderPass, EveryTechniqueAndEveryAovStaysWithinTheDrawBuffers) {
+    Workbench wb;
+    const Scene s = every_technique();
+    RenderRequest req;
+    req.width = 160;
+    req.height = 64;
+    req.aovs = every_aov(s);
+    auto [cpu, gpu] = render_cpu_and_gpu(wb, s, req.width, req.height, req.aovs);
+    const int max_draw = wb.gpu().max_attachments();
+    GLint gl_max = 0;
+    glGetIntegerv(GL_MAX_DRAW_BUFFERS, &gl_max);
+    EXPECT_LE(max_draw, gl_max);
+    EXPECT_EQ(gpu.layout.size(), req.aovs.size());
+    EXPECT_EQ(wb.gpu().last_batches(), int((req.aovs.size() + size_t(max_draw) - 1) / size_t(max_draw)));
+    // Every AOV was drawn: the objects cover pixels in each of them, on both paths.
+    for (const auto& a : req.aovs) {
+        double sum_cpu = 0, sum_gpu = 0;
+        for (float v : cpu.aov(a).data) sum_cpu += std::fabs(v);
+        for (float v : gpu.aov(a).data) sum_gpu += std::fabs(v);
+        if (a == "folded") continue;  // flat bases never fold
+        EXPECT_GT(sum_cpu, 0.0) << a;
+        EXPECT_GT(sum_gpu, 0.0) << a;
+    }
+    expect_frames_agree(cpu, gpu, {"radiance", "normal"}, 1e-3, 0.05, 0.97, 0.99);
+
+    // Forced into batches of two attachments, the GPU frame is the same, byte for byte.
+    wb.gpu().set_max_attachments(2);
+    req.backend = Backend::Gpu;
+    const Frame batched = wb.render(s, req).frame;
+    EXPECT_EQ(wb.gpu().last_batches(), int((req.aovs.size() + 1) / 2));
+    for (const auto& a : req.aovs) EXPECT_EQ(batched.aov(a).data, gpu.aov(a).data) << a;
+    wb.gpu().set_max_attachments(0);
+}
+
+// [SECTION] Frame steps
+TEST(FrameSteps, RunBeforeTheFrameOnBothPathsAndAgree) {
+    Workbench wb;
+    const Scene s = probe_scene();
+    RenderRequest req;
+    req.width = req.height = 96;
+    req.aovs = {"texel"};
+    auto [cpu, gpu] = render_cpu_and_gpu(wb, s, req.width, req.height, req.aovs);
+    for (const Frame* f : {&cpu, &gpu}) {
+        ASSERT_EQ(f->steps.size(), 2u);
+        EXPECT_EQ(f->steps[0].name, "probe.illumination");
+        EXPECT_EQ(f->steps[1].name, "probe.blur");
+        EXPECT_EQ(f->steps[0].status, StageStatus::Ran);
+    }
+    EXPECT_GE(cpu.steps[0].ms, 0.0);
+    // The same texel at (almost) every pixel, then the same radiance there.
+    size_t same_texel = 0, covered = 0;
+    for (size_t i = 0; i < cpu.aov("texel").data.size(); i += 3) {
+        if (cpu.aov("radiance").data[i] == 0.f && gpu.aov("radiance").data[i] == 0.f) continue;
+        ++covered;
+        same_texel += cpu.aov("texel").data[i] == gpu.aov("texel").data[i] && cpu.aov("texel").data[i + 1] == gpu.aov("texel").data[i + 1];
+    }
+    ASSERT_GT(covered, 1000u);
+    EXPECT_GE(double(same_texel), 0.98 * double(covered));
+    expect_frames_agree(cpu, gpu, {"radiance"}, 1e-4, 0.02, 0.97, 0.995);
+}
+
+TEST(FrameSteps, AreReusedWhileTheirInputsHold) {
+    Workbench wb;
+    Scene s = probe_scene();
+    RenderRequest req;
+    req.width = req.height = 64;
+    for (Backend b : {Backend::Cpu, Backend::Gpu}) {
+        req.backend = b;
+        const Frame first = wb.render(s, req).frame;
+        Scene moved = s;
+        apply_set(moved, "camera.orbit=40,10");  // not an input of either step
+        const Frame second = wb.render(moved, req).frame;
+        ASSERT_EQ(second.steps.size(), 2u);
+        EXPECT_EQ(step(second, "probe.illumination")->status, StageStatus::Cached);
+        EXPECT_EQ(step(second, "probe.blur")->status, StageStatus::Cached);
+        apply_set(moved, "probe.blur=2");  // an input of the blur only
+        const Frame third = wb.render(moved, req).frame;
+        EXPECT_EQ(step(third, "probe.illumination")->status, StageStatus::Cached);
+        EXPECT_EQ(step(third, "probe.blur")->status, StageStatus::Ran);
+        apply_set(moved, "light.direction=10,20");  // an input of both
+        const Frame fourth = wb.render(moved, req).frame;
+        EXPECT_EQ(step(fourth, "probe.illumination")->status, StageStatus::Ran);
+        EXPECT_EQ(step(fourth, "probe.blur")->status, StageStatus::Ran);
+        EXPECT_NE(fourth.aov("radiance").data, third.aov("radiance").data) << "the light moved";
+        // Back to the first scene: the reused outputs must not be stale.
+        wb.forget_frame_steps();
+        const Frame again = wb.render(s, req).frame;
+        EXPECT_EQ(again.aov("radiance").data, first.aov("radiance").data);
+    }
+}
+
+TEST(FrameSteps, AreTimedAsTheirOwnRows) {
+    Workbench wb;
+    const Scene s = probe_scene();
+    RenderRequest req;
+    req.width = req.height = 32;
+    req.backend = Backend::Cpu;
+    wb.render(s, req);
+    TimingStat st;
+    EXPECT_TRUE(wb.session().profiler().find("frame.cpu/step.probe.illumination", st));
+    EXPECT_TRUE(wb.session().profiler().find("frame.cpu/step.probe.blur", st));
+    req.backend = Backend::Gpu;
+    wb.render(s, req);
+    EXPECT_TRUE(wb.session().profiler().find("frame.gpu/step.probe.illumination", st));
+}
