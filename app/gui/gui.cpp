@@ -13,6 +13,7 @@
 //  - Scripted mode (--script FILE, or --frames N with screenshots) drives the same loop without
 //    vsync and exits with 0, 2 (bad input) or 1 (internal failure).
 #include "app/commands.h"
+#include "app/gui/evaluator.h"
 #include "app/workbench.h"
 #include "core/error.h"
 #include "core/image.h"
@@ -36,30 +37,19 @@
 #include <imgui_internal.h>  // ErrorCheckEndFrameRecover: keep running after an exception mid-frame
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
-#include <condition_variable>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
-#include <deque>
 #include <filesystem>
 #include <fstream>
-#include <mutex>
 #include <optional>
-#include <stop_token>
-#include <thread>
 
 namespace fs = std::filesystem;
 
-namespace mesolab {
+namespace mesolab::gui {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
 // Longest a scripted run waits for one evaluation (or a window resize) before giving up.
 constexpr double kScriptWaitCapS = 600.0;
@@ -101,143 +91,6 @@ void copy_text(char (&dst)[N], std::string_view src) {
 void ignore_imgui_log(void*, const char*, ...) {}
 
 ImTextureID texture_id(GLuint tex) { return reinterpret_cast<ImTextureID>(static_cast<intptr_t>(tex)); }
-
-// [SECTION] Stage keys of a scene's frame stages
-using StageKeys = std::vector<std::pair<std::string, uint64_t>>;
-
-StageKeys stage_keys(const Scene& s) {
-    Registry& reg = Registry::instance();
-    StageKeys keys;
-    for (const auto& name : reg.frame_stages(s)) keys.emplace_back(name, reg.stages().key(s, name));
-    return keys;
-}
-
-// [SECTION] Background evaluation
-// One worker thread evaluates the latest submitted snapshot. Submitting while a job runs sets its
-// cancel flag (StageContext::progress then throws Cancelled) and queues the new snapshot.
-class Evaluator {
-public:
-    struct Outcome {
-        enum class Kind { Done, Failed, Cancelled } kind = Kind::Done;
-        uint64_t id = 0;
-        Evaluation eval;
-        Scene scene;
-        StageKeys keys;
-        std::string error, stage;  // Failed: the message; the last stage that reported progress
-        bool input_error = false;
-        double ms = 0;
-    };
-    struct Progress {
-        std::string stage;
-        double fraction = 0, seconds = 0;
-        bool running = false;
-    };
-
-    Evaluator() : thread_([this](std::stop_token st) { loop(st); }) {}
-    ~Evaluator() {  // then the jthread member (declared last) stops and joins, first of all members
-        std::lock_guard lock(mutex_);
-        pending_.reset();
-        stopping_ = true;
-        cancel_.store(true);
-    }
-
-    uint64_t submit(Scene s, StageKeys keys) {
-        std::lock_guard lock(mutex_);
-        pending_ = Job{++next_id_, std::move(s), std::move(keys)};
-        cancel_.store(true);  // the running job, if any, gives way
-        cv_.notify_one();
-        return next_id_;
-    }
-    void cancel() {
-        std::lock_guard lock(mutex_);
-        pending_.reset();
-        cancel_.store(true);
-    }
-    // No job pending or running and every outcome collected.
-    bool idle() const {
-        std::lock_guard lock(mutex_);
-        return !pending_ && !running_ && outcomes_.empty();
-    }
-    bool busy() const {
-        std::lock_guard lock(mutex_);
-        return pending_.has_value() || running_;
-    }
-    std::optional<Outcome> poll() {
-        std::lock_guard lock(mutex_);
-        if (outcomes_.empty()) return std::nullopt;
-        Outcome o = std::move(outcomes_.front());
-        outcomes_.pop_front();
-        return o;
-    }
-    Progress progress() const {
-        std::lock_guard lock(mutex_);
-        return {stage_, fraction_, running_ ? seconds_since(started_) : 0.0, running_ || pending_.has_value()};
-    }
-
-private:
-    struct Job {
-        uint64_t id = 0;
-        Scene scene;
-        StageKeys keys;
-    };
-
-    void loop(std::stop_token st) {
-        for (;;) {
-            Job job;
-            {
-                std::unique_lock lock(mutex_);
-                if (!cv_.wait(lock, st, [&] { return pending_.has_value(); })) return;  // stop requested
-                job = std::move(*pending_);
-                pending_.reset();
-                running_ = true;
-                cancel_.store(stopping_);
-                stage_.clear();
-                fraction_ = 0;
-                started_ = Clock::now();
-            }
-            Outcome out;
-            out.id = job.id;
-            out.keys = std::move(job.keys);
-            const auto t0 = Clock::now();
-            const ProgressFn progress = [this](const std::string& stage, double f) {
-                std::lock_guard lock(mutex_);
-                stage_ = stage;
-                fraction_ = f;
-            };
-            try {
-                Registry& reg = Registry::instance();
-                out.eval = reg.stages().evaluate(job.scene, reg.frame_stages(job.scene), progress, &cancel_);
-            } catch (const Cancelled&) {
-                out.kind = Outcome::Kind::Cancelled;
-            } catch (const InputError& e) {
-                out.kind = Outcome::Kind::Failed;
-                out.input_error = true;
-                out.error = e.what();
-            } catch (const std::exception& e) {
-                out.kind = Outcome::Kind::Failed;
-                out.error = e.what();
-            }
-            out.ms = ms_since(t0);
-            out.scene = std::move(job.scene);
-            std::lock_guard lock(mutex_);
-            out.stage = stage_;
-            running_ = false;
-            outcomes_.push_back(std::move(out));
-        }
-    }
-
-    mutable std::mutex mutex_;
-    std::condition_variable_any cv_;
-    std::optional<Job> pending_;
-    bool running_ = false, stopping_ = false;
-    uint64_t next_id_ = 0;
-    std::atomic<bool> cancel_{false};
-    std::string stage_;
-    double fraction_ = 0;
-    Clock::time_point started_{};
-    std::deque<Outcome> outcomes_;
-    std::jthread thread_;  // last: stops before the members it uses go
-};
 
 // [SECTION] Scripts
 struct ScriptCommand {
@@ -517,13 +370,7 @@ private:
     panels::PresetBrowser presets_;
 
     // Evaluation
-    std::optional<Evaluation> eval_;
-    StageKeys eval_keys_, inflight_keys_, failed_keys_;
-    uint64_t wanted_id_ = 0;
-    std::vector<StageRun> shown_runs_;
-    std::string eval_note_;
-    double last_eval_ms_ = 0;
-    bool eval_cancelled_ = false;  // the frame on screen is older than the scene
+    EvalState eval_;
 
     // Rendering and display
     Scene render_scene_, rendered_scene_;
@@ -716,49 +563,20 @@ void Gui::handle(const panels::PresetRequest& r) {
 
 // [SECTION] Scene changes: redraw or evaluate
 void Gui::on_scene_changed() {
-    StageKeys keys = stage_keys(scene_);
-    if (eval_ && keys == eval_keys_) {
-        // Only redraw-cost edits since the last completed evaluation: no stage runs.
-        if (evaluator_.busy()) evaluator_.cancel();  // an older edit's evaluation is not needed any more
-        wanted_id_ = 0;                               // and its outcome is ignored
-        inflight_keys_.clear();
-        eval_note_.clear();
-        eval_cancelled_ = false;
+    if (scene_changed(eval_, evaluator_, scene_) == SceneChange::Redraw) {
         render_scene_ = scene_;
         need_render_ = true;
-        return;
     }
-    if (!evaluator_.idle() && keys == inflight_keys_) return;  // the running evaluation computes exactly this
-    if (!evaluator_.busy() && keys == failed_keys_) return;   // these inputs just failed; the error is shown
-    inflight_keys_ = keys;
-    eval_cancelled_ = false;
-    wanted_id_ = evaluator_.submit(scene_, std::move(keys));
 }
 
 void Gui::poll_evaluator() {
-    while (auto o = evaluator_.poll()) {
-        if (o->id != wanted_id_) continue;  // superseded by a newer edit
-        inflight_keys_.clear();
-        using K = Evaluator::Outcome::Kind;
-        if (o->kind == K::Done) {
-            eval_ = std::move(o->eval);
-            eval_keys_ = o->keys;
-            failed_keys_.clear();
-            shown_runs_ = eval_->runs;
-            eval_note_.clear();
-            last_eval_ms_ = o->ms;
-            // Edits made meanwhile that only cost a redraw are shown at once.
-            render_scene_ = stage_keys(scene_) == o->keys ? scene_ : std::move(o->scene);
+    while (auto r = poll_evaluation(eval_, evaluator_, scene_)) {
+        if (r->kind == Polled::Kind::Done) {
+            render_scene_ = std::move(r->scene);
             need_render_ = true;
             if (!error_.empty() && error_origin_ == ErrorOrigin::Evaluation) error_.clear();  // fixed by this edit
-        } else if (o->kind == K::Failed) {
-            failed_keys_ = o->keys;
-            eval_note_ = "The last evaluation failed" + (o->stage.empty() ? std::string() : " (last progress from " + o->stage + ")") + ": " + o->error +
-                         (have_frame_ ? "  (showing the last good frame)" : "");
-            report(o->error, o->input_error, ErrorOrigin::Evaluation);
-        } else {
-            eval_cancelled_ = true;
-            eval_note_ = "Evaluation cancelled; showing the last completed frame. Edit a parameter or use Re-evaluate to start again.";
+        } else if (r->kind == Polled::Kind::Failed) {
+            report(r->error, r->input_error, ErrorOrigin::Evaluation);
         }
     }
 }
@@ -772,9 +590,9 @@ void Gui::render_now(bool interacting) {
     if (interacting && !scripted_ && full_render_ms_ > kInteractiveBudgetMs)
         scale = float(std::clamp(std::sqrt(kInteractiveBudgetMs / full_render_ms_), 0.25, 1.0));
     const ivec2 req{std::max(16, int(float(view_size_.x) * scale)), std::max(16, int(float(view_size_.y) * scale))};
-    const ivec2 size = frame_size(render_scene_, *eval_, req);
+    const ivec2 size = frame_size(render_scene_, *eval_.last, req);
     const auto t0 = Clock::now();
-    renderer_->render(render_scene_, *eval_, size.x, size.y);
+    renderer_->render(render_scene_, *eval_.last, size.x, size.y);
     last_render_ms_ = ms_since(t0);
     reduced_frame_ = scale < 1.f;
     if (!reduced_frame_) full_render_ms_ = last_render_ms_;
@@ -978,7 +796,7 @@ void Gui::after_ui() {
         attempt([&] { on_scene_changed(); });
     }
     const bool interacting = ImGui::IsAnyItemActive();
-    if (eval_ && (need_render_ || rendered_view_ != view_size_ || (reduced_frame_ && !interacting))) {
+    if (eval_.last && (need_render_ || rendered_view_ != view_size_ || (reduced_frame_ && !interacting))) {
         attempt([&] { render_now(interacting); }, ErrorOrigin::Render);
     } else if (have_frame_ && display_stale_) {
         attempt([&] { update_display(); }, ErrorOrigin::Render);
@@ -1239,10 +1057,7 @@ void Gui::viewport_overlays(ImVec2 p0, ImVec2 size) {
             ImGui::ProgressBar(float(pr.fraction), ImVec2(-ImGui::CalcTextSize("Cancel").x - 24.f, 0), label);
             ImGui::SameLine();
             if (ImGui::Button("Cancel")) {
-                evaluator_.cancel();
-                inflight_keys_.clear();
-                eval_cancelled_ = true;
-                eval_note_ = "Evaluation cancelled; showing the last completed frame. Edit a parameter or use Re-evaluate to start again.";
+                cancel_evaluation(eval_, evaluator_);
             }
         }
         ImGui::EndChild();
@@ -1285,7 +1100,7 @@ void Gui::side_windows() {
     const float presets_h = r.body_h - scene_h - tech_total;
     float y = r.top;
 
-    panels::PanelContext ctx{scene_, dirty_, eval_ ? &*eval_ : nullptr, selected_object_};
+    panels::PanelContext ctx{scene_, dirty_, eval_.last ? &*eval_.last : nullptr, selected_object_};
 
     ImGui::SetNextWindowPos(ImVec2(r.side_x, y), cond);
     ImGui::SetNextWindowSize(ImVec2(r.side_w, scene_h), cond);
@@ -1324,21 +1139,14 @@ void Gui::timings_window() {
     if (ImGui::Begin("Timings")) {
         if (ImGui::Button("Re-evaluate")) {
             // Picks up edits of files on disk (their size and time are in the keys).
-            failed_keys_.clear();
-            StageKeys keys = stage_keys(scene_);
-            if (!eval_ || keys != eval_keys_) {
-                inflight_keys_ = keys;
-                eval_cancelled_ = false;
-                wanted_id_ = evaluator_.submit(scene_, std::move(keys));
-            } else {
-                toast("Up to date: every stage key matches the last evaluation");
-            }
+            if (!reevaluate(eval_, evaluator_, scene_)) toast("Up to date: every stage key matches the last evaluation");
         }
         if (ImGui::IsItemHovered()) ImGui::SetTooltip("Evaluate the stage graph again if any key changed (e.g. an input file was edited)");
         ImGui::SameLine();
-        if (eval_) ImGui::TextDisabled("last evaluation %.1f ms, render %.2f ms", last_eval_ms_, last_render_ms_);
+        if (eval_.last) ImGui::TextDisabled("last evaluation %.1f ms, render %.2f ms", eval_.last_ms, last_render_ms_);
         ImGui::SameLine();
-        panels::timings_panel(shown_runs_, eval_note_);
+        static const std::vector<StageRun> no_runs;
+        panels::timings_panel(eval_.last ? eval_.last->runs : no_runs, eval_.note);
     }
     ImGui::End();
     relayout_ = false;
@@ -1363,9 +1171,9 @@ void Gui::status_bar() {
         ImGui::SameLine(0, 24);
         const Evaluator::Progress pr = evaluator_.progress();
         if (pr.running) ImGui::TextColored(ImVec4(0.45f, 0.7f, 1.f, 1.f), "evaluating stages %.1f s", pr.seconds);
-        else if (!failed_keys_.empty()) ImGui::TextColored(ImVec4(0.92f, 0.4f, 0.35f, 1.f), "evaluation failed");
-        else if (eval_cancelled_) ImGui::TextColored(ImVec4(0.9f, 0.67f, 0.3f, 1.f), "evaluation cancelled: the frame is out of date");
-        else if (eval_) ImGui::TextDisabled("up to date");
+        else if (eval_.failed()) ImGui::TextColored(ImVec4(0.92f, 0.4f, 0.35f, 1.f), "evaluation failed");
+        else if (eval_.cancelled()) ImGui::TextColored(ImVec4(0.9f, 0.67f, 0.3f, 1.f), "evaluation cancelled: the frame is out of date");
+        else if (eval_.last) ImGui::TextDisabled("up to date");
         TimingStat fs{};
         char right[256];
         const bool have = Profiler::global().find("gui.frame", fs);
@@ -1491,9 +1299,12 @@ void Gui::shortcuts() {
     }
 }
 }  // namespace
+}  // namespace mesolab::gui
 
+namespace mesolab {
 // [SECTION] Entry point
 int run_gui(const GuiOptions& o) {
+    using namespace gui;
     int w = 0, h = 0;
     parse_size(o.size, w, h);
     if (!o.script.empty() && o.frames > 0) throw InputError("gui: --script and --frames cannot be combined");
