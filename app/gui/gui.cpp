@@ -14,6 +14,7 @@
 //    vsync and exits with 0, 2 (bad input) or 1 (internal failure).
 #include "app/commands.h"
 #include "app/gui/evaluator.h"
+#include "app/gui/script.h"
 #include "app/workbench.h"
 #include "core/error.h"
 #include "core/image.h"
@@ -43,7 +44,6 @@
 #include <cstring>
 #include <ctime>
 #include <filesystem>
-#include <fstream>
 #include <optional>
 
 namespace fs = std::filesystem;
@@ -51,9 +51,6 @@ namespace fs = std::filesystem;
 namespace mesolab::gui {
 namespace {
 
-// Longest a scripted run waits for one evaluation (or a window resize) before giving up.
-constexpr double kScriptWaitCapS = 600.0;
-constexpr double kResizeWaitCapS = 10.0;
 // Frame time above which drags render the viewport at a reduced size.
 constexpr double kInteractiveBudgetMs = 40.0;
 
@@ -73,13 +70,6 @@ std::string file_safe(const std::string& name) {
     return r.empty() ? "untitled" : r;
 }
 
-std::string trim(const std::string& s) {
-    const auto b = s.find_first_not_of(" \t\r\n");
-    if (b == std::string::npos) return "";
-    const auto e = s.find_last_not_of(" \t\r\n");
-    return s.substr(b, e - b + 1);
-}
-
 // Copy into a fixed text buffer of an ImGui input, truncating, always terminated.
 template <size_t N>
 void copy_text(char (&dst)[N], std::string_view src) {
@@ -91,82 +81,6 @@ void copy_text(char (&dst)[N], std::string_view src) {
 void ignore_imgui_log(void*, const char*, ...) {}
 
 ImTextureID texture_id(GLuint tex) { return reinterpret_cast<ImTextureID>(static_cast<intptr_t>(tex)); }
-
-// [SECTION] Scripts
-struct ScriptCommand {
-    std::string where;  // "FILE:LINE" for messages
-    std::string verb, arg;
-    int n = 0, w = 0, h = 0;  // frames N; size WxH
-    // Run state
-    bool started = false, requested = false;
-    int remaining = 0;
-    Clock::time_point t0{};
-};
-
-const char* const kScriptVerbs = "load PRESET, set KEY=VALUE, frames N, wait, screenshot PATH, window-screenshot PATH, size WxH, quit";
-
-std::vector<ScriptCommand> parse_script(const std::string& path) {
-    std::ifstream in(path);
-    if (!fs::is_regular_file(path) || !in) throw InputError(path + ": cannot read the script (no such file?)");
-    std::vector<ScriptCommand> cmds;
-    std::string line;
-    for (int no = 1; std::getline(in, line); ++no) {
-        line = trim(line);
-        if (line.empty() || line[0] == '#') continue;
-        ScriptCommand c;
-        c.where = path + ":" + std::to_string(no);
-        const auto sp = line.find_first_of(" \t");
-        c.verb = line.substr(0, sp);
-        c.arg = sp == std::string::npos ? "" : trim(line.substr(sp));
-        auto bad = [&](const std::string& msg) { return InputError(c.where + ": " + msg); };
-        if (c.verb == "load" || c.verb == "screenshot" || c.verb == "window-screenshot") {
-            if (c.arg.empty()) throw bad("'" + c.verb + "' needs a path");
-        } else if (c.verb == "set") {
-            if (c.arg.find('=') == std::string::npos) throw bad("'set' expects KEY=VALUE, got '" + c.arg + "'");
-        } else if (c.verb == "frames") {
-            size_t used = 0;
-            long v = -1;
-            try {
-                v = std::stol(c.arg, &used);
-            } catch (const std::exception&) {
-            }
-            if (c.arg.empty() || used != c.arg.size() || v < 0 || v > 1000000) throw bad("'frames' expects a count 0..1000000, got '" + c.arg + "'");
-            c.n = int(v);
-        } else if (c.verb == "size") {
-            try {
-                parse_size(c.arg, c.w, c.h);
-            } catch (const InputError&) {
-                throw bad("'size' expects WxH within 1..16384 per side (e.g. 1600x900), got '" + c.arg + "'");
-            }
-        } else if (c.verb == "wait" || c.verb == "quit") {
-            if (!c.arg.empty()) throw bad("'" + c.verb + "' takes no argument, got '" + c.arg + "'");
-        } else {
-            throw bad("unknown command '" + c.verb + "' (commands: " + kScriptVerbs + "; '#' starts a comment line)");
-        }
-        cmds.push_back(std::move(c));
-    }
-    return cmds;
-}
-
-// --frames N [--screenshot P] [--window-screenshot P] as a script.
-std::vector<ScriptCommand> frames_script(const GuiOptions& o) {
-    std::vector<ScriptCommand> cmds;
-    auto add = [&](std::string verb, std::string arg, int n = 0) {
-        ScriptCommand c;
-        c.where = "--frames";
-        c.verb = std::move(verb);
-        c.arg = std::move(arg);
-        c.n = n;
-        cmds.push_back(std::move(c));
-    };
-    add("frames", "", std::max(0, o.frames - 1));
-    add("wait", "");
-    add("frames", "", 1);  // the last frame counts once the evaluation is done
-    if (!o.screenshot.empty()) add("screenshot", o.screenshot);
-    if (!o.window_screenshot.empty()) add("window-screenshot", o.window_screenshot);
-    add("quit", "");
-    return cmds;
-}
 
 // [SECTION] GLFW, window and ImGui lifetimes
 std::string g_glfw_error;
@@ -300,9 +214,9 @@ struct ImGuiSession {
 };
 
 // [SECTION] The application
-class Gui {
+class Gui : private ScriptHost {
 public:
-    Gui(const GuiOptions& o, GLFWwindow* window, std::vector<ScriptCommand> script, bool scripted, std::optional<Scene> initial,
+    Gui(GLFWwindow* window, ScriptRunner script, bool scripted, std::optional<Scene> initial,
         std::string initial_file, std::string initial_error);
     int run();
 
@@ -314,8 +228,6 @@ private:
     void wait_or_poll();
     void handle_drops();
     void poll_evaluator();
-    void step_script();
-    bool run_command(ScriptCommand& c);
     void build_ui();
     void after_ui();
     void present();
@@ -334,18 +246,26 @@ private:
     void handle(const panels::PresetRequest& r);
 
     // Actions (throw InputError; callers report)
-    void load(const std::string& path);
+    void load(const std::string& path) override;
     void save_to(const std::string& path);
     void paste();
     void screenshot_viewport(const std::string& path);
     void capture_window(const std::string& path);
     std::string screenshot_path(bool window) const;
 
+    // Script commands (ScriptHost)
+    void set(const std::string& assignment) override;
+    void screenshot(const std::string& path) override { screenshot_viewport(path); }
+    void request_window_screenshot(const std::string& path) override;
+    ShotResult window_screenshot_result() const override { return {window_shot_done_, window_shot_error_}; }
+    void request_size(int w, int h) override;
+    bool has_size(int w, int h) const override;
+
     // State changes
     void on_scene_changed();
     void render_now(bool interacting);
     void update_display();
-    bool settled() const;
+    bool settled() const override;
     bool modified() const { return !(scene_ == saved_scene_); }
     void report(const std::string& msg, bool input_error, ErrorOrigin origin);
     template <class F>
@@ -353,7 +273,6 @@ private:
     void toast(std::string text);
     void update_title();
 
-    GuiOptions opts_;
     GLFWwindow* window_;
     bool scripted_;
     std::unique_ptr<gpu::Renderer> renderer_;
@@ -390,7 +309,7 @@ private:
     Clock::time_point toast_t0_{};
     Modal open_modal_ = Modal::None;
     char modal_path_[1024] = "";
-    bool close_confirmed_ = false, quit_ = false;
+    bool close_confirmed_ = false;
     ImVec2 last_display_{0, 0};
     bool relayout_ = true;
     bool image_covers_ = false;  // last frame's image filled the viewport window
@@ -405,16 +324,12 @@ private:
     bool window_shot_done_ = false;
     std::string window_shot_error_;
 
-    // Script
-    std::vector<ScriptCommand> script_;
-    size_t pc_ = 0;
-    std::optional<std::string> script_error_;
-    bool script_input_error_ = false;
+    ScriptRunner script_;
 };
 
-Gui::Gui(const GuiOptions& o, GLFWwindow* window, std::vector<ScriptCommand> script, bool scripted, std::optional<Scene> initial,
+Gui::Gui(GLFWwindow* window, ScriptRunner script, bool scripted, std::optional<Scene> initial,
          std::string initial_file, std::string initial_error)
-    : opts_(o), window_(window), scripted_(scripted), script_(std::move(script)) {
+    : window_(window), scripted_(scripted), script_(std::move(script)) {
     renderer_ = std::make_unique<gpu::Renderer>();
     display_ = std::make_unique<gpu::DisplayPass>();
     gl_renderer_ = gpu::query_gl_info("glfw").renderer;
@@ -436,11 +351,7 @@ Gui::Gui(const GuiOptions& o, GLFWwindow* window, std::vector<ScriptCommand> scr
 // [SECTION] Errors and notifications
 void Gui::report(const std::string& msg, bool input_error, ErrorOrigin origin) {
     if (scripted_) {
-        if (!script_error_) {
-            const std::string where = pc_ < script_.size() ? script_[pc_].where + ": " : "";
-            script_error_ = where + msg;
-            script_input_error_ = input_error;
-        }
+        script_.fail(msg, input_error);
         return;
     }
     std::fprintf(stderr, "mesolab: %s%s\n", origin == ErrorOrigin::Evaluation ? "evaluation failed: " : "", msg.c_str());
@@ -644,101 +555,13 @@ void Gui::handle_drops() {
     report("dropped " + paths.front() + ": not a preset (drop a .json file)", true, ErrorOrigin::Action);
 }
 
-void Gui::step_script() {
-    while (pc_ < script_.size() && !script_error_) {
-        ScriptCommand& c = script_[pc_];
-        if (!c.started) {
-            c.started = true;
-            c.t0 = Clock::now();
-            c.remaining = c.n;
-        }
-        bool done = false;
-        try {
-            done = run_command(c);
-        } catch (const InputError& e) {
-            report(e.what(), true, ErrorOrigin::Action);
-            return;
-        } catch (const std::exception& e) {
-            report(e.what(), false, ErrorOrigin::Action);
-            return;
-        }
-        if (!done) {
-            const double cap = c.verb == "size" ? kResizeWaitCapS : kScriptWaitCapS;
-            if (seconds_since(c.t0) > cap) {
-                report("'" + c.verb + "' gave up after " + std::to_string(int(cap)) + " s (evaluation or window resize did not finish)", false, ErrorOrigin::Action);
-            }
-            return;
-        }
-        if (quit_) return;
-        ++pc_;
-    }
-    if (pc_ >= script_.size()) quit_ = true;
-}
-
-// Returns true when the command is complete, false to be called again next frame.
-bool Gui::run_command(ScriptCommand& c) {
-    if (c.verb == "load") {
-        std::string path = c.arg;
-        std::error_code ec;
-        // Relative to the working directory, else to the script's folder.
-        if (fs::path(path).is_relative() && !fs::exists(path, ec) && !opts_.script.empty()) {
-            const fs::path alt = fs::path(opts_.script).parent_path() / path;
-            if (fs::exists(alt, ec)) path = alt.string();
-        }
-        load(path);
-        return true;
-    }
-    if (c.verb == "set") {
-        apply_set(scene_, c.arg);
-        return true;
-    }
-    if (c.verb == "frames") {
-        if (c.remaining <= 0) return true;
-        --c.remaining;
-        return false;
-    }
-    if (c.verb == "wait") return settled();
-    if (c.verb == "screenshot") {
-        if (!settled()) return false;
-        screenshot_viewport(c.arg);
-        return true;
-    }
-    if (c.verb == "window-screenshot") {
-        if (!c.requested) {
-            if (!settled()) return false;
-            c.requested = true;
-            window_shot_path_ = c.arg;
-            window_shot_settle_ = 2;  // let the panels show the final values
-            window_shot_done_ = false;
-            return false;
-        }
-        if (!window_shot_error_.empty()) throw InputError(window_shot_error_);
-        return window_shot_done_;
-    }
-    if (c.verb == "size") {
-        if (!c.requested) {
-            c.requested = true;
-            glfwSetWindowSize(window_, c.w, c.h);
-            return false;
-        }
-        int w = 0, h = 0;
-        glfwGetFramebufferSize(window_, &w, &h);
-        return w == c.w && h == c.h;
-    }
-    if (c.verb == "quit") {
-        quit_ = true;
-        return true;
-    }
-    throw std::logic_error("script command " + c.verb);
-}
-
 int Gui::run() {
-    while (!quit_) {
+    for (;;) {
         wait_or_poll();
         const auto t0 = Clock::now();
         if (glfwWindowShouldClose(window_)) {
             if (scripted_) {
-                if (!script_error_) report("the window was closed before the script finished", false, ErrorOrigin::Action);
+                report("the window was closed before the script finished", false, ErrorOrigin::Action);
                 break;
             }
             if (modified() && !close_confirmed_) {
@@ -750,19 +573,36 @@ int Gui::run() {
         }
         handle_drops();
         poll_evaluator();
-        if (scripted_) step_script();
-        if (script_error_ || quit_) break;
+        if (scripted_) script_.step(*this);
+        if (script_.failure() || (scripted_ && script_.finished())) break;
         build_ui();
         after_ui();
         present();
         Profiler::global().record("gui.frame", ms_since(t0));
-        if (script_error_) break;
+        if (script_.failure()) break;
     }
-    if (script_error_) {
-        if (script_input_error_) throw InputError(*script_error_);
-        throw std::runtime_error(*script_error_);
+    if (const auto& f = script_.failure()) {
+        if (f->input_error) throw InputError(f->message);
+        throw std::runtime_error(f->message);
     }
     return 0;
+}
+
+// [SECTION] Script commands
+void Gui::set(const std::string& assignment) { apply_set(scene_, assignment); }
+
+void Gui::request_window_screenshot(const std::string& path) {
+    window_shot_path_ = path;
+    window_shot_settle_ = 2;  // let the panels show the final values
+    window_shot_done_ = false;
+}
+
+void Gui::request_size(int w, int h) { glfwSetWindowSize(window_, w, h); }
+
+bool Gui::has_size(int w, int h) const {
+    int fw = 0, fh = 0;
+    glfwGetFramebufferSize(window_, &fw, &fh);
+    return fw == w && fh == h;
 }
 
 void Gui::build_ui() {
@@ -1312,7 +1152,9 @@ int run_gui(const GuiOptions& o) {
         throw InputError("gui: --screenshot and --window-screenshot need --frames N (or use a --script)");
     if (o.frames < 0) throw InputError("gui: --frames must be positive");
     const bool scripted = !o.script.empty() || o.frames > 0;
-    std::vector<ScriptCommand> script = !o.script.empty() ? parse_script(o.script) : o.frames > 0 ? frames_script(o) : std::vector<ScriptCommand>{};
+    ScriptRunner script = !o.script.empty() ? ScriptRunner(parse_script(o.script), o.script)
+                          : o.frames > 0    ? ScriptRunner(frames_script(o), "")
+                                            : ScriptRunner();
 
     // The preset first: bad input fails before a window opens (scripted), or shows in it.
     std::optional<Scene> initial;
@@ -1329,7 +1171,7 @@ int run_gui(const GuiOptions& o) {
     GlfwLibrary glfw;
     Window window(w, h);
     ImGuiSession imgui(window.handle);
-    Gui gui(o, window.handle, std::move(script), scripted, std::move(initial), o.preset, initial_error);
+    Gui gui(window.handle, std::move(script), scripted, std::move(initial), o.preset, initial_error);
     return gui.run();
 }
 }  // namespace mesolab
