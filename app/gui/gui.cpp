@@ -15,6 +15,7 @@
 #include "app/commands.h"
 #include "app/gui/evaluator.h"
 #include "app/gui/script.h"
+#include "app/gui/state.h"
 #include "app/gui/window.h"
 #include "app/workbench.h"
 #include "core/error.h"
@@ -91,8 +92,8 @@ public:
     int run();
 
 private:
-    enum class Modal { None, Open, SaveAs, Close };
-    enum class ErrorOrigin { Action, Evaluation, Render };
+    using Modal = UiState::Modal;
+    using ErrorOrigin = UiState::ErrorOrigin;
 
     // Frame phases
     void wait_or_poll();
@@ -127,7 +128,7 @@ private:
     void set(const std::string& assignment) override;
     void screenshot(const std::string& path) override { screenshot_viewport(path); }
     void request_window_screenshot(const std::string& path) override;
-    ShotResult window_screenshot_result() const override { return {window_shot_done_, window_shot_error_}; }
+    ShotResult window_screenshot_result() const override;
     void request_size(int w, int h) override;
     bool has_size(int w, int h) const override;
 
@@ -136,7 +137,7 @@ private:
     void render_now(bool interacting);
     void update_display();
     bool settled() const override;
-    bool modified() const { return !(scene_ == saved_scene_); }
+    bool modified() const { return state_.doc.modified(); }
     void report(const std::string& msg, bool input_error, ErrorOrigin origin);
     template <class F>
     void attempt(F&& f, ErrorOrigin origin = ErrorOrigin::Action);
@@ -149,51 +150,15 @@ private:
     std::unique_ptr<gpu::DisplayPass> display_;
     std::string gl_renderer_;
     Evaluator evaluator_;
-
-    // Scene
-    Scene scene_, prev_scene_, saved_scene_;
-    std::string current_file_;
-    int selected_object_ = 0;
-    bool scene_pending_ = true;  // first frame: evaluate the initial scene
     panels::PanelRegistry technique_panels_;
     panels::PresetBrowser presets_;
 
-    // Evaluation
-    EvalState eval_;
+    GuiState state_;
 
-    // Rendering and display
-    Scene render_scene_, rendered_scene_;
-    bool need_render_ = false, have_frame_ = false, display_stale_ = false;
-    ivec2 view_size_{0, 0}, rendered_view_{0, 0}, frame_px_{0, 0};
-    std::string aov_ = "radiance";
-    float exposure_ev_ = 0.f;
-    double last_render_ms_ = 0, full_render_ms_ = 0;
-    bool reduced_frame_ = false;  // drawn at a reduced size during a drag
-
-    // UI
-    std::string error_;
-    ErrorOrigin error_origin_ = ErrorOrigin::Action;
-    int error_count_ = 0;
-    panels::Dirty dirty_;  // what this frame's edits cost (panels and camera)
-    std::string toast_;
-    Clock::time_point toast_t0_{};
-    Modal open_modal_ = Modal::None;
-    char modal_path_[1024] = "";
-    bool close_confirmed_ = false;
-    ImVec2 last_display_{0, 0};
-    bool relayout_ = true;
-    bool image_covers_ = false;  // last frame's image filled the viewport window
-    std::string tech_windows_;  // techniques with a window, to re-lay out when it changes
-    std::vector<std::string> dropped_;
-    std::string title_;
-    int busy_frames_ = 3;
-
-    // Window screenshot: taken after ImGui drew, `settle` frames after the request.
-    std::string window_shot_path_;
-    int window_shot_settle_ = 0;
-    bool window_shot_done_ = false;
-    std::string window_shot_error_;
-
+    // Window plumbing
+    std::vector<std::string> dropped_;  // paths dropped on the window, handled next frame
+    std::string title_;                 // the window title last set
+    int busy_frames_ = 3;               // frames to poll (not wait for) events: ImGui settles after one
     ScriptRunner script_;
 };
 
@@ -204,10 +169,8 @@ Gui::Gui(GLFWwindow* window, ScriptRunner script, bool scripted, std::optional<S
     display_ = std::make_unique<gpu::DisplayPass>();
     gl_renderer_ = gpu::query_gl_info("glfw").renderer;
     panels::register_technique_panels(technique_panels_);
-    scene_ = initial ? std::move(*initial) : default_scene();
-    saved_scene_ = scene_;
-    prev_scene_ = scene_;
-    current_file_ = initial ? initial_file : "";
+    if (initial) state_.doc.loaded(std::move(*initial), std::move(initial_file));
+    else state_.doc.loaded(default_scene(), "");  // the first frame evaluates it
     if (!initial_error.empty()) report(initial_error, true, ErrorOrigin::Action);
     glfwSetWindowUserPointer(window_, this);
     glfwSetDropCallback(window_, [](GLFWwindow* w, int count, const char** paths) {
@@ -225,9 +188,7 @@ void Gui::report(const std::string& msg, bool input_error, ErrorOrigin origin) {
         return;
     }
     std::fprintf(stderr, "mesolab: %s%s\n", origin == ErrorOrigin::Evaluation ? "evaluation failed: " : "", msg.c_str());
-    error_ = msg;
-    error_origin_ = origin;
-    ++error_count_;
+    state_.ui.show_error(msg, origin);
 }
 
 template <class F>
@@ -241,13 +202,10 @@ void Gui::attempt(F&& f, ErrorOrigin origin) {
     }
 }
 
-void Gui::toast(std::string text) {
-    toast_ = std::move(text);
-    toast_t0_ = Clock::now();
-}
+void Gui::toast(std::string text) { state_.ui.show_toast(std::move(text)); }
 
 void Gui::update_title() {
-    const std::string t = "mesolab - " + (current_file_.empty() ? std::string("untitled") : current_file_) + (modified() ? " *" : "");
+    const std::string t = "mesolab - " + (state_.doc.file.empty() ? std::string("untitled") : state_.doc.file) + (modified() ? " *" : "");
     if (t != title_) {
         title_ = t;
         glfwSetWindowTitle(window_, t.c_str());
@@ -256,25 +214,16 @@ void Gui::update_title() {
 
 // [SECTION] Actions
 void Gui::load(const std::string& path) {
-    Scene s = load_preset(path);  // InputError names the file; the old scene stays
-    scene_ = s;
-    saved_scene_ = std::move(s);
-    current_file_ = path;
-    selected_object_ = 0;
-    scene_pending_ = true;  // the same values from another folder may resolve other files
+    state_.doc.loaded(load_preset(path), path);  // InputError names the file; the old scene stays
     copy_text(presets_.save_as, path);
     if (!scripted_) toast("Loaded " + path);
 }
 
 void Gui::save_to(const std::string& path) {
     if (path.empty()) throw InputError("save: no file name given");
-    save_preset(scene_, path);
+    save_preset(state_.doc.scene, path);
     // Reload, so that relative paths are rebased onto the new file's folder.
-    Scene s = load_preset(path);
-    scene_ = s;
-    saved_scene_ = std::move(s);
-    current_file_ = path;
-    scene_pending_ = true;
+    state_.doc.saved_as(load_preset(path), path);
     presets_.rescan();
     toast("Saved " + path);
 }
@@ -288,20 +237,17 @@ void Gui::paste() {
     } catch (const json::parse_error& e) {
         throw InputError(std::string("clipboard: invalid JSON (") + e.what() + ")");
     }
-    const std::string base = scene_.base_dir.empty() ? fs::current_path().string() : scene_.base_dir;
-    scene_ = scene_from_json(j, "clipboard", base);
-    scene_pending_ = true;
-    current_file_.clear();
-    selected_object_ = 0;
+    const std::string base = state_.doc.scene.base_dir.empty() ? fs::current_path().string() : state_.doc.scene.base_dir;
+    state_.doc.replaced(scene_from_json(j, "clipboard", base));
     toast("Pasted a preset from the clipboard (untitled)");
 }
 
 std::string Gui::screenshot_path(bool window) const {
-    return "screenshots/" + file_safe(scene_.name) + (window ? "-window-" : "-") + timestamp() + ".png";
+    return "screenshots/" + file_safe(state_.doc.scene.name) + (window ? "-window-" : "-") + timestamp() + ".png";
 }
 
 void Gui::screenshot_viewport(const std::string& path) {
-    if (!have_frame_) throw InputError("screenshot " + path + ": no frame rendered yet");
+    if (!state_.frame.shown()) throw InputError("screenshot " + path + ": no frame rendered yet");
     const Frame f = renderer_->read_frame();
     write_png_srgb(path, f.aov("radiance"));
 }
@@ -326,16 +272,15 @@ void Gui::handle(const panels::PresetRequest& r) {
         case K::None: break;
         case K::Load: attempt([&] { load(r.path); }); break;
         case K::Save:
-            if (current_file_.empty()) {
-                open_modal_ = Modal::SaveAs;
-                copy_text(modal_path_, presets_.save_as);
+            if (state_.doc.file.empty()) {
+                state_.ui.open_modal(Modal::SaveAs, presets_.save_as);
             } else {
-                attempt([&] { save_to(current_file_); });
+                attempt([&] { save_to(state_.doc.file); });
             }
             break;
         case K::SaveAs: attempt([&] { save_to(r.path); }); break;
         case K::Copy:
-            ImGui::SetClipboardText(scene_to_text(scene_).c_str());
+            ImGui::SetClipboardText(scene_to_text(state_.doc.scene).c_str());
             toast("Copied the preset JSON to the clipboard");
             break;
         case K::Paste: attempt([&] { paste(); }); break;
@@ -344,18 +289,14 @@ void Gui::handle(const panels::PresetRequest& r) {
 
 // [SECTION] Scene changes: redraw or evaluate
 void Gui::on_scene_changed() {
-    if (scene_changed(eval_, evaluator_, scene_) == SceneChange::Redraw) {
-        render_scene_ = scene_;
-        need_render_ = true;
-    }
+    if (scene_changed(state_.eval, evaluator_, state_.doc.scene) == SceneChange::Redraw) state_.frame.redraw(state_.doc.scene);
 }
 
 void Gui::poll_evaluator() {
-    while (auto r = poll_evaluation(eval_, evaluator_, scene_)) {
+    while (auto r = poll_evaluation(state_.eval, evaluator_, state_.doc.scene)) {
         if (r->kind == Polled::Kind::Done) {
-            render_scene_ = std::move(r->scene);
-            need_render_ = true;
-            if (!error_.empty() && error_origin_ == ErrorOrigin::Evaluation) error_.clear();  // fixed by this edit
+            state_.frame.redraw(std::move(r->scene));
+            state_.ui.clear_error(ErrorOrigin::Evaluation);  // fixed by this edit
         } else if (r->kind == Polled::Kind::Failed) {
             report(r->error, r->input_error, ErrorOrigin::Evaluation);
         }
@@ -363,47 +304,41 @@ void Gui::poll_evaluator() {
 }
 
 void Gui::render_now(bool interacting) {
-    need_render_ = false;
-    rendered_view_ = view_size_;
+    FrameState& f = state_.frame;
+    const ivec2 view = state_.ui.viewport.size;
+    f.render_started(view);
     // While a widget or the camera is being dragged, a slow renderer (llvmpipe) draws fewer
     // pixels to keep up; the full-size frame follows when the drag ends.
     float scale = 1.f;
-    if (interacting && !scripted_ && full_render_ms_ > kInteractiveBudgetMs)
-        scale = float(std::clamp(std::sqrt(kInteractiveBudgetMs / full_render_ms_), 0.25, 1.0));
-    const ivec2 req{std::max(16, int(float(view_size_.x) * scale)), std::max(16, int(float(view_size_.y) * scale))};
-    const ivec2 size = frame_size(render_scene_, *eval_.last, req);
+    if (interacting && !scripted_ && f.full_render_ms > kInteractiveBudgetMs)
+        scale = float(std::clamp(std::sqrt(kInteractiveBudgetMs / f.full_render_ms), 0.25, 1.0));
+    const ivec2 req{std::max(16, int(float(view.x) * scale)), std::max(16, int(float(view.y) * scale))};
+    const ivec2 size = frame_size(f.scene, *state_.eval.last, req);
     const auto t0 = Clock::now();
-    renderer_->render(render_scene_, *eval_.last, size.x, size.y);
-    last_render_ms_ = ms_since(t0);
-    reduced_frame_ = scale < 1.f;
-    if (!reduced_frame_) full_render_ms_ = last_render_ms_;
-    rendered_scene_ = render_scene_;
-    frame_px_ = size;
-    have_frame_ = true;
+    renderer_->render(f.scene, *state_.eval.last, size.x, size.y);
+    f.rendered(size, scale < 1.f, ms_since(t0));
     update_display();
 }
 
 void Gui::update_display() {
-    display_stale_ = false;
-    const auto layout = Registry::instance().aovs(rendered_scene_);
-    auto it = std::find_if(layout.begin(), layout.end(), [&](const AovDecl& a) { return a.name == aov_; });
+    FrameState& f = state_.frame;
+    f.display_outdated = false;
+    const auto layout = Registry::instance().aovs(f.scene);
+    auto it = std::find_if(layout.begin(), layout.end(), [&](const AovDecl& a) { return a.name == state_.ui.viewport.aov; });
     if (it == layout.end()) it = layout.begin();  // radiance
     const GLuint tex = renderer_->aov_texture(it->name);
     const bool normal = it->name == "normal";
-    display_->run(tex, frame_px_.x, frame_px_.y, normal ? gpu::DisplayMode::Normal : gpu::DisplayMode::Color, it->channels,
-                  it->name == "radiance" ? std::exp2(exposure_ev_) : 1.f);
+    display_->run(tex, f.px.x, f.px.y, normal ? gpu::DisplayMode::Normal : gpu::DisplayMode::Color, it->channels,
+                  it->name == "radiance" ? std::exp2(state_.ui.viewport.exposure_ev) : 1.f);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
-bool Gui::settled() const {
-    return evaluator_.idle() && !scene_pending_ && scene_ == prev_scene_ && !need_render_ && !display_stale_ && have_frame_ && !reduced_frame_ &&
-           rendered_view_ == view_size_;
-}
+bool Gui::settled() const { return state_.settled(evaluator_.idle()); }
 
 // [SECTION] Frame loop
 void Gui::wait_or_poll() {
-    const bool toast_on = !toast_.empty() && seconds_since(toast_t0_) < 4.0;
-    if (scripted_ || busy_frames_ > 0 || evaluator_.busy() || toast_on || need_render_ || ImGui::IsAnyMouseDown() || !window_shot_path_.empty()) {
+    const bool shot_pending = state_.ui.window_shot.kind == UiState::WindowShot::Kind::Requested;
+    if (scripted_ || busy_frames_ > 0 || evaluator_.busy() || state_.ui.toast.visible() || state_.frame.outdated || ImGui::IsAnyMouseDown() || shot_pending) {
         glfwPollEvents();
         if (busy_frames_ > 0) --busy_frames_;
     } else {
@@ -434,9 +369,9 @@ int Gui::run() {
                 report("the window was closed before the script finished", false, ErrorOrigin::Action);
                 break;
             }
-            if (modified() && !close_confirmed_) {
+            if (modified() && !state_.ui.close_confirmed) {
                 glfwSetWindowShouldClose(window_, GLFW_FALSE);
-                open_modal_ = Modal::Close;
+                state_.ui.open_modal(Modal::Close);
             } else {
                 break;
             }
@@ -459,12 +394,18 @@ int Gui::run() {
 }
 
 // [SECTION] Script commands
-void Gui::set(const std::string& assignment) { apply_set(scene_, assignment); }
+void Gui::set(const std::string& assignment) {
+    apply_set(state_.doc.scene, assignment);
+    state_.doc.edited(Cost::Recompute);  // the keys decide what it costs
+}
 
 void Gui::request_window_screenshot(const std::string& path) {
-    window_shot_path_ = path;
-    window_shot_settle_ = 2;  // let the panels show the final values
-    window_shot_done_ = false;
+    state_.ui.request_window_shot(path, 2);  // let the panels show the final values
+}
+
+ScriptHost::ShotResult Gui::window_screenshot_result() const {
+    const UiState::WindowShot& w = state_.ui.window_shot;
+    return {w.kind == UiState::WindowShot::Kind::Done, w.kind == UiState::WindowShot::Kind::Failed ? w.error : ""};
 }
 
 void Gui::request_size(int w, int h) { glfwSetWindowSize(window_, w, h); }
@@ -480,7 +421,6 @@ void Gui::build_ui() {
     ImGui_ImplOpenGL3_NewFrame();
     ImGui_ImplGlfw_NewFrame();
     ImGui::NewFrame();
-    dirty_ = {};
     try {
         layout_windows();
         menu_bar();
@@ -500,15 +440,11 @@ void Gui::build_ui() {
 }
 
 void Gui::after_ui() {
-    if (scene_pending_ || dirty_.any() || !(scene_ == prev_scene_)) {
-        scene_pending_ = false;
-        prev_scene_ = scene_;
-        attempt([&] { on_scene_changed(); });
-    }
+    if (state_.doc.take_edits()) attempt([&] { on_scene_changed(); });
     const bool interacting = ImGui::IsAnyItemActive();
-    if (eval_.last && (need_render_ || rendered_view_ != view_size_ || (reduced_frame_ && !interacting))) {
+    if (state_.eval.last && state_.frame.needs_render(state_.ui.viewport.size, interacting)) {
         attempt([&] { render_now(interacting); }, ErrorOrigin::Render);
-    } else if (have_frame_ && display_stale_) {
+    } else if (state_.frame.shown() && state_.frame.display_outdated) {
         attempt([&] { update_display(); }, ErrorOrigin::Render);
     }
     update_title();
@@ -523,15 +459,15 @@ void Gui::present() {
     glClearColor(0.08f, 0.085f, 0.095f, 1.f);
     glClear(GL_COLOR_BUFFER_BIT);
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
-    if (!window_shot_path_.empty() && window_shot_settle_-- <= 0) {
-        const std::string path = window_shot_path_;
-        window_shot_path_.clear();
+    UiState::WindowShot& shot = state_.ui.window_shot;
+    if (shot.kind == UiState::WindowShot::Kind::Requested && shot.settle-- <= 0) {
+        const std::string path = shot.path;
         try {
             capture_window(path);
-            window_shot_done_ = true;
+            state_.ui.window_shot_done();
             if (!scripted_) toast("Saved " + path);
         } catch (const std::exception& e) {
-            window_shot_error_ = e.what();
+            state_.ui.window_shot_failed(e.what());
             if (!scripted_) report(e.what(), true, ErrorOrigin::Action);
         }
     }
@@ -544,21 +480,21 @@ void Gui::layout_windows() {
     const ImVec2 ds = ImGui::GetIO().DisplaySize;
     std::string techs;
     for (const auto& e : technique_panels_.entries)
-        if (scene_.uses_technique(e.technique)) techs += e.technique + ";";
-    if (ds.x != last_display_.x || ds.y != last_display_.y || techs != tech_windows_) relayout_ = true;
-    last_display_ = ds;
-    tech_windows_ = techs;
+        if (state_.doc.scene.uses_technique(e.technique)) techs += e.technique + ";";
+    UiState::Layout& l = state_.ui.layout;
+    if (ds.x != l.display.x || ds.y != l.display.y || techs != l.tech_windows) l.relayout = true;
+    l.display = vec2(ds.x, ds.y);
+    state_.ui.layout.tech_windows = techs;
 }
 
 
 void Gui::menu_bar() {
     if (!ImGui::BeginMainMenuBar()) return;
     if (ImGui::BeginMenu("File")) {
-        if (ImGui::MenuItem("Open preset...", "Ctrl+O")) open_modal_ = Modal::Open;
-        if (ImGui::MenuItem("Save", "Ctrl+S")) handle({panels::PresetRequest::Kind::Save, current_file_});
+        if (ImGui::MenuItem("Open preset...", "Ctrl+O")) state_.ui.open_modal(Modal::Open);
+        if (ImGui::MenuItem("Save", "Ctrl+S")) handle({panels::PresetRequest::Kind::Save, state_.doc.file});
         if (ImGui::MenuItem("Save as...", "Ctrl+Shift+S")) {
-            open_modal_ = Modal::SaveAs;
-            copy_text(modal_path_, presets_.save_as);
+            state_.ui.open_modal(Modal::SaveAs, presets_.save_as);
         }
         ImGui::Separator();
         if (ImGui::MenuItem("Copy preset JSON to clipboard")) handle({panels::PresetRequest::Kind::Copy, ""});
@@ -569,27 +505,27 @@ void Gui::menu_bar() {
     }
     if (ImGui::BeginMenu("View")) {
         ImGui::TextDisabled("AOV shown");
-        for (const auto& a : Registry::instance().aovs(have_frame_ ? rendered_scene_ : scene_)) {
-            if (ImGui::MenuItem(a.name.c_str(), nullptr, aov_ == a.name)) {
-                aov_ = a.name;
-                display_stale_ = true;
+        for (const auto& a : Registry::instance().aovs(state_.frame.shown() ? state_.frame.scene : state_.doc.scene)) {
+            if (ImGui::MenuItem(a.name.c_str(), nullptr, state_.ui.viewport.aov == a.name)) {
+                state_.ui.viewport.aov = a.name;
+                state_.frame.display_outdated = true;
             }
             if (ImGui::IsItemHovered() && !a.help.empty()) ImGui::SetTooltip("%s", a.help.c_str());
         }
         ImGui::Separator();
         ImGui::SetNextItemWidth(ImGui::GetFontSize() * 9.f);
-        if (ImGui::SliderFloat("Exposure (EV)", &exposure_ev_, -8.f, 8.f, "%+.1f")) display_stale_ = true;
+        if (ImGui::SliderFloat("Exposure (EV)", &state_.ui.viewport.exposure_ev, -8.f, 8.f, "%+.1f")) state_.frame.display_outdated = true;
         if (ImGui::IsItemHovered()) ImGui::SetTooltip("Display only: scales the radiance shown; screenshots keep the rendered values");
-        if (ImGui::MenuItem("Reset exposure", nullptr, false, exposure_ev_ != 0.f)) {
-            exposure_ev_ = 0.f;
-            display_stale_ = true;
+        if (ImGui::MenuItem("Reset exposure", nullptr, false, state_.ui.viewport.exposure_ev != 0.f)) {
+            state_.ui.viewport.exposure_ev = 0.f;
+            state_.frame.display_outdated = true;
         }
         ImGui::Separator();
-        if (ImGui::MenuItem("Reset layout")) relayout_ = true;
+        if (ImGui::MenuItem("Reset layout")) state_.ui.layout.relayout = true;
         ImGui::EndMenu();
     }
     if (ImGui::BeginMenu("Screenshot")) {
-        if (ImGui::MenuItem("Viewport", "F12", false, have_frame_)) {
+        if (ImGui::MenuItem("Viewport", "F12", false, state_.frame.shown())) {
             attempt([&] {
                 const std::string p = screenshot_path(false);
                 screenshot_viewport(p);
@@ -598,8 +534,7 @@ void Gui::menu_bar() {
         }
         if (ImGui::IsItemHovered()) ImGui::SetTooltip("The radiance AOV of the current frame, 8-bit sRGB PNG, in screenshots/");
         if (ImGui::MenuItem("Window", "Shift+F12")) {
-            window_shot_path_ = screenshot_path(true);
-            window_shot_settle_ = 1;  // next frame, once this menu is closed
+            state_.ui.request_window_shot(screenshot_path(true), 1);  // next frame, once this menu is closed
         }
         if (ImGui::IsItemHovered()) ImGui::SetTooltip("The whole window with its panels, PNG, in screenshots/");
         ImGui::EndMenu();
@@ -613,29 +548,29 @@ void Gui::menu_bar() {
 
 void Gui::viewport_window() {
     const layout::Rects r = layout::compute(ImGui::GetIO().DisplaySize);
-    const ImGuiCond cond = relayout_ ? ImGuiCond_Always : ImGuiCond_FirstUseEver;
+    const ImGuiCond cond = state_.ui.layout.relayout ? ImGuiCond_Always : ImGuiCond_FirstUseEver;
     ImGui::SetNextWindowPos(r.view_pos, cond);
     ImGui::SetNextWindowSize(r.view_size, cond);
     ImGui::PushStyleVar(ImGuiStyleVar_WindowPadding, ImVec2(0, 0));
     // When the frame covers the whole window, skip its background: on llvmpipe every full layer
     // of blended pixels costs milliseconds.
-    const ImGuiWindowFlags bg = image_covers_ ? ImGuiWindowFlags_NoBackground : 0;
+    const ImGuiWindowFlags bg = state_.ui.viewport.image_covers ? ImGuiWindowFlags_NoBackground : 0;
     const bool open = ImGui::Begin("Viewport", nullptr, ImGuiWindowFlags_NoScrollbar | ImGuiWindowFlags_NoScrollWithMouse | ImGuiWindowFlags_NoCollapse | bg);
     ImGui::PopStyleVar();
-    image_covers_ = false;
+    state_.ui.viewport.image_covers = false;
     if (open) {
         const ImVec2 p0 = ImGui::GetCursorScreenPos();
         const ImVec2 avail = ImGui::GetContentRegionAvail();
         if (avail.x >= 1.f && avail.y >= 1.f) {
-            view_size_ = {std::max(16, int(avail.x)), std::max(16, int(avail.y))};
+            state_.ui.viewport.size = {std::max(16, int(avail.x)), std::max(16, int(avail.y))};
             ImDrawList* dl = ImGui::GetWindowDrawList();
-            if (have_frame_ && display_->valid()) {
+            if (state_.frame.shown() && display_->valid()) {
                 // Fit the frame (texture mode may have its own size), centred, aspect kept.
-                const float sx = avail.x / float(frame_px_.x), sy = avail.y / float(frame_px_.y);
+                const float sx = avail.x / float(state_.frame.px.x), sy = avail.y / float(state_.frame.px.y);
                 const float s = std::min(sx, sy);
-                const ImVec2 size(std::floor(float(frame_px_.x) * s), std::floor(float(frame_px_.y) * s));
-                image_covers_ = size.x >= avail.x - 1.f && size.y >= avail.y - 1.f;
-                if (!image_covers_) dl->AddRectFilled(p0, ImVec2(p0.x + avail.x, p0.y + avail.y), IM_COL32(22, 23, 26, 255));
+                const ImVec2 size(std::floor(float(state_.frame.px.x) * s), std::floor(float(state_.frame.px.y) * s));
+                state_.ui.viewport.image_covers = size.x >= avail.x - 1.f && size.y >= avail.y - 1.f;
+                if (!state_.ui.viewport.image_covers) dl->AddRectFilled(p0, ImVec2(p0.x + avail.x, p0.y + avail.y), IM_COL32(22, 23, 26, 255));
                 ImGui::SetCursorScreenPos(ImVec2(std::floor(p0.x + (avail.x - size.x) * 0.5f), std::floor(p0.y + (avail.y - size.y) * 0.5f)));
                 ImGui::Image(texture_id(display_->texture()), size, ImVec2(0, 1), ImVec2(1, 0));  // GL rows are bottom-up
             } else {
@@ -656,7 +591,7 @@ void Gui::camera_input(ImVec2 size) {
     ImGui::InvisibleButton("##viewport_input", size, ImGuiButtonFlags_MouseButtonLeft | ImGuiButtonFlags_MouseButtonRight | ImGuiButtonFlags_MouseButtonMiddle);
     const bool hovered = ImGui::IsItemHovered(), active = ImGui::IsItemActive();
     ImGuiIO& io = ImGui::GetIO();
-    ParamTable& cam = scene_.camera;
+    ParamTable& cam = state_.doc.scene.camera;
     const bool texture_mode = cam.get_string("mode") == "texture";
     const ImVec2 d = io.MouseDelta;
     if (active && (d.x != 0.f || d.y != 0.f)) {
@@ -668,7 +603,7 @@ void Gui::camera_input(ImVec2 size) {
             if (phi > 180.f) phi -= 360.f;
             if (phi < -180.f) phi += 360.f;
             cam.set("orbit", std::array<double, 2>{theta, phi});
-            dirty_.mark(cam.group().find("orbit")->cost);
+            state_.doc.edits.mark(cam.group().find("orbit")->cost);
         } else if (!texture_mode && (ImGui::IsMouseDown(ImGuiMouseButton_Right) || ImGui::IsMouseDown(ImGuiMouseButton_Middle))) {
             // Pan the target in the view plane, one pixel = one pixel's footprint at the target.
             const vec2 o = cam.get_vec2("orbit");
@@ -681,14 +616,14 @@ void Gui::camera_input(ImVec2 size) {
             const vec3 t = cam.get_vec3("target") - right * (d.x * px) + up * (d.y * px);
             auto clampc = [](float v) { return std::clamp(double(v), -1e6, 1e6); };
             cam.set("target", std::array<double, 3>{clampc(t.x), clampc(t.y), clampc(t.z)});
-            dirty_.mark(cam.group().find("target")->cost);
+            state_.doc.edits.mark(cam.group().find("target")->cost);
         }
     }
     if (hovered && io.MouseWheel != 0.f && !texture_mode) {
         const double dist = cam.get_float("distance") * std::pow(1.1, -double(io.MouseWheel));
         const ParamDecl* dd = cam.group().find("distance");
         cam.set("distance", std::clamp(dist, dd->min, dd->max));
-        dirty_.mark(dd->cost);
+        state_.doc.edits.mark(dd->cost);
     }
     if (hovered && !active && !io.WantTextInput) ImGui::SetMouseCursor(ImGuiMouseCursor_Hand);
 }
@@ -699,10 +634,10 @@ void Gui::viewport_overlays(ImVec2 p0, ImVec2 size) {
     float y = p0.y + pad;
 
     // Error bar: the last error, the frame behind it stays the last good one.
-    if (!error_.empty()) {
+    if (!state_.ui.error.text.empty()) {
         const float w = size.x - 2.f * pad;
         const float wrap = w - 150.f;
-        const float text_h = std::min(ImGui::CalcTextSize(error_.c_str(), nullptr, false, wrap).y, ImGui::GetTextLineHeight() * 6.f);
+        const float text_h = std::min(ImGui::CalcTextSize(state_.ui.error.text.c_str(), nullptr, false, wrap).y, ImGui::GetTextLineHeight() * 6.f);
         const float h = text_h + ImGui::GetStyle().WindowPadding.y * 2.f + 2.f;
         ImGui::SetCursorScreenPos(ImVec2(p0.x + pad, y));
         ImGui::PushStyleColor(ImGuiCol_ChildBg, IM_COL32(110, 32, 32, 235));
@@ -710,19 +645,18 @@ void Gui::viewport_overlays(ImVec2 p0, ImVec2 size) {
         ImGui::PushStyleVar(ImGuiStyleVar_WindowPadding, ImVec2(10, 6));
         if (ImGui::BeginChild("##error_bar", ImVec2(w, h), true, ImGuiWindowFlags_NoScrollbar)) {
             ImGui::PushTextWrapPos(wrap);
-            ImGui::TextUnformatted(error_.c_str());
+            ImGui::TextUnformatted(state_.ui.error.text.c_str());
             ImGui::PopTextWrapPos();
             ImGui::SameLine(w - 140.f);
             ImGui::SetCursorPosY(ImGui::GetStyle().WindowPadding.y);
-            if (error_count_ > 1) {
-                ImGui::TextDisabled("x%d", error_count_);
+            if (state_.ui.error.count > 1) {
+                ImGui::TextDisabled("x%d", state_.ui.error.count);
                 ImGui::SameLine();
             }
-            if (ImGui::SmallButton("Copy")) ImGui::SetClipboardText(error_.c_str());
+            if (ImGui::SmallButton("Copy")) ImGui::SetClipboardText(state_.ui.error.text.c_str());
             ImGui::SameLine();
             if (ImGui::SmallButton("Dismiss")) {
-                error_.clear();
-                error_count_ = 0;
+                state_.ui.dismiss_error();
             }
         }
         ImGui::EndChild();
@@ -747,7 +681,7 @@ void Gui::viewport_overlays(ImVec2 p0, ImVec2 size) {
             ImGui::ProgressBar(float(pr.fraction), ImVec2(-ImGui::CalcTextSize("Cancel").x - 24.f, 0), label);
             ImGui::SameLine();
             if (ImGui::Button("Cancel")) {
-                cancel_evaluation(eval_, evaluator_);
+                cancel_evaluation(state_.eval, evaluator_);
             }
         }
         ImGui::EndChild();
@@ -755,49 +689,49 @@ void Gui::viewport_overlays(ImVec2 p0, ImVec2 size) {
     }
 
     // Frame info, top right.
-    if (have_frame_) {
+    if (state_.frame.shown()) {
         char info[160];
-        std::snprintf(info, sizeof info, "%dx%d%s  %s  %.1f ms", frame_px_.x, frame_px_.y, reduced_frame_ ? " (preview)" : "", aov_.c_str(), last_render_ms_);
+        std::snprintf(info, sizeof info, "%dx%d%s  %s  %.1f ms", state_.frame.px.x, state_.frame.px.y, state_.frame.preview() ? " (preview)" : "", state_.ui.viewport.aov.c_str(), state_.frame.render_ms);
         const ImVec2 ts = ImGui::CalcTextSize(info);
-        const ImVec2 a(p0.x + size.x - ts.x - pad - 8.f, p0.y + pad + (error_.empty() ? 0.f : y - p0.y - pad));
+        const ImVec2 a(p0.x + size.x - ts.x - pad - 8.f, p0.y + pad + (state_.ui.error.text.empty() ? 0.f : y - p0.y - pad));
         dl->AddRectFilled(ImVec2(a.x - 6.f, a.y - 3.f), ImVec2(a.x + ts.x + 6.f, a.y + ts.y + 3.f), IM_COL32(15, 16, 18, 170), 3.f);
         dl->AddText(a, IM_COL32(200, 203, 210, 255), info);
     }
 
     // Toast, bottom left, fading out.
-    if (!toast_.empty()) {
-        const double t = seconds_since(toast_t0_);
+    if (!state_.ui.toast.text.empty()) {
+        const double t = seconds_since(state_.ui.toast.t0);
         if (t > 4.0) {
-            toast_.clear();
+            state_.ui.toast.text.clear();
         } else {
             const float alpha = float(std::clamp(4.0 - t, 0.0, 1.0));
-            const ImVec2 ts = ImGui::CalcTextSize(toast_.c_str());
+            const ImVec2 ts = ImGui::CalcTextSize(state_.ui.toast.text.c_str());
             const ImVec2 a(p0.x + pad + 6.f, p0.y + size.y - pad - ts.y - 6.f);
             dl->AddRectFilled(ImVec2(a.x - 8.f, a.y - 5.f), ImVec2(a.x + ts.x + 8.f, a.y + ts.y + 5.f), IM_COL32(40, 90, 170, int(220 * alpha)), 4.f);
-            dl->AddText(a, IM_COL32(255, 255, 255, int(255 * alpha)), toast_.c_str());
+            dl->AddText(a, IM_COL32(255, 255, 255, int(255 * alpha)), state_.ui.toast.text.c_str());
         }
     }
 }
 
 void Gui::side_windows() {
     const layout::Rects r = layout::compute(ImGui::GetIO().DisplaySize);
-    const ImGuiCond cond = relayout_ ? ImGuiCond_Always : ImGuiCond_FirstUseEver;
+    const ImGuiCond cond = state_.ui.layout.relayout ? ImGuiCond_Always : ImGuiCond_FirstUseEver;
     std::vector<const panels::PanelEntry*> techs;
     for (const auto& e : technique_panels_.entries)
-        if (scene_.uses_technique(e.technique)) techs.push_back(&e);
+        if (state_.doc.scene.uses_technique(e.technique)) techs.push_back(&e);
     const float scene_h = std::floor(r.body_h * (techs.empty() ? 0.66f : 0.48f));
     const float tech_total = techs.empty() ? 0.f : std::floor(r.body_h * 0.22f);
     const float presets_h = r.body_h - scene_h - tech_total;
     float y = r.top;
 
-    panels::PanelContext ctx{scene_, dirty_, eval_.last ? &*eval_.last : nullptr, selected_object_};
+    panels::PanelContext ctx{state_.doc.scene, state_.doc.edits, state_.eval.last ? &*state_.eval.last : nullptr, state_.doc.selected_object};
 
     ImGui::SetNextWindowPos(ImVec2(r.side_x, y), cond);
     ImGui::SetNextWindowSize(ImVec2(r.side_w, scene_h), cond);
-    if (ImGui::Begin("Scene")) panels::scene_panel(ctx, current_file_.empty() ? nullptr : &saved_scene_);
+    if (ImGui::Begin("Scene")) panels::scene_panel(ctx, state_.doc.file.empty() ? nullptr : &state_.doc.saved);
     ImGui::End();
     y += scene_h;
-    selected_object_ = ctx.object;
+    state_.doc.selected_object = ctx.object;
 
     for (const panels::PanelEntry* e : techs) {
         const float h = std::floor(tech_total / float(techs.size()));
@@ -816,30 +750,30 @@ void Gui::side_windows() {
     ImGui::SetNextWindowPos(ImVec2(r.side_x, y), cond);
     ImGui::SetNextWindowSize(ImVec2(r.side_w, presets_h), cond);
     panels::PresetRequest req;
-    if (ImGui::Begin("Presets")) req = panels::presets_panel(presets_, current_file_, modified());
+    if (ImGui::Begin("Presets")) req = panels::presets_panel(presets_, state_.doc.file, modified());
     ImGui::End();
     handle(req);
 }
 
 void Gui::timings_window() {
     const layout::Rects r = layout::compute(ImGui::GetIO().DisplaySize);
-    const ImGuiCond cond = relayout_ ? ImGuiCond_Always : ImGuiCond_FirstUseEver;
+    const ImGuiCond cond = state_.ui.layout.relayout ? ImGuiCond_Always : ImGuiCond_FirstUseEver;
     ImGui::SetNextWindowPos(r.timings_pos, cond);
     ImGui::SetNextWindowSize(r.timings_size, cond);
     if (ImGui::Begin("Timings")) {
         if (ImGui::Button("Re-evaluate")) {
             // Picks up edits of files on disk (their size and time are in the keys).
-            if (!reevaluate(eval_, evaluator_, scene_)) toast("Up to date: every stage key matches the last evaluation");
+            if (!reevaluate(state_.eval, evaluator_, state_.doc.scene)) toast("Up to date: every stage key matches the last evaluation");
         }
         if (ImGui::IsItemHovered()) ImGui::SetTooltip("Evaluate the stage graph again if any key changed (e.g. an input file was edited)");
         ImGui::SameLine();
-        if (eval_.last) ImGui::TextDisabled("last evaluation %.1f ms, render %.2f ms", eval_.last_ms, last_render_ms_);
+        if (state_.eval.last) ImGui::TextDisabled("last evaluation %.1f ms, render %.2f ms", state_.eval.last_ms, state_.frame.render_ms);
         ImGui::SameLine();
         static const std::vector<StageRun> no_runs;
-        panels::timings_panel(eval_.last ? eval_.last->runs : no_runs, eval_.note);
+        panels::timings_panel(state_.eval.last ? state_.eval.last->runs : no_runs, state_.eval.note);
     }
     ImGui::End();
-    relayout_ = false;
+    state_.ui.layout.relayout = false;
 }
 
 void Gui::status_bar() {
@@ -853,7 +787,7 @@ void Gui::status_bar() {
     const ImGuiWindowFlags flags = ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoSavedSettings |
                                    ImGuiWindowFlags_NoFocusOnAppearing | ImGuiWindowFlags_NoBringToFrontOnFocus | ImGuiWindowFlags_NoNav;
     if (ImGui::Begin("##status", nullptr, flags)) {
-        ImGui::TextUnformatted(current_file_.empty() ? "untitled" : current_file_.c_str());
+        ImGui::TextUnformatted(state_.doc.file.empty() ? "untitled" : state_.doc.file.c_str());
         if (modified()) {
             ImGui::SameLine();
             ImGui::TextColored(ImVec4(0.95f, 0.7f, 0.3f, 1.f), "(modified)");
@@ -861,9 +795,9 @@ void Gui::status_bar() {
         ImGui::SameLine(0, 24);
         const Evaluator::Progress pr = evaluator_.progress();
         if (pr.running) ImGui::TextColored(ImVec4(0.45f, 0.7f, 1.f, 1.f), "evaluating stages %.1f s", pr.seconds);
-        else if (eval_.failed()) ImGui::TextColored(ImVec4(0.92f, 0.4f, 0.35f, 1.f), "evaluation failed");
-        else if (eval_.cancelled()) ImGui::TextColored(ImVec4(0.9f, 0.67f, 0.3f, 1.f), "evaluation cancelled: the frame is out of date");
-        else if (eval_.last) ImGui::TextDisabled("up to date");
+        else if (state_.eval.failed()) ImGui::TextColored(ImVec4(0.92f, 0.4f, 0.35f, 1.f), "evaluation failed");
+        else if (state_.eval.cancelled()) ImGui::TextColored(ImVec4(0.9f, 0.67f, 0.3f, 1.f), "evaluation cancelled: the frame is out of date");
+        else if (state_.eval.last) ImGui::TextDisabled("up to date");
         TimingStat fs{};
         char right[256];
         const bool have = Profiler::global().find("gui.frame", fs);
@@ -877,10 +811,10 @@ void Gui::status_bar() {
 }
 
 void Gui::modals() {
-    if (open_modal_ == Modal::Open) ImGui::OpenPopup("Open preset");
-    if (open_modal_ == Modal::SaveAs) ImGui::OpenPopup("Save preset as");
-    if (open_modal_ == Modal::Close) ImGui::OpenPopup("Unsaved changes");
-    open_modal_ = Modal::None;
+    if (state_.ui.modal == Modal::Open) ImGui::OpenPopup("Open preset");
+    if (state_.ui.modal == Modal::SaveAs) ImGui::OpenPopup("Save preset as");
+    if (state_.ui.modal == Modal::Close) ImGui::OpenPopup("Unsaved changes");
+    state_.ui.modal = Modal::None;
     const ImVec2 centre(ImGui::GetIO().DisplaySize.x * 0.5f, ImGui::GetIO().DisplaySize.y * 0.5f);
 
     ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
@@ -890,8 +824,8 @@ void Gui::modals() {
         panels::PresetRequest r = panels::preset_list(presets_, ImGui::GetContentRegionAvail().y - ImGui::GetFrameHeightWithSpacing() * 3.f);
         ImGui::SetNextItemWidth(-1);
         if (appearing) ImGui::SetKeyboardFocusHere();
-        const bool enter = ImGui::InputTextWithHint("##open_path", "path/to/preset.json (or pick one above)", modal_path_, sizeof modal_path_, ImGuiInputTextFlags_EnterReturnsTrue);
-        std::string path = modal_path_;
+        const bool enter = ImGui::InputTextWithHint("##open_path", "path/to/preset.json (or pick one above)", state_.ui.modal_path, sizeof state_.ui.modal_path, ImGuiInputTextFlags_EnterReturnsTrue);
+        std::string path = state_.ui.modal_path;
         if (path.empty() && presets_.selected >= 0 && presets_.selected < int(presets_.files.size())) path = presets_.files[size_t(presets_.selected)];
         if (r.kind == panels::PresetRequest::Kind::Load) path = r.path;
         const bool go = ImGui::Button("Open", ImVec2(120, 0)) || enter || r.kind == panels::PresetRequest::Kind::Load;
@@ -906,7 +840,7 @@ void Gui::modals() {
                 report(e.what(), true, ErrorOrigin::Action);
             }
             if (ok) {
-                modal_path_[0] = 0;
+                state_.ui.modal_path[0] = 0;
                 ImGui::CloseCurrentPopup();
             }
         }
@@ -918,13 +852,13 @@ void Gui::modals() {
         ImGui::TextUnformatted("Path of the preset file (relative to the working directory):");
         ImGui::SetNextItemWidth(480);
         if (ImGui::IsWindowAppearing()) ImGui::SetKeyboardFocusHere();
-        const bool enter = ImGui::InputText("##save_path", modal_path_, sizeof modal_path_, ImGuiInputTextFlags_EnterReturnsTrue);
-        const bool exists = fs::exists(modal_path_);
+        const bool enter = ImGui::InputText("##save_path", state_.ui.modal_path, sizeof state_.ui.modal_path, ImGuiInputTextFlags_EnterReturnsTrue);
+        const bool exists = fs::exists(state_.ui.modal_path);
         if (exists) ImGui::TextColored(ImVec4(0.95f, 0.7f, 0.3f, 1.f), "The file exists and will be replaced.");
         if (ImGui::Button("Save", ImVec2(120, 0)) || enter) {
             bool ok = true;
             try {
-                save_to(modal_path_);
+                save_to(state_.ui.modal_path);
             } catch (const std::exception& e) {
                 ok = false;
                 report(e.what(), true, ErrorOrigin::Action);
@@ -938,24 +872,23 @@ void Gui::modals() {
 
     ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
     if (ImGui::BeginPopupModal("Unsaved changes", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
-        ImGui::Text("%s has unsaved changes.", current_file_.empty() ? "The scene" : current_file_.c_str());
+        ImGui::Text("%s has unsaved changes.", state_.doc.file.empty() ? "The scene" : state_.doc.file.c_str());
         ImGui::Spacing();
-        if (ImGui::Button(current_file_.empty() ? "Save as..." : "Save and quit", ImVec2(140, 0))) {
+        if (ImGui::Button(state_.doc.file.empty() ? "Save as..." : "Save and quit", ImVec2(140, 0))) {
             ImGui::CloseCurrentPopup();
-            if (current_file_.empty()) {
-                open_modal_ = Modal::SaveAs;
-                copy_text(modal_path_, presets_.save_as);
+            if (state_.doc.file.empty()) {
+                state_.ui.open_modal(Modal::SaveAs, presets_.save_as);
             } else {
                 attempt([&] {
-                    save_to(current_file_);
-                    close_confirmed_ = true;
+                    save_to(state_.doc.file);
+                    state_.ui.close_confirmed = true;
                     glfwSetWindowShouldClose(window_, GLFW_TRUE);
                 });
             }
         }
         ImGui::SameLine();
         if (ImGui::Button("Discard and quit", ImVec2(140, 0))) {
-            close_confirmed_ = true;
+            state_.ui.close_confirmed = true;
             glfwSetWindowShouldClose(window_, GLFW_TRUE);
             ImGui::CloseCurrentPopup();
         }
@@ -968,18 +901,16 @@ void Gui::modals() {
 void Gui::shortcuts() {
     ImGuiIO& io = ImGui::GetIO();
     if (io.WantTextInput) return;
-    if (io.KeyCtrl && ImGui::IsKeyPressed(GLFW_KEY_O, false)) open_modal_ = Modal::Open;
-    if (io.KeyCtrl && !io.KeyShift && ImGui::IsKeyPressed(GLFW_KEY_S, false)) handle({panels::PresetRequest::Kind::Save, current_file_});
+    if (io.KeyCtrl && ImGui::IsKeyPressed(GLFW_KEY_O, false)) state_.ui.open_modal(Modal::Open);
+    if (io.KeyCtrl && !io.KeyShift && ImGui::IsKeyPressed(GLFW_KEY_S, false)) handle({panels::PresetRequest::Kind::Save, state_.doc.file});
     if (io.KeyCtrl && io.KeyShift && ImGui::IsKeyPressed(GLFW_KEY_S, false)) {
-        open_modal_ = Modal::SaveAs;
-        copy_text(modal_path_, presets_.save_as);
+        state_.ui.open_modal(Modal::SaveAs, presets_.save_as);
     }
     if (io.KeyCtrl && ImGui::IsKeyPressed(GLFW_KEY_Q, false)) glfwSetWindowShouldClose(window_, GLFW_TRUE);
     if (ImGui::IsKeyPressed(GLFW_KEY_F12, false)) {
         if (io.KeyShift) {
-            window_shot_path_ = screenshot_path(true);
-            window_shot_settle_ = 0;
-        } else if (have_frame_) {
+            state_.ui.request_window_shot(screenshot_path(true), 0);
+        } else if (state_.frame.shown()) {
             attempt([&] {
                 const std::string p = screenshot_path(false);
                 screenshot_viewport(p);
