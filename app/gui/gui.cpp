@@ -1,9 +1,10 @@
 // mesolab gui: the main window. GLFW + OpenGL 4.5/4.3 core + Dear ImGui 1.86.
 //
 // [SECTION] Overview
-//  - One working Scene, edited by the panels (widgets generated from the declarations), the
-//    viewport's camera interaction, preset loading and scripts.
-//  - After the UI of each frame, a changed scene is compared with the last completed evaluation
+//  - One working Scene (the document of GuiState, app/gui/state.h), edited by the panels
+//    (widgets generated from the declarations), the viewport's camera interaction, preset loading
+//    and scripts; each edit marks what it costs in the document's Dirty value.
+//  - After the UI of each frame, an edited scene is compared with the last completed evaluation
 //    by the cache keys of its frame stages. Equal keys (light, camera, material colour...) only
 //    redraw: the frame is rendered at once from the last Evaluation, no stage runs. Otherwise the
 //    stage graph is evaluated on a worker thread with a snapshot of the scene; a newer edit
@@ -12,22 +13,34 @@
 //    display pass (gpu/display.h) turns the chosen AOV into an RGBA8 texture for ImGui::Image.
 //  - Scripted mode (--script FILE, or --frames N with screenshots) drives the same loop without
 //    vsync and exits with 0, 2 (bad input) or 1 (internal failure).
+//
+// [SECTION] Parts
+//  - app/gui/state.h      GuiState: document, evaluation, frame, UI; their transitions
+//  - app/gui/evaluator.h  the evaluation worker; redraw or evaluate, by the stage keys
+//  - app/gui/script.h     script files and their commands, stepped once per frame
+//  - app/gui/viewport.h   the viewport window, camera input, overlays; rendering, previews
+//  - app/gui/window.h     GLFW, the window, ImGui and its style, the default layout
+//  - here                 the Gui: the frame loop, panels, menus, dialogs, actions (load, save,
+//                         paste, screenshots), errors
+//
+// [SECTION] Index
+//  Small helpers, The application, Errors and notifications, Actions, Scene changes, Frame loop,
+//  Script commands, Layout, Menus and windows, Dialogs and shortcuts, Entry point
 #include "app/commands.h"
 #include "app/gui/evaluator.h"
 #include "app/gui/script.h"
 #include "app/gui/state.h"
+#include "app/gui/viewport.h"
 #include "app/gui/window.h"
 #include "app/workbench.h"
 #include "core/error.h"
 #include "core/image.h"
 #include "core/profile.h"
-#include "core/render.h"
 #include "core/scene.h"
 #include "core/stage.h"
 #include "core/technique.h"
 #include "gpu/context.h"
-#include "gpu/display.h"
-#include "gpu/renderer.h"
+#include "gpu/gl.h"
 #include "panels/app_panels.h"
 #include "panels/panel.h"
 
@@ -52,9 +65,6 @@ namespace fs = std::filesystem;
 
 namespace mesolab::gui {
 namespace {
-
-// Frame time above which drags render the viewport at a reduced size.
-constexpr double kInteractiveBudgetMs = 40.0;
 
 // [SECTION] Small helpers
 std::string timestamp() {
@@ -82,8 +92,6 @@ void copy_text(char (&dst)[N], std::string_view src) {
 
 void ignore_imgui_log(void*, const char*, ...) {}
 
-ImTextureID texture_id(GLuint tex) { return reinterpret_cast<ImTextureID>(static_cast<intptr_t>(tex)); }
-
 // [SECTION] The application
 class Gui : private ScriptHost {
 public:
@@ -107,8 +115,6 @@ private:
     void layout_windows();
     void menu_bar();
     void viewport_window();
-    void viewport_overlays(ImVec2 p0, ImVec2 size);
-    void camera_input(ImVec2 size);
     void side_windows();
     void timings_window();
     void status_bar();
@@ -134,8 +140,6 @@ private:
 
     // State changes
     void on_scene_changed();
-    void render_now(bool interacting);
-    void update_display();
     bool settled() const override;
     bool modified() const { return state_.doc.modified(); }
     void report(const std::string& msg, bool input_error, ErrorOrigin origin);
@@ -145,28 +149,25 @@ private:
     void update_title();
 
     GLFWwindow* window_;
-    bool scripted_;
-    std::unique_ptr<gpu::Renderer> renderer_;
-    std::unique_ptr<gpu::DisplayPass> display_;
-    std::string gl_renderer_;
-    Evaluator evaluator_;
+    bool scripted_;                // a script drives the loop: no vsync, errors end the run
+    Viewport viewport_;            // the renderer and the viewport window
+    std::string gl_renderer_;      // GL_RENDERER, for the status bar
+    Evaluator evaluator_;          // the worker thread
     panels::PanelRegistry technique_panels_;
     panels::PresetBrowser presets_;
 
-    GuiState state_;
+    GuiState state_;  // what the window shows and the user changed
 
     // Window plumbing
     std::vector<std::string> dropped_;  // paths dropped on the window, handled next frame
     std::string title_;                 // the window title last set
     int busy_frames_ = 3;               // frames to poll (not wait for) events: ImGui settles after one
-    ScriptRunner script_;
+    ScriptRunner script_;               // scripted mode's commands and first failure
 };
 
 Gui::Gui(GLFWwindow* window, ScriptRunner script, bool scripted, std::optional<Scene> initial,
          std::string initial_file, std::string initial_error)
     : window_(window), scripted_(scripted), script_(std::move(script)) {
-    renderer_ = std::make_unique<gpu::Renderer>();
-    display_ = std::make_unique<gpu::DisplayPass>();
     gl_renderer_ = gpu::query_gl_info("glfw").renderer;
     panels::register_technique_panels(technique_panels_);
     if (initial) state_.doc.loaded(std::move(*initial), std::move(initial_file));
@@ -246,11 +247,7 @@ std::string Gui::screenshot_path(bool window) const {
     return "screenshots/" + file_safe(state_.doc.scene.name) + (window ? "-window-" : "-") + timestamp() + ".png";
 }
 
-void Gui::screenshot_viewport(const std::string& path) {
-    if (!state_.frame.shown()) throw InputError("screenshot " + path + ": no frame rendered yet");
-    const Frame f = renderer_->read_frame();
-    write_png_srgb(path, f.aov("radiance"));
-}
+void Gui::screenshot_viewport(const std::string& path) { viewport_.screenshot(state_.frame, path); }
 
 void Gui::capture_window(const std::string& path) {
     int w = 0, h = 0;
@@ -301,36 +298,6 @@ void Gui::poll_evaluator() {
             report(r->error, r->input_error, ErrorOrigin::Evaluation);
         }
     }
-}
-
-void Gui::render_now(bool interacting) {
-    FrameState& f = state_.frame;
-    const ivec2 view = state_.ui.viewport.size;
-    f.render_started(view);
-    // While a widget or the camera is being dragged, a slow renderer (llvmpipe) draws fewer
-    // pixels to keep up; the full-size frame follows when the drag ends.
-    float scale = 1.f;
-    if (interacting && !scripted_ && f.full_render_ms > kInteractiveBudgetMs)
-        scale = float(std::clamp(std::sqrt(kInteractiveBudgetMs / f.full_render_ms), 0.25, 1.0));
-    const ivec2 req{std::max(16, int(float(view.x) * scale)), std::max(16, int(float(view.y) * scale))};
-    const ivec2 size = frame_size(f.scene, *state_.eval.last, req);
-    const auto t0 = Clock::now();
-    renderer_->render(f.scene, *state_.eval.last, size.x, size.y);
-    f.rendered(size, scale < 1.f, ms_since(t0));
-    update_display();
-}
-
-void Gui::update_display() {
-    FrameState& f = state_.frame;
-    f.display_outdated = false;
-    const auto layout = Registry::instance().aovs(f.scene);
-    auto it = std::find_if(layout.begin(), layout.end(), [&](const AovDecl& a) { return a.name == state_.ui.viewport.aov; });
-    if (it == layout.end()) it = layout.begin();  // radiance
-    const GLuint tex = renderer_->aov_texture(it->name);
-    const bool normal = it->name == "normal";
-    display_->run(tex, f.px.x, f.px.y, normal ? gpu::DisplayMode::Normal : gpu::DisplayMode::Color, it->channels,
-                  it->name == "radiance" ? std::exp2(state_.ui.viewport.exposure_ev) : 1.f);
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
 bool Gui::settled() const { return state_.settled(evaluator_.idle()); }
@@ -443,9 +410,9 @@ void Gui::after_ui() {
     if (state_.doc.take_edits()) attempt([&] { on_scene_changed(); });
     const bool interacting = ImGui::IsAnyItemActive();
     if (state_.eval.last && state_.frame.needs_render(state_.ui.viewport.size, interacting)) {
-        attempt([&] { render_now(interacting); }, ErrorOrigin::Render);
+        attempt([&] { viewport_.render(state_.frame, state_.ui.viewport, *state_.eval.last, interacting && !scripted_); }, ErrorOrigin::Render);
     } else if (state_.frame.shown() && state_.frame.display_outdated) {
-        attempt([&] { update_display(); }, ErrorOrigin::Render);
+        attempt([&] { viewport_.update_display(state_.frame, state_.ui.viewport); }, ErrorOrigin::Render);
     }
     update_title();
 }
@@ -484,10 +451,10 @@ void Gui::layout_windows() {
     UiState::Layout& l = state_.ui.layout;
     if (ds.x != l.display.x || ds.y != l.display.y || techs != l.tech_windows) l.relayout = true;
     l.display = vec2(ds.x, ds.y);
-    state_.ui.layout.tech_windows = techs;
+    l.tech_windows = techs;
 }
 
-
+// [SECTION] Menus and windows
 void Gui::menu_bar() {
     if (!ImGui::BeginMainMenuBar()) return;
     if (ImGui::BeginMenu("File")) {
@@ -548,169 +515,7 @@ void Gui::menu_bar() {
 
 void Gui::viewport_window() {
     const layout::Rects r = layout::compute(ImGui::GetIO().DisplaySize);
-    const ImGuiCond cond = state_.ui.layout.relayout ? ImGuiCond_Always : ImGuiCond_FirstUseEver;
-    ImGui::SetNextWindowPos(r.view_pos, cond);
-    ImGui::SetNextWindowSize(r.view_size, cond);
-    ImGui::PushStyleVar(ImGuiStyleVar_WindowPadding, ImVec2(0, 0));
-    // When the frame covers the whole window, skip its background: on llvmpipe every full layer
-    // of blended pixels costs milliseconds.
-    const ImGuiWindowFlags bg = state_.ui.viewport.image_covers ? ImGuiWindowFlags_NoBackground : 0;
-    const bool open = ImGui::Begin("Viewport", nullptr, ImGuiWindowFlags_NoScrollbar | ImGuiWindowFlags_NoScrollWithMouse | ImGuiWindowFlags_NoCollapse | bg);
-    ImGui::PopStyleVar();
-    state_.ui.viewport.image_covers = false;
-    if (open) {
-        const ImVec2 p0 = ImGui::GetCursorScreenPos();
-        const ImVec2 avail = ImGui::GetContentRegionAvail();
-        if (avail.x >= 1.f && avail.y >= 1.f) {
-            state_.ui.viewport.size = {std::max(16, int(avail.x)), std::max(16, int(avail.y))};
-            ImDrawList* dl = ImGui::GetWindowDrawList();
-            if (state_.frame.shown() && display_->valid()) {
-                // Fit the frame (texture mode may have its own size), centred, aspect kept.
-                const float sx = avail.x / float(state_.frame.px.x), sy = avail.y / float(state_.frame.px.y);
-                const float s = std::min(sx, sy);
-                const ImVec2 size(std::floor(float(state_.frame.px.x) * s), std::floor(float(state_.frame.px.y) * s));
-                state_.ui.viewport.image_covers = size.x >= avail.x - 1.f && size.y >= avail.y - 1.f;
-                if (!state_.ui.viewport.image_covers) dl->AddRectFilled(p0, ImVec2(p0.x + avail.x, p0.y + avail.y), IM_COL32(22, 23, 26, 255));
-                ImGui::SetCursorScreenPos(ImVec2(std::floor(p0.x + (avail.x - size.x) * 0.5f), std::floor(p0.y + (avail.y - size.y) * 0.5f)));
-                ImGui::Image(texture_id(display_->texture()), size, ImVec2(0, 1), ImVec2(1, 0));  // GL rows are bottom-up
-            } else {
-                dl->AddRectFilled(p0, ImVec2(p0.x + avail.x, p0.y + avail.y), IM_COL32(22, 23, 26, 255));
-                const char* msg = evaluator_.busy() ? "Evaluating stages..." : "No frame yet";
-                const ImVec2 ts = ImGui::CalcTextSize(msg);
-                dl->AddText(ImVec2(p0.x + (avail.x - ts.x) * 0.5f, p0.y + (avail.y - ts.y) * 0.5f), IM_COL32(150, 153, 160, 255), msg);
-            }
-            ImGui::SetCursorScreenPos(p0);
-            camera_input(avail);
-            viewport_overlays(p0, avail);
-        }
-    }
-    ImGui::End();
-}
-
-void Gui::camera_input(ImVec2 size) {
-    ImGui::InvisibleButton("##viewport_input", size, ImGuiButtonFlags_MouseButtonLeft | ImGuiButtonFlags_MouseButtonRight | ImGuiButtonFlags_MouseButtonMiddle);
-    const bool hovered = ImGui::IsItemHovered(), active = ImGui::IsItemActive();
-    ImGuiIO& io = ImGui::GetIO();
-    ParamTable& cam = state_.doc.scene.camera;
-    const bool texture_mode = cam.get_string("mode") == "texture";
-    const ImVec2 d = io.MouseDelta;
-    if (active && (d.x != 0.f || d.y != 0.f)) {
-        if (ImGui::IsMouseDown(ImGuiMouseButton_Left)) {
-            // Orbit: THETA from +z (clamped off the poles), PHI around z.
-            vec2 o = cam.get_vec2("orbit");
-            const float theta = std::clamp(o.x - 0.35f * d.y, 0.5f, 179.5f);
-            float phi = std::fmod(o.y - 0.35f * d.x, 360.f);
-            if (phi > 180.f) phi -= 360.f;
-            if (phi < -180.f) phi += 360.f;
-            cam.set("orbit", std::array<double, 2>{theta, phi});
-            state_.doc.edits.mark(cam.group().find("orbit")->cost);
-        } else if (!texture_mode && (ImGui::IsMouseDown(ImGuiMouseButton_Right) || ImGui::IsMouseDown(ImGuiMouseButton_Middle))) {
-            // Pan the target in the view plane, one pixel = one pixel's footprint at the target.
-            const vec2 o = cam.get_vec2("orbit");
-            const vec3 dir = direction_from_degrees(o.x, o.y);  // target -> eye
-            const vec3 up0 = std::fabs(dir.z) > 0.999f ? vec3(0.f, 1.f, 0.f) : vec3(0.f, 0.f, 1.f);  // as make_camera
-            const vec3 right = glm::normalize(glm::cross(up0, dir));
-            const vec3 up = glm::cross(dir, right);
-            const float dist = float(cam.get_float("distance"));
-            const float px = 2.f * dist * std::tan(radians(float(cam.get_float("fov"))) * 0.5f) / std::max(1.f, size.y);
-            const vec3 t = cam.get_vec3("target") - right * (d.x * px) + up * (d.y * px);
-            auto clampc = [](float v) { return std::clamp(double(v), -1e6, 1e6); };
-            cam.set("target", std::array<double, 3>{clampc(t.x), clampc(t.y), clampc(t.z)});
-            state_.doc.edits.mark(cam.group().find("target")->cost);
-        }
-    }
-    if (hovered && io.MouseWheel != 0.f && !texture_mode) {
-        const double dist = cam.get_float("distance") * std::pow(1.1, -double(io.MouseWheel));
-        const ParamDecl* dd = cam.group().find("distance");
-        cam.set("distance", std::clamp(dist, dd->min, dd->max));
-        state_.doc.edits.mark(dd->cost);
-    }
-    if (hovered && !active && !io.WantTextInput) ImGui::SetMouseCursor(ImGuiMouseCursor_Hand);
-}
-
-void Gui::viewport_overlays(ImVec2 p0, ImVec2 size) {
-    ImDrawList* dl = ImGui::GetWindowDrawList();
-    const float pad = 8.f;
-    float y = p0.y + pad;
-
-    // Error bar: the last error, the frame behind it stays the last good one.
-    if (!state_.ui.error.text.empty()) {
-        const float w = size.x - 2.f * pad;
-        const float wrap = w - 150.f;
-        const float text_h = std::min(ImGui::CalcTextSize(state_.ui.error.text.c_str(), nullptr, false, wrap).y, ImGui::GetTextLineHeight() * 6.f);
-        const float h = text_h + ImGui::GetStyle().WindowPadding.y * 2.f + 2.f;
-        ImGui::SetCursorScreenPos(ImVec2(p0.x + pad, y));
-        ImGui::PushStyleColor(ImGuiCol_ChildBg, IM_COL32(110, 32, 32, 235));
-        ImGui::PushStyleColor(ImGuiCol_Border, IM_COL32(200, 70, 60, 255));
-        ImGui::PushStyleVar(ImGuiStyleVar_WindowPadding, ImVec2(10, 6));
-        if (ImGui::BeginChild("##error_bar", ImVec2(w, h), true, ImGuiWindowFlags_NoScrollbar)) {
-            ImGui::PushTextWrapPos(wrap);
-            ImGui::TextUnformatted(state_.ui.error.text.c_str());
-            ImGui::PopTextWrapPos();
-            ImGui::SameLine(w - 140.f);
-            ImGui::SetCursorPosY(ImGui::GetStyle().WindowPadding.y);
-            if (state_.ui.error.count > 1) {
-                ImGui::TextDisabled("x%d", state_.ui.error.count);
-                ImGui::SameLine();
-            }
-            if (ImGui::SmallButton("Copy")) ImGui::SetClipboardText(state_.ui.error.text.c_str());
-            ImGui::SameLine();
-            if (ImGui::SmallButton("Dismiss")) {
-                state_.ui.dismiss_error();
-            }
-        }
-        ImGui::EndChild();
-        ImGui::PopStyleVar();
-        ImGui::PopStyleColor(2);
-        y += h + pad;
-    }
-
-    // Progress of a running evaluation, with Cancel.
-    const Evaluator::Progress pr = evaluator_.progress();
-    if (pr.running) {
-        ImGui::SetCursorScreenPos(ImVec2(p0.x + pad, y));
-        ImGui::PushStyleColor(ImGuiCol_ChildBg, IM_COL32(28, 30, 34, 230));
-        const float h = ImGui::GetFrameHeight() * 2.f + ImGui::GetStyle().WindowPadding.y * 2.f + ImGui::GetStyle().ItemSpacing.y;
-        if (ImGui::BeginChild("##progress", ImVec2(std::min(380.f, size.x - 2.f * pad), h), true, ImGuiWindowFlags_NoScrollbar)) {
-            if (pr.stage.empty()) ImGui::TextUnformatted("Evaluating stages");
-            else ImGui::Text("Evaluating stages  %s %s", pr.fraction >= 1.0 ? "done:" : "in", pr.stage.c_str());
-            ImGui::SameLine(ImGui::GetContentRegionMax().x - ImGui::CalcTextSize("00.0 s").x);
-            ImGui::TextDisabled("%.1f s", pr.seconds);
-            char label[32];
-            std::snprintf(label, sizeof label, "%.0f%%", 100.0 * pr.fraction);
-            ImGui::ProgressBar(float(pr.fraction), ImVec2(-ImGui::CalcTextSize("Cancel").x - 24.f, 0), label);
-            ImGui::SameLine();
-            if (ImGui::Button("Cancel")) {
-                cancel_evaluation(state_.eval, evaluator_);
-            }
-        }
-        ImGui::EndChild();
-        ImGui::PopStyleColor();
-    }
-
-    // Frame info, top right.
-    if (state_.frame.shown()) {
-        char info[160];
-        std::snprintf(info, sizeof info, "%dx%d%s  %s  %.1f ms", state_.frame.px.x, state_.frame.px.y, state_.frame.preview() ? " (preview)" : "", state_.ui.viewport.aov.c_str(), state_.frame.render_ms);
-        const ImVec2 ts = ImGui::CalcTextSize(info);
-        const ImVec2 a(p0.x + size.x - ts.x - pad - 8.f, p0.y + pad + (state_.ui.error.text.empty() ? 0.f : y - p0.y - pad));
-        dl->AddRectFilled(ImVec2(a.x - 6.f, a.y - 3.f), ImVec2(a.x + ts.x + 6.f, a.y + ts.y + 3.f), IM_COL32(15, 16, 18, 170), 3.f);
-        dl->AddText(a, IM_COL32(200, 203, 210, 255), info);
-    }
-
-    // Toast, bottom left, fading out.
-    if (!state_.ui.toast.text.empty()) {
-        const double t = seconds_since(state_.ui.toast.t0);
-        if (t > 4.0) {
-            state_.ui.toast.text.clear();
-        } else {
-            const float alpha = float(std::clamp(4.0 - t, 0.0, 1.0));
-            const ImVec2 ts = ImGui::CalcTextSize(state_.ui.toast.text.c_str());
-            const ImVec2 a(p0.x + pad + 6.f, p0.y + size.y - pad - ts.y - 6.f);
-            dl->AddRectFilled(ImVec2(a.x - 8.f, a.y - 5.f), ImVec2(a.x + ts.x + 8.f, a.y + ts.y + 5.f), IM_COL32(40, 90, 170, int(220 * alpha)), 4.f);
-            dl->AddText(a, IM_COL32(255, 255, 255, int(255 * alpha)), state_.ui.toast.text.c_str());
-        }
-    }
+    if (viewport_.window(state_, r, evaluator_.progress()).cancel_evaluation) cancel_evaluation(state_.eval, evaluator_);
 }
 
 void Gui::side_windows() {
@@ -810,6 +615,7 @@ void Gui::status_bar() {
     ImGui::PopStyleVar(2);
 }
 
+// [SECTION] Dialogs and shortcuts
 void Gui::modals() {
     if (state_.ui.modal == Modal::Open) ImGui::OpenPopup("Open preset");
     if (state_.ui.modal == Modal::SaveAs) ImGui::OpenPopup("Save preset as");
