@@ -49,7 +49,7 @@ public:
         enum class Kind { Done, Failed, Cancelled } kind = Kind::Done;
         uint64_t id = 0;  // as returned by submit()
         Evaluation eval;  // Done
-        Scene scene;      // the snapshot evaluated
+        Scene scene;      // the snapshot evaluated: what the evaluation holds for, once the document moved on
         StageKeys keys;   // as given to submit()
         std::string error, stage;  // Failed: the message; the last stage that reported progress
         bool input_error = false;  // Failed with an InputError (bad input rather than a bug)
@@ -83,7 +83,7 @@ public:
 private:
     struct Job {
         uint64_t id = 0;
-        Scene scene;
+        Scene scene;  // a snapshot: the document goes on being edited on the UI thread meanwhile
         StageKeys keys;
     };
     void loop(std::stop_token st);
