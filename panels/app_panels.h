@@ -1,5 +1,5 @@
 #pragma once
-// [SECTION] The workbench's own panels (app/gui.cpp lays them out): Scene, Presets, Timings.
+// [SECTION] The workbench's own panels (app/gui/gui.cpp lays them out): Scene, Presets, Timings.
 // Like the technique panels they only draw and edit; anything with side effects (loading,
 // saving, the clipboard) comes back to the caller as a request, so errors are handled in one
 // place and never unwind through an open ImGui window.
