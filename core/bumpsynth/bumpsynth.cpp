@@ -2,8 +2,8 @@
 #include "core/bumpsynth/bumpsynth.h"
 #include "core/bumpsynth/sweep_metric.h"
 #include "core/error.h"
+#include "core/heightfield/params.h"
 #include "core/image.h"
-#include "core/microgeom/microgeom.h"
 #include "core/render.h"
 #include "core/technique.h"
 
@@ -16,10 +16,10 @@ namespace mesolab::bumpsynth {
 namespace {
 
 // The bump map an NDF may come from (ndf = normal_map | heightfield, §7): the normal map and the
-// heightfield's own keys (declared by microgeom, the same surface in both techniques).
+// heightfield's own keys (core/heightfield/params.h: the same surface as in microgeom).
 std::vector<std::string> source_keys() {
     std::vector<std::string> k{"ndf", "normal_map", "normal_map_encoding", "normal_map_y"};
-    for (const auto& h : microgeom::heightfield_keys()) k.push_back(h);
+    for (const auto& h : heightfield_keys()) k.push_back(h);
     return k;
 }
 const std::vector<std::string> kSourceKeys = source_keys();
@@ -56,7 +56,7 @@ bool masking(const SceneObject& o) { return o.material.get_bool("masking"); }
 // [SECTION] Materials
 BumpNormals bump_normals_from_material(const Scene& s, const ParamTable& m) {
     const std::string& kind = m.get_string("ndf");
-    if (kind == "heightfield") return normals_of(microgeom::heightfield_from_material(s, m));
+    if (kind == "heightfield") return normals_of(heightfield_from_material(s, m));
     if (kind != "normal_map") throw std::logic_error("bumpsynth: ndf " + kind + " has no bump map");
     const std::string path = s.resolve(m.get_string("normal_map"));
     if (path.empty()) throw InputError("bumpsynth.normal_map: ndf is normal_map but no image is given");
@@ -184,7 +184,7 @@ public:
             .doc("unsigned: components stored as (v + 1)/2 in [0, 1] (8/16-bit maps); signed: stored as they are (float maps)");
         p.add_enum("normal_map_y", {"up", "down"}, "up").costs(Cost::Recompute).used_when("ndf", {"normal_map"})
             .doc("Green channel convention: up (OpenGL, Blender) or down (DirectX, Unreal: y negated)");
-        microgeom::declare_heightfield_params(p, [](ParamDecl& d) {
+        declare_heightfield_params(p, [](ParamDecl& d) {
             d.used_when("ndf", {"heightfield"});
             d.help += " (the same surface as microgeom." + d.name + ")";
         });

@@ -1,5 +1,6 @@
 #include "core/microgeom/microgeom.h"
 #include "core/error.h"
+#include "core/heightfield/params.h"
 #include "core/microgeom/device.h"
 #include "core/microgeom/goniometer.h"
 #include "core/microgeom/btf.h"
@@ -21,53 +22,6 @@
 
 namespace mesolab::microgeom {
 
-ProceduralParams procedural_params(const ParamTable& m) {
-    ProceduralParams p;
-    p.name = m.get_string("heightfield");
-    p.resolution = int(m.get_int("resolution"));
-    p.height_scale = float(m.get_float("height_scale"));
-    p.periodic = m.get_bool("periodic");
-    p.vgroove_angle = float(m.get_float("vgroove_angle"));
-    p.rms_slope = float(m.get_float("rms_slope"));
-    p.correlation = float(m.get_float("correlation"));
-    p.seed = uint32_t(m.get_int("seed"));
-    if (m.group().find("albedo")) p.albedo = m.get_vec3("albedo");
-    return p;
-}
-
-// [SECTION] The heightfield's parameters (declared once, shared with bumpsynth's ndf = heightfield)
-const std::vector<std::string>& heightfield_keys() {
-    static const std::vector<std::string> keys{"heightfield", "resolution", "height_scale", "texel_size", "periodic",
-                                               "vgroove_angle", "rms_slope", "correlation", "seed"};
-    return keys;
-}
-
-void declare_heightfield_params(ParamGroup& p, const std::function<void(ParamDecl&)>& each) {
-    const auto add = [&](ParamDecl& d) {
-        if (each) each(d);
-    };
-    add(p.add_path("heightfield", "bricks").builtins(procedural_names()).costs(Cost::Recompute)
-            .doc("Procedural heightfield (triangles: the paper's Fig. 2 ridge, bricks, bumps, vgrooves, gaussian, flat) or an image "
-                 "(8/16-bit, float EXR/TIFF; first channel = height in texels before height_scale)"));
-    add(p.add_int("resolution", 128).range(8, 4096).costs(Cost::Recompute).in("texels").doc("Size of a procedural heightfield (texels per side)"));
-    add(p.add_float("height_scale", 1.0).range(0.0, 1e4).costs(Cost::Recompute).doc("Multiplies the heights (procedural heights are in texels)"));
-    add(p.add_float("texel_size", 1.0).range(1e-6, 1e6).log().costs(Cost::Recompute)
-            .doc("Image heightfields: the grid spacing in the unit of the image's heights (e.g. 0.1 for heights in mm sampled every 0.1 mm); "
-                 "height in texels = value * height_scale / texel_size. Procedural heights are already in texels"));
-    add(p.add_bool("periodic", true).costs(Cost::Recompute).doc("Wrap-around visibility across the borders (tileable fields)"));
-    add(p.add_float("vgroove_angle", 90.0).range(1.0, 179.0).in("degrees").costs(Cost::Recompute).doc("vgrooves: opening angle of the V"));
-    add(p.add_float("rms_slope", 0.5).range(0.0, 10.0).costs(Cost::Recompute).doc("gaussian: RMS slope"));
-    add(p.add_float("correlation", 4.0).range(0.5, 64.0).in("texels").costs(Cost::Recompute).doc("gaussian: correlation length"));
-    add(p.add_int("seed", 1).range(0, 2147483647).costs(Cost::Recompute).doc("gaussian: random seed"));
-}
-
-Heightfield heightfield_from_material(const Scene& s, const ParamTable& m) {
-    ProceduralParams p = procedural_params(m);
-    p.group = m.group().name();
-    if (!m.group().find("heightfield")->is_file(m.get("heightfield"))) return make_procedural(p);
-    return load_heightfield(s.resolve(p.name), p.height_scale / float(m.get_float("texel_size")), 1.f, p.periodic, p.albedo);
-}
-
 namespace {
 
 // [SECTION] Per-object stage helpers
@@ -76,7 +30,12 @@ PerObject<T> per_object(const Scene& s, const std::vector<std::string>& keys, co
     return mesolab::per_object<T>(s, "microgeom", keys, make);
 }
 
-const std::vector<std::string> kFieldKeys{"heightfield", "resolution", "height_scale", "texel_size", "periodic", "vgroove_angle", "rms_slope", "correlation", "seed", "albedo", "albedo_map"};
+std::vector<std::string> with(std::vector<std::string> a, const std::vector<std::string>& b) {
+    a.insert(a.end(), b.begin(), b.end());
+    return a;
+}
+
+const std::vector<std::string> kFieldKeys = with(heightfield_keys(), {"albedo", "albedo_map"});
 const std::vector<std::string> kScatterKeys{"depth", "sampling", "paths", "scatter_seed", "shadows"};
 const std::vector<std::string> kCurvatureKeys{"curvature_u", "curvature_v"};
 const std::vector<std::string> kBrdfKeys{"lod", "brdf_fit", "brdf_resolution", "brdf_samples", "sh_bands", "brdf", "ks", "shininess"};
@@ -91,11 +50,6 @@ bool any_object(const Scene& s, const Pred& pred) {
 }
 
 bool curved(const SceneObject& o) { return o.material.get_float("curvature_u") != 0.0 || o.material.get_float("curvature_v") != 0.0; }
-
-std::vector<std::string> with(std::vector<std::string> a, const std::vector<std::string>& b) {
-    a.insert(a.end(), b.begin(), b.end());
-    return a;
-}
 
 bool planar(const SceneObject& o) { return o.geometry.get_string("type") == "plane"; }
 bool any_point_light(const Scene& s) {
@@ -146,21 +100,6 @@ vec3 light_local(const Scene& s, const SceneObject& o, size_t index) {
         wi = glm::normalize(l.get_vec3("position") - o.geometry.get_vec3("position"));
     }
     return wi;  // the plane's local frame is the world frame (u = +x, v = +y, n = +z)
-}
-
-// Per-texel albedo from an image, bilinear with wrap-around at the texel centres, times `tint`.
-void apply_albedo_map(Heightfield& hf, const std::string& path, vec3 tint) {
-    const Image img = read_image(path, /*srgb_to_linear_8bit=*/true, /*reject_nonfinite=*/true);
-    std::vector<vec3> rgb(size_t(img.width) * size_t(img.height));
-    for (size_t i = 0; i < rgb.size(); ++i)
-        for (int c = 0; c < 3; ++c) rgb[i][c] = img.data[i * size_t(img.channels) + size_t(img.channels >= 3 ? c : 0)];
-    for (int y = 0; y < hf.height; ++y)
-        for (int x = 0; x < hf.width; ++x) {
-            const float c = (float(x) + 0.5f) * float(img.width) / float(hf.width) - 0.5f, r = (float(y) + 0.5f) * float(img.height) / float(hf.height) - 0.5f;
-            const vec3 a = sample_bilinear(rgb, img.width, img.height, true, c, r) * tint;
-            if (!(a.x >= 0.f && a.y >= 0.f && a.z >= 0.f)) throw InputError(path + ": microgeom.albedo_map has a negative or non-finite albedo");
-            hf.albedo[hf.index(x, y)] = glm::min(a, vec3(1.f));
-        }
 }
 
 // [SECTION] The technique
@@ -275,7 +214,7 @@ public:
                        Heightfield hf = heightfield_from_material(ctx.scene, o.material);
                        const vec3 albedo = o.material.get_vec3("albedo");
                        const std::string albedo_map = o.material.get_string("albedo_map");
-                       if (!albedo_map.empty()) apply_albedo_map(hf, ctx.scene.resolve(albedo_map), albedo);
+                       if (!albedo_map.empty()) apply_albedo_map(hf, ctx.scene.resolve(albedo_map), albedo, "microgeom.albedo_map");
                        return hf;
                    }));
                }});

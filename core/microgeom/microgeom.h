@@ -38,14 +38,11 @@
 // RGB floats, M solves) and blended per pixel and light over the spherical triangle containing
 // the light's tangent-space direction, as the exact shadows are; moving a light never recomputes
 // it. Exact shadows ignore the base curvature (ellipse shadows follow it).
+#include "core/heightfield/heightfield.h"
 #include "core/microgeom/directions.h"
-#include "core/microgeom/heightfield.h"
 #include "core/microgeom/scatter.h"
 #include "core/microgeom/visibility.h"
-#include "core/param.h"
 #include "core/per_object.h"
-#include <functional>
-#include <memory>
 #include <vector>
 
 namespace mesolab::microgeom {
@@ -66,16 +63,4 @@ struct LightScatter {
 struct LightsScatter {
     std::vector<LightScatter> lights;
 };
-
-ProceduralParams procedural_params(const ParamTable& material);
-
-// The heightfield's own parameters (heightfield_keys(): the procedural name or image, resolution,
-// height_scale, texel_size, periodic and the procedural shapes' parameters), declared once here and
-// shared by bumpsynth (ndf = heightfield), so that both techniques can show the same surface. `each`
-// may amend every declaration (e.g. bumpsynth marks them used only when ndf is heightfield).
-const std::vector<std::string>& heightfield_keys();
-void declare_heightfield_params(ParamGroup& p, const std::function<void(ParamDecl&)>& each = {});
-// The heightfield a material describes (procedural or image), without the albedo map; errors name
-// the material's group (microgeom.resolution, bumpsynth.resolution, ...).
-Heightfield heightfield_from_material(const Scene& s, const ParamTable& material);
 }  // namespace mesolab::microgeom
