@@ -1,9 +1,11 @@
 // Technique microgeom: the timing tables (mesolab bench microgeom, microgeom-brdf, ...).
 #include "core/microgeom/goniometer.h"
+#include "core/microgeom/paper.h"
 #include "core/microgeom/technique.h"
 #include "core/scene.h"
 
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -11,6 +13,11 @@
 namespace mesolab::microgeom {
 
 // [SECTION] Table 1
+namespace {
+// A row's figures in the order of Table 1's columns below (S_i, shadows, software render, frame).
+std::vector<std::optional<double>> table1_ms(const paper::Table1Row& r) { return {r.visibility.ms, r.shadows.ms, r.scattering.ms, r.frame.ms}; }
+}  // namespace
+
 std::vector<BenchTable> MicrogeomTechnique::bench_tables() const {
     auto scene = [](const char* field, int res, std::vector<std::pair<const char*, const char*>> extra = {}) {
         return [=] {
@@ -61,9 +68,9 @@ std::vector<BenchTable> MicrogeomTechnique::bench_tables() const {
                  scatter_col,
                  {"frame (texture space, 1 pixel per texel; GPU = hardware render)", "", 0, 0, true, true},
                  memory};
-    t.rows = {{"Triangles 32x32", scene("triangles", 32), {27e3, 32e3, 10e3, 480}},
-              {"Bricks 128x128", scene("bricks", 128), {1029e3, 194e3, 12e3, 2100}},
-              {"Bumps 32x32", scene("bumps", 32), {109e3, 65e3, 8e3, 480}},
+    t.rows = {{"Triangles 32x32", scene("triangles", 32), table1_ms(paper::kTriangles32)},
+              {"Bricks 128x128", scene("bricks", 128), table1_ms(paper::kBricks128)},
+              {"Bumps 32x32", scene("bumps", 32), table1_ms(paper::kBumps32)},
               {"Bricks 512x512", scene("bricks", 512), {}},
               {"Bricks 1024x1024", scene("bricks", 1024), {}}};
 
@@ -85,7 +92,7 @@ std::vector<BenchTable> MicrogeomTechnique::bench_tables() const {
     brdf_col.gpu_set = "microgeom.device=gpu";
     lod.columns = {brdf_col, brdf_mem};
     lod.rows = {{"BRDF table 8^4", scene("bricks", 128, {{"microgeom.lod", "brdf"}, {"microgeom.brdf_resolution", "8"}, {"microgeom.shadows", "exact"}}), {}},
-                {"BRDF table 16^4", scene("bricks", 128, {{"microgeom.lod", "brdf"}, {"microgeom.brdf_resolution", "16"}, {"microgeom.shadows", "exact"}}), {7.5 * 3600e3}},
+                {"BRDF table 16^4", scene("bricks", 128, {{"microgeom.lod", "brdf"}, {"microgeom.brdf_resolution", "16"}, {"microgeom.shadows", "exact"}}), {paper::kBrdf16.ms}},
                 {"BRDF SH, 300 random images, 3 bands", scene("bricks", 128, {{"microgeom.lod", "brdf"}, {"microgeom.brdf_fit", "sh"}, {"microgeom.shadows", "exact"}}), {}}};
     BenchTable geo;
     geo.name = "microgeom-geometry";

@@ -3,6 +3,7 @@
 #include "core/heightfield/params.h"
 #include "core/microgeom/goniometer.h"
 #include "core/microgeom/lod.h"
+#include "core/microgeom/paper.h"
 #include "core/microgeom/technique.h"
 #include "core/scene_stages.h"
 
@@ -259,7 +260,7 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
            .help = "Visibility textures S_i: first hit for every direction and texel (on microgeom.device)",
            .params = keys({"device"}),
            .inputs = {"microgeom.heightfield", "microgeom.directions"},
-           .paper = PaperFigure{1029e3, "Heidrich et al. 2000, Table 1: Bricks 128x128, 100 directions (SGI Octane)"},
+           .paper = paper::kBricks128.visibility,
            .run = [](StageContext& ctx) {
                auto hf = ctx.input<PerObject<Heightfield>>("microgeom.heightfield");
                auto dirs = ctx.input<PerObject<DirectionSet>>("microgeom.directions");
@@ -363,7 +364,7 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
            .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.ellipses_curved"},
            .when = [](const Scene& s) { return any_object(s, [](const SceneObject& o) { return o.material.get_string("shadows") == "ellipse"; }); },
            .when_text = "microgeom.shadows is ellipse",
-           .paper = PaperFigure{194e3, "Heidrich et al. 2000, Table 1: Bricks 128x128 shadow precompute (SGI Octane)"},
+           .paper = paper::kBricks128.shadows,
            .run = [](StageContext& ctx) {
                const auto [hf, dirs, vis, imp, ell] = FieldInputs(ctx);
                auto curved_fits = ctx.input<PerObject<CurvedEllipses>>("microgeom.ellipses_curved");
@@ -435,7 +436,7 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
            .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "microgeom.ellipses"},
            .when = [](const Scene& s) { return any_object(s, [](const SceneObject& o) { return lod(o) == "brdf"; }); },
            .when_text = "microgeom.lod is brdf",
-           .paper = PaperFigure{7.5 * 3600e3, "Heidrich et al. 2000, §6: a 16^4 BRDF would take about 7-8 hours (hardware, 2000)"},
+           .paper = paper::kBrdf16,
            .run = [](StageContext& ctx) {
                const auto [hf, dirs, vis, imp, ell] = FieldInputs(ctx);
                PerObject<SimulatedBrdf> out;
@@ -488,7 +489,7 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
                return !s.lights.empty() && any_object(s, [&](const SceneObject& o) { return wants_light_scatter(o) && !direction_table(s, o); });
            },
            .when_text = "the scene has a light, microgeom.depth > 0, microgeom.lod is not brdf, the base is a plane and every light is directional",
-           .paper = PaperFigure{12e3, "Heidrich et al. 2000, Table 1: Bricks 128x128, software render, 100 samples (SGI Octane)"},
+           .paper = paper::kBricks128.scattering,
            .run = [](StageContext& ctx) {
                return stage_result(scatter_lights(ctx));
            }});

@@ -6,8 +6,8 @@
 //   shading.cpp     CPU shading (shade_cpu)
 //   export_btf.cpp  the BTF export (exports, §6)
 //   bench.cpp       the timing tables (bench_tables: Table 1 and §6)
-// The stages and the BTF export share the scattering settings of a material and the GPU's light
-// solver with its CPU fallback (below).
+// The paper's figures are in paper.h. The stages and the BTF export share the scattering settings
+// of a material and the GPU's light solver with its CPU fallback (below).
 #include "core/error.h"
 #include "core/microgeom/device.h"
 #include "core/microgeom/microgeom.h"
