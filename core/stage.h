@@ -1,7 +1,7 @@
 #pragma once
 // [SECTION] The stage graph.
 // Computation is a graph of named stages ("scene.geometry", "env.irradiance", "basic.albedo",
-// later "microgeom.visibility"...). Each stage declares the parameters it reads (public keys,
+// "microgeom.visibility"...). Each stage declares the parameters it reads (public keys,
 // or "group.*"), the upstream stages whose results it reads, and the effects that need it.
 //  - A stage runs only if it is upstream of what a frame needs and, when it lists effects, one
 //    of them is enabled in the scene; otherwise it is reported as skipped.
@@ -23,7 +23,9 @@
 
 namespace mesolab {
 
-// A figure from one of the papers, shown beside ours in the Timings panel and bench tables.
+// A figure from one of the papers, shown beside ours in the Timings panel (StageDecl::paper) and
+// the bench tables (BenchRow::paper_ms). A technique writes each figure once (e.g.
+// core/microgeom/paper.h) and both read it.
 struct PaperFigure {
     double ms = 0;
     std::string source;  // e.g. "Heidrich 2000, Table 1, Bricks 128x128 (SGI Octane)"

@@ -121,10 +121,4 @@ std::vector<BenchTable> bench_tables() {
         for (auto& b : t->bench_tables()) r.push_back(std::move(b));
     return r;
 }
-
-std::vector<AovDecl> Registry::all_aovs() const {
-    Scene everything;
-    for (const auto& t : techniques_) everything.objects.push_back({"", {}, t->name(), {}});
-    return aovs(everything);
-}
 }  // namespace mesolab

@@ -128,7 +128,6 @@ public:
     std::vector<std::string> frame_stages(const Scene& s) const;
     // AOVs of a scene: radiance, normal, then the techniques' own, without duplicates.
     std::vector<AovDecl> aovs(const Scene& s) const;
-    std::vector<AovDecl> all_aovs() const;
 
     // Called by the generated registration code (core/registry.cpp) for each technique.
     void add(std::unique_ptr<Technique> t);

@@ -61,7 +61,6 @@ MicrogeomTechnique::MicrogeomTechnique() : Technique("microgeom", "Micro-geometr
              {"folded", 1, "1 where the curvature folds the direction triangulation over (visibility would change; §5)"}};
 }
 
-
 // [SECTION] What a frame needs
 std::vector<std::string> MicrogeomTechnique::frame_stages() const {
     return {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "microgeom.ellipses_curved", "microgeom.ellipses",

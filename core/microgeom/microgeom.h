@@ -29,15 +29,19 @@
 //   blinn-phong  f = rho/pi + ks (s + 8)/(8 pi) max(0, n.h)^s   (the normalised lobe, as goniometer.h)
 // applied to the direct light only: L_direct = sum over lights f E max(0, n.wi) V; the scattered
 // and environment light are Lambert, L_indirect = rho/pi E_indirect (shade_cpu, microgeom.frag).
-// Scope (see the issue notes): micro-BRDF Lambertian for every bounce (the Blinn-Phong lobe
-// applies to the direct light seen by the viewer); every light gets its own scattering solution:
-// on a planar base under directional lights one solve for each light's direction
-// (microgeom.scatter); on a non-planar base (sphere, cylinder, torus, teapot, mesh) or under a point
-// light, where the tangent-space light direction changes from pixel to pixel, the light-driven scattering is tabulated once for the M ~ N/2 set directions
-// above the horizon (microgeom.scatter_directions, DirectionalScatter in scatter.h: M x texels x
-// RGB floats, M solves) and blended per pixel and light over the spherical triangle containing
-// the light's tangent-space direction, as the exact shadows are; moving a light never recomputes
-// it. Exact shadows ignore the base curvature (ellipse shadows follow it).
+// Scope: micro-BRDF Lambertian for every bounce (the Blinn-Phong lobe applies to the direct light
+// seen by the viewer); every light gets its own scattering solution: on a planar base under
+// directional lights one solve for each light's direction (microgeom.scatter); on a non-planar
+// base (sphere, cylinder, torus, teapot, mesh) or under a point light, where the tangent-space
+// light direction changes from pixel to pixel, the light-driven scattering is tabulated once for
+// the M ~ N/2 set directions above the horizon (microgeom.scatter_directions, DirectionalScatter
+// in scatter.h: M x texels x RGB floats, M solves) and blended per pixel and light over the
+// spherical triangle containing the light's tangent-space direction, as the exact shadows are;
+// moving a light never recomputes it. Exact shadows ignore the base curvature (ellipse shadows
+// follow it).
+//
+// The heightfield and its parameters are the shared module core/heightfield (heightfield.h,
+// params.h); the technique itself is implemented in the files technique.h lists.
 #include "core/heightfield/heightfield.h"
 #include "core/microgeom/directions.h"
 #include "core/microgeom/scatter.h"
