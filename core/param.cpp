@@ -75,7 +75,6 @@ const char* to_string(ParamType t) {
 const char* to_string(Cost c) {
     switch (c) {
         case Cost::Redraw: return "redraw";
-        case Cost::Rebuild: return "rebuild";
         case Cost::Recompute: return "recompute";
     }
     return "?";

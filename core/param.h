@@ -22,8 +22,11 @@ namespace mesolab {
 using json = nlohmann::ordered_json;
 
 enum class ParamType { Bool, Int, Float, Vec2, Vec3, Color, Enum, Path, Text };
-// What a change costs: only redraw the frame, rebuild GPU resources, or recompute a stage.
-enum class Cost { Redraw, Rebuild, Recompute };
+// What a change costs: only a redraw of the frame, or a recompute of the stages that read it. The
+// GUI redraws after any edit and the stage graph's cache keys decide what recomputes; the cost is
+// what the widgets' tooltips and `preset schema` tell, and tests/params checks it against the
+// parameters the stages read.
+enum class Cost { Redraw, Recompute };
 // Which way of a knob is more accurate (used by `sweep` to pick its reference).
 enum class Accuracy { None, Higher, Lower };
 

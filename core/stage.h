@@ -28,7 +28,9 @@
 
 namespace mesolab {
 
-// A figure from one of the papers, shown beside ours in the Timings panel and bench tables.
+// A figure from one of the papers, shown beside ours in the Timings panel (StageDecl::paper) and
+// the bench tables (BenchRow::paper_ms). A technique writes each figure once (e.g.
+// core/microgeom/paper.h) and both read it.
 struct PaperFigure {
     double ms = 0;
     std::string source;  // e.g. "Heidrich 2000, Table 1, Bricks 128x128 (SGI Octane)"

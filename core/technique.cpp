@@ -152,5 +152,4 @@ std::vector<BenchTable> bench_tables() {
         for (auto& b : t->bench_tables()) r.push_back(std::move(b));
     return r;
 }
-
 }  // namespace mesolab

@@ -15,13 +15,12 @@ namespace mesolab::panels {
 
 // What the edits of this frame cost (Falcor-style dirty flags).
 struct Dirty {
-    bool redraw = false, rebuild = false, recompute = false;
+    bool redraw = false, recompute = false;
     void mark(Cost c) {
         redraw = true;
-        rebuild |= c != Cost::Redraw;
         recompute |= c == Cost::Recompute;
     }
-    bool any() const { return redraw || rebuild || recompute; }
+    bool any() const { return redraw || recompute; }
 };
 
 struct PanelContext {

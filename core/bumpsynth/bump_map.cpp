@@ -1,8 +1,8 @@
 // Existing bump maps: normals from heightfields and normal maps, index textures, detail (see bump_map.h).
 #include "core/bumpsynth/bump_map.h"
 #include "core/error.h"
+#include "core/heightfield/heightfield.h"
 #include "core/image.h"
-#include "core/microgeom/heightfield.h"
 
 #include <tbb/parallel_for.h>
 #include <cmath>
@@ -15,7 +15,7 @@ std::string texel_name(int x, int y) { return "texel (" + std::to_string(x) + ",
 }  // namespace
 
 // [SECTION] Sources
-BumpNormals normals_of(const microgeom::Heightfield& f) {
+BumpNormals normals_of(const Heightfield& f) {
     BumpNormals n;
     n.width = f.width;
     n.height = f.height;

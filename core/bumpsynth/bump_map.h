@@ -5,9 +5,10 @@
 // [SECTION] Sources (BumpNormals)
 // Per-texel unit normals in the macro tangent frame (x along +u, y along +v, z the macro normal),
 // row 0 at the top, texel (x, y) centred at uv = ((x + 0.5)/W, 1 - (y + 0.5)/H): the heightfield's
-// convention (core/microgeom/heightfield.h), so a heightfield and its bump map line up.
-//  - A heightfield (bumpsynth.ndf = heightfield: microgeom's procedural fields or a height image, with
-//    microgeom's parameters): Heightfield::normal, central differences in texel units × height scale.
+// convention (core/heightfield/heightfield.h), so a heightfield and its bump map line up.
+//  - A heightfield (bumpsynth.ndf = heightfield: a procedural field or a height image, with the
+//    same parameters as microgeom's, core/heightfield/params.h): Heightfield::normal, central
+//    differences in texel units × height scale.
 //  - A normal map (bumpsynth.ndf = normal_map): RGB = (x, y, z), `unsigned` encoding 2v - 1 (the
 //    usual one: 8/16-bit images, v in [0, 1]) or `signed` (stored as is: float images); y up (OpenGL,
 //    Blender) or down (DirectX: y negated). Each is normalised. InputError naming the file and the
@@ -39,7 +40,7 @@
 #include <string>
 #include <vector>
 
-namespace mesolab::microgeom {
+namespace mesolab {
 struct Heightfield;
 }
 
@@ -51,7 +52,7 @@ struct BumpNormals {
     const vec3& at(int x, int y) const { return m[size_t(y) * size_t(width) + size_t(x)]; }
 };
 
-BumpNormals normals_of(const microgeom::Heightfield& f);
+BumpNormals normals_of(const Heightfield& f);
 
 enum class NormalEncoding { unsigned_unit, signed_unit };  // 2v - 1, or as stored
 struct NormalMapFormat {

@@ -2,8 +2,8 @@
 #include "core/bumpsynth/bumpsynth.h"
 #include "core/bumpsynth/sweep_metric.h"
 #include "core/error.h"
+#include "core/heightfield/params.h"
 #include "core/image.h"
-#include "core/microgeom/microgeom.h"
 #include "core/render.h"
 #include "core/technique.h"
 
@@ -16,10 +16,10 @@ namespace mesolab::bumpsynth {
 namespace {
 
 // The bump map an NDF may come from (ndf = normal_map | heightfield, §7): the normal map and the
-// heightfield's own keys (declared by microgeom, the same surface in both techniques).
+// heightfield's own keys (core/heightfield/params.h: the same surface as in microgeom).
 std::vector<std::string> source_keys() {
     std::vector<std::string> k{"ndf", "normal_map", "normal_map_encoding", "normal_map_y"};
-    for (const auto& h : microgeom::heightfield_keys()) k.push_back(h);
+    for (const auto& h : heightfield_keys()) k.push_back(h);
     return k;
 }
 const std::vector<std::string> kSourceKeys = source_keys();
@@ -56,7 +56,7 @@ bool masking(const SceneObject& o) { return o.material.get_bool("masking"); }
 // [SECTION] Materials
 BumpNormals bump_normals_from_material(const Scene& s, const ParamTable& m) {
     const std::string& kind = m.get_string("ndf");
-    if (kind == "heightfield") return normals_of(microgeom::heightfield_from_material(s, m));
+    if (kind == "heightfield") return normals_of(heightfield_from_material(s, m));
     if (kind != "normal_map") throw std::logic_error("bumpsynth: ndf " + kind + " has no bump map");
     const std::string path = s.resolve(m.get_string("normal_map"));
     if (path.empty()) throw InputError("bumpsynth.normal_map: ndf is normal_map but no image is given");
@@ -181,7 +181,7 @@ public:
             .doc("unsigned: components stored as (v + 1)/2 in [0, 1] (8/16-bit maps); signed: stored as they are (float maps)");
         p.add_enum("normal_map_y", {"up", "down"}, "up").costs(Cost::Recompute).used_when("ndf", {"normal_map"})
             .doc("Green channel convention: up (OpenGL, Blender) or down (DirectX, Unreal: y negated)");
-        microgeom::declare_heightfield_params(p, [](ParamDecl& d) {
+        declare_heightfield_params(p, [](ParamDecl& d) {
             d.used_when("ndf", {"heightfield"});
             d.help += " (the same surface as microgeom." + d.name + ")";
         });
@@ -386,6 +386,9 @@ void BumpsynthTechnique::shade_cpu(const ShadeContext& ctx) const {
 }
 
 // [SECTION] Timing table
+// Kautz et al. 2001, §6: the paper's frame time, about 30 Hz (its only timing).
+constexpr double kPaperFrameMs = 33.0;
+
 std::vector<BenchTable> BumpsynthTechnique::bench_tables() const {
     auto scene = [](const char* geometry, std::vector<std::pair<const char*, const char*>> extra) {
         return [=] {
@@ -412,7 +415,7 @@ std::vector<BenchTable> BumpsynthTechnique::bench_tables() const {
     BenchTable frame;
     frame.name = "bumpsynth-frame";
     frame.title = "Kautz et al. 2001, §6 / Fig. 5: frame time at 1280x720 (teapot: ~17,000 triangles in the paper)";
-    frame.paper_machine = "AMD Athlon 1 GHz + NVIDIA GeForce 3 (about 30 Hz = 33 ms)";
+    frame.paper_machine = "AMD Athlon 1 GHz + NVIDIA GeForce 3 (about 30 Hz = " + std::to_string(int(kPaperFrameMs)) + " ms)";
     frame.columns = {{"frame 1280x720", "", 1280, 720, true, true}};
     // The teapot at 16,384 triangles (the paper's ~17,000) filling the frame; detail_distance puts
     // the camera at full detail (8 octaves) or beyond it (NDF only).
@@ -420,8 +423,8 @@ std::vector<BenchTable> BumpsynthTechnique::bench_tables() const {
         extra.insert(extra.begin(), {{"geometry.resolution", "128"}, {"camera.distance", "3.4"}, {"bumpsynth.noise_frequency", "48"}, {"bumpsynth.detail_distance", "1000"}});
         return scene("teapot", extra);
     };
-    frame.rows = {{"teapot, procedural noise, 8 octaves", teapot({}), {33.0}},
-                  {"teapot, noise texture (the paper's path)", teapot({{"bumpsynth.noise", "texture"}}), {33.0}},
+    frame.rows = {{"teapot, procedural noise, 8 octaves", teapot({}), {kPaperFrameMs}},
+                  {"teapot, noise texture (the paper's path)", teapot({{"bumpsynth.noise", "texture"}}), {kPaperFrameMs}},
                   {"teapot, far (NDF only)", teapot({{"bumpsynth.detail_distance", "1"}}), {}},
                   {"teapot, masking + Fresnel", teapot({{"bumpsynth.masking", "true"}, {"bumpsynth.fresnel", "true"}}), {}}};
     return {pre, frame};

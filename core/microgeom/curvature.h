@@ -22,8 +22,8 @@
 //  - where a bent triangle turns over (its orientation flips), visibility would change: the
 //    texel is flagged (AOV `folded`, and a warning) instead of giving unflagged garbage.
 // Curvature 0 gives importance 1 everywhere and no flags: exactly the flat result.
+#include "core/heightfield/heightfield.h"
 #include "core/microgeom/directions.h"
-#include "core/microgeom/heightfield.h"
 #include "core/microgeom/visibility.h"
 #include <cstdint>
 #include <functional>

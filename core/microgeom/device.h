@@ -5,10 +5,10 @@
 // ComputeScope), so they work from any thread (the GUI evaluates stages off the UI thread) and
 // return the same CPU-side results as the CPU code: the stages' consumers never know. Where the
 // hook is empty or fails (no OpenGL), the stage falls back to the CPU and warns.
+#include "core/heightfield/heightfield.h"
 #include "core/microgeom/curvature.h"
 #include "core/microgeom/directions.h"
 #include "core/microgeom/ellipse.h"
-#include "core/microgeom/heightfield.h"
 #include "core/microgeom/scatter.h"
 #include "core/microgeom/visibility.h"
 #include <functional>

@@ -85,10 +85,10 @@
 //  - Exactness: Bending{} returns the flat fit unchanged (bit-exact, no round trip); at exactly a
 //    sample's curvature the result is that sample up to the float rounding of the Q round trip
 //    (relative 1e-6 in a and b, 1e-6 in the centre; the angle where a and b differ).
+#include "core/heightfield/heightfield.h"
 #include "core/math.h"
 #include "core/microgeom/curvature.h"
 #include "core/microgeom/directions.h"
-#include "core/microgeom/heightfield.h"
 #include "core/microgeom/visibility.h"
 #include <functional>
 #include <vector>

@@ -70,10 +70,10 @@
 // result = sum over the 4 x 4 tap pairs of w_light w_view table[(iL n_phi + jL) * nodes +
 // (iV n_phi + jV)], nodes = n_theta * n_phi: bilinear in (t, s) for wi and for wo, periodic in phi.
 // eval_env(wo): the same 4 taps of wo over `env`.
+#include "core/heightfield/heightfield.h"
 #include "core/image.h"
 #include "core/math.h"
 #include "core/microgeom/directions.h"
-#include "core/microgeom/heightfield.h"
 #include "core/microgeom/scatter.h"
 #include "core/microgeom/visibility.h"
 #include <cstddef>

@@ -8,8 +8,8 @@
 //             texture), so it differs from `bump` only by parallax, occlusion and silhouettes;
 //   bump      the base surface with the heightfield as a bump map (microgeom.cpp);
 //   brdf      the base surface with the heightfield's simulated BRDF (goniometer.h), no texture.
+#include "core/heightfield/heightfield.h"
 #include "core/mesh.h"
-#include "core/microgeom/heightfield.h"
 #include <string>
 
 namespace mesolab::microgeom {

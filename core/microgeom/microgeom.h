@@ -29,23 +29,24 @@
 //   blinn-phong  f = rho/pi + ks (s + 8)/(8 pi) max(0, n.h)^s   (the normalised lobe, as goniometer.h)
 // applied to the direct light only: L_direct = sum over lights f E max(0, n.wi) V; the scattered
 // and environment light are Lambert, L_indirect = rho/pi E_indirect (shade_cpu, microgeom.frag).
-// Scope (see the issue notes): micro-BRDF Lambertian for every bounce (the Blinn-Phong lobe
-// applies to the direct light seen by the viewer); every light gets its own scattering solution:
-// on a planar base under directional lights one solve for each light's direction
-// (microgeom.scatter); on a non-planar base (sphere, cylinder, torus, teapot, mesh) or under a point
-// light, where the tangent-space light direction changes from pixel to pixel, the light-driven scattering is tabulated once for the M ~ N/2 set directions
-// above the horizon (microgeom.scatter_directions, DirectionalScatter in scatter.h: M x texels x
-// RGB floats, M solves) and blended per pixel and light over the spherical triangle containing
-// the light's tangent-space direction, as the exact shadows are; moving a light never recomputes
-// it. Exact shadows ignore the base curvature (ellipse shadows follow it).
+// Scope: micro-BRDF Lambertian for every bounce (the Blinn-Phong lobe applies to the direct light
+// seen by the viewer); every light gets its own scattering solution: on a planar base under
+// directional lights one solve for each light's direction (microgeom.scatter); on a non-planar
+// base (sphere, cylinder, torus, teapot, mesh) or under a point light, where the tangent-space
+// light direction changes from pixel to pixel, the light-driven scattering is tabulated once for
+// the M ~ N/2 set directions above the horizon (microgeom.scatter_directions, DirectionalScatter
+// in scatter.h: M x texels x RGB floats, M solves) and blended per pixel and light over the
+// spherical triangle containing the light's tangent-space direction, as the exact shadows are;
+// moving a light never recomputes it. Exact shadows ignore the base curvature (ellipse shadows
+// follow it).
+//
+// The heightfield and its parameters are the shared module core/heightfield (heightfield.h,
+// params.h); the technique itself is implemented in the files technique.h lists.
+#include "core/heightfield/heightfield.h"
 #include "core/microgeom/directions.h"
-#include "core/microgeom/heightfield.h"
 #include "core/microgeom/scatter.h"
 #include "core/microgeom/visibility.h"
-#include "core/param.h"
 #include "core/per_object.h"
-#include <functional>
-#include <memory>
 #include <vector>
 
 namespace mesolab::microgeom {
@@ -66,16 +67,4 @@ struct LightScatter {
 struct LightsScatter {
     std::vector<LightScatter> lights;
 };
-
-ProceduralParams procedural_params(const ParamTable& material);
-
-// The heightfield's own parameters (heightfield_keys(): the procedural name or image, resolution,
-// height_scale, texel_size, periodic and the procedural shapes' parameters), declared once here and
-// shared by bumpsynth (ndf = heightfield), so that both techniques can show the same surface. `each`
-// may amend every declaration (e.g. bumpsynth marks them used only when ndf is heightfield).
-const std::vector<std::string>& heightfield_keys();
-void declare_heightfield_params(ParamGroup& p, const std::function<void(ParamDecl&)>& each = {});
-// The heightfield a material describes (procedural or image), without the albedo map; errors name
-// the material's group (microgeom.resolution, bumpsynth.resolution, ...).
-Heightfield heightfield_from_material(const Scene& s, const ParamTable& material);
 }  // namespace mesolab::microgeom

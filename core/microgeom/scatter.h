@@ -22,10 +22,10 @@
 // the spherical triangle containing l with its barycentric weights. Masking uses the same data
 // with the view direction.
 #include "core/env.h"
+#include "core/heightfield/heightfield.h"
 #include "core/microgeom/curvature.h"
 #include "core/microgeom/directions.h"
 #include "core/microgeom/ellipse.h"
-#include "core/microgeom/heightfield.h"
 #include "core/microgeom/visibility.h"
 #include <atomic>
 #include <functional>
@@ -131,9 +131,4 @@ int directions_above_horizon(const DirectionSet& dirs);
 // direction after the other through it.
 DirectionalScatter scatter_directions(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, const ScatterSettings& s,
                                       const std::function<void(double)>& progress = {});
-
-// Bilinear, wrapping (periodic) or clamped look-up of a per-texel quantity at continuous texel
-// coordinates (c, r) (texel (x, y) at (x, y)).
-template <class T>
-T sample_bilinear(const std::vector<T>& tex, int w, int h, bool periodic, float c, float r);
 }  // namespace mesolab::microgeom

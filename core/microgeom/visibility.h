@@ -1,16 +1,17 @@
 #pragma once
 // Visibility textures S_i (Heidrich et al. 2000, §3): for every direction d_i of a DirectionSet
 // and every texel p, the point q of the heightfield that the ray from p in direction d_i hits
-// first, or no hit. Exact against the triangulated heightfield surface (heightfield.h): the ray
-// walks the cells it crosses (2D DDA, accelerated by a max-height pyramid so that rays above all
-// geometry stop at once), testing both triangles of each cell; nothing can be stepped over.
+// first, or no hit. Exact against the triangulated heightfield surface
+// (core/heightfield/heightfield.h): the ray walks the cells it crosses (2D DDA, accelerated by a
+// max-height pyramid so that rays above all geometry stop at once), testing both triangles of
+// each cell; nothing can be stepped over.
 // Periodic fields wrap the walk across the borders.
 //
 // Ray origin: the texel centre P(p) lifted by eps along the texel's normal, with
 // eps = 1e-3 texel sizes; directions with d . n(p) <= 0 point into the surface at p and are
 // stored as kBelow without tracing.
+#include "core/heightfield/heightfield.h"
 #include "core/microgeom/directions.h"
-#include "core/microgeom/heightfield.h"
 #include <atomic>
 #include <cstdint>
 #include <functional>

@@ -11,19 +11,19 @@ namespace mesolab::gpu {
 
 void install_microgeom_gpu_compute() {
     microgeom::GpuCompute g;
-    g.visibility = [](const microgeom::Heightfield& hf, const microgeom::DirectionSet& dirs) {
+    g.visibility = [](const Heightfield& hf, const microgeom::DirectionSet& dirs) {
         ComputeScope scope;
         // Compiled once, on the compute context, and kept (that context lives until exit).
         static const VisibilityProgram* program = new VisibilityProgram();
         return program->compute(hf, dirs);
     };
     g.gatherer = [] { return make_gpu_gatherer(); };
-    g.light_solver = [](const microgeom::Heightfield& hf, const microgeom::DirectionSet& dirs, const microgeom::Visibility& vis, const microgeom::ScatterSettings& s) {
+    g.light_solver = [](const Heightfield& hf, const microgeom::DirectionSet& dirs, const microgeom::Visibility& vis, const microgeom::ScatterSettings& s) {
         return make_gpu_light_solver(hf, dirs, vis, s);
     };
-    g.importance = [](const microgeom::Heightfield& hf, const microgeom::DirectionSet& dirs, const microgeom::Visibility& vis, microgeom::Bending b,
+    g.importance = [](const Heightfield& hf, const microgeom::DirectionSet& dirs, const microgeom::Visibility& vis, microgeom::Bending b,
                       const std::function<void(double)>& progress) { return compute_importance_gpu(hf, dirs, vis, b, progress); };
-    g.ellipses = [](const microgeom::Heightfield& hf, const microgeom::DirectionSet& dirs, const microgeom::Visibility& vis, microgeom::Bending b,
+    g.ellipses = [](const Heightfield& hf, const microgeom::DirectionSet& dirs, const microgeom::Visibility& vis, microgeom::Bending b,
                     const std::function<void(double)>& progress) { return fit_ellipses_gpu(hf, dirs, vis, b, progress); };
     microgeom::set_gpu_compute(std::move(g));
 }

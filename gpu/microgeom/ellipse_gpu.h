@@ -33,7 +33,7 @@ namespace mesolab::gpu {
 // ComputeScope, taken inside), so it may be called from any thread. Throws std::runtime_error without
 // OpenGL; std::invalid_argument as the CPU for mismatched visibility. `progress` as the CPU's (fractions
 // on the calling thread, may throw to cancel).
-microgeom::EllipseMap fit_ellipses_gpu(const microgeom::Heightfield& hf, const microgeom::DirectionSet& dirs,
+microgeom::EllipseMap fit_ellipses_gpu(const Heightfield& hf, const microgeom::DirectionSet& dirs,
                                        const microgeom::Visibility& vis, microgeom::Bending b = {},
                                        const std::function<void(double)>& progress = {});
 }  // namespace mesolab::gpu

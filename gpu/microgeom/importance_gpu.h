@@ -27,7 +27,7 @@ namespace mesolab::gpu {
 // std::invalid_argument when vis does not match hf and dirs. `progress` as the CPU's: the fraction
 // done after each batch of rows, on the calling thread; it may throw to cancel (the exception
 // propagates, GL state restored).
-microgeom::Importance compute_importance_gpu(const microgeom::Heightfield& hf, const microgeom::DirectionSet& dirs,
+microgeom::Importance compute_importance_gpu(const Heightfield& hf, const microgeom::DirectionSet& dirs,
                                              const microgeom::Visibility& vis, microgeom::Bending b,
                                              const std::function<void(double)>& progress = {});
 }  // namespace mesolab::gpu

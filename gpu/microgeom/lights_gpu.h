@@ -17,7 +17,7 @@ namespace mesolab::gpu {
 // solves happen and drop it after. S_i and the weights go up in chunks of directions of at most
 // max_chunk_bytes (0: GL_MAX_SHADER_STORAGE_BLOCK_SIZE; gpu/microgeom/chunks.h). Throws
 // std::runtime_error without OpenGL, or when one direction's texture alone exceeds that limit.
-std::unique_ptr<microgeom::LightSolver> make_gpu_light_solver(const microgeom::Heightfield& hf, const microgeom::DirectionSet& dirs,
+std::unique_ptr<microgeom::LightSolver> make_gpu_light_solver(const Heightfield& hf, const microgeom::DirectionSet& dirs,
                                                               const microgeom::Visibility& vis, const microgeom::ScatterSettings& s,
                                                               size_t max_chunk_bytes = 0);
 }  // namespace mesolab::gpu

@@ -10,8 +10,8 @@
 // Host work: per-texel normals and lifted origins, per-cell heights, the min/max pyramid and
 // per-direction constants (all O(W H + N), in double as on the CPU), then one invocation per
 // (texel, direction), dispatched in batches of directions.
+#include "core/heightfield/heightfield.h"
 #include "core/microgeom/directions.h"
-#include "core/microgeom/heightfield.h"
 #include "core/microgeom/visibility.h"
 #include "gpu/gl.h"
 
@@ -25,14 +25,14 @@ public:
 
     // All N textures, read back: same layout and encoding as microgeom::compute_visibility.
     // Throws std::invalid_argument for a heightfield whose h has the wrong size (as the CPU does).
-    microgeom::Visibility compute(const microgeom::Heightfield& hf, const microgeom::DirectionSet& dirs) const;
+    microgeom::Visibility compute(const Heightfield& hf, const microgeom::DirectionSet& dirs) const;
 
     // All N textures as a new R32UI GL_TEXTURE_2D_ARRAY (width x height x N, layer = direction,
     // nearest filtering), as gpu/microgeom/microgeom_pass.cpp uploads S_i, filled on the GPU with
     // no read-back. Empty (no texture) when W, H or N is 0. Throws std::runtime_error when N
     // exceeds GL_MAX_ARRAY_TEXTURE_LAYERS. Leaves the texture bound to GL_TEXTURE_2D_ARRAY on the
     // active unit restored to what it was.
-    Texture compute_texture(const microgeom::Heightfield& hf, const microgeom::DirectionSet& dirs) const;
+    Texture compute_texture(const Heightfield& hf, const microgeom::DirectionSet& dirs) const;
 
 private:
     Program program_;
@@ -40,5 +40,5 @@ private:
 
 // Needs a current GL context. Same layout and encoding as microgeom::compute_visibility.
 // Compiles the program for each call (~tens of ms on llvmpipe); use VisibilityProgram to reuse it.
-microgeom::Visibility compute_visibility_gpu(const microgeom::Heightfield& hf, const microgeom::DirectionSet& dirs);
+microgeom::Visibility compute_visibility_gpu(const Heightfield& hf, const microgeom::DirectionSet& dirs);
 }  // namespace mesolab::gpu

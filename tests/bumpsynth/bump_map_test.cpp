@@ -4,8 +4,8 @@
 #include "app/workbench.h"
 #include "core/bumpsynth/bump_map.h"
 #include "core/bumpsynth/bumpsynth.h"
+#include "core/heightfield/params.h"
 #include "core/image.h"
-#include "core/microgeom/microgeom.h"
 #include "core/scene.h"
 #include "support/cli.h"
 #include "support/errors.h"
@@ -23,14 +23,14 @@ using namespace mesolab::bumpsynth;
 
 namespace {
 
-microgeom::Heightfield gaussian_field(float rms_slope, int resolution = 256, float correlation = 3.f) {
-    microgeom::ProceduralParams p;
+Heightfield gaussian_field(float rms_slope, int resolution = 256, float correlation = 3.f) {
+    ProceduralParams p;
     p.name = "gaussian";
     p.resolution = resolution;
     p.rms_slope = rms_slope;
     p.correlation = correlation;
     p.seed = 7;
-    return microgeom::make_procedural(p);
+    return make_procedural(p);
 }
 
 // A bumpsynth scene whose NDF is a procedural heightfield's (plane, texture mode at full detail).
@@ -79,8 +79,9 @@ TEST(BumpsynthBumpMap, GaussianHeightfieldHasBeckmannsNdfWithAlphaTheRmsSlope) {
     EXPECT_LT(tv, 0.06);
 }
 
-// bumpsynth.ndf = heightfield reads microgeom's own declaration of the heightfield's keys, so the
-// same settings give the same surface in both techniques; and errors name bumpsynth's keys.
+// bumpsynth declares the heightfield's keys as microgeom does (core/heightfield/params.h), so with
+// ndf = heightfield the same settings give the same surface in both techniques; and errors name
+// bumpsynth's keys.
 TEST(BumpsynthBumpMap, HeightfieldSettingsGiveMicrogeomsSurface) {
     Scene s = default_scene("bumpsynth");
     apply_set(s, "bumpsynth.ndf", "heightfield");
@@ -90,7 +91,7 @@ TEST(BumpsynthBumpMap, HeightfieldSettingsGiveMicrogeomsSurface) {
         apply_set(s, "bumpsynth." + k, v);
         apply_set(g, "microgeom." + k, v);
     }
-    const microgeom::Heightfield field = microgeom::heightfield_from_material(g, g.objects[0].material);
+    const Heightfield field = heightfield_from_material(g, g.objects[0].material);
     const BumpNormals ours = bump_normals_from_material(s, s.objects[0].material);
     ASSERT_EQ(ours.width, 48);
     ASSERT_EQ(ours.height, 48);

@@ -1,7 +1,7 @@
 #pragma once
 // Shared by the microgeom GPU tests (frame agreement itself: support/frames.h).
 #include "app/workbench.h"
-#include "core/microgeom/heightfield.h"
+#include "core/heightfield/heightfield.h"
 #include "core/scene.h"
 #include "core/render.h"
 #include "gpu/context.h"
@@ -27,11 +27,11 @@ inline bool have_compute_gl() {
 }
 
 // A procedural heightfield by name at res x res texels, periodic or not (default: the procedural default).
-inline microgeom::Heightfield procedural_field(const char* name, int res, bool periodic = microgeom::ProceduralParams{}.periodic) {
-    microgeom::ProceduralParams p;
+inline Heightfield procedural_field(const char* name, int res, bool periodic = ProceduralParams{}.periodic) {
+    ProceduralParams p;
     p.name = name;
     p.resolution = res;
-    microgeom::Heightfield hf = microgeom::make_procedural(p);
+    Heightfield hf = make_procedural(p);
     hf.periodic = periodic;
     return hf;
 }

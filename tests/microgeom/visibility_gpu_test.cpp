@@ -11,8 +11,8 @@
 // Measured on llvmpipe (printed per field): classification agrees on 100% of the pairs of the
 // first test's five fields and common hits are at most one 1/16 packing step apart; the steep
 // field has 1 disagreement in 947,200 pairs (a ray passing 2e-6 texels under a valley edge).
+#include "core/heightfield/heightfield.h"
 #include "core/microgeom/directions.h"
-#include "core/microgeom/heightfield.h"
 #include "core/microgeom/visibility.h"
 #include "gpu/context.h"
 #include "gpu/gl.h"

@@ -1,5 +1,11 @@
 #pragma once
-// Heightfields for technique microgeom (Heidrich et al. 2000).
+// [SECTION] Heightfields: micro-geometry shared by the techniques.
+// A heightfield is a grid of heights over a base surface, with a per-texel albedo. microgeom
+// (Heidrich et al. 2000) lights it with precomputed visibility; bumpsynth (Kautz et al. 2001,
+// bumpsynth.ndf = heightfield) takes the histogram of its normals as an NDF. This module builds
+// the fields (procedural or from images), gives them an albedo (a procedural rule or an albedo
+// map), and answers the queries every technique needs (heights, normals, bilinear look-ups).
+// The parameters that describe a heightfield are declared once for every technique: params.h.
 //
 // Local frame: x along +u, y along +v, z = height (the base surface's normal). Texel (x, y),
 // with y the image row from the TOP, has its centre at uv = ((x + 0.5)/W, 1 - (y + 0.5)/H) and at
@@ -14,7 +20,7 @@
 #include <string>
 #include <vector>
 
-namespace mesolab::microgeom {
+namespace mesolab {
 
 struct Heightfield {
     int width = 0, height = 0;
@@ -34,14 +40,21 @@ struct Heightfield {
     float max_height() const;
 };
 
+// Bilinear, wrapping (periodic) or clamped look-up of a per-texel quantity (heights, albedo, any
+// w x h row-major texture laid out like a heightfield) at continuous texel coordinates (c, r)
+// (texel (x, y) at (x, y)). Defined for float and vec3.
+template <class T>
+T sample_bilinear(const std::vector<T>& tex, int w, int h, bool periodic, float c, float r);
+
+// [SECTION] Procedural fields
 // Parameters of the procedural fields. Heights come out in units of texels before `height_scale`
 // (world height = value * height_scale * texel_size), so the shapes keep their slopes at any
-// resolution. Triangles, bricks and bumps are the fields of the paper's Table 1 (Fig. 2 shows
-// the triangles). Every field is a function of the texel centre's position in the unit tile, with
-// period 1, so it tiles seamlessly at any resolution in [8, 4096]:
-//   triangles  the paper's Fig. 2 ridges: a symmetric triangle wave along x, 4 periods across,
-//              constant along y, peaks at half the period (45-degree faces at height_scale 1);
-//              albedo red (0.8, 0.08, 0.08) exactly where the central difference dh/dx > 0
+// resolution. Triangles, bricks and bumps are the fields of Heidrich et al.'s Table 1 (their
+// Fig. 2 shows the triangles). Every field is a function of the texel centre's position in the
+// unit tile, with period 1, so it tiles seamlessly at any resolution in [8, 4096]:
+//   triangles  Heidrich et al.'s Fig. 2 ridges: a symmetric triangle wave along x, 4 periods
+//              across, constant along y, peaks at half the period (45-degree faces at height_scale
+//              1); albedo red (0.8, 0.08, 0.08) exactly where the central difference dh/dx > 0
 //              (normal.x < 0), white 0.8 elsewhere (`albedo` is not used).
 //   bricks     running bond, 4 courses of 2 bricks (2:1 aspect), mortar joints 1/8 of the course
 //              height wide at height 0, bricks raised by 1/6 of the course height with a bevel of
@@ -68,17 +81,25 @@ struct ProceduralParams {
     float correlation = 4.f;     // gaussian: correlation length, texels, in (0, min(resolution, 64)]
     uint32_t seed = 1;           // gaussian: seed (deterministic for a seed)
     vec3 albedo{0.8f};           // base albedo; the rules above modulate it
-    std::string group = "microgeom";  // the parameter group named in errors (bumpsynth reads the same keys)
+    std::string group = "microgeom";  // the parameter group named in errors (every technique reads the same keys)
 };
 
 // The known procedural names.
 const std::vector<std::string>& procedural_names();
-// Throws InputError naming microgeom.heightfield for an unknown name (with a suggestion).
+// Throws InputError naming <group>.heightfield for an unknown name (with a suggestion).
 Heightfield make_procedural(const ProceduralParams& p);
 
+// [SECTION] Heightfields from images
 // Heightfield from an image (OpenImageIO: 8/16-bit, float EXR/TIFF; the first channel), heights
 // = value * height_scale * texel_size (8/16-bit data normalised to [0, 1], not sRGB-decoded).
 // NaN/Inf texels are an InputError naming the file and the texel; so are a missing or unreadable
 // file and sizes outside 2..4096 texels a side. Albedo is set to `albedo` everywhere.
 Heightfield load_heightfield(const std::string& path, float height_scale, float texel_size, bool periodic, vec3 albedo);
-}  // namespace mesolab::microgeom
+
+// [SECTION] Albedo maps
+// Per-texel albedo from an image (8/16-bit sRGB or float linear; grey images give grey albedo),
+// resampled bilinearly with wrap-around at the texel centres onto the heightfield's texels, times
+// `tint`, clamped to 1. A negative or non-finite result is an InputError naming the file and
+// `key` (the parameter that named it, e.g. microgeom.albedo_map).
+void apply_albedo_map(Heightfield& hf, const std::string& path, vec3 tint, const std::string& key);
+}  // namespace mesolab

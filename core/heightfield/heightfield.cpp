@@ -1,4 +1,5 @@
-#include "core/microgeom/heightfield.h"
+// Heightfields: queries, bilinear look-ups, procedural fields, images and albedo maps (see heightfield.h).
+#include "core/heightfield/heightfield.h"
 #include "core/error.h"
 
 #include <algorithm>
@@ -8,7 +9,7 @@
 
 #include <tbb/parallel_for.h>
 
-namespace mesolab::microgeom {
+namespace mesolab {
 
 // [SECTION] Heightfield queries
 float Heightfield::at(int x, int y) const {
@@ -41,6 +42,19 @@ vec3 Heightfield::normal(int x, int y) const {
 
 float Heightfield::min_height() const { return h.empty() ? 0.f : *std::min_element(h.begin(), h.end()); }
 float Heightfield::max_height() const { return h.empty() ? 0.f : *std::max_element(h.begin(), h.end()); }
+
+// [SECTION] Bilinear look-ups
+template <class T>
+T sample_bilinear(const std::vector<T>& tex, int w, int h, bool periodic, float c, float r) {
+    const float c0f = std::floor(c), r0f = std::floor(r);
+    const float fc = c - c0f, fr = r - r0f;
+    auto wrap = [&](int i, int n) { return periodic ? ((i % n) + n) % n : std::clamp(i, 0, n - 1); };
+    const int c0 = wrap(int(c0f), w), c1 = wrap(int(c0f) + 1, w), r0 = wrap(int(r0f), h), r1 = wrap(int(r0f) + 1, h);
+    auto at = [&](int x, int y) { return tex[size_t(y) * size_t(w) + size_t(x)]; };
+    return (at(c0, r0) * (1.f - fc) + at(c1, r0) * fc) * (1.f - fr) + (at(c0, r1) * (1.f - fc) + at(c1, r1) * fc) * fr;
+}
+template vec3 sample_bilinear<vec3>(const std::vector<vec3>&, int, int, bool, float, float);
+template float sample_bilinear<float>(const std::vector<float>&, int, int, bool, float, float);
 
 // [SECTION] Procedural fields
 namespace {
@@ -295,4 +309,19 @@ Heightfield load_heightfield(const std::string& path, float height_scale, float 
         for (int x = 0; x < f.width; ++x) f.h[f.index(x, y)] = img.at(x, y)[0] * scale;
     return f;
 }
-}  // namespace mesolab::microgeom
+
+// [SECTION] Albedo maps
+void apply_albedo_map(Heightfield& hf, const std::string& path, vec3 tint, const std::string& key) {
+    const Image img = read_image(path, /*srgb_to_linear_8bit=*/true, /*reject_nonfinite=*/true);
+    std::vector<vec3> rgb(size_t(img.width) * size_t(img.height));
+    for (size_t i = 0; i < rgb.size(); ++i)
+        for (int c = 0; c < 3; ++c) rgb[i][c] = img.data[i * size_t(img.channels) + size_t(img.channels >= 3 ? c : 0)];
+    for (int y = 0; y < hf.height; ++y)
+        for (int x = 0; x < hf.width; ++x) {
+            const float c = (float(x) + 0.5f) * float(img.width) / float(hf.width) - 0.5f, r = (float(y) + 0.5f) * float(img.height) / float(hf.height) - 0.5f;
+            const vec3 a = sample_bilinear(rgb, img.width, img.height, true, c, r) * tint;
+            if (!(a.x >= 0.f && a.y >= 0.f && a.z >= 0.f)) throw InputError(path + ": " + key + " has a negative or non-finite albedo");
+            hf.albedo[hf.index(x, y)] = glm::min(a, vec3(1.f));
+        }
+}
+}  // namespace mesolab

@@ -1,10 +1,10 @@
-// Image heightfields in integer formats (issue 3: "an image file read with OpenImageIO (8/16-bit,
-// float EXR/TIFF; single channel, or the first channel)"): 8- and 16-bit PNG and TIFF, grey and
-// RGB, written with OpenImageIO, come back from load_heightfield normalised to [0, 1] (not
-// sRGB-decoded) times height_scale * texel_size, and through the stage graph as
-// value * height_scale / texel_size texels (microgeom.texel_size, heightfield_from_material).
+// Image heightfields in integer formats (OpenImageIO: 8/16-bit, float EXR/TIFF; a single channel,
+// or the first channel): 8- and 16-bit PNG and TIFF, grey and RGB, written with OpenImageIO, come
+// back from load_heightfield normalised to [0, 1] (not sRGB-decoded) times height_scale *
+// texel_size, and through microgeom's stage graph as value * height_scale / texel_size texels
+// (microgeom.texel_size, heightfield_from_material).
 #include "app/workbench.h"
-#include "core/microgeom/heightfield.h"
+#include "core/heightfield/heightfield.h"
 #include "core/per_object.h"
 #include "core/scene.h"
 #include "support/cli.h"
@@ -18,7 +18,6 @@
 #include <vector>
 
 using namespace mesolab;
-using namespace mesolab::microgeom;
 using namespace mesolab::test;
 
 namespace {
