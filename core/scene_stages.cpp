@@ -17,9 +17,9 @@ void declare_scene_stages(StageGraph& g) {
            .help = "Tessellate procedural shapes and read mesh files (OpenMesh)",
            .scope = StageScope::Object,
            .params = {"geometry.type", "geometry.path", "geometry.resolution", "geometry.minor_ratio"},
-           .memory = [](const Scene&, const SceneObject* o) {
+           .memory = [](const StageContext& ctx) {
                MemoryEstimate e;
-               const ParamTable& g = o->geometry;
+               const ParamTable& g = ctx.obj().geometry;
                if (g.get_string("type") == "mesh") return e;  // the file's size bounds it
                const double n = double(g.get_int("resolution"));
                // Tessellations have about n x n/2 (sphere) to n x n (torus, plane) vertices; the teapot 32 x (n/8)^2.

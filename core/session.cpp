@@ -202,7 +202,7 @@ Evaluation Session::evaluate(const Scene& scene, const std::vector<std::string>&
         std::any result;
         try {
             if (cancel && cancel->load()) throw Cancelled();
-            if (d.memory) check_memory(scene, d, object, d.memory(scene, object >= 0 ? &scene.objects[size_t(object)] : nullptr));
+            if (d.memory) check_memory(scene, d, object, d.memory(ctx));
             ProfileScope scope("stage/" + d.name);
             result = d.run(ctx);
         } catch (const Cancelled&) {

@@ -63,8 +63,9 @@ struct StageDecl {
     std::string when_text;
     std::optional<PaperFigure> paper;
     // The memory the stage will allocate for these settings (object stages: for that object),
+    // estimated from its context (the scene, the object, its inputs' results, which are ready) and
     // checked against the session's budget before it runs (core/session.h).
-    std::function<MemoryEstimate(const Scene&, const SceneObject*)> memory;
+    std::function<MemoryEstimate(const StageContext&)> memory;
     // Returns the result as std::shared_ptr<const T> wrapped in std::any (or an empty any).
     std::function<std::any(StageContext&)> run;
 };

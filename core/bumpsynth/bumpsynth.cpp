@@ -35,13 +35,6 @@ std::vector<std::string> keys(const std::vector<std::string>& names) {
     for (const auto& n : names) out.push_back("bumpsynth." + n);
     return out;
 }
-std::vector<std::string> with(std::vector<std::string> a, const std::vector<std::string>& b) {
-    a.insert(a.end(), b.begin(), b.end());
-    return a;
-}
-bool any_object(const Scene& s, const std::function<bool(const SceneObject&)>& f) {
-    return std::any_of(s.objects.begin(), s.objects.end(), [&](const SceneObject& o) { return o.technique == "bumpsynth" && f(o); });
-}
 bool from_bump_map(const SceneObject& o) {
     const std::string& n = o.material.get_string("ndf");
     return n == "normal_map" || n == "heightfield";
@@ -233,8 +226,8 @@ public:
                       .help = "Tabulate the normal density function over the normal's (x, y) disk",
                       .params = keys(kNdfKeys),
                       .inputs = {"bumpsynth.bump_normals"},
-                      .memory = [](const Scene&, const SceneObject* o) {
-                          const double R = double(o->material.get_int("ndf_resolution"));
+                      .memory = [](const StageContext& ctx) {
+                          const double R = double(ctx.material().get_int("ndf_resolution"));
                           return MemoryEstimate{R * R * 2.0 * sizeof(double), "NDF: " + std::to_string(int(R)) + "^2 cells", {"bumpsynth.ndf_resolution"}};
                       },
                       .run = [](StageContext& ctx) {
@@ -260,8 +253,8 @@ public:
                       .help = "Invert the NDF's marginal and conditional CDFs into the normal look-up table L(r1, r2) with tangent frames (§4)",
                       .params = keys({"lut_size"}),
                       .inputs = {"bumpsynth.ndf"},
-                      .memory = [](const Scene&, const SceneObject* o) {
-                          const double n = double(o->material.get_int("lut_size"));
+                      .memory = [](const StageContext& ctx) {
+                          const double n = double(ctx.material().get_int("lut_size"));
                           return MemoryEstimate{n * n * double(sizeof(LutEntry)), "look-up table: " + std::to_string(int(n)) + "^2 entries",
                                                 {"bumpsynth.lut_size"}};
                       },
@@ -289,8 +282,8 @@ public:
                       .inputs = {"bumpsynth.noise_cdf"},
                       .applies = when(texture_noise),
                       .when_text = "bumpsynth.noise is texture",
-                      .memory = [](const Scene&, const SceneObject* o) {
-                          const double n = double(o->material.get_int("noise_texture_size"));
+                      .memory = [](const StageContext& ctx) {
+                          const double n = double(ctx.material().get_int("noise_texture_size"));
                           // Two channels of floats over the mip chain (4/3 of the finest level).
                           return MemoryEstimate{n * n * 4.0 / 3.0 * 2.0 * sizeof(float), "noise texture: " + std::to_string(int(n)) + "^2 texels with mip levels",
                                                 {"bumpsynth.noise_texture_size"}};

@@ -45,16 +45,16 @@ std::vector<BenchTable> MicrogeomTechnique::bench_tables() const {
     BenchColumn memory;
     memory.name = "memory: S_i / ellipses / scattered light";
     memory.info = [mb](const Scene& s, const Evaluation& ev) {
-        auto vis = ev.get<PerObject<Visibility>>("microgeom.visibility");
-        auto ell = ev.get<PerObject<EllipseMap>>("microgeom.ellipses");
-        auto sc = ev.get<PerObject<LightsScatter>>("microgeom.scatter");
-        auto table = ev.get<PerObject<DirectionalScatter>>("microgeom.scatter_directions");
+        auto vis = ev.get<Visibility>("microgeom.visibility", 0);
+        auto ell = ev.get<EllipseMap>("microgeom.ellipses", 0);
+        auto sc = ev.get<LightsScatter>("microgeom.scatter", 0);
+        auto table = ev.get<DirectionalScatter>("microgeom.scatter_directions", 0);
         (void)s;
-        const size_t v = vis && vis->get(0) ? vis->get(0)->bytes() : 0, e = ell && ell->get(0) ? ell->get(0)->bytes() : 0;
+        const size_t v = vis ? vis->bytes() : 0, e = ell ? ell->bytes() : 0;
         size_t l = 0;
-        if (sc && sc->get(0))
-            for (const LightScatter& one : sc->get(0)->lights) l += one.result.E_indirect.size() * sizeof(vec3);
-        if (table && table->get(0)) l += table->get(0)->bytes();
+        if (sc)
+            for (const LightScatter& one : sc->lights) l += one.result.E_indirect.size() * sizeof(vec3);
+        if (table) l += table->bytes();
         return mb(v) + " / " + mb(e) + " / " + mb(l);
     };
     BenchColumn vis_col{"S_i precompute", "microgeom.visibility"};
@@ -81,11 +81,10 @@ std::vector<BenchTable> MicrogeomTechnique::bench_tables() const {
     BenchColumn brdf_mem;
     brdf_mem.name = "memory";
     brdf_mem.info = [mb](const Scene&, const Evaluation& ev) {
-        auto b = ev.get<PerObject<SimulatedBrdf>>("microgeom.brdf");
-        auto d = ev.get<PerObject<TriMesh>>("microgeom.displaced");
-        if (b && b->get(0)) return mb(b->get(0)->bytes()) + " (" + std::to_string(b->get(0)->images) + " images)";
-        if (d && d->get(0)) return mb(d->get(0)->vertex_count() * (3 * sizeof(vec3) + sizeof(vec2)) + d->get(0)->index.size() * 4) + " (" +
-                                   std::to_string(d->get(0)->triangle_count()) + " triangles)";
+        auto b = ev.get<SimulatedBrdf>("microgeom.brdf", 0);
+        auto d = ev.get<TriMesh>("microgeom.displaced", 0);
+        if (b) return mb(b->bytes()) + " (" + std::to_string(b->images) + " images)";
+        if (d) return mb(d->vertex_count() * (3 * sizeof(vec3) + sizeof(vec2)) + d->index.size() * 4) + " (" + std::to_string(d->triangle_count()) + " triangles)";
         return std::string("—");
     };
     BenchColumn brdf_col{"precompute", "microgeom.brdf"};
@@ -112,9 +111,9 @@ std::vector<BenchTable> MicrogeomTechnique::bench_tables() const {
     BenchColumn table_mem;
     table_mem.name = "memory: scattered light";
     table_mem.info = [mb](const Scene&, const Evaluation& ev) {
-        auto table = ev.get<PerObject<DirectionalScatter>>("microgeom.scatter_directions");
-        if (!table || !table->get(0)) return std::string("—");
-        return mb(table->get(0)->bytes()) + " (" + std::to_string(table->get(0)->count) + " directions)";
+        auto table = ev.get<DirectionalScatter>("microgeom.scatter_directions", 0);
+        if (!table) return std::string("—");
+        return mb(table->bytes()) + " (" + std::to_string(table->count) + " directions)";
     };
     curved_t.columns = {table_col, {"frame 512x512", "", 512, 512, true, true}, table_mem};
     curved_t.rows = {{"Bricks 128x128 on a sphere", [scene] {

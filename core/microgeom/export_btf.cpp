@@ -43,23 +43,22 @@ std::vector<ExportDecl> MicrogeomTechnique::exports() const {
             if (k == "lights") lg = parse_grid(k, v);
             else if (k == "views") vg = parse_grid(k, v);
         const SceneObject& o = s.objects[size_t(object)];
-        const Heightfield& hf = *ev.get<PerObject<Heightfield>>("microgeom.heightfield")->get(object);
-        const DirectionSet& dirs = *ev.get<PerObject<DirectionSet>>("microgeom.directions")->get(object);
-        const Visibility& vis = *ev.get<PerObject<Visibility>>("microgeom.visibility")->get(object);
-        auto imp = ev.get<PerObject<Importance>>("microgeom.importance");
-        auto ell = ev.get<PerObject<EllipseMap>>("microgeom.ellipses");
+        const ObjectFrame of = ObjectFrame::from(s, ev, object);
+        const Heightfield& hf = *of.hf;
+        const DirectionSet& dirs = *of.dirs;
+        const Visibility& vis = *of.vis;
         GonioSettings gs;
         gs.scatter = scatter_settings(o.material);
         if (!s.effect("indirect")) gs.scatter.depth = 0;
-        gs.scatter.importance = imp ? imp->get(object) : nullptr;
-        gs.scatter.ellipses = ell ? ell->get(object) : nullptr;
+        gs.scatter.importance = of.imp.get();
+        gs.scatter.ellipses = of.ell.get();
         gs.phong = o.material.get_string("brdf") == "blinn-phong";
         gs.ks = o.material.get_vec3("ks");
         gs.shininess = float(o.material.get_float("shininess"));
         const std::vector<vec3> lights = btf_directions(lg.x, lg.y), views = btf_directions(vg.x, vg.y);
         const auto t0 = std::chrono::steady_clock::now();
         std::string warnings;
-        const Image mosaic = with_light_solver([&](const std::string& m) { warnings += "\nwarning: " + m; }, o, hf, dirs, vis, gs.scatter,
+        const Image mosaic = with_light_solver([&](std::string m) { warnings += "\nwarning: " + o.name + ": " + m; }, o, hf, dirs, vis, gs.scatter,
                                                                    [&](LightSolver* solver) {
                                                                        gs.lights = solver;
                                                                        return btf_mosaic(hf, dirs, vis, gs, lights, views, [&](double f) { if (progress) progress("export.btf", f); });

@@ -68,15 +68,12 @@ std::vector<std::string> MicrogeomTechnique::frame_stages() const {
 }
 
 std::shared_ptr<const TriMesh> MicrogeomTechnique::object_mesh(const Scene&, const Evaluation& ev, int object) const {
-    auto d = ev.get<PerObject<TriMesh>>("microgeom.displaced");
-    if (!d || !d->get(object)) return nullptr;
-    return d->items[size_t(object)];
+    return ev.get<TriMesh>("microgeom.displaced", object);
 }
 
 std::optional<ivec2> MicrogeomTechnique::texture_size(const Scene& s, const Evaluation& ev) const {
-    auto hf = ev.get<PerObject<Heightfield>>("microgeom.heightfield");
-    for (size_t i = 0; hf && i < s.objects.size(); ++i)
-        if (const Heightfield* h = hf->get(int(i))) return ivec2(h->width, h->height);
+    for (size_t i = 0; i < s.objects.size(); ++i)
+        if (const auto h = ev.get<Heightfield>("microgeom.heightfield", int(i))) return ivec2(h->width, h->height);
     return std::nullopt;
 }
 }  // namespace mesolab::microgeom

@@ -5,7 +5,7 @@
 // with exact shadows from the visibility textures S_i (§4) and with light scattered inside the
 // heightfield by the Method of Dependent Tests (§3).
 //
-// Stages (results hold one entry per scene object; objects with equal settings share it):
+// Stages (object stages: one result per object using microgeom; objects with equal settings share it):
 //   microgeom.heightfield      heights and albedo            (microgeom.heightfield, resolution, texel_size, albedo_map, ...)
 //   microgeom.directions       N directions + triangulation  (microgeom.directions)
 //   microgeom.visibility       S_i                           (heightfield, directions) — never the light or the curvature
@@ -43,15 +43,16 @@
 // The heightfield and its parameters are the shared module core/heightfield (heightfield.h,
 // params.h); the technique itself is implemented in the files technique.h lists.
 #include "core/heightfield/heightfield.h"
+#include "core/microgeom/curvature.h"
 #include "core/microgeom/directions.h"
+#include "core/microgeom/ellipse.h"
+#include "core/microgeom/goniometer.h"
 #include "core/microgeom/scatter.h"
 #include "core/microgeom/visibility.h"
-#include "core/per_object.h"
+#include "core/stage.h"
 #include <vector>
 
 namespace mesolab::microgeom {
-
-using mesolab::PerObject;
 
 // One scattering solution of one object: unit irradiance from `light_dir` (microgeom.scatter), or
 // the environment's (microgeom.scatter_env).
@@ -63,8 +64,32 @@ struct LightScatter {
 // microgeom.scatter (planar bases, directional lights only): one solution per scene light (same order as Scene::lights),
 // each at unit irradiance; the shaders scale each by its light's irradiance at the pixel.
 // Non-planar bases and scenes with a point light have no entry here: they use microgeom.scatter_directions, a
-// PerObject<DirectionalScatter> (scatter.h).
+// DirectionalScatter per object (scatter.h).
 struct LightsScatter {
     std::vector<LightScatter> lights;
+};
+// The material parameters the shading reads, parsed once per frame (CPU and GPU alike).
+struct Material {
+    float tiling = 4.f;     // microgeom.tiling
+    bool phong = false;     // microgeom.brdf == blinn-phong
+    vec3 ks{0.f};           // Blinn-Phong lobe (0 for Lambert)
+    float shininess = 32.f;
+    bool shadows = true;    // microgeom.shadows != none
+    static Material from(const ParamTable& m);
+};
+
+// An object's stage results for a frame (null where a stage did not run) and its material.
+struct ObjectFrame {
+    Material material;
+    std::shared_ptr<const Heightfield> hf;
+    std::shared_ptr<const DirectionSet> dirs;
+    std::shared_ptr<const Visibility> vis;
+    std::shared_ptr<const LightScatter> env;           // microgeom.scatter_env
+    std::shared_ptr<const LightsScatter> lights;       // microgeom.scatter (planar bases)
+    std::shared_ptr<const DirectionalScatter> table;   // microgeom.scatter_directions (non-planar bases)
+    std::shared_ptr<const Importance> imp;
+    std::shared_ptr<const EllipseMap> ell;
+    std::shared_ptr<const SimulatedBrdf> brdf;         // lod = brdf
+    static ObjectFrame from(const Scene& s, const Evaluation& ev, int object);
 };
 }  // namespace mesolab::microgeom

@@ -5,36 +5,55 @@
 
 #include <tbb/parallel_for.h>
 #include <algorithm>
+#include <map>
+#include <stdexcept>
 #include <cmath>
 #include <utility>
 
 namespace mesolab::microgeom {
 
+// [SECTION] Per-frame inputs
+Material Material::from(const ParamTable& m) {
+    Material r;
+    r.tiling = float(m.get_float("tiling"));
+    r.phong = m.get_string("brdf") == "blinn-phong";
+    r.ks = r.phong ? m.get_vec3("ks") : vec3(0.f);
+    r.shininess = float(m.get_float("shininess"));
+    r.shadows = m.get_string("shadows") != "none";
+    return r;
+}
+
+ObjectFrame ObjectFrame::from(const Scene& s, const Evaluation& ev, int object) {
+    ObjectFrame f;
+    f.material = Material::from(s.objects.at(size_t(object)).material);
+    f.hf = ev.get<Heightfield>("microgeom.heightfield", object);
+    f.dirs = ev.get<DirectionSet>("microgeom.directions", object);
+    f.vis = ev.get<Visibility>("microgeom.visibility", object);
+    f.env = ev.get<LightScatter>("microgeom.scatter_env", object);
+    f.lights = ev.get<LightsScatter>("microgeom.scatter", object);
+    f.table = ev.get<DirectionalScatter>("microgeom.scatter_directions", object);
+    f.imp = ev.get<Importance>("microgeom.importance", object);
+    f.ell = ev.get<EllipseMap>("microgeom.ellipses", object);
+    f.brdf = ev.get<SimulatedBrdf>("microgeom.brdf", object);
+    if (!f.hf || !f.dirs || !f.vis) throw std::logic_error("microgeom: the frame's stages were not evaluated for object " + std::to_string(object));
+    return f;
+}
+
 // [SECTION] CPU shading (bump level of detail; texture mode = the heightfield's texels 1:1)
 void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
-    auto hfs = ctx.eval.get<PerObject<Heightfield>>("microgeom.heightfield");
-    auto dirss = ctx.eval.get<PerObject<DirectionSet>>("microgeom.directions");
-    auto viss = ctx.eval.get<PerObject<Visibility>>("microgeom.visibility");
-    auto envs = ctx.eval.get<PerObject<LightScatter>>("microgeom.scatter_env");
-    auto lights = ctx.eval.get<PerObject<LightsScatter>>("microgeom.scatter");
-    auto tables = ctx.eval.get<PerObject<DirectionalScatter>>("microgeom.scatter_directions");
+    // Inputs and materials parsed once per frame, by object.
+    std::map<int, ObjectFrame> objects;
+    for (int i : ctx.objects) objects.emplace(i, ObjectFrame::from(ctx.scene, ctx.eval, i));
     const GBuffer& gb = ctx.gbuffer;
-    Image& rad = ctx.frame.aov("radiance");
-    Image& nrm = ctx.frame.aov("normal");
-    Image& dir_img = ctx.frame.aov("direct");
-    Image& ind_img = ctx.frame.aov("indirect");
-    Image& sh_img = ctx.frame.aov("shadow");
-    Image& fold_img = ctx.frame.aov("folded");
-    auto imps = ctx.eval.get<PerObject<Importance>>("microgeom.importance");
-    auto ells = ctx.eval.get<PerObject<EllipseMap>>("microgeom.ellipses");
-    auto brdfs = ctx.eval.get<PerObject<SimulatedBrdf>>("microgeom.brdf");
-    // One pixel's AOVs.
+    const AovWriter& out = ctx.out;
+    const int direct_out = out.index("direct"), indirect_out = out.index("indirect"), shadow_out = out.index("shadow"), folded_out = out.index("folded");
+    // One pixel's AOVs (those the frame holds).
     auto store = [&](int x, int y, vec3 L, vec3 n, vec3 direct, vec3 indirect, float shadow) {
-        for (auto [img, v] : {std::pair{&rad, L}, std::pair{&nrm, n}, std::pair{&dir_img, direct}, std::pair{&ind_img, indirect}}) {
-            float* q = img->at(x, y);
-            q[0] = v.x, q[1] = v.y, q[2] = v.z;
-        }
-        sh_img.at(x, y)[0] = shadow;
+        out.put(AovWriter::kRadiance, x, y, L);
+        out.put(AovWriter::kNormal, x, y, n);
+        out.put(direct_out, x, y, direct);
+        out.put(indirect_out, x, y, indirect);
+        out.put(shadow_out, x, y, shadow);
     };
 
     tbb::parallel_for(0, gb.height, [&](int y) {
@@ -42,18 +61,18 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
             const size_t px = gb.index(x, y);
             if (!ctx.mine(px)) continue;
             const int obj = gb.object[px];
-            const SceneObject& o = ctx.scene.objects[size_t(obj)];
-            const Heightfield& hf = *hfs->get(obj);
-            const DirectionSet& dirs = *dirss->get(obj);
-            const Visibility& vis = *viss->get(obj);
-            const ParamTable& m = o.material;
+            const ObjectFrame& of = objects.at(obj);
+            const Heightfield& hf = *of.hf;
+            const DirectionSet& dirs = *of.dirs;
+            const Visibility& vis = *of.vis;
+            const Material& m = of.material;
 
             // Macro frame (two-sided) and the texel position of this pixel.
             const vec3 p = gb.position[px];
             const vec3 wo = ctx.camera.wo(p);
             const TangentFrame frame = tangent_frame(gb.normal[px], gb.tangent[px], wo);
             const vec3 N = frame.N, T = frame.T, B = frame.B;
-            const float tiling = ctx.camera.texture_mode ? 1.f : float(m.get_float("tiling"));
+            const float tiling = ctx.camera.texture_mode ? 1.f : m.tiling;
             const vec2 uv = gb.uv[px];
             const float c = uv.x * float(hf.width) * tiling - 0.5f, r = (1.f - uv.y) * float(hf.height) * tiling - 0.5f;
             auto to_local = [&](vec3 w) { return frame.to_local(w); };
@@ -61,7 +80,7 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
             // BRDF level: a smooth surface with the simulated BRDF (it folds in shadows, masking and
             // scattering); the environment part is exact for a constant environment and scaled by the
             // irradiance at the macro normal for a map.
-            if (const SimulatedBrdf* brdf = brdfs ? brdfs->get(obj) : nullptr) {
+            if (const SimulatedBrdf* brdf = of.brdf.get()) {
                 const vec3 v_loc = to_local(wo);
                 vec3 Lo_lights(0.f);
                 float shadow_first = 0.f;
@@ -92,11 +111,10 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
             }
             n_loc = glm::normalize(n_loc);
             const vec3 n = glm::normalize(T * n_loc.x + B * n_loc.y + N * n_loc.z);
-            const bool phong = m.get_string("brdf") == "blinn-phong";
-            const vec3 ks = phong ? m.get_vec3("ks") : vec3(0.f);
-            const float shininess = float(m.get_float("shininess"));
-            const bool shadows = m.get_string("shadows") != "none";
-            const EllipseMap* ellipses = ells ? ells->get(obj) : nullptr;
+            const bool phong = m.phong, shadows = m.shadows;
+            const vec3 ks = m.ks;
+            const float shininess = m.shininess;
+            const EllipseMap* ellipses = of.ell.get();
 
             // Direct light: per pixel, exact shadows bilinear over the 4 texels.
             vec3 direct(0.f);
@@ -136,15 +154,15 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
             // Scattered light: environment part, plus each light's part scaled by its irradiance
             // (non-planar bases: blended over the spherical triangle of its tangent-space direction).
             vec3 E_ind(0.f);
-            const LightScatter* es = envs ? envs->get(obj) : nullptr;
+            const LightScatter* es = of.env.get();
             if (es) E_ind += sample_bilinear(es->result.E_indirect, hf.width, hf.height, true, c, r);
-            const LightsScatter* ls = lights ? lights->get(obj) : nullptr;
+            const LightsScatter* ls = of.lights.get();
             for (size_t li = 0; ls && li < std::min(ls->lights.size(), ctx.lighting.lights.size()); ++li) {
                 vec3 wi, E;
                 ctx.lighting.lights[li].sample(p, wi, E);
                 E_ind += sample_bilinear(ls->lights[li].result.E_indirect, hf.width, hf.height, true, c, r) * E;
             }
-            const DirectionalScatter* table = tables ? tables->get(obj) : nullptr;
+            const DirectionalScatter* table = of.table.get();
             for (size_t li = 0; table && li < ctx.lighting.lights.size(); ++li) {
                 vec3 wi, E;
                 ctx.lighting.lights[li].sample(p, wi, E);
@@ -152,10 +170,10 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
             }
             const vec3 indirect = albedo * kInvPi * E_ind;
             store(x, y, direct + indirect, n, direct, indirect, shadow0);
-            const Importance* imp = imps ? imps->get(obj) : nullptr;
-            if (imp && !imp->folded.empty()) {
+            const Importance* imp = of.imp.get();
+            if (imp && !imp->folded.empty() && out.wanted(folded_out)) {
                 const int fx = ((int(std::floor(c + 0.5f)) % hf.width) + hf.width) % hf.width, fy = ((int(std::floor(r + 0.5f)) % hf.height) + hf.height) % hf.height;
-                fold_img.at(x, y)[0] = float(imp->folded[hf.index(fx, fy)]);
+                out.put(folded_out, x, y, float(imp->folded[hf.index(fx, fy)]));
             }
         }
     });

@@ -9,6 +9,7 @@
 // The paper's figures are in paper.h. The stages and the BTF export share the scattering settings
 // of a material and the GPU's light solver with its CPU fallback (below).
 #include "core/error.h"
+#include "core/gpu_or_cpu.h"
 #include "core/microgeom/device.h"
 #include "core/microgeom/microgeom.h"
 #include "core/technique.h"
@@ -40,23 +41,18 @@ ScatterSettings scatter_settings(const ParamTable& material);
 inline std::string first_line(const std::string& text) { return text.substr(0, text.find('\n')); }
 
 // f(solver) with the GPU's light solver (goniometer and BTF light images) where the object asks
-// for it and OpenGL works; else, or when the GPU fails on the way, f(nullptr) (the CPU) with a warning.
+// for it and OpenGL works; else, or when the GPU fails on the way, f(nullptr) (the CPU), with a
+// warning through `warn` (gpu_or_cpu).
 template <class F>
-auto with_light_solver(const std::function<void(const std::string&)>& warn, const SceneObject& o, const Heightfield& hf, const DirectionSet& dirs,
+auto with_light_solver(const std::function<void(std::string)>& warn, const SceneObject& o, const Heightfield& hf, const DirectionSet& dirs,
                        const Visibility& vis, const ScatterSettings& st, F&& f) {
-    if (o.material.get_string("device") == "gpu") {
-        try {
-            if (!gpu_compute().light_solver) throw std::runtime_error("this build has no GPU compute");
+    return gpu_or_cpu(
+        o.material.get_string("device") == "gpu", "light images", warn,
+        [&] {
+            require_gpu(bool(gpu_compute().light_solver));
             const std::unique_ptr<LightSolver> solver = gpu_compute().light_solver(hf, dirs, vis, st);
             return f(solver.get());
-        } catch (const Cancelled&) {
-            throw;
-        } catch (const InputError&) {
-            throw;
-        } catch (const std::runtime_error& e) {
-            warn(o.name + ": light images computed on the CPU: the GPU could not (" + first_line(e.what()) + ")");
-        }
-    }
-    return f(nullptr);
+        },
+        [&] { return f(nullptr); });
 }
 }  // namespace mesolab::microgeom

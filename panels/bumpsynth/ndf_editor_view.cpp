@@ -2,7 +2,6 @@
 // Everything is drawn with ImDrawList primitives, so it needs no GL texture and runs headless.
 #include "core/bumpsynth/bumpsynth.h"
 #include "core/error.h"
-#include "core/per_object.h"
 #include "panels/bumpsynth/ndf_editor.h"
 
 #include <imgui.h>

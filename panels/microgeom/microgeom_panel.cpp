@@ -107,14 +107,11 @@ void register_microgeom_panel(PanelRegistry& r) {
             help_marker("Like the paper's Fig. 9: replaces the scene's objects by three spheres with this material as displaced geometry, "
                         "bump map and simulated BRDF, left to right (a button at the top of this panel goes back).");
             if (ctx.eval) {
-                if (auto vis = ctx.eval->get<microgeom::PerObject<microgeom::Visibility>>("microgeom.visibility"))
-                    if (const auto* v = vis->get(int(i)))
-                        ImGui::TextDisabled("S_i: %d directions x %dx%d texels, %.1f MB", v->count, v->width, v->height, double(v->bytes()) / (1 << 20));
-                if (auto b = ctx.eval->get<microgeom::PerObject<microgeom::SimulatedBrdf>>("microgeom.brdf"))
-                    if (const auto* f = b->get(int(i)))
-                        ImGui::TextDisabled("BRDF: %d^4 table from %d goniometer images, %.2f MB", f->n_theta, f->images, double(f->bytes()) / (1 << 20));
-                if (auto d = ctx.eval->get<microgeom::PerObject<TriMesh>>("microgeom.displaced"))
-                    if (const auto* m = d->get(int(i))) ImGui::TextDisabled("displaced: %zu triangles", m->triangle_count());
+                if (const auto v = ctx.eval->get<microgeom::Visibility>("microgeom.visibility", int(i)))
+                    ImGui::TextDisabled("S_i: %d directions x %dx%d texels, %.1f MB", v->count, v->width, v->height, double(v->bytes()) / (1 << 20));
+                if (const auto f = ctx.eval->get<microgeom::SimulatedBrdf>("microgeom.brdf", int(i)))
+                    ImGui::TextDisabled("BRDF: %d^4 table from %d goniometer images, %.2f MB", f->n_theta, f->images, double(f->bytes()) / (1 << 20));
+                if (const auto m = ctx.eval->get<TriMesh>("microgeom.displaced", int(i))) ImGui::TextDisabled("displaced: %zu triangles", m->triangle_count());
             }
             ImGui::PopID();
         }

@@ -5,7 +5,6 @@
 // (microgeom.texel_size, heightfield_from_material).
 #include "app/workbench.h"
 #include "core/heightfield/heightfield.h"
-#include "core/per_object.h"
 #include "core/scene.h"
 #include "support/cli.h"
 
@@ -102,9 +101,9 @@ TEST(Heightfield, A16BitTiffThroughTheStagesUsesHeightScaleOverTexelSize) {
     req.backend = Backend::Cpu;
     const RenderResult r = wb.render(s, req);
     EXPECT_EQ(r.frame.width, kW);
-    const auto fields = r.eval.get<PerObject<Heightfield>>("microgeom.heightfield");
-    ASSERT_TRUE(fields && fields->get(0));
-    const Heightfield& f = *fields->get(0);
+    const auto field = r.eval.get<Heightfield>("microgeom.heightfield", 0);
+    ASSERT_TRUE(field);
+    const Heightfield& f = *field;
     ASSERT_EQ(f.width, kW);
     for (int y = 0; y < kH; ++y)
         for (int x = 0; x < kW; ++x) ASSERT_NEAR(f.at(x, y), float(code(x, y, 0, 65535u)) / 65535.f * 12.f, 12e-6f) << x << "," << y;

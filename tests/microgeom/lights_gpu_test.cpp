@@ -191,8 +191,8 @@ TEST(LightsGpu, BrdfLevelOfDetailOnDeviceGpuMatchesDeviceCpu) {
         {"microgeom.resolution=32", "microgeom.lod=brdf", "microgeom.brdf_resolution=5", "camera.mode=orbit", "geometry.type=sphere"}, Backend::Cpu);
     const RenderResult &cpu = r.cpu, &gpu = r.gpu;
     test::expect_ran_on_the_gpu(gpu, {"microgeom.brdf"});
-    const SimulatedBrdf* bc = cpu.eval.get<PerObject<SimulatedBrdf>>("microgeom.brdf")->get(0);
-    const SimulatedBrdf* bg = gpu.eval.get<PerObject<SimulatedBrdf>>("microgeom.brdf")->get(0);
+    const SimulatedBrdf* bc = cpu.eval.get<SimulatedBrdf>("microgeom.brdf", 0).get();
+    const SimulatedBrdf* bg = gpu.eval.get<SimulatedBrdf>("microgeom.brdf", 0).get();
     ASSERT_TRUE(bc && bg);
     const double worst_table = worst_rel(bc->table, bg->table);
     expect_worst_below("brdf table, device gpu vs cpu", worst_table, 2e-2);

@@ -225,7 +225,7 @@ TEST(Lod, TexelSizeAndAlbedoMap) {
         apply_set(s, "microgeom.albedo_map", albedo_map);
         Session session(g);
         const Evaluation ev = session.evaluate(s, {"microgeom.heightfield"});
-        return *ev.get<PerObject<Heightfield>>("microgeom.heightfield")->get(0);
+        return *ev.get<Heightfield>("microgeom.heightfield", 0);
     };
     const Heightfield h1 = field("1", ""), h05 = field("0.5", dir / "a.exr");
     EXPECT_FLOAT_EQ(h1.max_height() / h1.texel_size, 1.f);

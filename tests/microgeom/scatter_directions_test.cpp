@@ -55,14 +55,14 @@ RenderResult render(Workbench& wb, const Scene& s, Backend backend = Backend::Cp
 
 // The stages' inputs and the table of a scene's first object.
 struct Solved {
-    std::shared_ptr<const PerObject<Heightfield>> hf;
-    std::shared_ptr<const PerObject<DirectionSet>> dirs;
-    std::shared_ptr<const PerObject<Visibility>> vis;
-    std::shared_ptr<const PerObject<DirectionalScatter>> table;
+    std::shared_ptr<const Heightfield> hf;
+    std::shared_ptr<const DirectionSet> dirs;
+    std::shared_ptr<const Visibility> vis;
+    std::shared_ptr<const DirectionalScatter> table;
 };
 Solved solved(const RenderResult& r) {
-    return {r.eval.get<PerObject<Heightfield>>("microgeom.heightfield"), r.eval.get<PerObject<DirectionSet>>("microgeom.directions"),
-            r.eval.get<PerObject<Visibility>>("microgeom.visibility"), r.eval.get<PerObject<DirectionalScatter>>("microgeom.scatter_directions")};
+    return {r.eval.get<Heightfield>("microgeom.heightfield", 0), r.eval.get<DirectionSet>("microgeom.directions", 0),
+            r.eval.get<Visibility>("microgeom.visibility", 0), r.eval.get<DirectionalScatter>("microgeom.scatter_directions", 0)};
 }
 
 ScatterResult direct_solve(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, vec3 l) {
@@ -78,16 +78,16 @@ TEST(ScatterDirections, AtASetDirectionTheBlendIsThatDirectionsSolve) {
     Workbench wb;
     const RenderResult r = render(wb, small_sphere());
     const Solved s = solved(r);
-    ASSERT_TRUE(s.table && s.table->get(0)) << "a sphere must tabulate its scattering";
-    const Heightfield& hf = *s.hf->get(0);
-    const DirectionSet& dirs = *s.dirs->get(0);
-    const DirectionalScatter& table = *s.table->get(0);
+    ASSERT_TRUE(s.table) << "a sphere must tabulate its scattering";
+    const Heightfield& hf = *s.hf;
+    const DirectionSet& dirs = *s.dirs;
+    const DirectionalScatter& table = *s.table;
     EXPECT_EQ(table.count, 50) << "N = 100: the 50 directions with z > 0";
     EXPECT_EQ(table.bytes(), size_t(50) * 32 * 32 * sizeof(vec3));
     double worst = 0;
     for (int j : {0, 7, 23, 38, 49}) {
         const vec3 l = dirs.d[size_t(j)];
-        const ScatterResult ref = direct_solve(hf, dirs, *s.vis->get(0), l);
+        const ScatterResult ref = direct_solve(hf, dirs, *s.vis, l);
         for (int y = 0; y < hf.height; ++y)
             for (int x = 0; x < hf.width; ++x) {
                 const vec3 a = ref.E_indirect[hf.index(x, y)], b = table.irradiance(dirs, l, float(x), float(y));

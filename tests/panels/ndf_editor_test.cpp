@@ -5,7 +5,6 @@
 // the ImGui editor does all of it from simulated mouse and keyboard input in a headless context.
 #include "core/bumpsynth/bumpsynth.h"
 #include "core/image.h"
-#include "core/per_object.h"
 #include "core/scene.h"
 #include "core/session.h"
 #include "core/stage.h"

@@ -231,7 +231,9 @@ TEST(Memory, EstimatesBoundWhatTheStagesAllocate) {
     const Evaluation e = session.evaluate_frame(s);
     const StageDecl& d = Registry::instance().stages().at("microgeom.visibility");
     ASSERT_TRUE(d.memory);
-    const double est = d.memory(s, &s.objects[0]).bytes;
+    const ProgressFn no_progress;
+    const StageContext ctx(s, e, d.name, 0, no_progress, nullptr);  // its inputs are in e
+    const double est = d.memory(ctx).bytes;
     const double real = double(e.get<microgeom::Visibility>("microgeom.visibility", 0)->bytes());
     EXPECT_GE(est, real);
     EXPECT_LE(est, 2.0 * real) << "an estimate far above the allocation would refuse settings that fit";
