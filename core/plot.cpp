@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -268,10 +269,145 @@ void draw_text(Image& img, int x, int y, const std::string& text, float r, float
     });
 }
 
-// Chart
+// Canvases: the chart's layout drawn into an image or written as SVG.
+namespace {
+class Canvas {
+public:
+    virtual ~Canvas() = default;
+    // Opaque pixel rectangle [x0, x1) x [y0, y1).
+    virtual void rect(int x0, int y0, int x1, int y1, const Rgb& c) = 0;
+    // Polyline of width w through points in pixel coordinates, clipped to `clip`.
+    virtual void polyline(const std::vector<std::array<double, 2>>& pts, double w, const Rgb& c, const Rect& clip) = 0;
+    // Text with its box's top-left corner at (x, y), as draw_text.
+    virtual void text(int x, int y, const std::string& t, float r, float g, float b, int scale) = 0;
+};
+
+class RasterCanvas final : public Canvas {
+public:
+    explicit RasterCanvas(Image& img) : img_(img) {}
+    void rect(int x0, int y0, int x1, int y1, const Rgb& c) override { fill_rect(img_, x0, y0, x1, y1, c); }
+    void polyline(const std::vector<std::array<double, 2>>& pts, double w, const Rgb& c, const Rect& clip) override {
+        draw_polyline(img_, pts, w, c, clip, coverage_);
+    }
+    void text(int x, int y, const std::string& t, float r, float g, float b, int scale) override {
+        draw_text(img_, x, y, t, r, g, b, scale);
+    }
+
+private:
+    Image& img_;
+    std::vector<float> coverage_;
+};
+
+// UTF-8 of one code point.
+void append_utf8(std::string& out, char32_t c) {
+    if (c < 0x80) {
+        out += char(c);
+    } else if (c < 0x800) {
+        out += char(0xC0 | (c >> 6)), out += char(0x80 | (c & 0x3F));
+    } else if (c < 0x10000) {
+        out += char(0xE0 | (c >> 12)), out += char(0x80 | ((c >> 6) & 0x3F)), out += char(0x80 | (c & 0x3F));
+    } else {
+        out += char(0xF0 | (c >> 18)), out += char(0x80 | ((c >> 12) & 0x3F)), out += char(0x80 | ((c >> 6) & 0x3F)),
+            out += char(0x80 | (c & 0x3F));
+    }
+}
+
+// Text as XML character data: valid UTF-8 (malformed bytes as U+FFFD), markup escaped, control
+// characters (not allowed in XML 1.0) as U+FFFD.
+std::string xml_text(const std::string& text) {
+    std::string out;
+    for (char32_t c : decode_utf8(text)) {
+        if (c == U'&') out += "&amp;";
+        else if (c == U'<') out += "&lt;";
+        else if (c == U'>') out += "&gt;";
+        else if (c == U'"') out += "&quot;";
+        else if ((c < 0x20 && c != U'\t') || c == 0x7F || c == 0xFFFE || c == 0xFFFF) append_utf8(out, U'\uFFFD');
+        else append_utf8(out, c);
+    }
+    return out;
+}
+
+std::string hex(const Rgb& c) {
+    char buf[8];
+    std::snprintf(buf, sizeof buf, "#%02x%02x%02x", unsigned(linear_to_srgb8(c.r)), unsigned(linear_to_srgb8(c.g)),
+                  unsigned(linear_to_srgb8(c.b)));
+    return buf;
+}
+
+std::string num(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.2f", v);
+    std::string r = buf;
+    while (r.back() == '0') r.pop_back();
+    if (r.back() == '.') r.pop_back();
+    return r == "-0" ? "0" : r;
+}
+
+class SvgCanvas final : public Canvas {
+public:
+    SvgCanvas(int width, int height) : w_(width), h_(height) {}
+    void rect(int x0, int y0, int x1, int y1, const Rgb& c) override {
+        x0 = std::max(x0, 0), y0 = std::max(y0, 0), x1 = std::min(x1, w_), y1 = std::min(y1, h_);
+        if (x0 >= x1 || y0 >= y1) return;
+        body_ << "<rect x=\"" << x0 << "\" y=\"" << y0 << "\" width=\"" << x1 - x0 << "\" height=\"" << y1 - y0
+              << "\" fill=\"" << hex(c) << "\"/>\n";
+    }
+    void polyline(const std::vector<std::array<double, 2>>& pts, double w, const Rgb& c, const Rect& clip) override {
+        if (pts.size() < 2 || clip.x0 >= clip.x1 || clip.y0 >= clip.y1) return;
+        const int id = clips_++;
+        defs_ << "<clipPath id=\"c" << id << "\"><rect x=\"" << clip.x0 << "\" y=\"" << clip.y0 << "\" width=\""
+              << clip.x1 - clip.x0 << "\" height=\"" << clip.y1 - clip.y0 << "\"/></clipPath>\n";
+        body_ << "<polyline clip-path=\"url(#c" << id << ")\" fill=\"none\" stroke=\"" << hex(c) << "\" stroke-width=\""
+              << num(w) << "\" stroke-linecap=\"round\" stroke-linejoin=\"round\" shape-rendering=\"auto\" points=\"";
+        for (size_t i = 0; i < pts.size(); ++i)
+            body_ << (i ? " " : "") << num(std::clamp(pts[i][0], -1e6, 1e6)) << "," << num(std::clamp(pts[i][1], -1e6, 1e6));
+        body_ << "\"/>\n";
+    }
+    void text(int x, int y, const std::string& t, float r, float g, float b, int scale) override {
+        if (t.empty()) return;
+        // The same box as the raster text: the pen starts left of the first glyph's ink by its bearing.
+        const int px = text_em_px(scale);
+        const Font& f = plot_font();
+        body_ << "<text x=\"" << x - f.left_bearing(t, px) << "\" y=\"" << y + f.ascent(px) << "\" font-size=\"" << px
+              << "\" fill=\"" << hex(Rgb{r, g, b}) << "\">" << xml_text(t) << "</text>\n";
+    }
+    std::string str() const {
+        std::ostringstream o;
+        o << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+          << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << w_ << "\" height=\"" << h_ << "\" viewBox=\"0 0 "
+          << w_ << " " << h_ << "\" font-family=\"DejaVu Sans, sans-serif\" shape-rendering=\"crispEdges\" xml:space=\"preserve\">\n";
+        if (!defs_.str().empty()) o << "<defs>\n" << defs_.str() << "</defs>\n";
+        if (w_ > 0 && h_ > 0) o << "<rect width=\"" << w_ << "\" height=\"" << h_ << "\" fill=\"#ffffff\"/>\n";
+        o << body_.str() << "</svg>\n";
+        return o.str();
+    }
+
+private:
+    int w_, h_, clips_ = 0;
+    std::ostringstream defs_, body_;
+};
+
+void draw_chart(Canvas& cv, const PlotSpec& spec, int width, int height);
+}  // namespace
+
 Image render_plot(const PlotSpec& spec, int width, int height) {
     if (width <= 0 || height <= 0) return Image(std::max(width, 0), std::max(height, 0), 3);
     Image img(width, height, 3, 1.f);
+    RasterCanvas cv(img);
+    draw_chart(cv, spec, width, height);
+    return img;
+}
+
+std::string render_plot_svg(const PlotSpec& spec, int width, int height) {
+    width = std::max(width, 0), height = std::max(height, 0);
+    SvgCanvas cv(width, height);
+    if (width > 0 && height > 0) draw_chart(cv, spec, width, height);
+    return cv.str();
+}
+
+// Chart
+namespace {
+void draw_chart(Canvas& cv, const PlotSpec& spec, int width, int height) {
 
     const Rgb black = srgb(30, 30, 30), text_c = srgb(40, 40, 40), axis_c = srgb(90, 90, 90),
               grid_major = srgb(222, 222, 222), grid_minor = srgb(240, 240, 240), muted = srgb(150, 150, 150),
@@ -333,18 +469,17 @@ Image render_plot(const PlotSpec& spec, int width, int height) {
         for (const Tick& t : ax.ticks)
             if (t.major == want_major) {
                 const int x = to_px(upx(t.u) - 0.5);
-                fill_rect(img, x, top, x + 1, bottom, want_major ? grid_major : grid_minor);
+                cv.rect(x, top, x + 1, bottom, want_major ? grid_major : grid_minor);
             }
         for (const Tick& t : ay.ticks)
             if (t.major == want_major) {
                 const int y = to_px(upy(t.u) - 0.5);
-                fill_rect(img, left, y, right, y + 1, want_major ? grid_major : grid_minor);
+                cv.rect(left, y, right, y + 1, want_major ? grid_major : grid_minor);
             }
     }
 
     // Series: anti-aliased polylines, then square markers with a white rim, then point labels.
     const Rect plot_clip{left, top, right, bottom};
-    std::vector<float> coverage;
     auto color_of = [&](size_t i) {
         const int* p = kPalette[i % 10];
         return srgb(p[0], p[1], p[2]);
@@ -352,13 +487,13 @@ Image render_plot(const PlotSpec& spec, int width, int height) {
     for (size_t si = 0; si < pts.size(); ++si) {
         std::vector<std::array<double, 2>> line;
         for (const Point& p : pts[si]) line.push_back({px(p.x), py(p.y)});
-        draw_polyline(img, line, 0.75 * s + 0.5, color_of(si), plot_clip, coverage);
+        cv.polyline(line, 0.75 * s + 0.5, color_of(si), plot_clip);
     }
     for (size_t si = 0; si < pts.size(); ++si)
         for (const Point& p : pts[si]) {
             const int cx = to_px(px(p.x) - 0.5), cy = to_px(py(p.y) - 0.5), h = marker / 2;
-            fill_rect(img, cx - h - 1, cy - h - 1, cx + h + 2, cy + h + 2, white);
-            fill_rect(img, cx - h, cy - h, cx + h + 1, cy + h + 1, color_of(si));
+            cv.rect(cx - h - 1, cy - h - 1, cx + h + 2, cy + h + 2, white);
+            cv.rect(cx - h, cy - h, cx + h + 1, cy + h + 1, color_of(si));
         }
     for (size_t si = 0; si < pts.size(); ++si)
         for (const Point& p : pts[si]) {
@@ -368,30 +503,30 @@ Image render_plot(const PlotSpec& spec, int width, int height) {
             if (tx + w > right) tx = cx - marker / 2 - 2 * ls - w;
             if (ty < top + 1) ty = cy + marker / 2 + 2 * ls;
             const Rgb c = color_of(si);
-            draw_text(img, tx, ty, p.label, 0.6f * c.r, 0.6f * c.g, 0.6f * c.b, ls);
+            cv.text(tx, ty, p.label, 0.6f * c.r, 0.6f * c.g, 0.6f * c.b, ls);
         }
 
     // Frame, ticks and tick labels.
-    fill_rect(img, left - 1, top - 1, right + 1, top, axis_c);
-    fill_rect(img, left - 1, bottom, right + 1, bottom + 1, axis_c);
-    fill_rect(img, left - 1, top - 1, left, bottom + 1, axis_c);
-    fill_rect(img, right, top - 1, right + 1, bottom + 1, axis_c);
+    cv.rect(left - 1, top - 1, right + 1, top, axis_c);
+    cv.rect(left - 1, bottom, right + 1, bottom + 1, axis_c);
+    cv.rect(left - 1, top - 1, left, bottom + 1, axis_c);
+    cv.rect(right, top - 1, right + 1, bottom + 1, axis_c);
     for (const Tick& t : ax.ticks) {
         const int x = to_px(upx(t.u) - 0.5), len = t.major || !t.label.empty() ? tick_len : tick_len / 2;
-        fill_rect(img, x, bottom + 1, x + 1, bottom + 1 + len, axis_c);
+        cv.rect(x, bottom + 1, x + 1, bottom + 1 + len, axis_c);
         if (!t.label.empty())
-            draw_text(img, x - text_width(t.label, s) / 2, bottom + 1 + tick_len + 2 * s, t.label, text_c.r, text_c.g,
+            cv.text(x - text_width(t.label, s) / 2, bottom + 1 + tick_len + 2 * s, t.label, text_c.r, text_c.g,
                       text_c.b, s);
     }
     for (const Tick& t : ay.ticks) {
         const int y = to_px(upy(t.u) - 0.5), len = t.major || !t.label.empty() ? tick_len : tick_len / 2;
-        fill_rect(img, left - 1 - len, y, left - 1, y + 1, axis_c);
+        cv.rect(left - 1 - len, y, left - 1, y + 1, axis_c);
         if (!t.label.empty())
-            draw_text(img, left - 1 - tick_len - 2 * s - text_width(t.label, s), y - line_h / 2, t.label, text_c.r,
+            cv.text(left - 1 - tick_len - 2 * s - text_width(t.label, s), y - line_h / 2, t.label, text_c.r,
                       text_c.g, text_c.b, s);
     }
     if (xs.empty())
-        draw_text(img, (left + right - text_width("no data", s)) / 2, (top + bottom - line_h) / 2, "no data", muted.r,
+        cv.text((left + right - text_width("no data", s)) / 2, (top + bottom - line_h) / 2, "no data", muted.r,
                   muted.g, muted.b, s);
 
     // Legend: the plot corner that hides the fewest points.
@@ -424,31 +559,31 @@ Image render_plot(const PlotSpec& spec, int width, int height) {
             if (hidden < best_hidden) best_hidden = hidden, best = k;
         }
         const int bx = corners[size_t(best)][0], by = corners[size_t(best)][1];
-        fill_rect(img, bx, by, bx + bw, by + bh, srgb(200, 200, 200));
-        fill_rect(img, bx + 1, by + 1, bx + bw - 1, by + bh - 1, white);
+        cv.rect(bx, by, bx + bw, by + bh, srgb(200, 200, 200));
+        cv.rect(bx + 1, by + 1, bx + bw - 1, by + bh - 1, white);
         for (size_t si = 0; si < names.size(); ++si) {
             const int ry = by + 2 * s + row_h * int(si), cy = ry + line_h / 2;
             const Rgb c = color_of(si);
             const int lt = std::max(1, to_px(0.75 * s + 0.5));
-            fill_rect(img, bx + 3 * s, cy - lt / 2, bx + 3 * s + swatch, cy - lt / 2 + lt, c);
+            cv.rect(bx + 3 * s, cy - lt / 2, bx + 3 * s + swatch, cy - lt / 2 + lt, c);
             const int mx = bx + 3 * s + swatch / 2, h = marker / 2;
-            fill_rect(img, mx - h, cy - h, mx + h + 1, cy + h + 1, c);
-            draw_text(img, bx + 6 * s + swatch, ry, names[si], text_c.r, text_c.g, text_c.b, s);
+            cv.rect(mx - h, cy - h, mx + h + 1, cy + h + 1, c);
+            cv.text(bx + 6 * s + swatch, ry, names[si], text_c.r, text_c.g, text_c.b, s);
         }
     }
 
     // Titles.
     if (!spec.title.empty()) {
         const int sc = text_width(spec.title, ts) <= width - 2 * pad ? ts : s;
-        draw_text(img, std::max(pad, (width - text_width(spec.title, sc)) / 2), pad, spec.title, black.r, black.g,
+        cv.text(std::max(pad, (width - text_width(spec.title, sc)) / 2), pad, spec.title, black.r, black.g,
                   black.b, sc);
     }
     if (!spec.ylabel.empty())
-        draw_text(img, std::max(pad, left - tick_len - 2 * s - label_w), top - 3 * s - line_h, spec.ylabel, text_c.r,
+        cv.text(std::max(pad, left - tick_len - 2 * s - label_w), top - 3 * s - line_h, spec.ylabel, text_c.r,
                   text_c.g, text_c.b, s);
     if (!spec.xlabel.empty())
-        draw_text(img, std::max(pad, (left + right - text_width(spec.xlabel, s)) / 2), height - pad - line_h,
+        cv.text(std::max(pad, (left + right - text_width(spec.xlabel, s)) / 2), height - pad - line_h,
                   spec.xlabel, text_c.r, text_c.g, text_c.b, s);
-    return img;
 }
+}  // namespace
 }  // namespace mesolab

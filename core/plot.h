@@ -1,6 +1,6 @@
 #pragma once
 // Small plotting for `mesolab sweep`: error against time as an RGB image (written as PNG by the
-// caller), with axes, ticks, tick labels, axis titles, a title, a legend and point labels. Text is
+// caller) or as SVG, with axes, ticks, tick labels, axis titles, a title, a legend and point labels. Text is
 // UTF-8 (Greek letters, units such as µs, m², °) in the plot font, DejaVu Sans through FreeType
 // (core/text.h); without the font file (Debian package fonts-dejavu-core) rendering a plot throws
 // std::runtime_error naming the file and the package; there is no fallback font.
@@ -26,6 +26,10 @@ struct PlotSpec {
 // <= 0). Text and marks scale with min(width, height) / 300. NaN/Inf values (and non-positive
 // ones on log axes) are dropped; a series' line joins its remaining points in the given order.
 Image render_plot(const PlotSpec& spec, int width = 900, int height = 600);
+// The same chart as SVG (UTF-8): the same layout in pixel units, lines as vector paths, text as
+// <text> in DejaVu Sans (drawn with the viewer's copy of the font and its hinting, so widths may
+// differ from the PNG's by a pixel or so).
+std::string render_plot_svg(const PlotSpec& spec, int width = 900, int height = 600);
 
 // Draw UTF-8 text, anti-aliased, into a 1- to 4-channel image; (x, y) is the top-left corner of
 // the text's box, text_width(text, scale) x text_height(scale) pixels: the first glyph's ink starts

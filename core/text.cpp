@@ -191,6 +191,13 @@ int Font::width(const std::string& utf8, int px) const {
     return std::max(0, r - l);
 }
 
+int Font::left_bearing(const std::string& utf8, int px) const {
+    std::lock_guard lock(mutex_);
+    int l = 0, r = 0;
+    layout(decode_utf8(utf8), clamp_px(px), l, r);
+    return l;
+}
+
 void Font::rasterize(const std::string& utf8, int px, int x, int y, const std::function<void(int, int, float)>& ink) const {
     std::lock_guard lock(mutex_);
     px = clamp_px(px);

@@ -48,6 +48,9 @@ public:
     // its last glyph's ink, the glyphs spaced by their advances and kerning (a blank glyph, such as
     // a space, counts with its advance). 0 for "".
     int width(const std::string& utf8, int px) const;
+    // Where the box starts right of the pen's starting point (the first glyph's left bearing; may
+    // be negative): a renderer that places text by its pen draws it at x - left_bearing.
+    int left_bearing(const std::string& utf8, int px) const;
 
     // Calls ink(x, y, coverage) with coverage in (0, 1] for each pixel the text covers, the box's
     // top-left corner at (x, y) (the first glyph's ink starts at x, the baseline is at y + ascent).

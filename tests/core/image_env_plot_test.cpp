@@ -654,6 +654,53 @@ TEST(Plot, TextAndPlotsAreDeterministic) {
     EXPECT_TRUE(same_pixels(ink_of("\xce\xb1\xce\xb2", 2).img, ink_of("\xce\xb1\xce\xb2", 2).img));
 }
 
+TEST(Plot, SvgHasTheSameChartWithTextAsText) {
+    auto count = [](const std::string& s, const std::string& what) {
+        size_t n = 0;
+        for (size_t at = s.find(what); at != std::string::npos; at = s.find(what, at + 1)) ++n;
+        return n;
+    };
+    PlotSpec spec;
+    spec.title = "error vs time: \xce\xb1 < \xce\xb2 & \xc2\xb5s";
+    spec.xlabel = "time [\xc2\xb5s]";
+    spec.ylabel = "RMSE \xe2\x80\x93 m\xc2\xb2";
+    spec.series.push_back({"\xce\xb8 sweep", {1, 2, 4, 8}, {0.1, 0.05, 0.03, 0.012}, {"1", "2", "4", "8"}});
+    spec.series.push_back({"floor", {1, 8}, {0.02, 0.02}, {}});
+    spec.series.push_back({"bad \xff\x01", {1}, {0.5}, {}});  // one point: no line
+    const std::string svg = render_plot_svg(spec, 900, 600);
+    EXPECT_EQ(svg.rfind("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<svg ", 0), 0u);
+    EXPECT_NE(svg.find("width=\"900\" height=\"600\""), std::string::npos);
+    EXPECT_EQ(svg.substr(svg.size() - 7), "</svg>\n");
+    // Text as text, UTF-8 kept, markup escaped, malformed bytes and control characters replaced.
+    EXPECT_NE(svg.find(">error vs time: \xce\xb1 &lt; \xce\xb2 &amp; \xc2\xb5s</text>"), std::string::npos) << svg;
+    EXPECT_NE(svg.find(">time [\xc2\xb5s]</text>"), std::string::npos);
+    EXPECT_NE(svg.find(">RMSE \xe2\x80\x93 m\xc2\xb2</text>"), std::string::npos);
+    EXPECT_NE(svg.find(">\xce\xb8 sweep</text>"), std::string::npos);
+    EXPECT_NE(svg.find(">bad \xef\xbf\xbd\xef\xbf\xbd</text>"), std::string::npos);
+    for (char c = 1; c < 0x20; ++c) {
+        if (c != '\n') {
+            EXPECT_EQ(svg.find(c), std::string::npos) << int(c);
+        }
+    }
+    // One line per series with two or more points, each clipped to the plot area; four point labels.
+    EXPECT_EQ(count(svg, "<polyline"), 2u);
+    EXPECT_EQ(count(svg, "<clipPath"), 2u);
+    for (const char* l : {">1</text>", ">2</text>", ">4</text>", ">8</text>"}) EXPECT_GE(count(svg, l), 1u) << l;
+    EXPECT_EQ(count(svg, "<text"), count(svg, "</text>"));
+    // The title sits where the PNG's is (scale 3, 12 px down at 900x600): centred by its inked width,
+    // the pen left of the ink by its bearing.
+    const int ts = 3, x = (900 - text_width(spec.title, ts)) / 2;
+    const int pen = x - plot_font().left_bearing(spec.title, text_em_px(ts));
+    EXPECT_NE(svg.find("<text x=\"" + std::to_string(pen) + "\" y=\"" + std::to_string(12 + plot_font().ascent(text_em_px(ts))) +
+                       "\" font-size=\"" + std::to_string(text_em_px(ts)) + "\""),
+              std::string::npos)
+        << svg;
+    EXPECT_EQ(svg, render_plot_svg(spec, 900, 600));  // deterministic
+    const std::string empty = render_plot_svg(spec, 0, 0);
+    EXPECT_EQ(count(empty, "<text"), 0u);
+    EXPECT_EQ(empty.substr(empty.size() - 7), "</svg>\n");
+}
+
 TEST(Plot, Utf8Decoding) {
     EXPECT_EQ(decode_utf8("a\xce\xb1\xe2\x80\x93\xf0\x9f\x98\x80"), std::u32string(U"a\u03B1\u2013\U0001F600"));
     EXPECT_EQ(decode_utf8("\xff"), std::u32string(U"\uFFFD"));
