@@ -16,8 +16,8 @@ namespace mesolab {
 
 namespace {
 
-// Text: the em size in pixels per unit of text scale (cap height about 6.6 px per unit, near the
-// 7 of the bitmap font the plots were laid out with).
+// Text: the em size in pixels per unit of text scale (capitals about 6.6 px tall per unit, which
+// the chart's spacing is laid out for).
 constexpr int kEmPerScale = 9;
 
 // Pixel primitives

@@ -4,9 +4,10 @@
 // (vertical only) and placed at whole pixels with the font's kerning, so the same text at the same
 // size gives the same pixels.
 //
-// A missing font file is an error naming the file and the package, not a fallback: a fallback
-// could only draw the '?' placeholders this font exists to replace. `mesolab sweep` asks for the
-// font before measuring, so the error comes before the work.
+// A missing font file is an error naming the file and the package, not a fallback: a built-in
+// fallback would have no Greek letters or unit signs and would put placeholders in the labels
+// without anyone noticing. `mesolab sweep` asks for the font before measuring, so the error comes
+// before the work.
 #include <functional>
 #include <map>
 #include <memory>
