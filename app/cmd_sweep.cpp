@@ -7,6 +7,7 @@
 #include "core/plot.h"
 #include "core/profile.h"
 #include "core/scene.h"
+#include "core/text.h"
 #include "core/technique.h"
 
 #include <algorithm>
@@ -198,7 +199,7 @@ Point sweep_point(Workbench& wb, const Scene& base, const Knob& k, const std::st
     return p;
 }
 
-// [SECTION] Outputs: CSV, Markdown, PNG plot
+// [SECTION] Outputs: CSV, Markdown, PNG and SVG plot
 struct Report {
     std::string csv, md;
     PlotSpec plot;
@@ -266,6 +267,7 @@ int run_sweep(const SweepOptions& o) {
     int w = 0, h = 0;
     parse_size(o.size, w, h);
     if (o.repeat < 1 || o.repeat > 100) throw InputError("--repeat: " + std::to_string(o.repeat) + " is out of range [1, 100]");
+    plot_font();  // the plot's font (fonts-dejavu-core): an error now rather than after the measurements
     Measure m;
     m.metric = find_metric(o.metric);
     Scene base = load_preset(o.preset);
@@ -305,8 +307,9 @@ int run_sweep(const SweepOptions& o) {
     write_text_atomic(stem + ".csv", r.csv);
     write_text_atomic(stem + ".md", r.md);
     write_png_srgb(stem + ".png", render_plot(r.plot));
+    write_text_atomic(stem + ".svg", render_plot_svg(r.plot));
     std::printf("%s", r.md.c_str());
-    std::printf("\nwrote %s.csv, %s.md, %s.png\n", stem.c_str(), stem.c_str(), stem.c_str());
+    std::printf("\nwrote %s.csv, %s.md, %s.png, %s.svg\n", stem.c_str(), stem.c_str(), stem.c_str(), stem.c_str());
     return 0;
 }
 }  // namespace mesolab

@@ -78,7 +78,7 @@ int main(int argc, char** argv) {
     s->add_option("preset", sweep.preset, "Preset file")->required();
     s->add_option("--knob", sweep.knob, "KEY=V1,V2,... (e.g. geometry.resolution=8,16,32,64)")->required();
     s->add_option("--reference", sweep.reference, "KEY=V settings of the reference rendering (default: the knob's most accurate setting)");
-    s->add_option("-o,--output", sweep.out_dir, "Output folder for CSV, Markdown and the PNG plot")->capture_default_str();
+    s->add_option("-o,--output", sweep.out_dir, "Output folder for CSV, Markdown and the plot (PNG and SVG)")->capture_default_str();
     s->add_option("--size", sweep.size, "Frame size WxH")->capture_default_str();
     s->add_option("--backend", sweep.backend, "cpu or gpu")->capture_default_str();
     s->add_option("--set", sweep.sets, "Override a parameter: KEY=VALUE (repeatable)");

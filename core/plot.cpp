@@ -1,11 +1,14 @@
-// Plotting: a 5x7 bitmap font, anti-aliased polylines and an XY chart with linear or log axes.
+// Plotting: text in the plot font, anti-aliased polylines and an XY chart with linear or log axes.
 #include "core/plot.h"
+
+#include "core/text.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -13,119 +16,9 @@ namespace mesolab {
 
 namespace {
 
-// 5x7 bitmap font
-// ASCII 32..126, seven rows per glyph from the top; bit 4 is the leftmost column.
-constexpr uint8_t kFont[95][7] = {
-    {0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00},  // ' '
-    {0x04, 0x04, 0x04, 0x04, 0x04, 0x00, 0x04},  // !
-    {0x0A, 0x0A, 0x0A, 0x00, 0x00, 0x00, 0x00},  // "
-    {0x0A, 0x0A, 0x1F, 0x0A, 0x1F, 0x0A, 0x0A},  // #
-    {0x04, 0x0F, 0x14, 0x0E, 0x05, 0x1E, 0x04},  // $
-    {0x18, 0x19, 0x02, 0x04, 0x08, 0x13, 0x03},  // %
-    {0x0C, 0x12, 0x14, 0x08, 0x15, 0x12, 0x0D},  // &
-    {0x04, 0x04, 0x08, 0x00, 0x00, 0x00, 0x00},  // '
-    {0x02, 0x04, 0x08, 0x08, 0x08, 0x04, 0x02},  // (
-    {0x08, 0x04, 0x02, 0x02, 0x02, 0x04, 0x08},  // )
-    {0x00, 0x04, 0x15, 0x0E, 0x15, 0x04, 0x00},  // *
-    {0x00, 0x04, 0x04, 0x1F, 0x04, 0x04, 0x00},  // +
-    {0x00, 0x00, 0x00, 0x00, 0x0C, 0x04, 0x08},  // ,
-    {0x00, 0x00, 0x00, 0x1F, 0x00, 0x00, 0x00},  // -
-    {0x00, 0x00, 0x00, 0x00, 0x00, 0x0C, 0x0C},  // .
-    {0x00, 0x01, 0x02, 0x04, 0x08, 0x10, 0x00},  // /
-    {0x0E, 0x11, 0x13, 0x15, 0x19, 0x11, 0x0E},  // 0
-    {0x04, 0x0C, 0x04, 0x04, 0x04, 0x04, 0x0E},  // 1
-    {0x0E, 0x11, 0x01, 0x02, 0x04, 0x08, 0x1F},  // 2
-    {0x1F, 0x02, 0x04, 0x02, 0x01, 0x11, 0x0E},  // 3
-    {0x02, 0x06, 0x0A, 0x12, 0x1F, 0x02, 0x02},  // 4
-    {0x1F, 0x10, 0x1E, 0x01, 0x01, 0x11, 0x0E},  // 5
-    {0x06, 0x08, 0x10, 0x1E, 0x11, 0x11, 0x0E},  // 6
-    {0x1F, 0x01, 0x02, 0x04, 0x08, 0x08, 0x08},  // 7
-    {0x0E, 0x11, 0x11, 0x0E, 0x11, 0x11, 0x0E},  // 8
-    {0x0E, 0x11, 0x11, 0x0F, 0x01, 0x02, 0x0C},  // 9
-    {0x00, 0x0C, 0x0C, 0x00, 0x0C, 0x0C, 0x00},  // :
-    {0x00, 0x0C, 0x0C, 0x00, 0x0C, 0x04, 0x08},  // ;
-    {0x02, 0x04, 0x08, 0x10, 0x08, 0x04, 0x02},  // <
-    {0x00, 0x00, 0x1F, 0x00, 0x1F, 0x00, 0x00},  // =
-    {0x08, 0x04, 0x02, 0x01, 0x02, 0x04, 0x08},  // >
-    {0x0E, 0x11, 0x01, 0x02, 0x04, 0x00, 0x04},  // ?
-    {0x0E, 0x11, 0x01, 0x0D, 0x15, 0x15, 0x0E},  // @
-    {0x0E, 0x11, 0x11, 0x11, 0x1F, 0x11, 0x11},  // A
-    {0x1E, 0x11, 0x11, 0x1E, 0x11, 0x11, 0x1E},  // B
-    {0x0E, 0x11, 0x10, 0x10, 0x10, 0x11, 0x0E},  // C
-    {0x1C, 0x12, 0x11, 0x11, 0x11, 0x12, 0x1C},  // D
-    {0x1F, 0x10, 0x10, 0x1E, 0x10, 0x10, 0x1F},  // E
-    {0x1F, 0x10, 0x10, 0x1E, 0x10, 0x10, 0x10},  // F
-    {0x0E, 0x11, 0x10, 0x17, 0x11, 0x11, 0x0F},  // G
-    {0x11, 0x11, 0x11, 0x1F, 0x11, 0x11, 0x11},  // H
-    {0x0E, 0x04, 0x04, 0x04, 0x04, 0x04, 0x0E},  // I
-    {0x07, 0x02, 0x02, 0x02, 0x02, 0x12, 0x0C},  // J
-    {0x11, 0x12, 0x14, 0x18, 0x14, 0x12, 0x11},  // K
-    {0x10, 0x10, 0x10, 0x10, 0x10, 0x10, 0x1F},  // L
-    {0x11, 0x1B, 0x15, 0x15, 0x11, 0x11, 0x11},  // M
-    {0x11, 0x11, 0x19, 0x15, 0x13, 0x11, 0x11},  // N
-    {0x0E, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0E},  // O
-    {0x1E, 0x11, 0x11, 0x1E, 0x10, 0x10, 0x10},  // P
-    {0x0E, 0x11, 0x11, 0x11, 0x15, 0x12, 0x0D},  // Q
-    {0x1E, 0x11, 0x11, 0x1E, 0x14, 0x12, 0x11},  // R
-    {0x0F, 0x10, 0x10, 0x0E, 0x01, 0x01, 0x1E},  // S
-    {0x1F, 0x04, 0x04, 0x04, 0x04, 0x04, 0x04},  // T
-    {0x11, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0E},  // U
-    {0x11, 0x11, 0x11, 0x11, 0x11, 0x0A, 0x04},  // V
-    {0x11, 0x11, 0x11, 0x15, 0x15, 0x15, 0x0A},  // W
-    {0x11, 0x11, 0x0A, 0x04, 0x0A, 0x11, 0x11},  // X
-    {0x11, 0x11, 0x11, 0x0A, 0x04, 0x04, 0x04},  // Y
-    {0x1F, 0x01, 0x02, 0x04, 0x08, 0x10, 0x1F},  // Z
-    {0x0E, 0x08, 0x08, 0x08, 0x08, 0x08, 0x0E},  // [
-    {0x00, 0x10, 0x08, 0x04, 0x02, 0x01, 0x00},  // backslash
-    {0x0E, 0x02, 0x02, 0x02, 0x02, 0x02, 0x0E},  // ]
-    {0x04, 0x0A, 0x11, 0x00, 0x00, 0x00, 0x00},  // ^
-    {0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x1F},  // _
-    {0x08, 0x04, 0x02, 0x00, 0x00, 0x00, 0x00},  // `
-    {0x00, 0x00, 0x0E, 0x01, 0x0F, 0x11, 0x0F},  // a
-    {0x10, 0x10, 0x16, 0x19, 0x11, 0x11, 0x1E},  // b
-    {0x00, 0x00, 0x0E, 0x10, 0x10, 0x11, 0x0E},  // c
-    {0x01, 0x01, 0x0D, 0x13, 0x11, 0x11, 0x0F},  // d
-    {0x00, 0x00, 0x0E, 0x11, 0x1F, 0x10, 0x0E},  // e
-    {0x06, 0x09, 0x08, 0x1C, 0x08, 0x08, 0x08},  // f
-    {0x00, 0x00, 0x0F, 0x11, 0x0F, 0x01, 0x0E},  // g
-    {0x10, 0x10, 0x16, 0x19, 0x11, 0x11, 0x11},  // h
-    {0x04, 0x00, 0x0C, 0x04, 0x04, 0x04, 0x0E},  // i
-    {0x02, 0x00, 0x06, 0x02, 0x02, 0x12, 0x0C},  // j
-    {0x10, 0x10, 0x12, 0x14, 0x18, 0x14, 0x12},  // k
-    {0x0C, 0x04, 0x04, 0x04, 0x04, 0x04, 0x0E},  // l
-    {0x00, 0x00, 0x1A, 0x15, 0x15, 0x11, 0x11},  // m
-    {0x00, 0x00, 0x16, 0x19, 0x11, 0x11, 0x11},  // n
-    {0x00, 0x00, 0x0E, 0x11, 0x11, 0x11, 0x0E},  // o
-    {0x00, 0x00, 0x1E, 0x11, 0x1E, 0x10, 0x10},  // p
-    {0x00, 0x00, 0x0D, 0x13, 0x0F, 0x01, 0x01},  // q
-    {0x00, 0x00, 0x16, 0x19, 0x10, 0x10, 0x10},  // r
-    {0x00, 0x00, 0x0E, 0x10, 0x0E, 0x01, 0x1E},  // s
-    {0x08, 0x08, 0x1C, 0x08, 0x08, 0x09, 0x06},  // t
-    {0x00, 0x00, 0x11, 0x11, 0x11, 0x13, 0x0D},  // u
-    {0x00, 0x00, 0x11, 0x11, 0x11, 0x0A, 0x04},  // v
-    {0x00, 0x00, 0x11, 0x11, 0x15, 0x15, 0x0A},  // w
-    {0x00, 0x00, 0x11, 0x0A, 0x04, 0x0A, 0x11},  // x
-    {0x00, 0x00, 0x11, 0x11, 0x0F, 0x01, 0x0E},  // y
-    {0x00, 0x00, 0x1F, 0x02, 0x04, 0x08, 0x1F},  // z
-    {0x02, 0x04, 0x04, 0x08, 0x04, 0x04, 0x02},  // {
-    {0x04, 0x04, 0x04, 0x04, 0x04, 0x04, 0x04},  // |
-    {0x08, 0x04, 0x04, 0x02, 0x04, 0x04, 0x08},  // }
-    {0x00, 0x00, 0x08, 0x15, 0x02, 0x00, 0x00},  // ~
-};
-
-constexpr int kGlyphW = 5, kGlyphH = 7, kAdvance = 6;
-
-// Glyph indices for a string: one per character; a UTF-8 sequence or a control character
-// becomes a single '?'.
-std::vector<int> glyphs(const std::string& text) {
-    std::vector<int> g;
-    g.reserve(text.size());
-    for (unsigned char ch : text) {
-        if (ch >= 0x80 && ch < 0xC0) continue;  // UTF-8 continuation byte
-        g.push_back(ch >= 32 && ch <= 126 ? int(ch) - 32 : int('?') - 32);
-    }
-    return g;
-}
+// Text: the em size in pixels per unit of text scale (capitals about 6.6 px tall per unit, which
+// the chart's spacing is laid out for).
+constexpr int kEmPerScale = 9;
 
 // Pixel primitives
 struct Rgb {
@@ -352,30 +245,169 @@ struct Point {
 }  // namespace
 
 // Text
-int text_width(const std::string& text, int scale) {
-    const int n = int(glyphs(text).size());
-    return n > 0 ? (kAdvance * n - 1) * std::max(scale, 1) : 0;
-}
+int text_em_px(int scale) { return kEmPerScale * std::clamp(scale, 1, 100); }
+int text_width(const std::string& text, int scale) { return plot_font().width(text, text_em_px(scale)); }
+int text_height(int scale) { return plot_font().line_height(text_em_px(scale)); }
 
 void draw_text(Image& img, int x, int y, const std::string& text, float r, float g, float b, int scale) {
-    if (!valid_canvas(img)) return;
-    scale = std::max(scale, 1);
-    const Rgb c{r, g, b};
-    int cx = x;
-    for (int gi : glyphs(text)) {
-        if (cx >= img.width) break;
-        for (int row = 0; row < kGlyphH; ++row)
-            for (int col = 0; col < kGlyphW; ++col)
-                if (kFont[gi][row] & (0x10 >> col))
-                    fill_rect(img, cx + col * scale, y + row * scale, cx + (col + 1) * scale, y + (row + 1) * scale, c);
-        cx += kAdvance * scale;
+    if (!valid_canvas(img) || text.empty()) return;
+    const float lin[3] = {r, g, b}, enc[3] = {linear_to_srgb(r), linear_to_srgb(g), linear_to_srgb(b)};
+    plot_font().rasterize(text, text_em_px(scale), x, y, [&](int px, int py, float a) {
+        if (px < 0 || py < 0 || px >= img.width || py >= img.height) return;
+        if (img.channels < 3) {
+            blend(img, px, py, {r, g, b}, a);
+            return;
+        }
+        // Coverage is mixed in sRGB-encoded values, as text renderers and displays expect (mixed
+        // in linear light, dark text on white looks thin and washed out).
+        float* p = img.at(px, py);
+        for (int k = 0; k < 3; ++k) {
+            const float e = linear_to_srgb(p[k]);
+            p[k] = a >= 1.f ? lin[k] : srgb_to_linear(e + (enc[k] - e) * a);
+        }
+        if (img.channels >= 4) p[3] += (1.f - p[3]) * a;
+    });
+}
+
+// Canvases: the chart's layout drawn into an image or written as SVG.
+namespace {
+class Canvas {
+public:
+    virtual ~Canvas() = default;
+    // Opaque pixel rectangle [x0, x1) x [y0, y1).
+    virtual void rect(int x0, int y0, int x1, int y1, const Rgb& c) = 0;
+    // Polyline of width w through points in pixel coordinates, clipped to `clip`.
+    virtual void polyline(const std::vector<std::array<double, 2>>& pts, double w, const Rgb& c, const Rect& clip) = 0;
+    // Text with its box's top-left corner at (x, y), as draw_text.
+    virtual void text(int x, int y, const std::string& t, float r, float g, float b, int scale) = 0;
+};
+
+class RasterCanvas final : public Canvas {
+public:
+    explicit RasterCanvas(Image& img) : img_(img) {}
+    void rect(int x0, int y0, int x1, int y1, const Rgb& c) override { fill_rect(img_, x0, y0, x1, y1, c); }
+    void polyline(const std::vector<std::array<double, 2>>& pts, double w, const Rgb& c, const Rect& clip) override {
+        draw_polyline(img_, pts, w, c, clip, coverage_);
+    }
+    void text(int x, int y, const std::string& t, float r, float g, float b, int scale) override {
+        draw_text(img_, x, y, t, r, g, b, scale);
+    }
+
+private:
+    Image& img_;
+    std::vector<float> coverage_;
+};
+
+// UTF-8 of one code point.
+void append_utf8(std::string& out, char32_t c) {
+    if (c < 0x80) {
+        out += char(c);
+    } else if (c < 0x800) {
+        out += char(0xC0 | (c >> 6)), out += char(0x80 | (c & 0x3F));
+    } else if (c < 0x10000) {
+        out += char(0xE0 | (c >> 12)), out += char(0x80 | ((c >> 6) & 0x3F)), out += char(0x80 | (c & 0x3F));
+    } else {
+        out += char(0xF0 | (c >> 18)), out += char(0x80 | ((c >> 12) & 0x3F)), out += char(0x80 | ((c >> 6) & 0x3F)),
+            out += char(0x80 | (c & 0x3F));
     }
 }
 
-// Chart
+// Text as XML character data: valid UTF-8 (malformed bytes as U+FFFD), markup escaped, control
+// characters (not allowed in XML 1.0) as U+FFFD.
+std::string xml_text(const std::string& text) {
+    std::string out;
+    for (char32_t c : decode_utf8(text)) {
+        if (c == U'&') out += "&amp;";
+        else if (c == U'<') out += "&lt;";
+        else if (c == U'>') out += "&gt;";
+        else if (c == U'"') out += "&quot;";
+        else if ((c < 0x20 && c != U'\t') || c == 0x7F || c == 0xFFFE || c == 0xFFFF) append_utf8(out, U'\uFFFD');
+        else append_utf8(out, c);
+    }
+    return out;
+}
+
+std::string hex(const Rgb& c) {
+    char buf[8];
+    std::snprintf(buf, sizeof buf, "#%02x%02x%02x", unsigned(linear_to_srgb8(c.r)), unsigned(linear_to_srgb8(c.g)),
+                  unsigned(linear_to_srgb8(c.b)));
+    return buf;
+}
+
+std::string num(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.2f", v);
+    std::string r = buf;
+    while (r.back() == '0') r.pop_back();
+    if (r.back() == '.') r.pop_back();
+    return r == "-0" ? "0" : r;
+}
+
+class SvgCanvas final : public Canvas {
+public:
+    SvgCanvas(int width, int height) : w_(width), h_(height) {}
+    void rect(int x0, int y0, int x1, int y1, const Rgb& c) override {
+        x0 = std::max(x0, 0), y0 = std::max(y0, 0), x1 = std::min(x1, w_), y1 = std::min(y1, h_);
+        if (x0 >= x1 || y0 >= y1) return;
+        body_ << "<rect x=\"" << x0 << "\" y=\"" << y0 << "\" width=\"" << x1 - x0 << "\" height=\"" << y1 - y0
+              << "\" fill=\"" << hex(c) << "\"/>\n";
+    }
+    void polyline(const std::vector<std::array<double, 2>>& pts, double w, const Rgb& c, const Rect& clip) override {
+        if (pts.size() < 2 || clip.x0 >= clip.x1 || clip.y0 >= clip.y1) return;
+        const int id = clips_++;
+        defs_ << "<clipPath id=\"c" << id << "\"><rect x=\"" << clip.x0 << "\" y=\"" << clip.y0 << "\" width=\""
+              << clip.x1 - clip.x0 << "\" height=\"" << clip.y1 - clip.y0 << "\"/></clipPath>\n";
+        body_ << "<polyline clip-path=\"url(#c" << id << ")\" fill=\"none\" stroke=\"" << hex(c) << "\" stroke-width=\""
+              << num(w) << "\" stroke-linecap=\"round\" stroke-linejoin=\"round\" shape-rendering=\"auto\" points=\"";
+        for (size_t i = 0; i < pts.size(); ++i)
+            body_ << (i ? " " : "") << num(std::clamp(pts[i][0], -1e6, 1e6)) << "," << num(std::clamp(pts[i][1], -1e6, 1e6));
+        body_ << "\"/>\n";
+    }
+    void text(int x, int y, const std::string& t, float r, float g, float b, int scale) override {
+        if (t.empty()) return;
+        // The same box as the raster text: the pen starts left of the first glyph's ink by its bearing.
+        const int px = text_em_px(scale);
+        const Font& f = plot_font();
+        body_ << "<text x=\"" << x - f.left_bearing(t, px) << "\" y=\"" << y + f.ascent(px) << "\" font-size=\"" << px
+              << "\" fill=\"" << hex(Rgb{r, g, b}) << "\">" << xml_text(t) << "</text>\n";
+    }
+    std::string str() const {
+        std::ostringstream o;
+        o << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+          << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << w_ << "\" height=\"" << h_ << "\" viewBox=\"0 0 "
+          << w_ << " " << h_ << "\" font-family=\"DejaVu Sans, sans-serif\" shape-rendering=\"crispEdges\" xml:space=\"preserve\">\n";
+        if (!defs_.str().empty()) o << "<defs>\n" << defs_.str() << "</defs>\n";
+        if (w_ > 0 && h_ > 0) o << "<rect width=\"" << w_ << "\" height=\"" << h_ << "\" fill=\"#ffffff\"/>\n";
+        o << body_.str() << "</svg>\n";
+        return o.str();
+    }
+
+private:
+    int w_, h_, clips_ = 0;
+    std::ostringstream defs_, body_;
+};
+
+void draw_chart(Canvas& cv, const PlotSpec& spec, int width, int height);
+}  // namespace
+
 Image render_plot(const PlotSpec& spec, int width, int height) {
     if (width <= 0 || height <= 0) return Image(std::max(width, 0), std::max(height, 0), 3);
     Image img(width, height, 3, 1.f);
+    RasterCanvas cv(img);
+    draw_chart(cv, spec, width, height);
+    return img;
+}
+
+std::string render_plot_svg(const PlotSpec& spec, int width, int height) {
+    width = std::max(width, 0), height = std::max(height, 0);
+    SvgCanvas cv(width, height);
+    if (width > 0 && height > 0) draw_chart(cv, spec, width, height);
+    return cv.str();
+}
+
+// Chart
+namespace {
+void draw_chart(Canvas& cv, const PlotSpec& spec, int width, int height) {
 
     const Rgb black = srgb(30, 30, 30), text_c = srgb(40, 40, 40), axis_c = srgb(90, 90, 90),
               grid_major = srgb(222, 222, 222), grid_minor = srgb(240, 240, 240), muted = srgb(150, 150, 150),
@@ -388,7 +420,7 @@ Image render_plot(const PlotSpec& spec, int width, int height) {
     const int s = std::clamp(std::min(width, height) / 300, 1, 8);
     const int ts = s + 1;  // title
     const int ls = std::max(1, s - 1);  // point labels
-    const int pad = 6 * s, tick_len = 3 * s, line_h = kGlyphH * s;
+    const int pad = 6 * s, tick_len = 3 * s, line_h = text_height(s);
     const int marker = 3 + 2 * s;
 
     // Valid points per series (finite, and positive on log axes).
@@ -408,7 +440,7 @@ Image render_plot(const PlotSpec& spec, int width, int height) {
 
     // Layout: title, y-axis title (horizontal, above the plot), plot area, x tick labels, x title.
     int top = pad;
-    if (!spec.title.empty()) top += kGlyphH * ts + 3 * s;
+    if (!spec.title.empty()) top += text_height(ts) + 3 * s;
     if (!spec.ylabel.empty()) top += line_h + 3 * s;
     else top += 2 * s;
     int bottom = height - pad - line_h - 2 * s - tick_len;
@@ -437,18 +469,17 @@ Image render_plot(const PlotSpec& spec, int width, int height) {
         for (const Tick& t : ax.ticks)
             if (t.major == want_major) {
                 const int x = to_px(upx(t.u) - 0.5);
-                fill_rect(img, x, top, x + 1, bottom, want_major ? grid_major : grid_minor);
+                cv.rect(x, top, x + 1, bottom, want_major ? grid_major : grid_minor);
             }
         for (const Tick& t : ay.ticks)
             if (t.major == want_major) {
                 const int y = to_px(upy(t.u) - 0.5);
-                fill_rect(img, left, y, right, y + 1, want_major ? grid_major : grid_minor);
+                cv.rect(left, y, right, y + 1, want_major ? grid_major : grid_minor);
             }
     }
 
     // Series: anti-aliased polylines, then square markers with a white rim, then point labels.
     const Rect plot_clip{left, top, right, bottom};
-    std::vector<float> coverage;
     auto color_of = [&](size_t i) {
         const int* p = kPalette[i % 10];
         return srgb(p[0], p[1], p[2]);
@@ -456,46 +487,46 @@ Image render_plot(const PlotSpec& spec, int width, int height) {
     for (size_t si = 0; si < pts.size(); ++si) {
         std::vector<std::array<double, 2>> line;
         for (const Point& p : pts[si]) line.push_back({px(p.x), py(p.y)});
-        draw_polyline(img, line, 0.75 * s + 0.5, color_of(si), plot_clip, coverage);
+        cv.polyline(line, 0.75 * s + 0.5, color_of(si), plot_clip);
     }
     for (size_t si = 0; si < pts.size(); ++si)
         for (const Point& p : pts[si]) {
             const int cx = to_px(px(p.x) - 0.5), cy = to_px(py(p.y) - 0.5), h = marker / 2;
-            fill_rect(img, cx - h - 1, cy - h - 1, cx + h + 2, cy + h + 2, white);
-            fill_rect(img, cx - h, cy - h, cx + h + 1, cy + h + 1, color_of(si));
+            cv.rect(cx - h - 1, cy - h - 1, cx + h + 2, cy + h + 2, white);
+            cv.rect(cx - h, cy - h, cx + h + 1, cy + h + 1, color_of(si));
         }
     for (size_t si = 0; si < pts.size(); ++si)
         for (const Point& p : pts[si]) {
             if (p.label.empty()) continue;
             const int cx = to_px(px(p.x)), cy = to_px(py(p.y)), w = text_width(p.label, ls);
-            int tx = cx + marker / 2 + 2 * ls, ty = cy - marker / 2 - kGlyphH * ls - ls;
+            int tx = cx + marker / 2 + 2 * ls, ty = cy - marker / 2 - text_height(ls) - ls;
             if (tx + w > right) tx = cx - marker / 2 - 2 * ls - w;
             if (ty < top + 1) ty = cy + marker / 2 + 2 * ls;
             const Rgb c = color_of(si);
-            draw_text(img, tx, ty, p.label, 0.6f * c.r, 0.6f * c.g, 0.6f * c.b, ls);
+            cv.text(tx, ty, p.label, 0.6f * c.r, 0.6f * c.g, 0.6f * c.b, ls);
         }
 
     // Frame, ticks and tick labels.
-    fill_rect(img, left - 1, top - 1, right + 1, top, axis_c);
-    fill_rect(img, left - 1, bottom, right + 1, bottom + 1, axis_c);
-    fill_rect(img, left - 1, top - 1, left, bottom + 1, axis_c);
-    fill_rect(img, right, top - 1, right + 1, bottom + 1, axis_c);
+    cv.rect(left - 1, top - 1, right + 1, top, axis_c);
+    cv.rect(left - 1, bottom, right + 1, bottom + 1, axis_c);
+    cv.rect(left - 1, top - 1, left, bottom + 1, axis_c);
+    cv.rect(right, top - 1, right + 1, bottom + 1, axis_c);
     for (const Tick& t : ax.ticks) {
         const int x = to_px(upx(t.u) - 0.5), len = t.major || !t.label.empty() ? tick_len : tick_len / 2;
-        fill_rect(img, x, bottom + 1, x + 1, bottom + 1 + len, axis_c);
+        cv.rect(x, bottom + 1, x + 1, bottom + 1 + len, axis_c);
         if (!t.label.empty())
-            draw_text(img, x - text_width(t.label, s) / 2, bottom + 1 + tick_len + 2 * s, t.label, text_c.r, text_c.g,
+            cv.text(x - text_width(t.label, s) / 2, bottom + 1 + tick_len + 2 * s, t.label, text_c.r, text_c.g,
                       text_c.b, s);
     }
     for (const Tick& t : ay.ticks) {
         const int y = to_px(upy(t.u) - 0.5), len = t.major || !t.label.empty() ? tick_len : tick_len / 2;
-        fill_rect(img, left - 1 - len, y, left - 1, y + 1, axis_c);
+        cv.rect(left - 1 - len, y, left - 1, y + 1, axis_c);
         if (!t.label.empty())
-            draw_text(img, left - 1 - tick_len - 2 * s - text_width(t.label, s), y - line_h / 2, t.label, text_c.r,
+            cv.text(left - 1 - tick_len - 2 * s - text_width(t.label, s), y - line_h / 2, t.label, text_c.r,
                       text_c.g, text_c.b, s);
     }
     if (xs.empty())
-        draw_text(img, (left + right - text_width("no data", s)) / 2, (top + bottom - line_h) / 2, "no data", muted.r,
+        cv.text((left + right - text_width("no data", s)) / 2, (top + bottom - line_h) / 2, "no data", muted.r,
                   muted.g, muted.b, s);
 
     // Legend: the plot corner that hides the fewest points.
@@ -528,31 +559,31 @@ Image render_plot(const PlotSpec& spec, int width, int height) {
             if (hidden < best_hidden) best_hidden = hidden, best = k;
         }
         const int bx = corners[size_t(best)][0], by = corners[size_t(best)][1];
-        fill_rect(img, bx, by, bx + bw, by + bh, srgb(200, 200, 200));
-        fill_rect(img, bx + 1, by + 1, bx + bw - 1, by + bh - 1, white);
+        cv.rect(bx, by, bx + bw, by + bh, srgb(200, 200, 200));
+        cv.rect(bx + 1, by + 1, bx + bw - 1, by + bh - 1, white);
         for (size_t si = 0; si < names.size(); ++si) {
             const int ry = by + 2 * s + row_h * int(si), cy = ry + line_h / 2;
             const Rgb c = color_of(si);
             const int lt = std::max(1, to_px(0.75 * s + 0.5));
-            fill_rect(img, bx + 3 * s, cy - lt / 2, bx + 3 * s + swatch, cy - lt / 2 + lt, c);
+            cv.rect(bx + 3 * s, cy - lt / 2, bx + 3 * s + swatch, cy - lt / 2 + lt, c);
             const int mx = bx + 3 * s + swatch / 2, h = marker / 2;
-            fill_rect(img, mx - h, cy - h, mx + h + 1, cy + h + 1, c);
-            draw_text(img, bx + 6 * s + swatch, ry, names[si], text_c.r, text_c.g, text_c.b, s);
+            cv.rect(mx - h, cy - h, mx + h + 1, cy + h + 1, c);
+            cv.text(bx + 6 * s + swatch, ry, names[si], text_c.r, text_c.g, text_c.b, s);
         }
     }
 
     // Titles.
     if (!spec.title.empty()) {
         const int sc = text_width(spec.title, ts) <= width - 2 * pad ? ts : s;
-        draw_text(img, std::max(pad, (width - text_width(spec.title, sc)) / 2), pad, spec.title, black.r, black.g,
+        cv.text(std::max(pad, (width - text_width(spec.title, sc)) / 2), pad, spec.title, black.r, black.g,
                   black.b, sc);
     }
     if (!spec.ylabel.empty())
-        draw_text(img, std::max(pad, left - tick_len - 2 * s - label_w), top - 3 * s - line_h, spec.ylabel, text_c.r,
+        cv.text(std::max(pad, left - tick_len - 2 * s - label_w), top - 3 * s - line_h, spec.ylabel, text_c.r,
                   text_c.g, text_c.b, s);
     if (!spec.xlabel.empty())
-        draw_text(img, std::max(pad, (left + right - text_width(spec.xlabel, s)) / 2), height - pad - line_h,
+        cv.text(std::max(pad, (left + right - text_width(spec.xlabel, s)) / 2), height - pad - line_h,
                   spec.xlabel, text_c.r, text_c.g, text_c.b, s);
-    return img;
 }
+}  // namespace
 }  // namespace mesolab

@@ -171,6 +171,9 @@ TEST(SweepMetricCli, WritesTheTableTheFloorAndThePlot) {
         EXPECT_NE(md.find(s), std::string::npos) << "missing: " << s << "\n" << md;
     EXPECT_TRUE(std::filesystem::exists(stem + ".png"));
     EXPECT_TRUE(std::filesystem::exists(stem + ".csv"));
+    const std::string svg = test::slurp(stem + ".svg");  // the same plot, text as text
+    EXPECT_NE(svg.find("<text"), std::string::npos) << svg.substr(0, 500);
+    EXPECT_NE(svg.find(">TV distance vs reference</text>"), std::string::npos) << svg.substr(0, 500);
 }
 
 TEST(SweepMetricCli, BumpsynthMetricOnAPresetWithoutBumpsynthIsAnInputError) {
