@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -41,7 +42,54 @@ std::string cpu_model() {
     return "unknown CPU";
 }
 
-constexpr double kSlowMs = 10000;  // stage cells slower than this are measured once
+constexpr double kSlowMs = 10000;
+
+// [SECTION] Pages
+// Replaces, in README.md and core/*/README.md under `root`, the text between the lines
+// `<!-- bench NAME -->` and `<!-- /bench -->` by table NAME's Markdown (tables not measured this
+// run are left as they are). Each page is written atomically. Returns the pages changed.
+std::vector<std::string> update_pages(const std::string& root, const std::map<std::string, std::string>& markdown) {
+    namespace fs = std::filesystem;
+    std::vector<fs::path> pages{fs::path(root) / "README.md"};
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(fs::path(root) / "core", ec))
+        if (e.is_directory() && fs::exists(e.path() / "README.md")) pages.push_back(e.path() / "README.md");
+    std::sort(pages.begin() + 1, pages.end());
+    std::vector<std::string> changed;
+    size_t markers = 0;
+    for (const auto& page : pages) {
+        std::ifstream in(page);
+        if (!in) continue;
+        std::stringstream ss;
+        ss << in.rdbuf();
+        const std::string text = ss.str();
+        std::string result;
+        size_t pos = 0;
+        for (;;) {
+            const size_t open = text.find("<!-- bench ", pos);
+            if (open == std::string::npos) break;
+            const size_t open_end = text.find("-->", open);
+            const size_t close = text.find("<!-- /bench -->", open_end);
+            if (open_end == std::string::npos || close == std::string::npos)
+                throw InputError(page.string() + ": a `<!-- bench NAME -->` marker without its `<!-- /bench -->`");
+            std::string name = text.substr(open + 11, open_end - open - 11);
+            name.erase(name.find_last_not_of(' ') + 1);
+            ++markers;
+            const size_t body = text.find('\n', open_end) + 1;
+            result += text.substr(pos, body - pos);
+            auto it = markdown.find(name);
+            result += it != markdown.end() ? it->second : text.substr(body, close - body);
+            pos = close;
+        }
+        result += text.substr(pos);
+        if (result != text) {
+            write_text_atomic(page.string(), result);
+            changed.push_back(page.string());
+        }
+    }
+    if (markers == 0) throw InputError("--update-pages: no `<!-- bench NAME -->` marker in " + root + "/README.md or " + root + "/core/*/README.md");
+    return changed;
+}  // stage cells slower than this are measured once
 
 std::vector<double> time_runs(int n, const std::function<double()>& once) {
     std::vector<double> v;
@@ -200,15 +248,19 @@ int run_bench(const BenchOptions& o) {
             j["cells"].push_back(x);
         }
         out << j.dump(2) << "\n";
-    } else {
-        for (const auto& t : tables) {
-            out << "### " << t.title << "\n\n";
-            out << "Ours: " << machine << "; median of " << o.repeat << " runs [min–max] (a stage over " << int(kSlowMs / 1000) << " s: its first run alone)." << (t.paper_machine.empty() ? "" : " Paper: " + t.paper_machine + ".")
+    }
+    // Markdown, one block per table (also what --update-pages writes into the pages).
+    std::map<std::string, std::string> markdown;
+    for (const auto& t : tables) {
+        std::ostringstream md;
+        {
+            md << "### " << t.title << "\n\n";
+            md << "Ours: " << machine << "; median of " << o.repeat << " runs [min–max] (a stage over " << int(kSlowMs / 1000) << " s: its first run alone)." << (t.paper_machine.empty() ? "" : " Paper: " + t.paper_machine + ".")
                 << "\n\n| |";
-            for (const auto& c : t.columns) out << " " << c.name << " |";
-            out << "\n|---|";
-            for (size_t i = 0; i < t.columns.size(); ++i) out << "---|";
-            out << "\n";
+            for (const auto& c : t.columns) md << " " << c.name << " |";
+            md << "\n|---|";
+            for (size_t i = 0; i < t.columns.size(); ++i) md << "---|";
+            md << "\n";
             // One line per row, then one per frame step of that row ("↳ step NAME"), its time under the frame column.
             for (const auto& row : t.rows) {
                 std::vector<std::string> row_steps{""};
@@ -217,7 +269,7 @@ int run_bench(const BenchOptions& o) {
                         std::find(row_steps.begin(), row_steps.end(), c.step) == row_steps.end())
                         row_steps.push_back(c.step);
                 for (const std::string& step : row_steps) {
-                    out << "| " << (step.empty() ? row.name : "↳ step " + step) << " |";
+                    md << "| " << (step.empty() ? row.name : "↳ step " + step) << " |";
                     for (const auto& col : t.columns) {
                         std::string cell;
                         std::optional<double> paper;
@@ -240,16 +292,21 @@ int run_bench(const BenchOptions& o) {
                             std::snprintf(r, sizeof r, " (×%.3g faster)", *paper / best);
                             cell += "<br>paper " + fmt_ms(*paper) + r;
                         }
-                        out << " " << (cell.empty() ? (step.empty() ? "—" : "") : cell) << " |";
+                        md << " " << (cell.empty() ? (step.empty() ? "—" : "") : cell) << " |";
                     }
-                    out << "\n";
+                    md << "\n";
                 }
             }
-            out << "\n";
+            md << "\n";
         }
+        markdown[t.name] = md.str();
     }
+    if (o.format == "md")
+        for (const auto& t : tables) out << markdown[t.name];
     if (o.profile) print_profile(session.profiler());
-    if (o.out.empty()) {
+    if (o.update_pages) {
+        for (const auto& page : update_pages(o.pages_root, markdown)) std::fprintf(stderr, "updated %s\n", page.c_str());
+    } else if (o.out.empty()) {
         std::fputs(out.str().c_str(), stdout);
     } else {
         write_text_atomic(o.out, out.str());

@@ -29,6 +29,8 @@ struct BenchOptions {
     std::string out;
     std::string backend = "both";  // cpu|gpu|both
     bool profile = false;
+    bool update_pages = false;       // write each table into the pages' <!-- bench NAME --> blocks
+    std::string pages_root = ".";    // where README.md and core/*/README.md are
 };
 int run_bench(const BenchOptions& o);
 

@@ -71,6 +71,9 @@ int main(int argc, char** argv) {
     b->add_option("-o,--output", bench.out, "Write to FILE instead of standard output");
     b->add_option("--backend", bench.backend, "cpu, gpu or both")->capture_default_str();
     b->add_flag("--profile", bench.profile, "Print the scoped CPU/GPU timing hierarchy at the end");
+    b->add_flag("--update-pages", bench.update_pages,
+                "Write each table (Markdown) between its `<!-- bench NAME -->` and `<!-- /bench -->` lines in README.md and core/*/README.md");
+    b->add_option("--pages-root", bench.pages_root, "With --update-pages: the repository's root")->capture_default_str();
     add_memory_limit(b, bench.memory_limit);
 
     SweepOptions sweep;

@@ -183,7 +183,7 @@ const std::string& StageGraph::fingerprint(const Scene& scene, const StageDecl& 
             fp += "<";
             if (u.scope == StageScope::Object && subject < 0) {
                 // A scene stage reading an object stage: every object's fingerprint.
-                for (int o : subjects(scene, u)) fp += "#" + std::to_string(o) + ":" + fingerprint(scene, u, o, memo) + ";";
+                for (int o : subjects(scene, u)) fp.append("#").append(std::to_string(o)).append(":").append(fingerprint(scene, u, o, memo)).append(";");
             } else {
                 fp += fingerprint(scene, u, subject, memo);
             }

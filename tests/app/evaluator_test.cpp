@@ -391,3 +391,30 @@ TEST(EvalTransitions, BugsAreFailuresThatAreNotInputErrors) {
     EXPECT_FALSE(r->input_error);
     EXPECT_EQ(r->error, "stage exploded");
 }
+
+// [SECTION] The window's session
+// Settings above the memory budget fail as bad input naming the parameters to lower (the window
+// shows the message and keeps running); lowering them evaluates again.
+TEST(EvalTransitions, ASessionsMemoryBudgetFailsAsBadInputNamingTheParameters) {
+    Session session;
+    session.set_memory_limit(32ull << 20);
+    Evaluator ev(session);
+    EvalState st;
+    Scene s = default_scene("microgeom");
+    apply_set(s, "microgeom.resolution=1024");
+    apply_set(s, "microgeom.directions=512");
+    ASSERT_EQ(scene_changed(st, ev, s), SceneChange::Evaluate);
+    const auto r = wait_polled(st, ev, s);
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->kind, Polled::Kind::Failed);
+    EXPECT_TRUE(r->input_error);
+    EXPECT_NE(r->error.find("microgeom.resolution"), std::string::npos) << r->error;
+    EXPECT_NE(r->error.find("microgeom.directions"), std::string::npos) << r->error;
+    apply_set(s, "microgeom.resolution=32");
+    apply_set(s, "microgeom.directions=32");
+    ASSERT_EQ(scene_changed(st, ev, s), SceneChange::Evaluate);
+    const auto ok = wait_polled(st, ev, s);
+    ASSERT_TRUE(ok);
+    EXPECT_EQ(ok->kind, Polled::Kind::Done);
+    EXPECT_EQ(ev.keys(s), session.frame_keys(s));
+}

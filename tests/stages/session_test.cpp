@@ -115,10 +115,9 @@ TEST(ObjectStages, TwoMicrogeomObjectsWithDifferentHeightfields) {
     EXPECT_EQ(status(e, "microgeom.visibility", 1), StageStatus::Ran);
     apply_set(s, "objects.1.material.heightfield=triangles");
     e = session.evaluate_frame(s);
-    for (const char* st : {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility"}) {
+    for (const char* st : {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility"})
         EXPECT_EQ(status(e, st, 0), StageStatus::Cached) << st << ": object 0 did not change";
-        EXPECT_NE(status(e, st, 1), StageStatus::Cached) << st;
-    }
+    EXPECT_EQ(status(e, "microgeom.visibility", 1), StageStatus::Ran);
     EXPECT_EQ(status(e, "microgeom.heightfield", 1), StageStatus::Ran);
     EXPECT_EQ(status(e, "microgeom.directions", 1), StageStatus::Cached) << "the direction set reads microgeom.directions only";
 }
