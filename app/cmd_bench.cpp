@@ -204,12 +204,15 @@ int run_bench(const BenchOptions& o) {
                     wb.render(scene, req);  // warm-up: stages cached, GPU resources built
                     // Frame steps (offscreen work before the frame) get rows of their own. They are
                     // timed from scratch in every run: their reuse between frames is disabled here.
-                    std::map<std::string, std::vector<double>> steps;
+                    std::vector<std::pair<std::string, std::vector<double>>> steps;  // in the order they run
                     add(gpu ? "gpu" : "cpu", time_runs(o.repeat, [&] {
                         wb.forget_frame_steps();
                         const RenderResult r = wb.render(scene, req);
-                        for (const auto& st : r.frame.steps)
-                            if (std::isfinite(st.ms)) steps[st.name].push_back(st.ms);
+                        for (const auto& st : r.frame.steps) {
+                            auto it = std::find_if(steps.begin(), steps.end(), [&](const auto& x) { return x.first == st.name; });
+                            if (it == steps.end()) it = steps.insert(steps.end(), {st.name, {}});
+                            if (std::isfinite(st.ms)) it->second.push_back(st.ms);
+                        }
                         return r.render_ms;
                     }));
                     for (const auto& [name, v] : steps) add(gpu ? "gpu" : "cpu", v, name);

@@ -29,6 +29,15 @@ public:
         params_.add_int("blur", 1).range(0, 8).doc("Box filter radius in texels");
         aovs_ = {{"texel", 3, "The illumination map's texel at the pixel (x, y)"}};
     }
+    // A frame-time table, so that `mesolab bench probe` shows the frame steps' own rows.
+    std::vector<BenchTable> bench_tables() const override {
+        BenchTable t;
+        t.name = "probe";
+        t.title = "probe: frame with two frame steps";
+        t.columns = {{"frame 64x64", "", 64, 64, true, true}};
+        t.rows = {{"sphere", [] { return default_scene("probe"); }, {}}};
+        return {t};
+    }
     std::vector<FrameStepDecl> frame_steps() const override {
         return {{"probe.illumination", "Irradiance per texel of the (u,v) square", {"light.*", "probe.atlas_size"}, {"scene.geometry"}},
                 {"probe.blur", "Box filter of the illumination map", {"light.*", "probe.atlas_size", "probe.blur"}, {"scene.geometry"}}};

@@ -1,10 +1,12 @@
 // The render-pass contract: outputs declared once, AOVs on demand within GL_MAX_DRAW_BUFFERS,
 // frame steps (offscreen work before the frame) timed and reused, on the CPU and the GPU.
+#include "app/commands.h"
 #include "app/workbench.h"
 #include "core/error.h"
 #include "core/technique.h"
 #include "gpu/renderer.h"
 #include "passes/probe.h"
+#include "support/cli.h"
 #include "support/frames.h"
 
 #include <gtest/gtest.h>
@@ -47,6 +49,10 @@ Scene probe_scene() {
     apply_set(s, "geometry.resolution=48");
     return s;
 }
+
+struct TempDirForPasses : test::TempDir {
+    TempDirForPasses() : TempDir("passes") {}
+};
 
 const FrameStepRun* step(const Frame& f, const std::string& name) {
     for (const auto& st : f.steps)
@@ -200,4 +206,31 @@ TEST(FrameSteps, AreTimedAsTheirOwnRows) {
     req.backend = Backend::Gpu;
     wb.render(s, req);
     EXPECT_TRUE(wb.session().profiler().find("frame.gpu/step.probe.illumination", st));
+}
+
+TEST(FrameSteps, BenchAndTheCaptureSidecarListThem) {
+    TempDirForPasses dir;
+    BenchOptions b;
+    b.tables = {"probe"};
+    b.repeat = 2;
+    b.out = dir / "bench.md";
+    ASSERT_EQ(run_bench(b), 0);
+    const std::string md = test::slurp(dir / "bench.md");
+    EXPECT_NE(md.find("| sphere |"), std::string::npos) << md;
+    EXPECT_NE(md.find("| ↳ step probe.illumination |"), std::string::npos) << md;
+    EXPECT_NE(md.find("| ↳ step probe.blur |"), std::string::npos) << md;
+
+    test::write_file(dir / "p.json", R"({"schema":1,"name":"probe-scene","objects":[{"material":{"technique":"probe"}}]})");
+    CaptureOptions c;
+    c.presets = {dir / "p.json"};
+    c.out_dir = dir.path.string();
+    c.size = "32x32";
+    c.backend = "cpu";
+    ASSERT_EQ(run_capture(c), 0);
+    const json side = json::parse(test::slurp(dir / "probe-scene.json"));
+    ASSERT_TRUE(side.contains("frame_steps"));
+    ASSERT_EQ(side["frame_steps"].size(), 2u);
+    EXPECT_EQ(side["frame_steps"][0]["name"], "probe.illumination");
+    EXPECT_EQ(side["frame_steps"][0]["status"], "ran");
+    EXPECT_TRUE(side["frame_steps"][0].contains("ms"));
 }
