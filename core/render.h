@@ -104,6 +104,15 @@ private:
     std::vector<Image*> images_;
 };
 
+// A frame step's output, returned by Technique::run_step_cpu as std::shared_ptr<const T> in a
+// std::any (std::logic_error when the step has none).
+template <class T>
+const T& step_output(const std::map<std::string, std::any>& steps, const std::string& name) {
+    auto it = steps.find(name);
+    if (it == steps.end() || !it->second.has_value()) throw std::logic_error("frame step " + name + " has no output");
+    return *std::any_cast<std::shared_ptr<const T>>(it->second);
+}
+
 // Everything a technique's frame step needs (Technique::run_step_cpu).
 struct FrameStepContext {
     const Scene& scene;
@@ -114,11 +123,7 @@ struct FrameStepContext {
     const std::map<std::string, std::any>& steps;  // outputs of the steps that ran before, by name
     // An earlier step's output (std::logic_error when it has none).
     template <class T>
-    const T& step(const std::string& name) const {
-        auto it = steps.find(name);
-        if (it == steps.end() || !it->second.has_value()) throw std::logic_error("frame step " + name + " has no output");
-        return *std::any_cast<std::shared_ptr<const T>>(it->second);
-    }
+    const T& step(const std::string& name) const { return step_output<T>(steps, name); }
 };
 
 // Outputs of frame steps kept between frames, reused while their declared inputs are unchanged.
@@ -150,11 +155,7 @@ struct ShadeContext {
     bool mine(size_t pixel) const;
     // A frame step's output (std::logic_error when the step did not run).
     template <class T>
-    const T& step(const std::string& name) const {
-        auto it = steps.find(name);
-        if (it == steps.end() || !it->second.has_value()) throw std::logic_error("frame step " + name + " has no output");
-        return *std::any_cast<std::shared_ptr<const T>>(it->second);
-    }
+    const T& step(const std::string& name) const { return step_output<T>(steps, name); }
 };
 
 // The shading frame at a pixel: N the interpolated normal turned towards the viewer (surfaces are

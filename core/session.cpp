@@ -133,13 +133,7 @@ StageKeys Session::keys(const Scene& scene, const std::vector<std::string>& targ
             if (graph_.covers(scene, d, object)) out.push_back({d.name, object, 0});
             return;
         }
-        for (const auto& in : d.inputs) {
-            const StageDecl& u = graph_.at(in);
-            if (u.scope == StageScope::Scene) visit(u, -1);
-            else if (object >= 0) visit(u, object);
-            else
-                for (int o : graph_.subjects(scene, u)) visit(u, o);
-        }
+        graph_.for_each_input(scene, d, object, visit);
         const std::string& fp = graph_.fingerprint(scene, d, object, memo);
         out.push_back({d.name, object, fp.empty() ? 0 : cache_.key(fp)});
     };
@@ -178,13 +172,7 @@ Evaluation Session::evaluate(const Scene& scene, const std::vector<std::string>&
             ev.runs.push_back(run);
             return;
         }
-        for (const auto& in : d.inputs) {
-            const StageDecl& u = graph_.at(in);
-            if (u.scope == StageScope::Scene) visit(u, -1);
-            else if (object >= 0) visit(u, object);
-            else
-                for (int o : graph_.subjects(scene, u)) visit(u, o);
-        }
+        graph_.for_each_input(scene, d, object, visit);
         const std::string& fp = graph_.fingerprint(scene, d, object, memo);
         run.key = cache_.key(fp);
         const auto t0 = std::chrono::steady_clock::now();

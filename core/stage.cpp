@@ -134,6 +134,16 @@ std::vector<int> StageGraph::subjects(const Scene& scene, const StageDecl& d) co
     return r;
 }
 
+void StageGraph::for_each_input(const Scene& scene, const StageDecl& d, int object, const std::function<void(const StageDecl&, int)>& f) const {
+    for (const auto& in : d.inputs) {
+        const StageDecl& u = at(in);
+        if (u.scope == StageScope::Scene) f(u, -1);
+        else if (object >= 0) f(u, object);
+        else
+            for (int o : subjects(scene, u)) f(u, o);
+    }
+}
+
 bool StageGraph::enabled(const Scene& scene, const StageDecl& d, int object, std::string* reason) const {
     if (d.scope == StageScope::Object) {
         if (!covers(scene, d, object)) {

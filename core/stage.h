@@ -173,6 +173,10 @@ public:
     bool enabled(const Scene& scene, const StageDecl& d, int object, std::string* reason = nullptr) const;
     // The objects an object stage computes for (covers()), in order; {-1} for a scene stage.
     std::vector<int> subjects(const Scene& scene, const StageDecl& d) const;
+    // f(input, its object) for each result stage `d` reads when computing for `object`: a scene
+    // stage's result, the same object's result of an object stage, or, for a scene stage, every
+    // object's result of an object stage.
+    void for_each_input(const Scene& scene, const StageDecl& d, int object, const std::function<void(const StageDecl&, int)>& f) const;
 
     // The full fingerprint of a stage's inputs for a scene (object stages: for `object`): its
     // name, its declared parameter values and its inputs' fingerprints. Empty when the stage
