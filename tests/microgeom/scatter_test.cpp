@@ -214,7 +214,7 @@ TEST(Stages, MovingTheLightNeverRecomputesVisibility) {
     EXPECT_EQ(g.key(s, "microgeom.visibility"), vis);
 }
 
-// The "changing the light or curvature never recomputes S_i", for the curvature: through
+// "Changing the light or curvature never recomputes S_i", for the curvature: through
 // the stage graph, every change of microgeom.curvature_u / curvature_v (including back to 0)
 // leaves microgeom.visibility Cached, and with ellipse shadows the five curved ellipse fits too
 // (they are interpolated, not refitted); the importance and the interpolated ellipses do rerun,
