@@ -80,6 +80,41 @@ TEST(Sessions, TwoSessionsOnTwoThreadsGiveTheSameBytesAsEachAlone) {
     EXPECT_TRUE(wb.session().profiler().find("stage/bumpsynth.lut", st));
 }
 
+// The same on the GPU: each session renders through its own EGL context on its own thread.
+TEST(Sessions, TwoSessionsOnTwoThreadsRenderTheSameGpuFramesAsEachAlone) {
+    Scene a = default_scene("basic");
+    apply_set(a, "geometry.type=torus");
+    Scene b = default_scene("microgeom");
+    apply_set(b, "microgeom.resolution=16");
+    apply_set(b, "microgeom.directions=32");
+    RenderRequest req;
+    req.backend = Backend::Gpu;
+    req.width = 96;
+    req.height = 64;
+    Frame alone_a, alone_b;
+    std::thread([&] {
+        Workbench w;
+        alone_a = w.render(a, req).frame;
+    }).join();
+    std::thread([&] {
+        Workbench w;
+        alone_b = w.render(b, req).frame;
+    }).join();
+    Frame par_a, par_b;
+    std::thread ta([&] {
+        Workbench w;
+        for (int i = 0; i < 3; ++i) par_a = w.render(a, req).frame;
+    });
+    std::thread tb([&] {
+        Workbench w;
+        for (int i = 0; i < 3; ++i) par_b = w.render(b, req).frame;
+    });
+    ta.join();
+    tb.join();
+    EXPECT_TRUE(same_bytes(alone_a, par_a));
+    EXPECT_TRUE(same_bytes(alone_b, par_b));
+}
+
 // [SECTION] Object stages
 TEST(ObjectStages, ChangingOneObjectsMaterialNeverRecomputesTheOther) {
     Session session;
