@@ -47,6 +47,12 @@ RenderResult Workbench::render(const Scene& s, const RenderRequest& req) {
     ProfilerBinding bind(session_.profiler());
     r.stages_ms = std::chrono::duration<double, std::milli>(clock::now() - t0).count();
     const ivec2 size = frame_size(s, r.eval, {req.width, req.height});
+    // The frame's images (and the CPU's G-buffer, about 52 bytes a pixel) before allocating them.
+    double per_pixel = req.backend == Backend::Cpu ? 52.0 : 4.0 * sizeof(float);
+    const auto layout = frame_layout(s, req.aovs);
+    for (const auto& a : layout) per_pixel += double(a.channels) * sizeof(float) + (req.backend == Backend::Gpu ? 4.0 * sizeof(float) : 0.0);
+    session_.check_memory("a " + std::to_string(size.x) + "x" + std::to_string(size.y) + " frame",
+                          {double(size.x) * double(size.y) * per_pixel, std::to_string(layout.size()) + " AOVs", {"--size", "the AOVs requested (--aov)"}});
     if (req.backend == Backend::Cpu) {
         t0 = clock::now();
         r.frame = render_cpu(s, r.eval, size.x, size.y, req.aovs, &cpu_steps_);

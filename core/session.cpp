@@ -99,16 +99,14 @@ size_t StageCache::entries() const {
 Session::Session() : Session(Registry::instance().stages()) {}
 Session::Session(const StageGraph& graph, StageCache::HashFn hash) : graph_(graph), cache_(std::move(hash)) {}
 
-void Session::check_memory(const Scene& scene, const StageDecl& d, int object, const MemoryEstimate& e) const {
-    const uint64_t available = available_memory();
+void Session::check_memory(const std::string& what, const MemoryEstimate& e) const {
     const bool limited = memory_limit_ > 0;
-    const double budget = limited ? double(memory_limit_) : double(available);
+    const double budget = limited ? double(memory_limit_) : double(available_memory());
     if (budget <= 0 || e.bytes <= budget) return;
-    StageRun r{d.name, object};
     std::string lower;
     for (size_t i = 0; i < e.lower.size(); ++i) lower += (i ? (i + 1 == e.lower.size() ? " or " : ", ") : "") + e.lower[i];
-    throw InputError("stage " + r.label(scene) + " would allocate about " + format_bytes(e.bytes) + (e.what.empty() ? "" : " (" + e.what + ")") +
-                     ", more than " + (limited ? "the --memory-limit of " + format_bytes(budget) : "the " + format_bytes(budget) + " of memory available") +
+    throw InputError(what + " would allocate about " + format_bytes(e.bytes) + (e.what.empty() ? "" : " (" + e.what + ")") + ", more than " +
+                     (limited ? "the --memory-limit of " + format_bytes(budget) : "the " + format_bytes(budget) + " of memory available") +
                      (lower.empty() ? std::string() : "; lower " + lower));
 }
 
@@ -190,7 +188,7 @@ Evaluation Session::evaluate(const Scene& scene, const std::vector<std::string>&
         std::any result;
         try {
             if (cancel && cancel->load()) throw Cancelled();
-            if (d.memory) check_memory(scene, d, object, d.memory(ctx));
+            if (d.memory) check_memory("stage " + run.label(scene), d.memory(ctx));
             ProfileScope scope("stage/" + d.name);
             result = d.run(ctx);
         } catch (const Cancelled&) {

@@ -103,8 +103,8 @@ public:
     // Memory budget for one stage's allocation: 0 = the machine's available memory.
     void set_memory_limit(uint64_t bytes) { memory_limit_ = bytes; }
     uint64_t memory_limit() const { return memory_limit_; }
-    // Throws InputError when `e` is above the budget (named for `stage` and `object`).
-    void check_memory(const Scene& scene, const StageDecl& d, int object, const MemoryEstimate& e) const;
+    // Throws InputError when `e` is above the budget: "<what> would allocate about ...; lower ...".
+    void check_memory(const std::string& what, const MemoryEstimate& e) const;
 
 private:
     const StageGraph& graph_;

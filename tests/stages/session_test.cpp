@@ -295,3 +295,20 @@ TEST(Memory, SizesParseAndPrint) {
     EXPECT_THROW(parse_memory_size("12 parsecs"), InputError);
     EXPECT_EQ(format_bytes(1536.0 * 1024 * 1024), "1.50 GiB");
 }
+
+TEST(Memory, AFrameAboveTheBudgetStopsBeforeItIsAllocated) {
+    Workbench wb;
+    wb.session().set_memory_limit(64ull << 20);
+    RenderRequest req;
+    req.backend = Backend::Cpu;
+    req.width = req.height = 4096;  // 16.8 M pixels: over 800 MB for the G-buffer alone
+    try {
+        wb.render(default_scene("basic"), req);
+        FAIL() << "expected an InputError";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("4096x4096 frame"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("--size"), std::string::npos) << e.what();
+    }
+    req.width = req.height = 64;
+    EXPECT_NO_THROW(wb.render(default_scene("basic"), req));
+}
