@@ -7,8 +7,8 @@
 
 #include <OpenImageIO/imageio.h>
 #include "support/errors.h"
+#include "support/threads.h"
 #include <gtest/gtest.h>
-#include <tbb/global_control.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -433,23 +433,16 @@ TEST(Env, RadianceLookupMapping) {
     EXPECT_EQ(sh9_irradiance(project_sh9(env), vec3(0.f)), sh9_irradiance(project_sh9(env), vec3(0.f)));
 }
 
-TEST(Env, ProjectionIsDeterministic) {
+TEST(Env, ProjectionIsIndependentOfTheThreadCount) {
+    // The projection sums rows in parallel: one thread and many threads must give the same bits
+    // (the stage cache and the CPU/GPU comparisons assume one answer per map).
     Environment env;
     env.map = std::make_shared<Image>(random_image(1024, 512, 3, 11, 0.f, 4.f));
-    const SH9 a = project_sh9(env);
-    SH9 b;
-    {
-        tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
-        b = project_sh9(env);
-    }
+    const SH9 a = test::with_threads(test::kManyThreads, [&] { return project_sh9(env); });
+    const SH9 b = test::with_threads(1, [&] { return project_sh9(env); });
+    EXPECT_GT(a.c[0][0], 0.f);
     for (int i = 0; i < 9; ++i)
-        for (int k = 0; k < 3; ++k) EXPECT_EQ(a.c[size_t(i)][k], b.c[size_t(i)][k]);
-    // Repeated projections of the same map agree bit for bit too.
-    for (int r = 0; r < 3; ++r) {
-        const SH9 c = project_sh9(env);
-        for (int i = 0; i < 9; ++i)
-            for (int k = 0; k < 3; ++k) EXPECT_EQ(a.c[size_t(i)][k], c.c[size_t(i)][k]) << "run " << r;
-    }
+        for (int k = 0; k < 3; ++k) EXPECT_EQ(a.c[size_t(i)][k], b.c[size_t(i)][k]) << "coefficient " << i << " channel " << k;
 }
 
 // Plot
@@ -636,7 +629,9 @@ TEST(Plot, NonAsciiDrawsRealGlyphs) {
     EXPECT_FALSE(same_pixels(alpha, question));
 }
 
-TEST(Plot, TextAndPlotsAreDeterministic) {
+TEST(Plot, TwoThreadsDrawingAtOnceGiveTheFirstDrawingsPixels) {
+    // The font's glyph caches are shared: two plots drawn at once on two threads (cached glyphs,
+    // concurrent look-ups) must equal the first one, drawn alone.
     PlotSpec spec;
     spec.title = "error vs time: \xce\xb1 (\xce\xb8 = 30\xc2\xb0)";
     spec.xlabel = "time [\xc2\xb5s]";
@@ -651,7 +646,6 @@ TEST(Plot, TextAndPlotsAreDeterministic) {
     EXPECT_TRUE(same_pixels(a, b));
     EXPECT_TRUE(same_pixels(a, c));
     EXPECT_TRUE(pixels_ok(a));
-    EXPECT_TRUE(same_pixels(ink_of("\xce\xb1\xce\xb2", 2).img, ink_of("\xce\xb1\xce\xb2", 2).img));
 }
 
 TEST(Plot, SvgHasTheSameChartWithTextAsText) {
@@ -695,7 +689,18 @@ TEST(Plot, SvgHasTheSameChartWithTextAsText) {
                        "\" font-size=\"" + std::to_string(text_em_px(ts)) + "\""),
               std::string::npos)
         << svg;
-    EXPECT_EQ(svg, render_plot_svg(spec, 900, 600));  // deterministic
+    // The same text on another thread, after other sizes and glyphs went through the font's caches.
+    std::string again;
+    std::thread other([&] {
+        PlotSpec before;
+        before.title = "\xce\xa3 \xce\xb4 \xcf\x80 \xce\xa9 WAVE";
+        before.series.push_back({"x", {1, 3}, {2, 1}, {}});
+        render_plot(before, 320, 200);
+        render_plot_svg(before, 2000, 1500);
+        again = render_plot_svg(spec, 900, 600);
+    });
+    other.join();
+    EXPECT_EQ(svg, again);
     const std::string empty = render_plot_svg(spec, 0, 0);
     EXPECT_EQ(count(empty, "<text"), 0u);
     EXPECT_EQ(empty.substr(empty.size() - 7), "</svg>\n");

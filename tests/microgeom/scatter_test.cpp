@@ -342,7 +342,9 @@ TEST(Curvature, ZeroReproducesTheFlatResultExactly) {
     b.importance = &imp;
     const ScatterResult ra = scatter(r.hf, r.dirs, r.vis, a), rb = scatter(r.hf, r.dirs, r.vis, b);
     EXPECT_EQ(ra.E_indirect, rb.E_indirect);
-    // Through the stage graph: curvature 0 skips the importance stage and renders identical bytes.
+    // Through the stage graph: curvature 0 skips the importance stage. Bending the base and then
+    // setting the curvature back to 0 renders the flat frame's bytes again (nothing of the bent
+    // frame is left in the renderer), while the bent frame differs.
     Scene s = default_scene("microgeom");
     apply_set(s, "camera.mode=texture");
     apply_set(s, "geometry.type=plane");
@@ -351,9 +353,16 @@ TEST(Curvature, ZeroReproducesTheFlatResultExactly) {
     RenderRequest req;
     req.backend = Backend::Cpu;
     const RenderResult flat = wb.render(s, req);
+    ASSERT_NE(flat.eval.run("microgeom.importance"), nullptr);
     EXPECT_EQ(flat.eval.run("microgeom.importance")->status, StageStatus::Skipped);
+    apply_set(s, "microgeom.curvature_u=40");
+    const RenderResult bent = wb.render(s, req);
+    EXPECT_EQ(bent.eval.run("microgeom.importance")->status, StageStatus::Ran);
+    EXPECT_NE(bent.frame.aov("radiance").data, flat.frame.aov("radiance").data) << "the bend must change the frame";
     apply_set(s, "microgeom.curvature_u=0");
-    EXPECT_EQ(wb.render(s, req).frame.aov("radiance").data, flat.frame.aov("radiance").data);
+    const RenderResult back = wb.render(s, req);
+    EXPECT_EQ(back.eval.run("microgeom.importance")->status, StageStatus::Skipped);
+    EXPECT_EQ(back.frame.aov("radiance").data, flat.frame.aov("radiance").data);
 }
 
 TEST(Curvature, ImportanceIsPositiveAndNormalised) {
