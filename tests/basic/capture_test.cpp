@@ -10,6 +10,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <cmath>
+#include <string>
+#include <vector>
 
 using namespace mesolab;
 using namespace mesolab::test;
@@ -93,17 +95,47 @@ TEST(Capture, CpuAndGpuAgree) {
         apply_set(s, setup);
         const auto [cpu, gpu] = render_cpu_and_gpu(wb, s, 200, 150);
         for (const char* aov : {"radiance", "normal"}) {
+            ASSERT_TRUE(cpu.has(aov) && gpu.has(aov)) << aov;
             const Image &a = cpu.aov(aov), &b = gpu.aov(aov);
-            size_t off = 0;
+            ASSERT_EQ(a.width, 200);
+            ASSERT_EQ(a.height, 150);
+            ASSERT_EQ(a.data.size(), b.data.size());
+            ASSERT_EQ(a.data.size(), size_t(200 * 150 * 3));
+            size_t off = 0, drawn = 0;
             for (size_t p = 0; p < size_t(a.width) * size_t(a.height); ++p) {
                 float d = 0;
-                for (int c = 0; c < 3; ++c) d = std::max(d, std::fabs(a.data[p * 3 + size_t(c)] - b.data[p * 3 + size_t(c)]));
+                bool nonzero = false;
+                for (int c = 0; c < 3; ++c) {
+                    d = std::max(d, std::fabs(a.data[p * 3 + size_t(c)] - b.data[p * 3 + size_t(c)]));
+                    nonzero = nonzero || a.data[p * 3 + size_t(c)] != 0.f;
+                }
                 off += d > 2e-3f;
+                drawn += nonzero;
             }
+            EXPECT_GT(double(drawn), 0.05 * a.width * a.height) << aov << ": the object covers too few pixels to compare";
             EXPECT_LE(double(off), 0.005 * a.width * a.height) << aov << ": " << off << " pixels differ by more than 2e-3";
         }
     }
 }
+
+namespace {
+// The sidecar's entries for stage `name` (object stages: one per object they ran for).
+std::vector<nlohmann::json> stage_entries(const nlohmann::json& sidecar, const std::string& name) {
+    std::vector<nlohmann::json> found;
+    for (const auto& st : sidecar.at("stages"))
+        if (st.at("name") == name) found.push_back(st);
+    return found;
+}
+
+// The single entry of an object stage for object 0, the preset's "sphere".
+void expect_object_stage(const nlohmann::json& sidecar, const std::string& name, const std::string& status) {
+    const std::vector<nlohmann::json> e = stage_entries(sidecar, name);
+    ASSERT_EQ(e.size(), 1u) << name << ": one entry per object, and the preset has one";
+    EXPECT_EQ(e[0].value("status", ""), status) << name;
+    EXPECT_EQ(e[0].value("object", -1), 0) << name;
+    EXPECT_EQ(e[0].value("object_name", ""), "sphere") << name;
+}
+}  // namespace
 
 TEST(Capture, SidecarSaysWhatRanWithWhichRenderer) {
     TempDir dir("sidecar");
@@ -114,19 +146,33 @@ TEST(Capture, SidecarSaysWhatRanWithWhichRenderer) {
     EXPECT_EQ(j["renderer"], "cpu");
     EXPECT_FALSE(j["version"].get<std::string>().empty());
     EXPECT_EQ(j["parameters"]["lights"][0]["intensity"], 5.0);
-    std::map<std::string, std::string> status;
-    for (const auto& st : j["stages"]) status[st["name"]] = st["status"];
-    EXPECT_EQ(status["scene.geometry"], "ran");
-    EXPECT_EQ(status["basic.albedo"], "ran");
+    ASSERT_TRUE(j["stages"].is_array());
+    ASSERT_FALSE(j["stages"].empty());
+    for (const auto& st : j["stages"]) {
+        const std::string status = st.value("status", "");
+        EXPECT_TRUE(status == "ran" || status == "cached" || status == "skipped") << st.dump();
+    }
+    // Object stages: once per object, named; scene stages: once, without an object.
+    expect_object_stage(j, "scene.geometry", "ran");
+    expect_object_stage(j, "basic.albedo", "ran");
+    const std::vector<nlohmann::json> irradiance = stage_entries(j, "env.irradiance");
+    ASSERT_EQ(irradiance.size(), 1u);
+    EXPECT_EQ(irradiance[0].value("status", ""), "ran");
+    EXPECT_FALSE(irradiance[0].contains("object"));
+    // basic has no frame steps; the frame holds every AOV of the scene (no --aov given).
+    ASSERT_TRUE(j["frame_steps"].is_array());
+    EXPECT_TRUE(j["frame_steps"].empty()) << j["frame_steps"].dump();
+    EXPECT_EQ(j["aovs_rendered"], nlohmann::json::array({"radiance", "normal"}));
     EXPECT_TRUE(j["timings"].contains("render_ms"));
-    // The same capture with the environment effect off skips its stage.
+    // The same capture with the environment effect off skips its stage, and says why.
     const CliResult r2 = run_mesolab("capture --backend cpu --size 32x32 -o '" + dir.path.string() + "' '" + preset + "' --set effects.environment=false");
     ASSERT_EQ(r2.status, 0) << r2.err;
     const auto j2 = nlohmann::json::parse(slurp(dir / "basic-sphere.json"));
-    for (const auto& st : j2["stages"])
-        if (st["name"] == "env.irradiance") {
-            EXPECT_EQ(st["status"], "skipped");
-        }
+    const std::vector<nlohmann::json> skipped = stage_entries(j2, "env.irradiance");
+    ASSERT_EQ(skipped.size(), 1u) << "a skipped stage is still listed";
+    EXPECT_EQ(skipped[0].value("status", ""), "skipped");
+    EXPECT_NE(skipped[0].value("reason", "").find("effects.environment is off"), std::string::npos) << skipped[0].dump();
+    expect_object_stage(j2, "basic.albedo", "ran");
 }
 
 TEST(Capture, SecondRenderReusesEveryStage) {
@@ -135,9 +181,16 @@ TEST(Capture, SecondRenderReusesEveryStage) {
     RenderRequest req;
     req.backend = Backend::Cpu;
     req.width = req.height = 32;
-    wb.render(s, req);
+    const RenderResult first = wb.render(s, req);
+    ASSERT_NE(first.eval.run("scene.geometry"), nullptr);
+    EXPECT_EQ(first.eval.run("scene.geometry")->status, StageStatus::Ran);
     apply_set(s, "light.direction=70,200");
     const RenderResult r = wb.render(s, req);
+    ASSERT_EQ(r.eval.runs.size(), first.eval.runs.size());
+    for (const char* stage : {"scene.geometry", "basic.albedo", "env.irradiance"}) {
+        ASSERT_NE(r.eval.run(stage), nullptr) << stage;
+        EXPECT_EQ(r.eval.run(stage)->status, StageStatus::Cached) << stage;
+    }
     for (const auto& run : r.eval.runs) EXPECT_NE(run.status, StageStatus::Ran) << run.name;
 }
 

@@ -42,6 +42,7 @@ std::string temp_path(const std::string& name) {
 
 // [SECTION] Heightfields
 TEST(Heightfield, ProceduralFieldsHaveTheRightSizeFiniteValuesAndTile) {
+    ASSERT_EQ(procedural_names().size(), 6u) << "triangles, bricks, bumps, vgrooves, gaussian, flat";
     for (const std::string& name : procedural_names())
         for (int res : {8, 13, 32, 64}) {
             SCOPED_TRACE(name + " " + std::to_string(res));

@@ -397,8 +397,10 @@ TEST(EllipseCurvature, InterpolatedEllipsesAreAlwaysValid) {
         for (float bend : {30.f, 360.f, 2000.f}) {
             SCOPED_TRACE(std::to_string(hf.width) + " " + std::to_string(bend));
             const CurvedEllipses c = fit_curved_ellipses(hf, dirs, vis, bend);
-            for (const EllipseMap* m : {&c.flat, &c.u_pos, &c.u_neg, &c.v_pos, &c.v_neg})
+            for (const EllipseMap* m : {&c.flat, &c.u_pos, &c.u_neg, &c.v_pos, &c.v_neg}) {
+                ASSERT_EQ(m->e.size(), size_t(hf.width) * size_t(hf.height));
                 for (const Ellipse& e : m->e) ASSERT_TRUE(well_formed(e));
+            }
             for (float tu : ts)
                 for (float tv : ts) {
                     const EllipseMap m = interpolate_ellipses(c, sum(scaled(c.step_u, tu), scaled(c.step_v, tv)));
@@ -411,6 +413,7 @@ TEST(EllipseCurvature, InterpolatedEllipsesAreAlwaysValid) {
     const Heightfield flat = test::procedural_field("flat", 16);
     const CurvedEllipses c = fit_curved_ellipses(flat, dirs, compute_visibility(flat, dirs), 90.f);
     const EllipseMap m = interpolate_ellipses(c, scaled(sum(c.step_u, c.step_v), 0.5f));
+    ASSERT_EQ(m.e.size(), size_t(16 * 16));
     for (const Ellipse& e : m.e)
         for (const vec3& l : light_directions()) ASSERT_EQ(ellipse_visibility(e, l), 1.f);
 }

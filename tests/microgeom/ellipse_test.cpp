@@ -92,8 +92,10 @@ TEST(Ellipse, FlatFieldIsLitFromEveryUpwardDirection) {
     const DirectionSet dirs = make_direction_set(100);
     const Visibility vis = compute_visibility(hf, dirs);
     const EllipseMap map = fit_ellipses(hf, dirs, vis);
+    ASSERT_EQ(map.e.size(), size_t(16 * 16));
     for (const vec3& w : hemisphere_probes()) {
         const std::vector<float> v = ellipse_visibility_texture(map, hf, w);
+        ASSERT_EQ(v.size(), size_t(16 * 16));
         for (float x : v) ASSERT_EQ(x, 1.f) << "w = (" << w.x << ", " << w.y << ", " << w.z << ")";
         for (const Ellipse& e : map.e) ASSERT_EQ(ellipse_visibility(e, w), 1.f);
     }
@@ -177,6 +179,7 @@ TEST(Ellipse, DegenerateVisibilityStaysFinite) {
     const DirectionSet dirs = make_direction_set(100);
     const Visibility vis = compute_visibility(hole, dirs);
     const EllipseMap map = fit_ellipses(hole, dirs, vis);
+    ASSERT_EQ(map.e.size(), size_t(9 * 9));
     for (const Ellipse& e : map.e) EXPECT_TRUE(well_formed(e));
     for (const vec3& w : hemisphere_probes()) EXPECT_EQ(ellipse_visibility(map.at(4, 4), w, map.edge), 0.f);
     // Mismatched sizes are rejected.

@@ -161,6 +161,10 @@ TEST(HardCases, StayFinite) {
         RenderRequest req;
         req.backend = Backend::Cpu;
         const Frame f = wb.render(s, req).frame;
+        for (const char* aov : {"radiance", "normal", "direct", "indirect", "shadow"}) {
+            ASSERT_TRUE(f.has(aov)) << aov << " with " << c.sets[0];
+            ASSERT_FALSE(f.aov(aov).data.empty()) << aov << " with " << c.sets[0];
+        }
         for (const auto& [name, img] : f.aovs)
             for (float v : img.data) ASSERT_TRUE(std::isfinite(v)) << name << " with " << c.sets[0];
         for (float v : f.aov("shadow").data) ASSERT_TRUE(v >= 0.f && v <= 1.f);

@@ -118,7 +118,9 @@ void check_agreement(const gpu::VisibilityProgram& program, const std::string& n
     ASSERT_EQ(gpu.height, cpu.height);
     ASSERT_EQ(gpu.count, cpu.count);
     ASSERT_EQ(gpu.hit.size(), cpu.hit.size());
+    ASSERT_EQ(cpu.hit.size(), size_t(hf.width) * size_t(hf.height) * size_t(dirs.size())) << "nothing to compare";
     const Agreement a = compare(hf, cpu, gpu);
+    EXPECT_GT(a.common_hits, 0u) << "no hits in common: the hit positions were not compared";
     std::printf("%-27s pairs %7zu  class agree %.5f%% (hit/no-hit %zu, below %zu)  common hits %zu: within 1/8 %.5f%%, "
                 "identical %.3f%%, max dist %.4f texels\n",
                 name.c_str(), a.pairs, 100.0 * a.class_rate(), a.hit_nohit, a.below_mismatch, a.common_hits, 100.0 * a.hit_rate(),
