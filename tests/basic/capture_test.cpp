@@ -1,7 +1,6 @@
 // Headless capture of the basic technique: deterministic bytes, CPU and GPU agree, AOV EXRs
 // hold the analytic values, the sidecar says what ran, and --backend cpu works without GL.
 #include "app/workbench.h"
-#include "core/basic/basic.h"
 #include "core/image.h"
 #include "core/scene.h"
 #include "support/cli.h"
@@ -29,14 +28,16 @@ const char* kPlane = R"({
                "material": {"technique": "basic", "kd": [0.5, 0.4, 0.3], "ks": [0.2, 0.2, 0.2], "shininess": 20}}]
 })";
 
+// Written out from basic.h's model, not through basic::brdf: n = wo = +z, wi at 30 degrees from n
+// in the xz plane, so n.wi = cos 30 and n.h = cos 15 (h halves the angle between wo and wi);
+//   L = (kd/pi + ks (s + 8)/(8 pi) cos^s 15deg) E cos 30deg + kd/pi * (pi L_env).
 vec3 analytic_plane() {
-    basic::Material m;
-    m.kd = {0.5f, 0.4f, 0.3f};
-    m.ks = vec3(0.2f);
-    m.shininess = 20.f;
-    const vec3 n(0, 0, 1), wo(0, 0, 1), wi = direction_from_degrees(30, 0);
-    const vec3 E = vec3(1, 0.5f, 0.25f) * 2.f;
-    return basic::brdf(m, n, wo, wi) * E * wi.z + m.kd * vec3(0.1f, 0.2f, 0.3f) * 1.5f;  // kd/pi * (pi * L_env)
+    const double pi = 3.14159265358979323846, deg = pi / 180.0, s = 20.0;
+    const double kd[3] = {0.5, 0.4, 0.3}, ks = 0.2, E[3] = {2.0 * 1.0, 2.0 * 0.5, 2.0 * 0.25}, env[3] = {0.1 * 1.5, 0.2 * 1.5, 0.3 * 1.5};
+    const double lobe = ks * (s + 8.0) / (8.0 * pi) * std::pow(std::cos(15.0 * deg), s);
+    vec3 L;
+    for (int c = 0; c < 3; ++c) L[c] = float((kd[c] / pi + lobe) * E[c] * std::cos(30.0 * deg) + kd[c] * env[c]);
+    return L;
 }
 
 }  // namespace

@@ -430,7 +430,30 @@ TEST(Env, RadianceLookupMapping) {
     const vec3 z = env.radiance(vec3(0.f));
     EXPECT_TRUE(std::isfinite(z.x) && std::isfinite(z.y) && std::isfinite(z.z));
     EXPECT_EQ(z, vec3(0.25f) * env.intensity);
-    EXPECT_EQ(sh9_irradiance(project_sh9(env), vec3(0.f)), sh9_irradiance(project_sh9(env), vec3(0.f)));
+    // Zero-length normal: no direction, so the irradiance averaged over all normals, pi times the
+    // mean radiance = intensity * sum over texels of L * Omega / 4, each texel constant over its
+    // solid angle Omega = (2 pi / w)(cos theta0 - cos theta1).
+    double want[3] = {0, 0, 0};
+    for (int y = 0; y < h; ++y) {
+        const double omega = 2.0 * kPiD / w * (std::cos(kPiD * y / h) - std::cos(kPiD * (y + 1) / h));
+        for (int x = 0; x < w; ++x)
+            for (int k = 0; k < 3; ++k) want[k] += double(map_img->at(x, y)[k]) * omega / 4.0 * double(env.intensity);
+    }
+    const vec3 e0 = sh9_irradiance(project_sh9(env), vec3(0.f));
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(e0[k], want[k], 1e-5 * want[k]) << "channel " << k;
+}
+
+TEST(Env, DirectionFromDegreesIsThetaFromZAndPhiFromX) {
+    // (theta, phi) in degrees: theta from +z, phi from +x towards +y (the lights' and the camera's
+    // convention): (sin t cos p, sin t sin p, cos t), here at values known exactly.
+    const float h = std::sqrt(0.5f);
+    const std::pair<vec2, vec3> cases[] = {{{0.f, 123.f}, {0.f, 0.f, 1.f}},  {{90.f, 0.f}, {1.f, 0.f, 0.f}},  {{90.f, 90.f}, {0.f, 1.f, 0.f}},
+                                           {{90.f, 180.f}, {-1.f, 0.f, 0.f}}, {{90.f, -90.f}, {0.f, -1.f, 0.f}}, {{180.f, 0.f}, {0.f, 0.f, -1.f}},
+                                           {{45.f, 0.f}, {h, 0.f, h}},       {{90.f, 45.f}, {h, h, 0.f}},       {{60.f, 90.f}, {0.f, 0.8660254f, 0.5f}}};
+    for (const auto& [angles, want] : cases) {
+        const vec3 d = direction_from_degrees(angles.x, angles.y);
+        EXPECT_NEAR(glm::distance(d, want), 0.f, 1e-6f) << angles.x << ", " << angles.y;
+    }
 }
 
 TEST(Env, ProjectionIsIndependentOfTheThreadCount) {

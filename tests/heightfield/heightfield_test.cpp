@@ -101,7 +101,8 @@ TEST(Heightfield, NormalsAreUnitAndFollowTheLocalFrame) {
                     ASSERT_GT(n.z, 0.f);
                 }
         }
-    // A plane rising along local +x and along local +y (towards the top row).
+    // A plane rising along local +x (columns) and along local +y (towards the top row: row y lies
+    // at local y = (5 - y) texels), written out here rather than through Heightfield::position.
     Heightfield f;
     f.width = 8;
     f.height = 6;
@@ -110,7 +111,7 @@ TEST(Heightfield, NormalsAreUnitAndFollowTheLocalFrame) {
     f.h.resize(48);
     f.albedo.assign(48, vec3(1.f));
     for (int y = 0; y < 6; ++y)
-        for (int x = 0; x < 8; ++x) f.h[f.index(x, y)] = f.position(x, y).x * 0.5f + f.position(x, y).y * 0.25f;
+        for (int x = 0; x < 8; ++x) f.h[f.index(x, y)] = 0.5f * (float(x) * 0.5f) + 0.25f * (float(5 - y) * 0.5f);
     for (int y = 0; y < 6; ++y)
         for (int x = 0; x < 8; ++x) {
             const vec3 n = f.normal(x, y), expect = glm::normalize(vec3(-0.5f, -0.25f, 1.f));

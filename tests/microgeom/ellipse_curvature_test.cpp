@@ -160,9 +160,10 @@ TEST(EllipseCurvature, SamplesEqualDirectFitsAndInterpolationHitsThemExactly) {
     EXPECT_EQ(fractions.front(), 0.0);
     EXPECT_EQ(fractions.back(), 1.0);
     EXPECT_EQ(c.bend_deg, 60.f);
-    EXPECT_EQ(c.step_u.ku, Bending::from_degrees(60.f, 0.f, 32, 32).ku);
+    // 60 degrees of bend across 32 texels: pi/3 / 32 radians per texel.
+    EXPECT_FLOAT_EQ(c.step_u.ku, float(3.14159265358979323846 / 3.0 / 32.0));
     EXPECT_EQ(c.step_u.kv, 0.f);
-    EXPECT_EQ(c.step_v.kv, Bending::from_degrees(0.f, 60.f, 32, 32).kv);
+    EXPECT_FLOAT_EQ(c.step_v.kv, float(3.14159265358979323846 / 3.0 / 32.0));
     EXPECT_EQ(c.step_v.ku, 0.f);
     EXPECT_EQ(c.bytes(), 5 * c.flat.bytes());
 
