@@ -38,6 +38,8 @@ bool in_support(const Ndf& ndf, vec3 m) {
 
 // Every entry: finite, unit m with m_z > 0 inside the NDF's support, orthonormal right-handed frame.
 void expect_well_formed(const Lut& lut, const Ndf& ndf, const char* name) {
+    ASSERT_GT(lut.size(), 0) << name;
+    ASSERT_EQ(lut.entries().size(), size_t(lut.size()) * size_t(lut.size())) << name;
     size_t bad = 0, outside = 0;
     for (const LutEntry& e : lut.entries()) {
         const bool ok = finite(e.m) && finite(e.t) && finite(e.b) && std::fabs(glm::length(e.m) - 1.f) < 1e-5f && e.m.z > 0.f &&
@@ -162,6 +164,7 @@ TEST(BumpsynthLut, SharpLobeNormalsStayInTheCentreCells) {
     // α = 1e-4 is far below the table's resolution: every normal lies in the four cells around n.
     const Lut lut = build_lut(Ndf::from_lobe(Lobe::beckmann(1e-4f, 1e-4f)));
     const float h = 2.f / Ndf::kDefaultResolution;
+    ASSERT_EQ(lut.entries().size(), size_t(Lut::kDefaultSize) * size_t(Lut::kDefaultSize));
     for (const LutEntry& e : lut.entries()) {
         EXPECT_LE(std::fabs(e.m.x), h);
         EXPECT_LE(std::fabs(e.m.y), h);
@@ -172,6 +175,7 @@ TEST(BumpsynthLut, ZeroMassRegionsAreNeverSampled) {
     const Ndf ring = Ndf::from_image(ring_image(256, 0.5, 0.7), 256, 256);
     const Lut lut = build_lut(ring);
     const double slack = 2.0 / Ndf::kDefaultResolution * std::sqrt(2.0);  // a cell the ring's edge cuts
+    ASSERT_EQ(lut.entries().size(), size_t(Lut::kDefaultSize) * size_t(Lut::kDefaultSize));
     for (const LutEntry& e : lut.entries()) {
         const double r = std::hypot(double(e.m.x), double(e.m.y));
         EXPECT_GE(r, 0.5 - slack);
@@ -183,6 +187,7 @@ TEST(BumpsynthLut, ZeroMassRegionsAreNeverSampled) {
     blobs[size_t(50) * 64 + 40] = 3.f;  // x in [0.25, 0.28125],     y in [-0.59375, -0.5625]
     const Ndf two = Ndf::from_image(blobs, 64, 64);
     const Lut lut2 = build_lut(two);
+    ASSERT_FALSE(lut2.entries().empty());
     size_t first = 0;
     for (const LutEntry& e : lut2.entries()) {
         const bool a = e.m.x >= -0.625f - 1e-6f && e.m.x <= -0.59375f + 1e-6f && e.m.y >= 0.65625f - 1e-6f && e.m.y <= 0.6875f + 1e-6f;

@@ -120,9 +120,13 @@ TEST(BumpsynthClosedForm, WardConstantTendsToWardsOneOverPiAlphaXAlphaY) {
 }
 
 TEST(BumpsynthClosedForm, SumIsTheWeightedMeanOfItsLobes) {
+    // Against the textbook forms (stats.h), not the lobes' own D: (1 phong(20) + 3 ggx(0.2)) / 4.
     const std::vector<Lobe> lobes{Lobe::blinn_phong(20.f, 1.f), Lobe::ggx(0.2f, 0.2f, 0.f, 3.f)};
-    const vec3 m = glm::normalize(vec3(0.2f, -0.1f, 1.f));
-    EXPECT_NEAR(D(lobes, m), (lobes[0].D(m) + 3.0 * lobes[1].D(m)) / 4.0, 1e-12);
+    for (const vec3 m : {glm::normalize(vec3(0.2f, -0.1f, 1.f)), vec3(0.f, 0.f, 1.f), direction_from_degrees(35.f, 200.f)}) {
+        const double th = std::atan2(std::hypot(double(m.x), double(m.y)), double(m.z)), ph = std::atan2(double(m.y), double(m.x));
+        const double want = (test::ref_phong(th, 20.0) + 3.0 * test::ref_ggx(th, ph, 0.2, 0.2)) / 4.0;
+        EXPECT_NEAR(D(lobes, m), want, 1e-4 * want) << m.x << "," << m.y << "," << m.z;
+    }
 }
 
 // [SECTION] Tabulation

@@ -9,6 +9,7 @@
 #include <map>
 #include <random>
 #include <string>
+#include <thread>
 
 using namespace mesolab;
 using namespace mesolab::microgeom;
@@ -106,11 +107,23 @@ TEST(Directions, FibonacciTriangulationIsAValidHull) {
     }
 }
 
-TEST(Directions, LargeSetsAreValidAndDeterministic) {
-    const DirectionSet a = make_direction_set(16384), b = make_direction_set(16384);
+TEST(Directions, LargeSetsAreValidAndDoNotDependOnWhatWasBuiltBefore) {
+    // The hull inserts the points in a shuffled order: the shuffle must come from the set's size
+    // alone, not from state left by earlier sets or from the thread. A set built first on this
+    // thread equals one built on another thread after sets of other sizes.
+    const DirectionSet a = make_direction_set(16384);
     check_triangulation(a, 16384, true);
+    DirectionSet b;
+    std::thread other([&] {
+        for (int n : {5, 100, 1023}) ASSERT_EQ(make_direction_set(n).size(), n);
+        b = make_direction_set(16384);
+    });
+    other.join();
+    ASSERT_EQ(b.d.size(), a.d.size());
+    EXPECT_EQ(a.d, b.d);
     EXPECT_EQ(a.triangles, b.triangles);
     EXPECT_EQ(a.solid_angle, b.solid_angle);
+    EXPECT_EQ(a.fan, b.fan);
 }
 
 TEST(Directions, LocateFindsTheContainingTriangle) {

@@ -184,6 +184,7 @@ TEST(EllipseGpu, HardCases) {
                             {"gaussian 32x32, N = 16", test::procedural_field("gaussian", 32), 16},
                             {"single spike 32x32, N = 100", spike, 100},
                             {"bricks 16x16, N = 1024", test::procedural_field("bricks", 16), 1024}};
+    size_t special_total = 0;
     for (const Case& c : cases) {
         SCOPED_TRACE(c.name);
         const DirectionSet dirs = make_direction_set(c.n);
@@ -202,8 +203,10 @@ TEST(EllipseGpu, HardCases) {
                     EXPECT_TRUE(same(gpu.e[p], cpu.e[p])) << p;
                 }
             std::printf("[ ellipse gpu ]   %zu texels with nothing or everything lit, identical\n", special);
+            special_total += special;
         }
     }
+    EXPECT_GT(special_total, 0u) << "no texel with nothing or everything lit: the exact special cases were not compared";
 }
 
 TEST(EllipseGpu, TooManyPointsThrow) {
@@ -242,6 +245,7 @@ TEST(EllipseGpu, ErrorsAndProgress) {
     EXPECT_TRUE(gpu::fit_ellipses_gpu(none, dirs, no_vis).e.empty());
     const DirectionSet no_dirs;
     const EllipseMap empty = gpu::fit_ellipses_gpu(hf, no_dirs, compute_visibility(hf, no_dirs));
+    ASSERT_EQ(empty.e.size(), size_t(16 * 16)) << "no directions: one (empty) ellipse per texel";
     for (const Ellipse& e : empty.e) EXPECT_TRUE(same(e, kEmptyEllipse));
 }
 

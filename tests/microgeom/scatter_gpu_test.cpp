@@ -30,14 +30,18 @@ double compare(const Heightfield& hf, const DirectionSet& dirs, const Visibility
     const auto g = gpu::make_gpu_gatherer();
     s.gatherer = g.get();
     const ScatterResult gpu = scatter(hf, dirs, vis, s);
+    EXPECT_EQ(cpu.E_indirect.size(), size_t(hf.width) * size_t(hf.height)) << "nothing to compare";
+    EXPECT_EQ(gpu.E_indirect.size(), cpu.E_indirect.size());
     EXPECT_EQ(cpu.direct, gpu.direct);
-    double worst = 0;
+    double worst = 0, largest = 0;
     for (size_t p = 0; p < cpu.E_indirect.size(); ++p)
         for (int c = 0; c < 3; ++c) {
             const double a = cpu.E_indirect[p][c], b = gpu.E_indirect[p][c];
             EXPECT_TRUE(std::isfinite(b));
             worst = std::max(worst, std::fabs(a - b) / std::max(1.0, std::fabs(a)));
+            largest = std::max(largest, std::fabs(a));
         }
+    EXPECT_GT(largest, 0.0) << "no irradiance anywhere: two zero results agree about nothing";
     return worst;
 }
 

@@ -161,6 +161,10 @@ TEST(HardCases, StayFinite) {
         RenderRequest req;
         req.backend = Backend::Cpu;
         const Frame f = wb.render(s, req).frame;
+        for (const char* aov : {"radiance", "normal", "direct", "indirect", "shadow"}) {
+            ASSERT_TRUE(f.has(aov)) << aov << " with " << c.sets[0];
+            ASSERT_FALSE(f.aov(aov).data.empty()) << aov << " with " << c.sets[0];
+        }
         for (const auto& [name, img] : f.aovs)
             for (float v : img.data) ASSERT_TRUE(std::isfinite(v)) << name << " with " << c.sets[0];
         for (float v : f.aov("shadow").data) ASSERT_TRUE(v >= 0.f && v <= 1.f);
@@ -331,6 +335,40 @@ struct Ridge {
 };
 }  // namespace
 
+// bent_direction against §5's model written out (curvature.h): the hit q of direction d lies at
+// horizontal offset (dx, dy) texels from p (local x = +column, local y = -row, nearest periodic
+// image) and at height d.z / |d.xy| * |(dx, dy)| along the ray; bending lowers it by
+// (ku dx^2 + kv dy^2) / 2, and the bent direction points from p to it. Directions without a hit,
+// or below the horizon, and zero bending leave d as it is. Hits at 1/16-texel positions are stored
+// exactly, so the only error is float rounding.
+TEST(Curvature, BentDirectionPointsAtTheHitLoweredByTheParaboloid) {
+    Heightfield hf = test::procedural_field("flat", 32, true);
+    DirectionSet dirs;
+    dirs.d = {glm::normalize(vec3(3.f, -4.f, 2.f))};  // |d.xy| : d.z = 5 : 2
+    Visibility vis;
+    vis.width = vis.height = 32;
+    vis.count = 1;
+    vis.hit.assign(32 * 32, Visibility::kNoHit);
+    auto set = [&](int x, int y, uint32_t v) { vis.hit[size_t(y) * 32 + size_t(x)] = v; };
+    // From (10, 10), 1.5 steps of (3, -4) in local units: column 14.5, row 16 (rows grow down).
+    set(10, 10, Visibility::encode(14.5f, 16.f));
+    // From (30, 2) the same offset crosses the right border: stored wrapped at column 34.5 - 32.
+    set(30, 2, Visibility::encode(2.5f, 8.f));
+    set(5, 5, Visibility::kBelow);
+    const Bending b{0.02f, -0.01f};
+    const double dx = 4.5, dy = -6.0, z = 2.0 / 5.0 * std::sqrt(dx * dx + dy * dy);  // z = 3 texels above p
+    const glm::dvec3 q(dx, dy, z - 0.5 * (double(b.ku) * dx * dx + double(b.kv) * dy * dy));
+    const vec3 want(glm::normalize(q));
+    for (const ivec2 p : {ivec2(10, 10), ivec2(30, 2)}) {
+        const vec3 got = bent_direction(hf, dirs, vis, b, p.x, p.y, 0);
+        EXPECT_NEAR(glm::distance(got, want), 0.f, 1e-6f) << p.x << ", " << p.y;
+        EXPECT_EQ(bent_direction(hf, dirs, vis, Bending{}, p.x, p.y, 0), dirs.d[0]) << "no bending";
+    }
+    EXPECT_GT(glm::distance(want, dirs.d[0]), 1e-3f) << "the bend must move the direction, else the test shows nothing";
+    EXPECT_EQ(bent_direction(hf, dirs, vis, b, 3, 3, 0), dirs.d[0]) << "no hit: the environment does not bend";
+    EXPECT_EQ(bent_direction(hf, dirs, vis, b, 5, 5, 0), dirs.d[0]) << "below the horizon";
+}
+
 TEST(Curvature, ZeroReproducesTheFlatResultExactly) {
     Ridge r;
     const Importance imp = compute_importance(r.hf, r.dirs, r.vis, Bending{});
@@ -342,7 +380,9 @@ TEST(Curvature, ZeroReproducesTheFlatResultExactly) {
     b.importance = &imp;
     const ScatterResult ra = scatter(r.hf, r.dirs, r.vis, a), rb = scatter(r.hf, r.dirs, r.vis, b);
     EXPECT_EQ(ra.E_indirect, rb.E_indirect);
-    // Through the stage graph: curvature 0 skips the importance stage and renders identical bytes.
+    // Through the stage graph: curvature 0 skips the importance stage. Bending the base and then
+    // setting the curvature back to 0 renders the flat frame's bytes again (nothing of the bent
+    // frame is left in the renderer), while the bent frame differs.
     Scene s = default_scene("microgeom");
     apply_set(s, "camera.mode=texture");
     apply_set(s, "geometry.type=plane");
@@ -351,9 +391,16 @@ TEST(Curvature, ZeroReproducesTheFlatResultExactly) {
     RenderRequest req;
     req.backend = Backend::Cpu;
     const RenderResult flat = wb.render(s, req);
+    ASSERT_NE(flat.eval.run("microgeom.importance"), nullptr);
     EXPECT_EQ(flat.eval.run("microgeom.importance")->status, StageStatus::Skipped);
+    apply_set(s, "microgeom.curvature_u=40");
+    const RenderResult bent = wb.render(s, req);
+    EXPECT_EQ(bent.eval.run("microgeom.importance")->status, StageStatus::Ran);
+    EXPECT_NE(bent.frame.aov("radiance").data, flat.frame.aov("radiance").data) << "the bend must change the frame";
     apply_set(s, "microgeom.curvature_u=0");
-    EXPECT_EQ(wb.render(s, req).frame.aov("radiance").data, flat.frame.aov("radiance").data);
+    const RenderResult back = wb.render(s, req);
+    EXPECT_EQ(back.eval.run("microgeom.importance")->status, StageStatus::Skipped);
+    EXPECT_EQ(back.frame.aov("radiance").data, flat.frame.aov("radiance").data);
 }
 
 TEST(Curvature, ImportanceIsPositiveAndNormalised) {

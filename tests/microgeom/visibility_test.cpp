@@ -2,6 +2,7 @@
 // brute-force ray/triangle reference, periodic wrap, degenerate fields, encoding, cancellation.
 #include "core/error.h"
 #include "core/microgeom/visibility.h"
+#include "support/threads.h"
 
 #include <gtest/gtest.h>
 
@@ -437,16 +438,18 @@ TEST(MicrogeomVisibility, TexelSizeDoesNotChangeTheTextures) {
     EXPECT_EQ(compute_visibility(a, dirs).hit, compute_visibility(b, dirs).hit);
 }
 
-TEST(MicrogeomVisibility, ProgressIsReportedAndCancels) {
+TEST(MicrogeomVisibility, ProgressIsReportedAndCancelsAndTheThreadCountChangesNothing) {
     const Heightfield f = random_field(32, 32, true, 81, 3.f);
     const DirectionSet dirs = random_directions(40, 82);
     std::vector<double> seen;
-    const Visibility vis = compute_visibility(f, dirs, [&](double p) { seen.push_back(p); });
+    const Visibility vis = test::with_threads(test::kManyThreads, [&] { return compute_visibility(f, dirs, [&](double p) { seen.push_back(p); }); });
     ASSERT_GE(seen.size(), 2u);
     EXPECT_TRUE(std::is_sorted(seen.begin(), seen.end()));
     EXPECT_GE(seen.front(), 0.0);
     EXPECT_DOUBLE_EQ(seen.back(), 1.0);
-    EXPECT_EQ(vis.hit, compute_visibility(f, dirs).hit);
+    // One thread, without a progress callback: the same entries.
+    ASSERT_EQ(vis.hit.size(), size_t(32 * 32) * size_t(dirs.size()));
+    EXPECT_EQ(vis.hit, test::with_threads(1, [&] { return compute_visibility(f, dirs); }).hit);
     int calls = 0;
     EXPECT_THROW(compute_visibility(f, dirs,
                                     [&](double p) {

@@ -151,6 +151,7 @@ TEST(NdfEditorBrush, EraseNeverGoesNegative) {
     e.stroke_to({0.f, 0.f});
     EXPECT_FALSE(e.end_stroke());
     EXPECT_FALSE(e.can_undo());
+    ASSERT_EQ(e.image().px.size(), size_t(R) * size_t(R));
     for (float v : e.image().px) EXPECT_EQ(v, 0.f);
 }
 

@@ -14,6 +14,9 @@ std::string key(const ParamGroup& g, const ParamDecl& d) { return g.name() + "."
 }
 
 TEST(Declarations, DefaultsAreValidAndRoundTripThroughJsonAndText) {
+    // The scene's groups and one per technique (basic, microgeom, bumpsynth at least).
+    for (const char* name : {"camera", "light", "env", "effects", "geometry", "basic", "microgeom", "bumpsynth"})
+        ASSERT_NE(Registry::instance().group(name), nullptr) << name;
     for (const ParamGroup* g : Registry::instance().groups()) {
         EXPECT_FALSE(g->decls().empty()) << g->name();
         for (const ParamDecl& d : g->decls()) {

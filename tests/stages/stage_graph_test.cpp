@@ -52,6 +52,7 @@ TEST(StageGraph, RunsOnceThenCaches) {
     EXPECT_EQ(status(e, "t.env"), StageStatus::Ran);
     EXPECT_EQ(status(e, "t.envlight"), StageStatus::Ran);
     e = c.eval(s);
+    ASSERT_EQ(e.runs.size(), 4u);
     for (const auto& r : e.runs) EXPECT_EQ(r.status, StageStatus::Cached) << r.name;
     EXPECT_EQ(c.runs["t.geometry"], 1);
     EXPECT_EQ(*e.get<std::string>("t.shade"), "t.shade");
@@ -73,6 +74,7 @@ TEST(StageGraph, ChangeRecomputesExactlyItsDependents) {
     EXPECT_EQ(status(e, "t.env"), StageStatus::Cached);
     apply_set(s, "camera.distance=7");  // nobody reads it
     e = c.eval(s);
+    ASSERT_EQ(e.runs.size(), 4u);
     for (const auto& r : e.runs) EXPECT_EQ(r.status, StageStatus::Cached) << r.name;
     apply_set(s, "geometry.resolution=64");  // back to a cached setting
     e = c.eval(s);
@@ -134,6 +136,11 @@ TEST(FrameStages, LightAndCameraNeverRecompute) {
     Scene s = default_scene("basic");
     std::map<std::string, uint64_t> before;
     for (const auto& st : Registry::instance().frame_stages(s)) before[st] = g.key(s, st);
+    // The stages a basic frame needs are there and enabled (a key of 0 would compare equal anyway).
+    for (const char* st : {"scene.geometry", "basic.albedo", "env.irradiance"}) {
+        ASSERT_EQ(before.count(st), 1u) << st << " is not a frame stage";
+        EXPECT_NE(before[st], 0u) << st << " is skipped";
+    }
     for (const char* set : {"light.direction=80,170", "light.intensity=9", "light.color=1,0,0", "camera.orbit=10,10", "camera.distance=50",
                             "camera.mode=texture", "env.color=1,1,1", "env.intensity=3", "basic.kd=0.1,0.1,0.1", "geometry.scale=2"}) {
         Scene t = s;
