@@ -208,7 +208,11 @@ void Viewport::render(FrameState& f, const UiState::Viewport& v, const Evaluatio
     bool reduced = false;
     const ivec2 size = frame_size(f.scene, eval, render_request(v.size, dragging, f.full_render_ms, reduced));
     const auto t0 = Clock::now();
-    renderer_->render(f.scene, eval, size.x, size.y, {v.aov});  // radiance and the AOV shown
+    // Radiance and the AOV shown (when this scene has it: a newly loaded scene may not).
+    std::vector<std::string> aovs;
+    for (const auto& a : Registry::instance().aovs(f.scene))
+        if (a.name == v.aov) aovs.push_back(a.name);
+    renderer_->render(f.scene, eval, size.x, size.y, aovs.empty() ? std::vector<std::string>{"radiance"} : aovs);
     f.rendered(size, reduced, ms_since(t0));
     update_display(f, v);
 }
