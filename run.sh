@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # mesolab main job. Installs missing Debian packages, builds, then opens the GUI when a display
-# is available; otherwise runs the headless showcase (a few minutes on 2 cores): prints the GL
-# context, captures every preset in presets/ into screenshots/ and times three short tables.
+# is available; otherwise runs the headless showcase (about a minute on 2 cores once built): the GL
+# context, a capture of every preset in presets/ into screenshots/ and three short timing tables.
 # The full timing tables live in the technique pages (core/*/README.md); regenerate them with
 # `build/mesolab bench --update-pages`. Arguments go to `mesolab gui` (e.g. a preset).
 # MESOLAB_HEADLESS=1 runs the showcase even when a display is available.
