@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # mesolab main job. Installs missing Debian packages, builds, then opens the GUI when a display
-# is available; otherwise runs the headless showcase: captures every preset in presets/ into
-# screenshots/ and prints the timing tables. Arguments go to `mesolab gui` (e.g. a preset).
+# is available; otherwise runs the headless showcase (about a minute on 2 cores once built): the GL
+# context, a capture of every preset in presets/ into screenshots/ and three short timing tables.
+# The full timing tables live in the technique pages (core/*/README.md); regenerate them with
+# `build/mesolab bench --update-pages`. Arguments go to `mesolab gui` (e.g. a preset).
+# MESOLAB_HEADLESS=1 runs the showcase even when a display is available.
 set -euo pipefail
 cd "$(dirname "$0")"
 source .ci/setup.sh
@@ -14,4 +17,8 @@ fi
 echo "== no display: headless showcase"
 ./build/mesolab info
 ./build/mesolab capture presets -o screenshots
-./build/mesolab bench --repeat 5
+echo "== short bench: three fast tables, median of 3 runs per cell"
+./build/mesolab bench basic microgeom-geometry bumpsynth-frame --repeat 3
+echo "== full timing tables: core/basic/README.md, core/microgeom/README.md, core/bumpsynth/README.md"
+echo "   regenerate them (every table, median of 5 runs; an estimated 10-15 minutes on an idle 2-core machine):"
+echo "     build/mesolab bench --update-pages"
