@@ -65,17 +65,26 @@ std::vector<std::string> update_pages(const std::string& root, const std::map<st
         const std::string text = ss.str();
         std::string result;
         size_t pos = 0;
+        // A marker is a whole line: `<!-- bench NAME -->` ... `<!-- /bench -->`.
+        const auto line_at = [&](const std::string& prefix, size_t from) {
+            for (size_t at = text.find(prefix, from); at != std::string::npos; at = text.find(prefix, at + 1))
+                if (at == 0 || text[at - 1] == '\n') return at;
+            return std::string::npos;
+        };
         for (;;) {
-            const size_t open = text.find("<!-- bench ", pos);
+            const size_t open = line_at("<!-- bench ", pos);
             if (open == std::string::npos) break;
-            const size_t open_end = text.find("-->", open);
-            const size_t close = text.find("<!-- /bench -->", open_end);
-            if (open_end == std::string::npos || close == std::string::npos)
-                throw InputError(page.string() + ": a `<!-- bench NAME -->` marker without its `<!-- /bench -->`");
-            std::string name = text.substr(open + 11, open_end - open - 11);
+            const size_t eol = std::min(text.find('\n', open), text.size());
+            const std::string line = text.substr(open, eol - open);
+            const size_t open_end = line.rfind("-->");
+            if (open_end == std::string::npos || open_end < 11)
+                throw InputError(page.string() + ": a line starting `<!-- bench ` must be `<!-- bench NAME -->`");
+            std::string name = line.substr(11, open_end - 11);
             name.erase(name.find_last_not_of(' ') + 1);
+            const size_t body = std::min(eol + 1, text.size());
+            const size_t close = line_at("<!-- /bench -->", body);
+            if (close == std::string::npos) throw InputError(page.string() + ": `<!-- bench " + name + " -->` has no `<!-- /bench -->` line after it");
             ++markers;
-            const size_t body = text.find('\n', open_end) + 1;
             result += text.substr(pos, body - pos);
             auto it = markdown.find(name);
             result += it != markdown.end() ? it->second : text.substr(body, close - body);

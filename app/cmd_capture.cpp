@@ -122,13 +122,13 @@ int run_capture(const CaptureOptions& o) {
     req.width = w;
     req.height = h;
     req.progress = tty_progress();
-    req.aovs = o.aovs;
+    req.aovs = o.aovs.empty() ? std::vector<std::string>{"radiance"} : o.aovs;  // radiance and the requested AOVs only
     const auto files = expand_presets(o.presets);
     // Validate everything first, so that bad input fails before any work.
     std::vector<Scene> scenes;
     for (const auto& f : files) {
         Scene s = load_preset(f);
-        for (const auto& set : o.sets) apply_set(s, set);
+        apply_sets(s, o.sets);
         try {
             frame_layout(s, o.aovs);  // every requested AOV exists in this scene
         } catch (const InputError& e) {

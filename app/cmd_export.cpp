@@ -26,7 +26,7 @@ int run_export(const ExportOptions& o) {
     if (!tech) throw InputError("export: unknown export '" + o.name + "' (known: " + export_names() + ")");
 
     Scene s = load_preset(o.preset);
-    for (const auto& a : o.sets) apply_set(s, a);
+    apply_sets(s, o.sets);
     int object = -1;
     for (size_t i = 0; i < s.objects.size() && object < 0; ++i)
         if (s.objects[i].technique == tech->name() && (o.object.empty() || s.objects[i].name == o.object)) object = int(i);

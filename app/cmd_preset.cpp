@@ -75,7 +75,7 @@ int run_preset_schema(const std::string& technique, bool as_json) {
 // [SECTION] preset show
 int run_preset_show(const std::string& file, const std::vector<std::string>& sets) {
     Scene s = load_preset(file);
-    for (const auto& set : sets) apply_set(s, set);
+    apply_sets(s, sets);
     std::printf("%s", scene_to_text(s).c_str());
     return 0;
 }

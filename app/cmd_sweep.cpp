@@ -111,6 +111,7 @@ Knob parse_knob(const Scene& base, const std::string& text) {
     for (const auto& v : k.values) {
         Scene probe = base;
         apply_set(probe, k.key, v);  // validates every value before any work
+        check_set_used(probe, k.key);
     }
     k.stages = knob_stages(base, k);
     return k;
@@ -271,7 +272,7 @@ int run_sweep(const SweepOptions& o) {
     Measure m;
     m.metric = find_metric(o.metric);
     Scene base = load_preset(o.preset);
-    for (const auto& s : o.sets) apply_set(base, s);
+    apply_sets(base, o.sets);
     if (m.metric) {
         try {
             m.metric->check(base);

@@ -3,6 +3,7 @@
 #include "gpu/renderer.h"
 #include "app/commands.h"
 #include "app/workbench.h"
+#include "core/bench.h"
 #include "core/error.h"
 
 #include <CLI/CLI.hpp>
@@ -65,7 +66,9 @@ int main(int argc, char** argv) {
 
     BenchOptions bench;
     auto* b = app.add_subcommand("bench", "Timing tables laid out like the papers' tables (all tables when none is named)");
-    b->add_option("tables", bench.tables, "Table names");
+    std::string table_names;
+    for (const auto& t : bench_tables()) table_names += (table_names.empty() ? "" : ", ") + t.name;
+    b->add_option("tables", bench.tables, "Table names: " + table_names);
     b->add_option("--format", bench.format, "md, csv or json")->capture_default_str();
     b->add_option("--repeat", bench.repeat, "Runs per cell (median, min, max)")->capture_default_str();
     b->add_option("-o,--output", bench.out, "Write to FILE instead of standard output");

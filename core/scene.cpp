@@ -368,6 +368,25 @@ void apply_set(Scene& s, const std::string& key, const std::string& value) {
     for (ParamTable* table : t.tables) table->set(d->name, v, "--set " + key);
 }
 
+void apply_sets(Scene& s, const std::vector<std::string>& assignments) {
+    for (const auto& a : assignments) apply_set(s, a);
+    for (const auto& a : assignments) check_set_used(s, a.substr(0, a.find('=')));
+}
+
+void check_set_used(const Scene& s, const std::string& key) {
+    Scene copy = s;
+    Target t = resolve_key(copy, key);
+    const ParamGroup& g = t.tables.front()->group();
+    const ParamDecl* d = g.find(t.param);
+    if (!d) return;  // apply_set has named it
+    for (const ParamTable* table : t.tables)
+        if (table->is_used(*d)) return;
+    const ParamTable& first = *t.tables.front();
+    throw InputError("--set " + key + ": not used when " + g.name() + "." + d->used_when_key + " is '" +
+                     value_to_text(*g.find(d->used_when_key), first.get(d->used_when_key)) + "' (it applies to " + d->used_when_key + " = " +
+                     list_text(d->used_when_values) + "); set " + g.name() + "." + d->used_when_key + " too, or leave it out");
+}
+
 const ParamDecl& decl_of(const Scene& s, const std::string& key) {
     Scene copy = s;
     Target t = resolve_key(copy, key);

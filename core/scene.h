@@ -67,6 +67,11 @@ void write_text_atomic(const std::string& path, const std::string& text);
 // nearest valid key.
 void apply_set(Scene& s, const std::string& assignment);
 void apply_set(Scene& s, const std::string& key, const std::string& value);
+// Several `--set`s, then the check a preset gets: a key the final settings do not use is an error
+// naming it and the setting it depends on (so the order of the --sets does not matter).
+void apply_sets(Scene& s, const std::vector<std::string>& assignments);
+// InputError when no table `key` addresses uses it with the scene's current settings.
+void check_set_used(const Scene& s, const std::string& key);
 // Read a public key ("camera.distance", "basic.kd", ...) as text, for display and sweeps.
 std::string get_public(const Scene& s, const std::string& key);
 // The declaration behind a public key (throws InputError with a suggestion if unknown).

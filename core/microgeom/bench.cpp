@@ -76,7 +76,7 @@ std::vector<BenchTable> MicrogeomTechnique::bench_tables() const {
 
     BenchTable lod;
     lod.name = "microgeom-brdf";
-    lod.title = "Heidrich et al. 2000, §6: simulated BRDF (virtual goniometer) and displaced geometry, Bricks 128x128, 100 directions, depth 2";
+    lod.title = "Heidrich et al. 2000, §6: simulated BRDF (virtual goniometer), Bricks 128x128, 100 directions, depth 2";
     lod.paper_machine = "SGI Octane + GeForce 256 (hardware goniometer images)";
     BenchColumn brdf_mem;
     brdf_mem.name = "memory";

@@ -160,10 +160,12 @@ TEST(Capture, SidecarSaysWhatRanWithWhichRenderer) {
     ASSERT_EQ(irradiance.size(), 1u);
     EXPECT_EQ(irradiance[0].value("status", ""), "ran");
     EXPECT_FALSE(irradiance[0].contains("object"));
-    // basic has no frame steps; the frame holds every AOV of the scene (no --aov given).
+    // basic has no frame steps; without --aov the frame holds the radiance only (AOVs on demand),
+    // while every AOV the scene could render is listed.
     ASSERT_TRUE(j["frame_steps"].is_array());
     EXPECT_TRUE(j["frame_steps"].empty()) << j["frame_steps"].dump();
-    EXPECT_EQ(j["aovs_rendered"], nlohmann::json::array({"radiance", "normal"}));
+    EXPECT_EQ(j["aovs_rendered"], nlohmann::json::array({"radiance"}));
+    EXPECT_EQ(j["aovs_available"], nlohmann::json::array({"radiance", "normal"}));
     EXPECT_TRUE(j["timings"].contains("render_ms"));
     // The same capture with the environment effect off skips its stage, and says why.
     const CliResult r2 = run_mesolab("capture --backend cpu --size 32x32 -o '" + dir.path.string() + "' '" + preset + "' --set effects.environment=false");

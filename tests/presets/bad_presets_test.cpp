@@ -89,6 +89,22 @@ TEST(BadInput, SetErrorsNameTheKeyAndSuggest) {
     EXPECT_EQ(r.status, 2);
 }
 
+// A --set of a key the final settings do not use is refused, as the same key in a preset file is;
+// the order of the --sets does not matter.
+TEST(BadInput, SetOfAnUnusedKeyIsAnErrorWhateverTheOrder) {
+    const std::string preset = source_path("presets/microgeom/bricks-texture.json");
+    CliResult r = run_mesolab("preset show '" + preset + "' --set microgeom.brdf_resolution=16");
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("microgeom.brdf_resolution"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("microgeom.lod"), std::string::npos) << r.err;
+    r = run_mesolab("preset show '" + preset + "' --set microgeom.brdf_resolution=16 --set microgeom.lod=brdf");
+    EXPECT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("\"brdf_resolution\": 16"), std::string::npos) << r.out;
+    r = run_mesolab("sweep '" + preset + "' --knob microgeom.brdf_resolution=4,8 -o /tmp/mesolab-never");
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("not used"), std::string::npos) << r.err;
+}
+
 // An unknown --metric is refused before any rendering, naming the value and listing the known ones.
 TEST(BadInput, SweepMetricErrorsNameTheValueAndListTheKnownOnes) {
     const std::string preset = source_path("presets/basic/sphere.json");

@@ -96,3 +96,24 @@ TEST(AtomicSave, FailedSaveLeavesTheOldFileIntact) {
     EXPECT_THROW(save_preset(s, path + "/child.json"), InputError);
     EXPECT_EQ(slurp(path), before);
 }
+
+// `bench --update-pages` replaces what lies between whole-line markers, and nothing else: a
+// marker quoted inside a line of prose is left alone, and tables not measured keep their text.
+TEST(BenchPages, UpdatePagesReplacesOnlyTheMarkedBlocks) {
+    using namespace mesolab::test;
+    TempDir dir("pages");
+    const std::string readme = "# Title\nQuote `<!-- bench basic -->` in prose.\n<!-- bench basic -->\nold table\n<!-- /bench -->\nafter\n";
+    const std::string page = "intro\n<!-- bench microgeom -->\nkept\n<!-- /bench -->\n";
+    write_file(dir / "README.md", readme);
+    write_file(dir / "core/t/README.md", page);
+    const CliResult r = run_mesolab("bench basic --repeat 1 --backend cpu --update-pages --pages-root '" + dir.path.string() + "'");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const std::string out = slurp(dir / "README.md");
+    EXPECT_EQ(out.find("old table"), std::string::npos) << out;
+    EXPECT_NE(out.find("Quote `<!-- bench basic -->` in prose.\n<!-- bench basic -->\n### basic"), std::string::npos) << out;
+    EXPECT_NE(out.find("| sphere 64 |"), std::string::npos) << out;
+    EXPECT_NE(out.find("<!-- /bench -->\nafter\n"), std::string::npos) << out;
+    EXPECT_EQ(slurp(dir / "core/t/README.md"), page) << "a table not measured keeps its text";
+    const CliResult none = run_mesolab("bench basic --repeat 1 --backend cpu --update-pages --pages-root '" + (dir / "core") + "'");
+    EXPECT_EQ(none.status, 2) << none.err;
+}
