@@ -174,7 +174,7 @@ void timings_panel(const Scene& scene, const std::vector<StageRun>& runs, const 
         ImGui::PopStyleColor();
     }
     const ImVec2 avail = ImGui::GetContentRegionAvail();
-    const float left_w = std::clamp(avail.x * 0.36f, 260.f, 460.f);
+    const float left_w = std::clamp(avail.x * 0.44f, 300.f, 620.f);  // object stages carry their object's name
     if (ImGui::BeginChild("##stages_child", ImVec2(left_w, 0))) {
         ImGui::TextDisabled("Stages of the last evaluation");
         stages_table(scene, runs, steps);

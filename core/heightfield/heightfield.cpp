@@ -43,19 +43,6 @@ vec3 Heightfield::normal(int x, int y) const {
 float Heightfield::min_height() const { return h.empty() ? 0.f : *std::min_element(h.begin(), h.end()); }
 float Heightfield::max_height() const { return h.empty() ? 0.f : *std::max_element(h.begin(), h.end()); }
 
-// [SECTION] Bilinear look-ups
-template <class T>
-T sample_bilinear(const std::vector<T>& tex, int w, int h, bool periodic, float c, float r) {
-    const float c0f = std::floor(c), r0f = std::floor(r);
-    const float fc = c - c0f, fr = r - r0f;
-    auto wrap = [&](int i, int n) { return periodic ? ((i % n) + n) % n : std::clamp(i, 0, n - 1); };
-    const int c0 = wrap(int(c0f), w), c1 = wrap(int(c0f) + 1, w), r0 = wrap(int(r0f), h), r1 = wrap(int(r0f) + 1, h);
-    auto at = [&](int x, int y) { return tex[size_t(y) * size_t(w) + size_t(x)]; };
-    return (at(c0, r0) * (1.f - fc) + at(c1, r0) * fc) * (1.f - fr) + (at(c0, r1) * (1.f - fc) + at(c1, r1) * fc) * fr;
-}
-template vec3 sample_bilinear<vec3>(const std::vector<vec3>&, int, int, bool, float, float);
-template float sample_bilinear<float>(const std::vector<float>&, int, int, bool, float, float);
-
 // [SECTION] Procedural fields
 namespace {
 
