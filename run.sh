@@ -10,6 +10,9 @@ cd "$(dirname "$0")"
 source .ci/setup.sh
 ensure_packages
 build build
+# Large stage results (look-up tables, visibility, light images) on transparent huge pages:
+# fresh allocations of tens of MB cost several times less where page faults are slow.
+export GLIBC_TUNABLES="${GLIBC_TUNABLES:+$GLIBC_TUNABLES:}glibc.malloc.hugetlb=1"
 
 if [ -n "${DISPLAY:-}${WAYLAND_DISPLAY:-}" ] && [ -z "${MESOLAB_HEADLESS:-}" ]; then
   exec ./build/mesolab gui "$@"
@@ -20,5 +23,5 @@ echo "== no display: headless showcase"
 echo "== short bench: three fast tables, median of 3 runs per cell"
 ./build/mesolab bench basic microgeom-geometry bumpsynth-frame --repeat 3
 echo "== full timing tables: core/basic/README.md, core/microgeom/README.md, core/bumpsynth/README.md"
-echo "   regenerate them (every table, median of 5 runs; an estimated 10-15 minutes on an idle 2-core machine):"
-echo "     build/mesolab bench --update-pages"
+echo "   regenerate them (every table, median of 5 runs; about 10 minutes on an idle 2-core machine):"
+echo "     GLIBC_TUNABLES=glibc.malloc.hugetlb=1 build/mesolab bench --update-pages"

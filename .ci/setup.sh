@@ -30,6 +30,11 @@ build() {
   local jobs
   jobs="$(nproc 2>/dev/null || echo 2)"
   echo "== building $dir"
-  cmake -S . -B "$dir" -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
+  # ccache, where installed, makes rebuilds of a fresh clone cheap; it is not required.
+  local launcher=()
+  if command -v ccache >/dev/null 2>&1; then
+    launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+  fi
+  cmake -S . -B "$dir" -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" "$@" >/dev/null
   cmake --build "$dir" -j "$jobs"
 }

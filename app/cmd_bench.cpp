@@ -8,6 +8,7 @@
 #include "core/technique.h"
 
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -139,7 +140,11 @@ int run_bench(const BenchOptions& o) {
             throw std::runtime_error(std::string("bench needs an OpenGL context for GPU columns (use --backend cpu): ") + e.what());
         }
     }
-    const std::string machine = cpu_model() + ", " + std::to_string(std::thread::hardware_concurrency()) + " threads; GL: " + gl;
+    std::string machine = cpu_model() + ", " + std::to_string(std::thread::hardware_concurrency()) + " threads; GL: " + gl;
+    // Large stage results on transparent huge pages (run.sh sets this): said, since it changes
+    // the cost of fresh allocations of tens of MB several-fold on machines with slow page faults.
+    if (const char* t = std::getenv("GLIBC_TUNABLES"); t && std::string(t).find("glibc.malloc.hugetlb=1") != std::string::npos)
+        machine += "; malloc on huge pages";
     // A stage's time in an evaluation: the sum over the objects it ran for.
     const auto stage_ms = [](const Evaluation& ev, const std::string& stage) {
         double ms = 0;
