@@ -1,0 +1,143 @@
+// The diffuse dipole (see dipole.h).
+#include "core/translucency/dipole.h"
+#include "core/error.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace mesolab::translucency {
+
+namespace {
+constexpr double kPiD = 3.14159265358979323846;
+
+std::string fmt3(dvec3 v) {
+    std::ostringstream s;
+    s << v.x << "," << v.y << "," << v.z;
+    return s.str();
+}
+}  // namespace
+
+// [SECTION] Measured materials (Jensen et al. 2001, Fig. 5 table: σ's, σa in mm^-1, R_d)
+const std::vector<MeasuredMaterial>& measured_materials() {
+    static const std::vector<MeasuredMaterial> m = {
+        {"apple", {{2.29, 2.39, 1.97}, {0.0030, 0.0034, 0.046}, 1.3}, {0.846, 0.841, 0.528}},
+        {"chicken1", {{0.15, 0.21, 0.38}, {0.015, 0.077, 0.19}, 1.3}, {0.314, 0.156, 0.126}},
+        {"chicken2", {{0.19, 0.25, 0.32}, {0.018, 0.088, 0.20}, 1.3}, {0.321, 0.160, 0.108}},
+        {"cream", {{7.38, 5.47, 3.15}, {0.0002, 0.0028, 0.0163}, 1.3}, {0.976, 0.900, 0.725}},
+        {"ketchup", {{0.18, 0.07, 0.03}, {0.061, 0.97, 1.45}, 1.3}, {0.164, 0.006, 0.002}},
+        {"marble", {{2.19, 2.62, 3.00}, {0.0021, 0.0041, 0.0071}, 1.5}, {0.830, 0.791, 0.753}},
+        {"potato", {{0.68, 0.70, 0.55}, {0.0024, 0.0090, 0.12}, 1.3}, {0.764, 0.613, 0.213}},
+        {"skimmilk", {{0.70, 1.22, 1.90}, {0.0014, 0.0025, 0.0142}, 1.3}, {0.815, 0.813, 0.682}},
+        {"skin1", {{0.74, 0.88, 1.01}, {0.032, 0.17, 0.48}, 1.3}, {0.436, 0.227, 0.131}},
+        {"skin2", {{1.09, 1.59, 1.79}, {0.013, 0.070, 0.145}, 1.3}, {0.623, 0.433, 0.344}},
+        {"spectralon", {{11.6, 20.4, 14.9}, {0.0, 0.0, 0.0}, 1.3}, {1.0, 1.0, 1.0}},
+        {"wholemilk", {{2.55, 3.21, 3.77}, {0.0011, 0.0024, 0.014}, 1.3}, {0.908, 0.881, 0.759}},
+    };
+    return m;
+}
+
+const MeasuredMaterial& measured_material(const std::string& name, const std::string& key) {
+    std::vector<std::string> names;
+    for (const MeasuredMaterial& m : measured_materials()) {
+        if (m.name == name) return m;
+        names.push_back(m.name);
+    }
+    std::string msg = key + ": unknown material '" + name + "'";
+    if (const std::string near = nearest_key(name, names); !near.empty()) msg += " (did you mean '" + near + "'?)";
+    msg += "; expected one of:";
+    for (const std::string& n : names) msg += " " + n;
+    throw InputError(msg);
+}
+
+void validate(const Medium& m, const std::string& group) {
+    for (int c = 0; c < 3; ++c) {
+        if (!std::isfinite(m.sigma_s[c]) || m.sigma_s[c] < 0.0)
+            throw InputError(group + ".sigma_s: " + fmt3(m.sigma_s) + " must be finite and >= 0 (reduced scattering, mm^-1)");
+        if (!std::isfinite(m.sigma_a[c]) || m.sigma_a[c] < 0.0)
+            throw InputError(group + ".sigma_a: " + fmt3(m.sigma_a) + " must be finite and >= 0 (absorption, mm^-1)");
+        if (!(m.sigma_s[c] + m.sigma_a[c] > 0.0))
+            throw InputError(group + ".sigma_s: " + fmt3(m.sigma_s) + " with " + group + ".sigma_a " + fmt3(m.sigma_a) +
+                             ": every channel needs sigma_s + sigma_a > 0 (a medium that neither scatters nor absorbs has no dipole)");
+    }
+    if (!std::isfinite(m.eta) || m.eta < 1.0 || m.eta > 3.0)
+        throw InputError(group + ".eta: " + std::to_string(m.eta) + " must be in [1, 3]");
+}
+
+// [SECTION] Fresnel terms
+double fresnel_diffuse_reflectance(double eta) { return -1.440 / (eta * eta) + 0.710 / eta + 0.668 + 0.0636 * eta; }
+
+double fresnel_transmittance(double cos_theta, double eta) {
+    if (eta == 1.0) return 1.0;
+    const double r0 = (eta - 1.0) / (eta + 1.0) * ((eta - 1.0) / (eta + 1.0));
+    const double c = std::clamp(std::abs(cos_theta), 0.0, 1.0), m = 1.0 - c;
+    const double m2 = m * m;
+    return std::clamp(1.0 - (r0 + (1.0 - r0) * m2 * m2 * m), 0.0, 1.0);
+}
+
+// [SECTION] The dipole
+Dipole::Dipole(const Medium& m) : m_(m) {
+    validate(m);
+    const double Fdr = fresnel_diffuse_reflectance(m.eta);
+    A_ = (1.0 + Fdr) / (1.0 - Fdr);
+    for (int c = 0; c < 3; ++c) {
+        const double st = m.sigma_s[c] + m.sigma_a[c];
+        alpha_[c] = m.sigma_s[c] / st;
+        sigma_tr_[c] = std::sqrt(3.0 * m.sigma_a[c] * st);
+        zr_[c] = 1.0 / st;
+        zv_[c] = zr_[c] * (1.0 + 4.0 * A_ / 3.0);
+    }
+}
+
+double Dipole::Rd(double r, int c) const {
+    const double r2 = r * r, s = sigma_tr_[c], zr = zr_[c], zv = zv_[c];
+    const double dr = std::sqrt(r2 + zr * zr), dv = std::sqrt(r2 + zv * zv);
+    const double real = zr * (s * dr + 1.0) * std::exp(-s * dr) / (dr * dr * dr);
+    const double virt = zv * (s * dv + 1.0) * std::exp(-s * dv) / (dv * dv * dv);
+    return alpha_[c] / (4.0 * kPiD) * (real + virt);
+}
+
+dvec3 Dipole::Rd(double r) const { return {Rd(r, 0), Rd(r, 1), Rd(r, 2)}; }
+
+// ∫_0^R 2πr z (σ d + 1) e^(-σ d) / d³ dr = 2π z [e^(-σ z)/z - e^(-σ d(R))/d(R)]  (r dr = d dd).
+dvec3 Dipole::reflectance_within(double R) const {
+    dvec3 out(0.0);
+    for (int c = 0; c < 3; ++c) {
+        const double s = sigma_tr_[c];
+        double sum = 0.0;
+        for (const double z : {zr_[c], zv_[c]}) {
+            const double d = std::sqrt(R * R + z * z);
+            sum += z * (std::exp(-s * z) / z - (std::isfinite(d) ? std::exp(-s * d) / d : 0.0));
+        }
+        out[c] = alpha_[c] / 2.0 * sum;
+    }
+    return out;
+}
+
+dvec3 Dipole::total_reflectance() const {
+    dvec3 out(0.0);
+    for (int c = 0; c < 3; ++c) {
+        const double k = std::sqrt(3.0 * (1.0 - alpha_[c]));
+        out[c] = alpha_[c] / 2.0 * (1.0 + std::exp(-4.0 / 3.0 * A_ * k)) * std::exp(-k);
+    }
+    return out;
+}
+
+double Dipole::radius_holding(double f) const {
+    f = std::clamp(f, 0.0, 1.0 - 1e-12);
+    const dvec3 total = reflectance_within(INFINITY);
+    double lo = 0.0, hi = std::max({zv_.x, zv_.y, zv_.z});
+    const auto enough = [&](double R) {
+        const dvec3 w = reflectance_within(R);
+        for (int c = 0; c < 3; ++c)
+            if (total[c] > 0.0 && w[c] < f * total[c]) return false;
+        return true;
+    };
+    while (!enough(hi) && hi < 1e12) hi *= 2.0;
+    for (int it = 0; it < 100 && hi - lo > 1e-9 * hi; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (enough(mid) ? hi : lo) = mid;
+    }
+    return hi;
+}
+}  // namespace mesolab::translucency

@@ -1,0 +1,88 @@
+#pragma once
+// [SECTION] The diffuse dipole of Jensen et al. 2001, as Lensch et al. 2002 use it (their Fig. 2, Eq. 2-3).
+// Multiple scattering in a homogeneous, highly scattering medium under a planar boundary: the
+// radiosity leaving the surface at distance r from where unit power entered is R_d(r) (mm^-2), and
+// the fraction of the entering power that leaves at all is the total diffuse reflectance
+// R_total = ∫ 2πr R_d(r) dr. Single scattering is ignored, as in both papers.
+//
+// Per colour channel, with the reduced scattering σ's and the absorption σa (mm^-1) and the
+// relative index of refraction η:
+//   σ't = σ's + σa,  α' = σ's / σ't,  σtr = sqrt(3 σa σ't)            (effective transport, mm^-1)
+//   F_dr = -1.440/η² + 0.710/η + 0.668 + 0.0636 η                      (diffuse Fresnel reflectance fit)
+//   A = (1 + F_dr) / (1 - F_dr)
+//   z_r = 1/σ't,  z_v = z_r (1 + 4A/3)                                  (real and virtual source depths, mm)
+//   d_r = sqrt(r² + z_r²),  d_v = sqrt(r² + z_v²)
+//   R_d(r) = α'/(4π) [ z_r (σtr d_r + 1) e^(-σtr d_r) / d_r³ + z_v (σtr d_v + 1) e^(-σtr d_v) / d_v³ ]
+//   R_total = α'/2 (1 + e^(-4/3 A sqrt(3(1-α')))) e^(-sqrt(3(1-α')))     (Jensen et al. 2001, Eq. 8 integrated)
+// R_d(0) is finite (z_r > 0); σa = 0 gives σtr = 0 and R_total = 1 (spectralon).
+//
+// Fresnel transmittance (Schlick 1994, as the paper): T(cos θ) = 1 - R0 - (1 - R0)(1 - cos θ)^5
+// with R0 = ((η - 1)/(η + 1))². At η = 1 there is no interface: T = 1 at every angle.
+#include "core/math.h"
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace mesolab::translucency {
+
+using dvec3 = glm::dvec3;
+
+// A homogeneous medium, RGB. Lengths in millimetres.
+struct Medium {
+    dvec3 sigma_s{0.0};  // reduced scattering coefficient σ's, mm^-1
+    dvec3 sigma_a{0.0};  // absorption coefficient σa, mm^-1
+    double eta = 1.3;    // relative index of refraction
+};
+
+// One of Jensen et al. 2001's measured materials (Table in ../shared/papers/README.md), with the
+// total diffuse reflectance that paper lists for it (R_d, 3 decimals).
+struct MeasuredMaterial {
+    std::string name;
+    Medium medium;
+    dvec3 listed_reflectance;
+};
+
+// apple, chicken1, chicken2, cream, ketchup, marble, potato, skimmilk, skin1, skin2, spectralon,
+// wholemilk; η = 1.3, marble 1.5.
+const std::vector<MeasuredMaterial>& measured_materials();
+// InputError naming `key` and the known names (with a suggestion) for an unknown name.
+const MeasuredMaterial& measured_material(const std::string& name, const std::string& key = "translucency.material");
+
+// Checks a medium: σ's, σa ≥ 0 and finite, σ's + σa > 0 per channel, η in [1, 3]. InputError
+// naming the key (`group`.sigma_s, .sigma_a, .eta) otherwise.
+void validate(const Medium& m, const std::string& group = "translucency");
+
+// Diffuse Fresnel reflectance F_dr(η) (Egan and Hilgeman's fit, as Jensen et al. 2001).
+double fresnel_diffuse_reflectance(double eta);
+// Schlick's Fresnel transmittance into (or out of) a medium of relative index η at cos θ.
+double fresnel_transmittance(double cos_theta, double eta);
+
+// The dipole for one medium, with the per-channel constants computed once.
+class Dipole {
+public:
+    explicit Dipole(const Medium& m);
+
+    // R_d(r) per channel, mm^-2, r in mm (r < 0 is taken as |r|).
+    dvec3 Rd(double r) const;
+    double Rd(double r, int channel) const;
+    // ∫ 2πr R_d(r) dr over [0, R] per channel (closed form), and R_total (R = ∞).
+    dvec3 reflectance_within(double R) const;
+    dvec3 total_reflectance() const;
+    // The radius within which R_d holds a fraction `f` of R_total in every channel (mm): how far
+    // subsurface transport reaches (Lensch et al.: "up to several millimetres in marble").
+    double radius_holding(double f) const;
+
+    const Medium& medium() const { return m_; }
+    const dvec3& sigma_tr() const { return sigma_tr_; }
+    const dvec3& alpha_prime() const { return alpha_; }
+    const dvec3& z_r() const { return zr_; }
+    const dvec3& z_v() const { return zv_; }
+    double A() const { return A_; }
+
+private:
+    Medium m_;
+    dvec3 sigma_tr_{0.0}, alpha_{0.0}, zr_{0.0}, zv_{0.0};
+    double A_ = 1.0;
+};
+}  // namespace mesolab::translucency
