@@ -1,0 +1,175 @@
+// Mesh preparation for translucency: weld, clean, keep manifold, decimate (see mesh_prep.h).
+#include "core/translucency/mesh_prep.h"
+#include "core/error.h"
+
+// OpenMesh's property vectors push back uninitialised VectorT values (see core/mesh.cpp).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <OpenMesh/Tools/Decimater/DecimaterT.hh>
+#include <OpenMesh/Tools/Decimater/ModAspectRatioT.hh>
+#include <OpenMesh/Tools/Decimater/ModNormalFlippingT.hh>
+#include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
+#pragma GCC diagnostic pop
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <iostream>
+#include <set>
+#include <unordered_map>
+
+namespace mesolab::translucency {
+
+namespace {
+using OmMesh = OpenMesh::TriMesh_ArrayKernelT<>;
+}
+
+PreparedMesh prepare_mesh(const std::vector<vec3>& position, const std::vector<uint32_t>& index, int target_vertices) {
+    if (target_vertices < 0) throw InputError("translucency.vertices: " + std::to_string(target_vertices) + " must be >= 0 (0 keeps every vertex)");
+    PreparedMesh out;
+
+    // [SECTION] Weld: a grid of cells of the tolerance; a vertex joins the first vertex within
+    // the tolerance in its cell or the neighbouring ones.
+    vec3 lo(INFINITY), hi(-INFINITY);
+    for (const vec3& p : position)
+        if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) lo = glm::min(lo, p), hi = glm::max(hi, p);
+    const float diag = glm::length(hi - lo);
+    const float tol = std::isfinite(diag) && diag > 0.f ? 1e-6f * diag : 1e-12f;
+    std::unordered_map<uint64_t, std::vector<uint32_t>> cells;
+    std::vector<uint32_t> remap(position.size(), UINT32_MAX);
+    std::vector<vec3> welded;
+    const auto cell_key = [](int64_t x, int64_t y, int64_t z) {
+        return uint64_t((x * 73856093) ^ (y * 19349663) ^ (z * 83492791));
+    };
+    for (size_t v = 0; v < position.size(); ++v) {
+        const vec3 p = position[v];
+        if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) continue;
+        const glm::i64vec3 c(glm::floor((p - lo) / tol));
+        uint32_t found = UINT32_MAX;
+        for (int dz = -1; dz <= 1 && found == UINT32_MAX; ++dz)
+            for (int dy = -1; dy <= 1 && found == UINT32_MAX; ++dy)
+                for (int dx = -1; dx <= 1 && found == UINT32_MAX; ++dx) {
+                    const auto it = cells.find(cell_key(c.x + dx, c.y + dy, c.z + dz));
+                    if (it == cells.end()) continue;
+                    for (uint32_t w : it->second)
+                        if (glm::length(welded[w] - p) <= tol) {
+                            found = w;
+                            break;
+                        }
+                }
+        if (found == UINT32_MAX) {
+            found = uint32_t(welded.size());
+            welded.push_back(p);
+            cells[cell_key(c.x, c.y, c.z)].push_back(found);
+        } else {
+            ++out.welded_vertices;
+        }
+        remap[v] = found;
+    }
+
+    // [SECTION] Clean: degenerate and duplicate triangles
+    std::vector<std::array<uint32_t, 3>> tris;
+    std::set<std::array<uint32_t, 3>> seen;
+    for (size_t f = 0; f + 2 < index.size(); f += 3) {
+        std::array<uint32_t, 3> t{};
+        bool ok = true;
+        for (int j = 0; j < 3; ++j) {
+            const uint32_t i = index[f + size_t(j)];
+            ok = ok && i < remap.size() && remap[i] != UINT32_MAX;
+            t[size_t(j)] = ok ? remap[i] : 0;
+        }
+        if (ok) ok = t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
+        if (ok) {
+            const vec3 n = glm::cross(welded[t[1]] - welded[t[0]], welded[t[2]] - welded[t[0]]);
+            ok = glm::length(n) > 1e-12f * diag * diag;
+        }
+        if (ok) {
+            std::array<uint32_t, 3> key = t;
+            std::sort(key.begin(), key.end());
+            ok = seen.insert(key).second;
+        }
+        if (ok) tris.push_back(t);
+        else ++out.removed_triangles;
+    }
+    if (tris.empty()) throw InputError("translucency: the mesh has no triangle left after removing " + std::to_string(out.removed_triangles) + " degenerate ones");
+
+    // [SECTION] Manifold: OpenMesh refuses a face that would make an edge or vertex non-manifold;
+    // such a face is added with its own copies of its corners.
+    OmMesh m;
+    std::vector<OmMesh::VertexHandle> vh(welded.size());
+    for (size_t v = 0; v < welded.size(); ++v) vh[v] = m.add_vertex(OmMesh::Point(welded[v].x, welded[v].y, welded[v].z));
+    for (const auto& t : tris) {
+        OmMesh::FaceHandle fh;
+        {
+            // OpenMesh reports a complex edge or vertex on std::cerr; the count below says it once.
+            const std::vector<OmMesh::VertexHandle> c{vh[t[0]], vh[t[1]], vh[t[2]]};
+            std::streambuf* old = std::cerr.rdbuf(nullptr);
+            fh = m.add_face(c);
+            std::cerr.rdbuf(old);
+        }
+        if (!fh.is_valid()) {
+            std::vector<OmMesh::VertexHandle> c;
+            for (uint32_t i : t) c.push_back(m.add_vertex(OmMesh::Point(welded[i].x, welded[i].y, welded[i].z)));
+            m.add_face(c);
+            ++out.detached_triangles;
+        }
+    }
+    // Unused vertices (welded away from every kept triangle) go.
+    m.request_vertex_status();
+    m.request_edge_status();
+    m.request_face_status();
+    for (const auto& v : m.vertices())
+        if (m.is_isolated(v)) m.delete_vertex(v, false);
+    m.garbage_collection();
+    out.input_vertices = int(m.n_vertices());
+
+    // [SECTION] Decimate
+    if (target_vertices > 0 && size_t(target_vertices) < m.n_vertices()) {
+        m.request_face_normals();
+        m.update_face_normals();
+        OpenMesh::Decimater::DecimaterT<OmMesh> dec(m);
+        OpenMesh::Decimater::ModQuadricT<OmMesh>::Handle quadric;
+        OpenMesh::Decimater::ModNormalFlippingT<OmMesh>::Handle flipping;
+        OpenMesh::Decimater::ModAspectRatioT<OmMesh>::Handle aspect;
+        dec.add(quadric);
+        dec.add(flipping);
+        dec.add(aspect);
+        dec.module(quadric).unset_max_err();
+        dec.module(flipping).set_max_normal_deviation(60.0);
+        dec.module(aspect).set_aspect_ratio(6.0);
+        dec.module(aspect).set_binary(true);
+        dec.initialize();
+        dec.decimate_to(size_t(target_vertices));
+        m.garbage_collection();
+        if (m.n_vertices() > size_t(target_vertices) + size_t(target_vertices) / 20 + 8)
+            out.warnings.push_back("decimation stopped at " + std::to_string(m.n_vertices()) + " vertices (translucency.vertices = " +
+                                   std::to_string(target_vertices) + "): further collapses would flip normals or make slivers");
+    }
+
+    // [SECTION] Arrays, normals, boundary
+    out.position.resize(m.n_vertices());
+    for (const auto& v : m.vertices()) {
+        const OmMesh::Point p = m.point(v);
+        out.position[size_t(v.idx())] = vec3(p[0], p[1], p[2]);
+    }
+    out.normal.assign(out.position.size(), vec3(0.f));
+    for (const auto& f : m.faces()) {
+        std::array<uint32_t, 3> t{};
+        int j = 0;
+        for (const auto& v : m.fv_range(f)) t[size_t(j++)] = uint32_t(v.idx());
+        for (uint32_t i : t) out.index.push_back(i);
+        const vec3 n = glm::cross(out.position[t[1]] - out.position[t[0]], out.position[t[2]] - out.position[t[0]]);  // 2 x area
+        for (uint32_t i : t) out.normal[i] += n;
+    }
+    for (vec3& n : out.normal) n = glm::length(n) > 0.f ? glm::normalize(n) : vec3(0.f, 0.f, 1.f);
+    for (const auto& e : m.edges()) out.boundary_edges += m.is_boundary(e) ? 1 : 0;
+
+    if (out.welded_vertices > 0) out.warnings.push_back(std::to_string(out.welded_vertices) + " duplicate vertices welded");
+    if (out.removed_triangles > 0) out.warnings.push_back(std::to_string(out.removed_triangles) + " degenerate or duplicate triangles removed");
+    if (out.detached_triangles > 0)
+        out.warnings.push_back(std::to_string(out.detached_triangles) + " triangles on non-manifold edges or vertices kept detached");
+    if (out.boundary_edges > 0) out.warnings.push_back(std::to_string(out.boundary_edges) + " boundary edges (holes or open borders)");
+    return out;
+}
+}  // namespace mesolab::translucency

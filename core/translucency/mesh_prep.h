@@ -1,0 +1,44 @@
+#pragma once
+// [SECTION] Mesh preparation for translucency (Lensch et al. 2002, §5: "simplified ... to
+// triangles of similar size"). The global response has one hat basis function per vertex, so
+// the mesh must be one connected surface without duplicated vertices: a scanned mesh read from a
+// file (or a primitive, whose seams repeat vertices) is repaired, then simplified.
+//
+//   weld        vertices closer than 1e-6 of the bounding box's diagonal become one
+//   clean       triangles with a repeated corner, no area, a non-finite corner or the same
+//               corners as another triangle are removed
+//   manifold    a triangle that would make an edge or a vertex non-manifold keeps its own copies
+//               of the offending corners (it is kept, detached along that edge)
+//   decimate    OpenMesh's decimater down to `target_vertices` (0 = keep): quadric error as the
+//               priority; collapses that flip a normal (> 60°) or leave a triangle with an aspect
+//               ratio worse than 1:6 are refused, so triangles stay well shaped
+// Holes stay holes (their boundary edges are counted). Everything repaired is counted and said
+// in `warnings`.
+#include "core/math.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace mesolab::translucency {
+
+struct PreparedMesh {
+    std::vector<vec3> position;
+    std::vector<vec3> normal;      // area-weighted vertex normals
+    std::vector<uint32_t> index;   // 3 per triangle, counter-clockwise from outside
+
+    int welded_vertices = 0;       // vertices merged into another
+    int removed_triangles = 0;     // degenerate or duplicate
+    int detached_triangles = 0;    // kept with their own copies of non-manifold corners
+    int boundary_edges = 0;        // edges of one triangle only (holes, open borders)
+    int input_vertices = 0;        // after welding, before decimation
+    std::vector<std::string> warnings;
+
+    size_t vertex_count() const { return position.size(); }
+    size_t triangle_count() const { return index.size() / 3; }
+};
+
+// InputError naming translucency.vertices for a negative target, or the mesh when no triangle
+// is left after cleaning. A target above the vertex count keeps every vertex.
+PreparedMesh prepare_mesh(const std::vector<vec3>& position, const std::vector<uint32_t>& index, int target_vertices);
+}  // namespace mesolab::translucency
