@@ -140,4 +140,16 @@ double Dipole::radius_holding(double f) const {
     }
     return hi;
 }
+
+// [SECTION] Tabulated R_d
+RdTable::RdTable(const Dipole& d, double r_max, int n) : r_max_(r_max), n_(std::max(2, n)) {
+    if (!(r_max > 0.0) || !std::isfinite(r_max)) throw std::invalid_argument("RdTable: r_max must be positive and finite");
+    inv_r_max_ = float(1.0 / r_max);
+    r_max2_ = float(r_max * r_max);
+    table_.resize(size_t(n_));
+    for (int i = 0; i < n_; ++i) {
+        const double q = double(i) / double(n_ - 1), r = q * q * r_max;
+        table_[size_t(i)] = vec3(d.Rd(r));
+    }
+}
 }  // namespace mesolab::translucency
