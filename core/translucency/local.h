@@ -1,0 +1,50 @@
+#pragma once
+// [SECTION] The local response of Lensch et al. 2002, §5.3: a K x K texel-to-texel kernel per texel.
+// Near where light enters, R_d is large and sharp, so it is resolved on the atlas's texels
+// (piecewise constant basis, dual basis 1/area): the radiosity at an inner texel t is
+//   B_local(t) = Σ_{t' in the K x K block around t} w(t, t') E(t'),
+//   w(t, t')   = R_d(|x_t − x_t'|) A_t'                    for t' ≠ t (A_t': the texel's area, mm²)
+//   w(t, t)    = ∫_{|r| < ρ} R_d 2πr dr, ρ = sqrt(A_t / π) (the texel as a disk of its own area,
+//                closed form: Dipole::reflectance_within), since R_d(0) A_t would misjudge the
+//                peak when a texel is wider than the source depth z_r.
+// The atlas's borders make every t' of the block a texel of t's chunk that samples the surface
+// (unfolded beyond the chunk's edge), so kernels reach across chunk borders.
+// Kernels are stored for inner texels only: K² weights per channel per inner texel.
+#include "core/math.h"
+#include "core/translucency/atlas.h"
+#include "core/translucency/dipole.h"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace mesolab::translucency {
+
+struct LocalKernels {
+    int K = 0;
+    int size = 0;                            // the atlas side
+    std::vector<int32_t> texel;              // inner texels, in atlas order
+    std::vector<int32_t> slot;               // per atlas texel: its index in `texel`, or -1
+    std::array<std::vector<float>, 3> w;     // per channel: K² weights per inner texel, row-major in (dy, dx)
+
+    size_t bytes() const { return texel.size() * 4 + slot.size() * 4 + 3 * w[0].size() * 4; }
+    // Weight of the neighbour at (dx, dy) (in [-(K-1)/2, (K-1)/2]) for kernel `k`, channel c.
+    float weight(size_t k, int dx, int dy, int c) const {
+        const int h = (K - 1) / 2;
+        return w[size_t(c)][k * size_t(K) * size_t(K) + size_t(dy + h) * size_t(K) + size_t(dx + h)];
+    }
+};
+
+// Surface positions of every non-empty atlas texel, in mm (0 for empty texels).
+std::vector<vec3> texel_positions_mm(const Atlas& atlas, const std::vector<vec3>& position, const std::vector<uint32_t>& index,
+                                     double mm_per_unit);
+
+// InputError naming translucency.kernel for an even K, K < 3 or K > 15, or a K wider than the
+// atlas's border allows (border >= (K - 1)/2 + 1).
+LocalKernels build_local_kernels(const Atlas& atlas, const std::vector<vec3>& position, const std::vector<uint32_t>& index, const Dipole& dipole,
+                                 double mm_per_unit, int K);
+
+// B_local per atlas texel (0 outside inner texels) from per-texel irradiance E (every texel,
+// border texels included). Rows in parallel.
+std::vector<vec3> convolve_local(const LocalKernels& k, const std::vector<vec3>& E);
+}  // namespace mesolab::translucency
