@@ -1,0 +1,84 @@
+// Blending (core/translucency/blend.h): energy on a plane lit by a spot against the total
+// diffuse reflectance, with and without blending; the fitted global response on the ring.
+#include "core/mesh.h"
+#include "core/translucency/blend.h"
+#include "core/translucency/mesh_prep.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace mesolab;
+using namespace mesolab::translucency;
+
+namespace {
+struct SpotScene {
+    PreparedMesh m;
+    Atlas atlas;
+    double mm;
+    std::vector<vec3> E;  // per texel
+};
+
+// A plane of 60 x 60 mm (vertices every 0.94 mm, texels of 0.25 mm: a 7 x 7 kernel reaches about
+// one vertex spacing, as in the paper), a spot of radius `spot_mm` at its centre.
+SpotScene spot_on_plane(double spot_mm) {
+    SpotScene s;
+    const TriMesh p = make_primitive(Primitive::Plane, 64);
+    s.m = prepare_mesh(p.position, p.index, 0);
+    s.atlas = build_atlas(s.m.position, s.m.index, {256, 4, 30.f});
+    s.mm = 30.0;
+    s.E.assign(s.atlas.texel_kind.size(), vec3(0.f));
+    for (size_t t = 0; t < s.E.size(); ++t)
+        if (s.atlas.texel_face[t] >= 0 && glm::length(texel_position(s.atlas, s.m.position, s.m.index, t)) * s.mm < spot_mm) s.E[t] = vec3(1.f);
+    return s;
+}
+
+// Σ B A / Σ E A over inner texels.
+dvec3 ratio(const SpotScene& s, const std::vector<vec3>& B) {
+    dvec3 out(0.0), in(0.0);
+    for (size_t t = 0; t < B.size(); ++t)
+        if (s.atlas.texel_kind[t] == Atlas::kInner) out += dvec3(B[t]) * double(s.atlas.texel_area[t]), in += dvec3(s.E[t]) * double(s.atlas.texel_area[t]);
+    return out / in;
+}
+}  // namespace
+
+// Σ radiosity / Σ irradiance over the plane should be the total diffuse reflectance. Measured
+// here (R, G, B): skin1 blended +2.7%, +6.1%, +8.0%, added without blending +21%, +45%, +82%;
+// marble blended +2.9%, +3.0%, +2.8%, without blending +52%, +73%, +97%.
+// The 3% that the technique aims at is not reached yet: the F0 factors sample R_d once per pair
+// of vertices, which misjudges the first ring of neighbours beyond the kernel.
+TEST(Blending, RemovesMostOfTheDoubleCountingOfASpotOnAPlane) {
+    const SpotScene s = spot_on_plane(3.0);
+    for (const char* material : {"skin1", "marble"}) {
+        const Dipole d(measured_material(material).medium);
+        const dvec3 R = d.total_reflectance();
+        const std::vector<float> A = vertex_areas(s.m.position, s.m.index, s.mm);
+        const std::vector<vec3> Ev = project_to_vertices(s.atlas, s.m.index, s.E, A, s.mm);
+
+        // Blended: zero diagonal, fitted direct part, corrected kernels.
+        LocalKernels L = build_local_kernels(s.atlas, s.m.position, s.m.index, d, s.mm, 7);
+        const VertexFactors F0 = build_vertex_factors(s.m.position, s.m.index, d, {s.mm, 0.f, true});
+        const BlendWeights b = fit_blending(s.atlas, s.m.position, s.m.index, d, s.mm, F0, L);
+        std::vector<vec3> Bv = F0.multiply(Ev);
+        const std::vector<vec3> Bd = direct_vertex_radiosity(b, L, s.atlas, s.m.index, s.m.vertex_count(), s.E);
+        for (size_t i = 0; i < Bv.size(); ++i) Bv[i] += Bd[i];
+        std::vector<vec3> blended = convolve_local(L, s.E);
+        const std::vector<vec3> g = interpolate_to_texels(s.atlas, s.m.index, Bv);
+        for (size_t t = 0; t < blended.size(); ++t) blended[t] += g[t];
+
+        // Not blended: the kernels as built and the full factors, simply added.
+        const LocalKernels L1 = build_local_kernels(s.atlas, s.m.position, s.m.index, d, s.mm, 7);
+        const VertexFactors F = build_vertex_factors(s.m.position, s.m.index, d, {s.mm, 0.f, false});
+        std::vector<vec3> plain = convolve_local(L1, s.E);
+        const std::vector<vec3> g1 = interpolate_to_texels(s.atlas, s.m.index, F.multiply(Ev));
+        for (size_t t = 0; t < plain.size(); ++t) plain[t] += g1[t];
+
+        const dvec3 rb = ratio(s, blended), rp = ratio(s, plain);
+        for (int c = 0; c < 3; ++c) {
+            const double eb = std::abs(rb[c] / R[c] - 1.0), ep = std::abs(rp[c] / R[c] - 1.0);
+            EXPECT_LT(eb, 0.09) << material << " blended, channel " << c << ": " << rb[c] << " vs " << R[c];
+            EXPECT_GT(ep, 0.15) << material << " unblended, channel " << c << ": " << rp[c] << " vs " << R[c];
+            EXPECT_LT(eb, 0.5 * ep) << material << " channel " << c;
+        }
+    }
+}
