@@ -127,6 +127,19 @@ int run_bench(const BenchOptions& o) {
         }
         tables.push_back(*it);
     }
+    if (o.vertices < 0) throw InputError("--vertices: " + std::to_string(o.vertices) + " must be >= 0");
+    if (!o.mesh.empty() || o.vertices > 0) {
+        if (o.mesh.empty()) throw InputError("--vertices: needs --mesh FILE");
+        // The user's mesh: only its row, in the tables that take one.
+        std::vector<BenchTable> with_mesh;
+        for (auto& t : tables)
+            if (t.mesh_row) {
+                t.rows = {t.mesh_row(std::filesystem::absolute(o.mesh).string(), o.vertices)};
+                with_mesh.push_back(std::move(t));
+            }
+        if (with_mesh.empty()) throw InputError("--mesh: none of the tables asked for takes a mesh (translucency does)");
+        tables = std::move(with_mesh);
+    }
 
     Workbench wb;
     wb.session().set_memory_limit(memory_limit_bytes(o.memory_limit));
@@ -167,7 +180,7 @@ int run_bench(const BenchOptions& o) {
                 auto add = [&](const char* device, const std::vector<double>& v, const std::string& step = "") {
                     if (v.empty()) return;
                     Cell c{t.name, row.name, col.name, device, step, median_of(v), *std::min_element(v.begin(), v.end()), *std::max_element(v.begin(), v.end()),
-                           step.empty() ? paper : std::nullopt};
+                           step.empty() ? paper : (row.paper_step_ms.count(step) ? std::optional<double>(row.paper_step_ms.at(step)) : std::nullopt)};
                     cells.push_back(c);
                     std::fprintf(stderr, "  %-10s %-22s %-22s %-4s %s\n", t.name.c_str(), (step.empty() ? row.name : row.name + " / " + step).c_str(), col.name.c_str(),
                                  device, fmt_ms(c.median).c_str());

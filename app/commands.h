@@ -31,6 +31,8 @@ struct BenchOptions {
     bool profile = false;
     bool update_pages = false;       // write each table into the pages' <!-- bench NAME --> blocks
     std::string pages_root = ".";    // where README.md and core/*/README.md are
+    std::string mesh;                // --mesh FILE: a row for this mesh in the tables that take one
+    int vertices = 0;                // --vertices N: simplify it to N vertices (0: the table's choice)
 };
 int run_bench(const BenchOptions& o);
 

@@ -77,6 +77,8 @@ int main(int argc, char** argv) {
     b->add_flag("--update-pages", bench.update_pages,
                 "Write each table (Markdown) between its `<!-- bench NAME -->` and `<!-- /bench -->` lines in README.md and core/*/README.md");
     b->add_option("--pages-root", bench.pages_root, "With --update-pages: the repository's root")->capture_default_str();
+    b->add_option("--mesh", bench.mesh, "A mesh file (OBJ, PLY, OFF, STL, OM) measured as its own row by the tables that take one (translucency)");
+    b->add_option("--vertices", bench.vertices, "With --mesh: simplify it to N vertices first (0: the table's default)");
     add_memory_limit(b, bench.memory_limit);
 
     SweepOptions sweep;

@@ -7,6 +7,7 @@
 #include "core/scene.h"
 #include "core/stage.h"
 #include <functional>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -31,6 +32,7 @@ struct BenchRow {
     std::string name;                               // as in the paper ("Bricks 128x128")
     std::function<Scene()> scene;                   // the scene this row measures
     std::vector<std::optional<double>> paper_ms;    // one per column, empty where the paper has none
+    std::map<std::string, double> paper_step_ms;    // the paper's figure for a frame step's row, by step name
 };
 
 struct BenchTable {
@@ -39,6 +41,9 @@ struct BenchTable {
     std::string paper_machine;  // "SGI Octane 300 MHz / GeForce 256"
     std::vector<BenchColumn> columns;
     std::vector<BenchRow> rows;
+    // A row for a mesh file of the user's (`mesolab bench NAME --mesh FILE [--vertices N]`; N = 0:
+    // the table's own choice), or null when the table takes none.
+    std::function<BenchRow(const std::string& mesh, int vertices)> mesh_row;
 };
 
 // Tables registered by techniques (see Technique::bench_tables).

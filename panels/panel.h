@@ -28,6 +28,7 @@ struct PanelContext {
     Dirty& dirty;
     const Evaluation* eval = nullptr;  // the last evaluation, may be null
     int object = 0;                    // selected object (index into scene.objects)
+    std::string* aov = nullptr;        // the AOV the viewport shows (null where there is none, e.g. tests)
 };
 
 using PanelFn = std::function<void(PanelContext&)>;

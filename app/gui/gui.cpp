@@ -534,6 +534,8 @@ void Gui::side_windows() {
     float y = r.top;
 
     panels::PanelContext ctx{state_.doc.scene, state_.doc.edits, state_.eval.last ? &*state_.eval.last : nullptr, state_.doc.selected_object};
+    ctx.aov = &state_.ui.viewport.aov;
+    const std::string aov_before = state_.ui.viewport.aov;
 
     ImGui::SetNextWindowPos(ImVec2(r.side_x, y), cond);
     ImGui::SetNextWindowSize(ImVec2(r.side_w, scene_h), cond);
@@ -555,6 +557,7 @@ void Gui::side_windows() {
         }
         ImGui::End();
     }
+    if (state_.ui.viewport.aov != aov_before) state_.frame.outdated = true;  // a panel picked another view
 
     ImGui::SetNextWindowPos(ImVec2(r.side_x, y), cond);
     ImGui::SetNextWindowSize(ImVec2(r.side_w, presets_h), cond);

@@ -101,6 +101,8 @@ public:
         return table_[size_t(i)] * (1.f - t) + table_[size_t(i) + 1] * t;
     }
     double r_max() const { return r_max_; }
+    // The samples (for the GPU's copy of the table): sample i at r = r_max (i / (n - 1))².
+    const std::vector<vec3>& samples() const { return table_; }
 
 private:
     std::vector<vec3> table_;

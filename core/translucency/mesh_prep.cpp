@@ -25,7 +25,8 @@ namespace {
 using OmMesh = OpenMesh::TriMesh_ArrayKernelT<>;
 }
 
-PreparedMesh prepare_mesh(const std::vector<vec3>& position, const std::vector<uint32_t>& index, int target_vertices) {
+PreparedMesh prepare_mesh(const std::vector<vec3>& position, const std::vector<uint32_t>& index, int target_vertices,
+                          const std::vector<vec2>* uv) {
     if (target_vertices < 0) throw InputError("translucency.vertices: " + std::to_string(target_vertices) + " must be >= 0 (0 keeps every vertex)");
     PreparedMesh out;
 
@@ -67,6 +68,16 @@ PreparedMesh prepare_mesh(const std::vector<vec3>& position, const std::vector<u
         }
         remap[v] = found;
     }
+    // Texture coordinates of each welded vertex (several where a seam was welded).
+    const bool with_uv = uv && uv->size() == position.size();
+    std::vector<std::vector<vec2>> welded_uv(with_uv ? welded.size() : 0);
+    if (with_uv)
+        for (size_t v = 0; v < position.size(); ++v) {
+            if (remap[v] == UINT32_MAX) continue;
+            auto& c = welded_uv[remap[v]];
+            const vec2 t = (*uv)[v];
+            if (std::find(c.begin(), c.end(), t) == c.end()) c.push_back(t);
+        }
 
     // [SECTION] Clean: degenerate and duplicate triangles
     std::vector<std::array<uint32_t, 3>> tris;
@@ -97,8 +108,13 @@ PreparedMesh prepare_mesh(const std::vector<vec3>& position, const std::vector<u
     // [SECTION] Manifold: OpenMesh refuses a face that would make an edge or vertex non-manifold;
     // such a face is added with its own copies of its corners.
     OmMesh m;
+    OpenMesh::VPropHandleT<int> source;  // the welded vertex an OpenMesh vertex stands for
+    m.add_property(source);
     std::vector<OmMesh::VertexHandle> vh(welded.size());
-    for (size_t v = 0; v < welded.size(); ++v) vh[v] = m.add_vertex(OmMesh::Point(welded[v].x, welded[v].y, welded[v].z));
+    for (size_t v = 0; v < welded.size(); ++v) {
+        vh[v] = m.add_vertex(OmMesh::Point(welded[v].x, welded[v].y, welded[v].z));
+        m.property(source, vh[v]) = int(v);
+    }
     for (const auto& t : tris) {
         OmMesh::FaceHandle fh;
         {
@@ -110,7 +126,10 @@ PreparedMesh prepare_mesh(const std::vector<vec3>& position, const std::vector<u
         }
         if (!fh.is_valid()) {
             std::vector<OmMesh::VertexHandle> c;
-            for (uint32_t i : t) c.push_back(m.add_vertex(OmMesh::Point(welded[i].x, welded[i].y, welded[i].z)));
+            for (uint32_t i : t) {
+                c.push_back(m.add_vertex(OmMesh::Point(welded[i].x, welded[i].y, welded[i].z)));
+                m.property(source, c.back()) = int(i);
+            }
             m.add_face(c);
             ++out.detached_triangles;
         }
@@ -163,6 +182,32 @@ PreparedMesh prepare_mesh(const std::vector<vec3>& position, const std::vector<u
         for (uint32_t i : t) out.normal[i] += n;
     }
     for (vec3& n : out.normal) n = glm::length(n) > 0.f ? glm::normalize(n) : vec3(0.f, 0.f, 1.f);
+    // Corner texture coordinates: per corner, among its welded vertex's coordinates, the one
+    // nearest the triangle's others (a seam vertex takes the side of the triangle it is in).
+    if (with_uv) {
+        out.corner_uv.resize(out.index.size());
+        for (size_t f = 0; f < out.triangle_count(); ++f) {
+            const std::vector<vec2>* c[3];
+            for (int j = 0; j < 3; ++j) c[j] = &welded_uv[size_t(m.property(source, OmMesh::VertexHandle(int(out.index[3 * f + size_t(j)]))))];
+            float best = INFINITY;
+            const size_t n0 = std::min<size_t>(c[0]->size(), 16);
+            for (size_t a = 0; a < n0; ++a) {
+                const vec2 t0 = (*c[0])[a];
+                const auto nearest = [](const std::vector<vec2>& cand, vec2 to) {
+                    vec2 b = cand.empty() ? to : cand[0];
+                    for (const vec2& q : cand)
+                        if (glm::length(q - to) < glm::length(b - to)) b = q;
+                    return b;
+                };
+                const vec2 t1 = nearest(*c[1], t0), t2 = nearest(*c[2], 0.5f * (t0 + t1));
+                const float spread = glm::length(t1 - t0) + glm::length(t2 - t0) + glm::length(t2 - t1);
+                if (spread < best) {
+                    best = spread;
+                    out.corner_uv[3 * f] = t0, out.corner_uv[3 * f + 1] = t1, out.corner_uv[3 * f + 2] = t2;
+                }
+            }
+        }
+    }
     for (const auto& e : m.edges()) out.boundary_edges += m.is_boundary(e) ? 1 : 0;
 
     if (out.welded_vertices > 0) out.warnings.push_back(std::to_string(out.welded_vertices) + " duplicate vertices welded");

@@ -26,6 +26,7 @@ struct PreparedMesh {
     std::vector<vec3> position;
     std::vector<vec3> normal;      // area-weighted vertex normals
     std::vector<uint32_t> index;   // 3 per triangle, counter-clockwise from outside
+    std::vector<vec2> corner_uv;   // 3 per triangle when the input had texture coordinates (else empty)
 
     int welded_vertices = 0;       // vertices merged into another
     int removed_triangles = 0;     // degenerate or duplicate
@@ -40,5 +41,9 @@ struct PreparedMesh {
 
 // InputError naming translucency.vertices for a negative target, or the mesh when no triangle
 // is left after cleaning. A target above the vertex count keeps every vertex.
-PreparedMesh prepare_mesh(const std::vector<vec3>& position, const std::vector<uint32_t>& index, int target_vertices);
+// `uv` (one per input vertex, optional) gives corner_uv: the decimated mesh's vertices are input
+// vertices, and a corner takes its vertex's coordinates (at a welded seam, those of the side the
+// triangle lies on).
+PreparedMesh prepare_mesh(const std::vector<vec3>& position, const std::vector<uint32_t>& index, int target_vertices,
+                          const std::vector<vec2>* uv = nullptr);
 }  // namespace mesolab::translucency

@@ -1,0 +1,349 @@
+// Technique translucency: the atlas stage's extras, the gather table, ρ and the per-frame CPU passes (see translucency.h).
+#include "core/translucency/translucency.h"
+#include "core/basic/basic.h"
+#include "core/error.h"
+#include "core/image.h"
+#include "core/raster.h"
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace mesolab::translucency {
+
+// [SECTION] Atlas stage: texel geometry, fill sources, the drawn mesh
+AtlasStage make_atlas_stage(const PreparedMesh& mesh, const AtlasParams& p) {
+    AtlasStage s;
+    s.atlas = build_atlas(mesh.position, mesh.index, p);
+    const Atlas& a = s.atlas;
+    const size_t N = size_t(a.size) * size_t(a.size);
+    s.texel_position.assign(N, vec3(0.f));
+    s.texel_normal.assign(N, vec3(0.f));
+    s.fill.assign(N, -1);
+    for (size_t t = 0; t < N; ++t)
+        if (a.texel_face[t] >= 0) s.nonempty.push_back(int32_t(t));
+    tbb::parallel_for(size_t(0), s.nonempty.size(), [&](size_t k) {
+        const size_t t = size_t(s.nonempty[k]);
+        const size_t f = size_t(a.texel_face[t]);
+        const vec3 w = a.texel_bary[t];
+        const uint32_t i0 = mesh.index[3 * f], i1 = mesh.index[3 * f + 1], i2 = mesh.index[3 * f + 2];
+        s.texel_position[t] = w.x * mesh.position[i0] + w.y * mesh.position[i1] + w.z * mesh.position[i2];
+        vec3 n = w.x * mesh.normal[i0] + w.y * mesh.normal[i1] + w.z * mesh.normal[i2];
+        if (!(glm::length(n) > 1e-12f)) n = glm::cross(mesh.position[i1] - mesh.position[i0], mesh.position[i2] - mesh.position[i0]);
+        s.texel_normal[t] = glm::length(n) > 0.f ? glm::normalize(n) : vec3(0.f, 0.f, 1.f);
+    });
+    // Fill sources: inner texels show themselves; the others the nearest inner texel of their chunk
+    // (breadth first over the chunk's texels), or, in a chunk too small to hold one, the inner
+    // texel nearest on the surface (3D).
+    {
+        std::vector<int32_t> queue;
+        for (size_t t = 0; t < N; ++t)
+            if (a.texel_kind[t] == Atlas::kInner) s.fill[t] = int32_t(t), queue.push_back(int32_t(t));
+        for (size_t head = 0; head < queue.size(); ++head) {
+            const int t = queue[head];
+            const int x = t % a.size, y = t / a.size;
+            const int nb[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+            for (const auto& d : nb) {
+                const int qx = x + d[0], qy = y + d[1];
+                if (qx < 0 || qy < 0 || qx >= a.size || qy >= a.size) continue;
+                const size_t q = a.texel(qx, qy);
+                if (s.fill[q] >= 0 || a.texel_face[q] < 0 || a.texel_chunk[q] != a.texel_chunk[size_t(t)]) continue;
+                s.fill[q] = s.fill[size_t(t)];
+                queue.push_back(int32_t(q));
+            }
+        }
+        std::vector<int32_t> orphans;
+        for (int32_t t : s.nonempty)
+            if (s.fill[size_t(t)] < 0) orphans.push_back(t);
+        if (!orphans.empty() && !queue.empty()) {
+            // A uniform grid over the inner texels' positions.
+            vec3 lo(INFINITY), hi(-INFINITY);
+            for (int32_t t : queue) lo = glm::min(lo, s.texel_position[size_t(t)]), hi = glm::max(hi, s.texel_position[size_t(t)]);
+            const int G = 32;
+            const vec3 cell = glm::max((hi - lo) / float(G), vec3(1e-12f));
+            auto cell_of = [&](vec3 p) { return glm::clamp(glm::ivec3(glm::floor((p - lo) / cell)), glm::ivec3(0), glm::ivec3(G - 1)); };
+            std::vector<std::vector<int32_t>> grid(size_t(G) * G * G);
+            for (int32_t t : queue) {
+                const glm::ivec3 c = cell_of(s.texel_position[size_t(t)]);
+                grid[(size_t(c.z) * G + size_t(c.y)) * G + size_t(c.x)].push_back(t);
+            }
+            const float min_cell = std::min({cell.x, cell.y, cell.z});
+            tbb::parallel_for(size_t(0), orphans.size(), [&](size_t k) {
+                const size_t t = size_t(orphans[k]);
+                const vec3 p = s.texel_position[t];
+                const glm::ivec3 c = cell_of(p);
+                int best = -1;
+                float best_d = INFINITY;
+                for (int r = 0; r < G; ++r) {
+                    if (best >= 0 && float(r - 1) * min_cell > std::sqrt(best_d)) break;
+                    for (int z = std::max(0, c.z - r); z <= std::min(G - 1, c.z + r); ++z)
+                        for (int y = std::max(0, c.y - r); y <= std::min(G - 1, c.y + r); ++y)
+                            for (int x = std::max(0, c.x - r); x <= std::min(G - 1, c.x + r); ++x) {
+                                if (std::max({std::abs(x - c.x), std::abs(y - c.y), std::abs(z - c.z)}) != r) continue;
+                                for (int32_t q : grid[(size_t(z) * G + size_t(y)) * G + size_t(x)]) {
+                                    const vec3 d = s.texel_position[size_t(q)] - p;
+                                    const float dd = glm::dot(d, d);
+                                    if (dd < best_d) best_d = dd, best = q;
+                                }
+                            }
+                }
+                s.fill[t] = best;
+            });
+        }
+    }
+    // The drawn mesh: each triangle with its own corners and atlas coordinates.
+    auto m = std::make_shared<TriMesh>();
+    const float inv = 1.f / float(a.size);
+    for (size_t f = 0; f < mesh.triangle_count(); ++f) {
+        if (a.face_chunk[f] < 0) continue;
+        for (int j = 0; j < 3; ++j) {
+            const uint32_t v = mesh.index[3 * f + size_t(j)];
+            const vec2 c = a.corner_uv[3 * f + size_t(j)];
+            m->index.push_back(uint32_t(m->position.size()));
+            m->position.push_back(mesh.position[v]);
+            m->normal.push_back(mesh.normal[v]);
+            m->tangent.push_back(vec3(0.f));
+            m->uv.push_back(vec2(c.x * inv, 1.f - c.y * inv));
+        }
+    }
+    m->has_uv = true;
+    s.display = std::move(m);
+    return s;
+}
+
+// [SECTION] Gather table
+Gather make_gather(const Atlas& a, const std::vector<uint32_t>& index, const std::vector<float>& vertex_area, double mm_per_unit,
+                   const BlendWeights* blend, const LocalKernels* kernels) {
+    Gather g;
+    g.n = int(vertex_area.size());
+    g.direct = blend && kernels;
+    g.start.assign(size_t(g.n) + 1, 0);
+    const size_t N = a.texel_kind.size();
+    for (size_t t = 0; t < N; ++t) {
+        if (a.texel_kind[t] != Atlas::kInner) continue;
+        const size_t f = size_t(a.texel_face[t]);
+        for (int j = 0; j < 3; ++j) ++g.start[index[3 * f + size_t(j)] + 1];
+    }
+    for (int v = 0; v < g.n; ++v) g.start[size_t(v) + 1] += g.start[size_t(v)];
+    g.texel.resize(size_t(g.start.back()));
+    g.w.resize(g.texel.size());
+    std::vector<int32_t> next(g.start.begin(), g.start.end() - 1);
+    const double s2 = mm_per_unit * mm_per_unit;
+    for (size_t t = 0; t < N; ++t) {
+        if (a.texel_kind[t] != Atlas::kInner) continue;
+        const size_t f = size_t(a.texel_face[t]);
+        const vec3 w = a.texel_bary[t];
+        const double area = double(a.texel_area[t]) * s2;
+        for (int j = 0; j < 3; ++j) {
+            const uint32_t v = index[3 * f + size_t(j)];
+            const size_t e = size_t(next[v]++);
+            g.texel[e] = int32_t(t);
+            const float proj = float(area * 3.0 / double(vertex_area[v]) * (4.0 * double(w[j]) - 1.0));
+            vec3 c(0.f);
+            if (g.direct) c = blend->c[size_t(kernels->slot[t])][size_t(j)];
+            g.w[e] = vec4(proj, c);
+        }
+    }
+    return g;
+}
+
+VertexValues gather_vertices(const Gather& g, const std::vector<vec3>& E) {
+    VertexValues out;
+    out.E.assign(size_t(g.n), vec3(0.f));
+    out.direct.assign(size_t(g.n), vec3(0.f));
+    tbb::parallel_for(tbb::blocked_range<int>(0, g.n, 256), [&](const tbb::blocked_range<int>& r) {
+        for (int v = r.begin(); v != r.end(); ++v) {
+            vec3 e(0.f), d(0.f);
+            for (int k = g.start[size_t(v)]; k < g.start[size_t(v) + 1]; ++k) {
+                const vec3 Et = E[size_t(g.texel[size_t(k)])];
+                const vec4 w = g.w[size_t(k)];
+                e += w.x * Et;
+                d += vec3(w.y, w.z, w.w) * Et;
+            }
+            out.E[size_t(v)] = e;
+            out.direct[size_t(v)] = d;
+        }
+    });
+    return out;
+}
+
+// [SECTION] ρ: albedo map and veins
+namespace {
+uint32_t hash3(int x, int y, int z) {
+    uint32_t h = uint32_t(x) * 0x8da6b343u ^ uint32_t(y) * 0xd8163841u ^ uint32_t(z) * 0xcb1ab31fu;
+    h ^= h >> 15;
+    h *= 0x2c1b3c6du;
+    h ^= h >> 12;
+    h *= 0x297a2d39u;
+    h ^= h >> 15;
+    return h;
+}
+float value_noise(vec3 p) {
+    const vec3 f = glm::floor(p);
+    const vec3 t = p - f;
+    const vec3 s = t * t * (3.f - 2.f * t);
+    const int x = int(f.x), y = int(f.y), z = int(f.z);
+    float v[8];
+    for (int k = 0; k < 8; ++k) v[k] = float(hash3(x + (k & 1), y + ((k >> 1) & 1), z + (k >> 2)) >> 8) * (1.f / 16777216.f);
+    const float a = glm::mix(glm::mix(v[0], v[1], s.x), glm::mix(v[2], v[3], s.x), s.y);
+    const float b = glm::mix(glm::mix(v[4], v[5], s.x), glm::mix(v[6], v[7], s.x), s.y);
+    return glm::mix(a, b, s.z);
+}
+}  // namespace
+
+float vein(vec3 x_mm, double scale_mm) {
+    const vec3 p = x_mm / float(scale_mm);
+    float fbm = 0.f, amp = 0.5f;
+    vec3 q = p;
+    for (int o = 0; o < 5; ++o, amp *= 0.5f, q *= 2.03f) fbm += amp * value_noise(q + vec3(17.f * float(o)));
+    const float t = p.x + 0.6f * p.y + 3.f * fbm;
+    return std::pow(1.f - std::abs(std::sin(kPi * t)), 8.f);
+}
+
+std::vector<vec3> texel_albedo(const Scene& scene, const Settings& s, const PreparedMesh& mesh, const AtlasStage& a) {
+    std::vector<vec3> rho(a.texel_position.size(), vec3(1.f));
+    std::optional<Image> img;
+    if (!s.albedo_map.empty()) {
+        const std::string path = scene.resolve(s.albedo_map);
+        if (mesh.corner_uv.empty())
+            throw InputError("translucency.albedo_map: " + path + " needs texture coordinates, and the object's mesh has none (use translucency.veins, or a mesh with uv)");
+        img = read_image(path, true, true);
+    }
+    tbb::parallel_for(size_t(0), a.nonempty.size(), [&](size_t k) {
+        const size_t t = size_t(a.nonempty[k]);
+        vec3 r(1.f);
+        if (img) {
+            const size_t f = size_t(a.atlas.texel_face[t]);
+            const vec3 w = a.atlas.texel_bary[t];
+            const vec2 uv = w.x * mesh.corner_uv[3 * f] + w.y * mesh.corner_uv[3 * f + 1] + w.z * mesh.corner_uv[3 * f + 2];
+            r = basic::sample_albedo(*img, uv);
+        }
+        if (s.veins > 0.f) r *= glm::mix(vec3(1.f), s.vein_color, s.veins * vein(a.texel_position[t] * float(s.mm_per_unit), s.vein_scale));
+        rho[t] = r;
+    });
+    return fill_texels(a, rho);
+}
+
+// [SECTION] Shadow maps
+ShadowMap shadow_frame(const Light& l, vec3 centre, float radius, int res) {
+    ShadowMap m;
+    m.res = res;
+    m.point = l.point;
+    radius = std::max(radius, 1e-6f);
+    mat4 view, proj;
+    if (!l.point) {
+        m.dir = -glm::normalize(l.direction);
+        m.origin = centre - m.dir * (1.01f * radius);
+        const vec3 up = std::abs(m.dir.z) < 0.9f ? vec3(0.f, 0.f, 1.f) : vec3(1.f, 0.f, 0.f);
+        view = glm::lookAt(m.origin, centre, up);
+        proj = glm::ortho(-radius, radius, -radius, radius, 0.f, 2.03f * radius);
+        m.bias = 2.f * (2.f * radius / float(res));
+        m.valid = true;
+    } else {
+        m.origin = l.position;
+        const vec3 d = centre - l.position;
+        const float dist = glm::length(d);
+        if (!(dist > 1.01f * radius)) return m;  // inside the bounds: no shadow map
+        const vec3 dir = d / dist;
+        const vec3 up = std::abs(dir.z) < 0.9f ? vec3(0.f, 0.f, 1.f) : vec3(1.f, 0.f, 0.f);
+        const float half = std::asin(std::min(1.f, radius / dist)) * 1.02f;
+        view = glm::lookAt(l.position, centre, up);
+        proj = glm::perspective(2.f * half, 1.f, std::max(dist - 1.01f * radius, 1e-4f * dist), dist + 1.01f * radius);
+        m.bias = 2.f * (2.f * dist * std::tan(half) / float(res));
+        m.valid = true;
+    }
+    m.view_proj = proj * view;
+    return m;
+}
+
+float ShadowMap::visibility(vec3 p) const {
+    if (!valid || depth.empty()) return 1.f;
+    const vec4 c = view_proj * vec4(p, 1.f);
+    if (!(c.w > 0.f)) return 1.f;
+    const float nx = c.x / c.w, ny = c.y / c.w;
+    if (!(std::abs(nx) <= 1.f && std::abs(ny) <= 1.f)) return 1.f;
+    const int x = std::clamp(int(std::floor((nx * 0.5f + 0.5f) * float(res))), 0, res - 1);
+    const int y = std::clamp(int(std::floor((0.5f - 0.5f * ny) * float(res))), 0, res - 1);
+    return distance(p) - bias <= depth[size_t(y) * size_t(res) + size_t(x)] ? 1.f : 0.f;
+}
+
+ShadowMap make_shadow_map(const TriMesh& display, const mat4& model, const Light& l, int res) {
+    Bounds b{vec3(INFINITY), vec3(-INFINITY)};
+    for (const vec3& p : display.position) {
+        const vec3 w = vec3(model * vec4(p, 1.f));
+        b.lo = glm::min(b.lo, w), b.hi = glm::max(b.hi, w);
+    }
+    if (display.position.empty()) return ShadowMap{};
+    const vec3 centre = 0.5f * (b.lo + b.hi);
+    ShadowMap m = shadow_frame(l, centre, 0.5f * glm::length(b.hi - b.lo), res);
+    if (!m.valid) return m;
+    RasterCamera cam;
+    cam.width = cam.height = res;
+    cam.view = mat4(1.f);
+    cam.proj = m.view_proj;
+    GBuffer gb;
+    rasterize({{&display, model, 0}}, cam, gb);
+    m.depth.assign(size_t(res) * size_t(res), std::numeric_limits<float>::infinity());
+    for (size_t i = 0; i < m.depth.size(); ++i)
+        if (gb.object[i] >= 0) m.depth[i] = m.distance(gb.position[i]);
+    return m;
+}
+
+// [SECTION] Illumination
+std::vector<vec3> illuminate(const AtlasStage& a, const mat4& model, const Lighting& L, double eta, const std::vector<ShadowMap>& shadows) {
+    std::vector<vec3> E(a.texel_position.size(), vec3(0.f));
+    const mat3 normal_matrix = glm::transpose(glm::inverse(mat3(model)));
+    const float env_t = float(1.0 - fresnel_diffuse_reflectance(eta));
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, a.nonempty.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t k = r.begin(); k != r.end(); ++k) {
+            const size_t t = size_t(a.nonempty[k]);
+            const vec3 p = vec3(model * vec4(a.texel_position[t], 1.f));
+            const vec3 n = glm::normalize(normal_matrix * a.texel_normal[t]);
+            vec3 e(0.f);
+            for (size_t i = 0; i < L.lights.size(); ++i) {
+                vec3 wi, El;
+                L.lights[i].sample(p, wi, El);
+                const float c = glm::dot(n, wi);
+                if (c <= 0.f) continue;
+                const float v = i < shadows.size() ? shadows[i].visibility(p) : 1.f;
+                e += El * (c * float(fresnel_transmittance(c, eta)) * v);
+            }
+            e += L.env_irradiance(n) * env_t;
+            E[t] = e;
+        }
+    });
+    return E;
+}
+
+// [SECTION] Combine and look-ups
+std::vector<vec3> fill_texels(const AtlasStage& a, const std::vector<vec3>& v) {
+    std::vector<vec3> out(v.size(), vec3(0.f));
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, v.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t t = r.begin(); t != r.end(); ++t) out[t] = a.fill[t] >= 0 ? v[size_t(a.fill[t])] : v[t];
+    });
+    return out;
+}
+
+Maps combine(const AtlasStage& a, const std::vector<vec3>& E, const std::vector<vec3>& local, const std::vector<vec3>& global) {
+    Maps m;
+    m.irradiance = fill_texels(a, E);
+    m.local = fill_texels(a, local);
+    m.global = fill_texels(a, global);
+    m.radiosity.resize(m.local.size());
+    for (size_t t = 0; t < m.local.size(); ++t) m.radiosity[t] = m.local[t] + m.global[t];
+    return m;
+}
+
+vec3 sample_texels(const std::vector<vec3>& map, int size, vec2 uv) {
+    const float fx = uv.x * float(size) - 0.5f, fy = (1.f - uv.y) * float(size) - 0.5f;
+    const float x0f = std::floor(fx), y0f = std::floor(fy);
+    const float ax = fx - x0f, ay = fy - y0f;
+    const int x0 = std::clamp(int(x0f), 0, size - 1), x1 = std::clamp(int(x0f) + 1, 0, size - 1);
+    const int y0 = std::clamp(int(y0f), 0, size - 1), y1 = std::clamp(int(y0f) + 1, 0, size - 1);
+    auto at = [&](int x, int y) { return map[size_t(y) * size_t(size) + size_t(x)]; };
+    return glm::mix(glm::mix(at(x0, y0), at(x1, y0), ax), glm::mix(at(x0, y1), at(x1, y1), ax), ay);
+}
+}  // namespace mesolab::translucency

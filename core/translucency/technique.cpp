@@ -1,0 +1,435 @@
+// Technique translucency: parameters, stages, frame steps and CPU shading (see translucency.h).
+#include "core/error.h"
+#include "core/profile.h"
+#include "core/render.h"
+#include "core/scene_stages.h"
+#include "core/technique.h"
+#include "core/translucency/reference.h"
+#include "core/translucency/technique.h"
+#include "core/translucency/translucency.h"
+
+#include <tbb/parallel_for.h>
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+namespace mesolab::translucency {
+
+// [SECTION] Settings
+Settings Settings::from(const SceneObject& o) {
+    const ParamTable& t = o.material;
+    Settings s;
+    s.material = t.get_string("material");
+    if (s.material == "custom") {
+        const vec3 ss = t.get_vec3("sigma_s"), sa = t.get_vec3("sigma_a");
+        s.medium = Medium{dvec3(ss), dvec3(sa), t.get_float("eta")};
+    } else {
+        s.medium = measured_material(s.material).medium;
+    }
+    validate(s.medium);
+    s.mm_per_unit = t.get_float("mm_per_unit") * o.geometry.get_float("scale");
+    s.vertices = int(t.get_int("vertices"));
+    s.atlas_size = int(t.get_int("atlas_size"));
+    s.kernel = int(t.get_int("kernel"));
+    s.chunk_angle = float(t.get_float("chunk_angle"));
+    s.threshold = float(t.get_float("threshold"));
+    s.blend = t.get_bool("blend");
+    s.shadows = t.get_bool("shadows");
+    s.shadow_map = int(t.get_int("shadow_map"));
+    s.compare = t.get_bool("compare");
+    const std::string& r = t.get_string("response");
+    s.response = r == "local" ? Response::Local : r == "global" ? Response::Global : r == "reference" ? Response::Reference : Response::Both;
+    s.albedo_map = t.get_string("albedo_map");
+    s.veins = float(t.get_float("veins"));
+    s.vein_color = t.get_vec3("vein_color");
+    s.vein_scale = t.get_float("vein_scale");
+    return s;
+}
+
+namespace {
+
+AtlasParams atlas_params(const Settings& s) { return {s.atlas_size, (s.kernel - 1) / 2 + 1, s.chunk_angle}; }
+
+// [SECTION] Memory estimates
+// Factors above the threshold: the radius where R_d A/3 falls below it, and the share of vertex
+// pairs within it, counted from up to 256 vertices.
+MemoryEstimate factor_memory(const PreparedMesh& m, const Settings& s) {
+    const size_t n = m.vertex_count();
+    MemoryEstimate e;
+    e.lower = {"translucency.threshold", "translucency.vertices"};
+    if (n == 0) return e;
+    double area = 0.0;
+    for (size_t f = 0; f < m.triangle_count(); ++f)
+        area += 0.5 * double(glm::length(glm::cross(m.position[m.index[3 * f + 1]] - m.position[m.index[3 * f]],
+                                                    m.position[m.index[3 * f + 2]] - m.position[m.index[3 * f]])));
+    const double mean_area = 3.0 * area * s.mm_per_unit * s.mm_per_unit / double(n);  // A_j, mm²
+    const Dipole d(s.medium);
+    auto factor = [&](double r) {
+        const dvec3 v = d.Rd(r);
+        return std::max({v.x, v.y, v.z}) * mean_area / 3.0;
+    };
+    double lo = 0.0, hi = 1.0;
+    while (factor(hi) >= double(s.threshold) && hi < 1e7) hi *= 2.0;
+    for (int i = 0; i < 40; ++i) (factor(0.5 * (lo + hi)) >= double(s.threshold) ? lo : hi) = 0.5 * (lo + hi);
+    const float r_unit = float(hi / s.mm_per_unit), r2 = r_unit * r_unit;
+    const size_t samples = std::min<size_t>(256, n);
+    size_t within = 0;
+    for (size_t k = 0; k < samples; ++k) {
+        const vec3 p = m.position[k * n / samples];
+        for (const vec3& q : m.position) within += glm::dot(q - p, q - p) <= r2 ? 1 : 0;
+    }
+    const double count = double(within) / double(samples) * double(n);
+    e.bytes = count * 16.0 + double(n + 1) * 4.0;
+    e.what = "about " + std::to_string(int64_t(count)) + " vertex-to-vertex factors (" + std::to_string(n) +
+             " vertices, translucency.threshold = " + std::to_string(s.threshold) + ") x 16 bytes";
+    return e;
+}
+
+// [SECTION] The technique
+class TranslucencyTechnique final : public Technique {
+public:
+    TranslucencyTechnique() : Technique("translucency", "Translucency (Lensch et al. 2002)") {
+        std::vector<std::string> names;
+        for (const auto& m : measured_materials()) names.push_back(m.name);
+        names.push_back("custom");
+        const MeasuredMaterial& marble = measured_material("marble");
+        auto& p = params_;
+        p.add_enum("material", names, "marble").costs(Cost::Recompute)
+            .doc("One of Jensen et al. 2001's measured materials, or custom (sigma_s, sigma_a, eta)");
+        p.add_vec3("sigma_s", {marble.medium.sigma_s.x, marble.medium.sigma_s.y, marble.medium.sigma_s.z}).range(0.0, 1e4).in("1/mm")
+            .costs(Cost::Recompute).used_when("material", {"custom"}).doc("Reduced scattering coefficient sigma'_s, RGB");
+        p.add_vec3("sigma_a", {marble.medium.sigma_a.x, marble.medium.sigma_a.y, marble.medium.sigma_a.z}).range(0.0, 1e4).in("1/mm")
+            .costs(Cost::Recompute).used_when("material", {"custom"}).doc("Absorption coefficient sigma_a, RGB");
+        p.add_float("eta", 1.5).range(1.0, 3.0).costs(Cost::Recompute).used_when("material", {"custom"}).doc("Relative index of refraction");
+        p.add_float("mm_per_unit", 20.0).range(1e-4, 1e7).log().in("mm").costs(Cost::Recompute)
+            .doc("Millimetres per scene unit: the object's size decides how translucent it looks");
+        p.add_int("vertices", 10000).range(0, 2000000).costs(Cost::Recompute).more_accurate(Accuracy::Higher)
+            .doc("Vertices after simplification (OpenMesh's decimater; 0 keeps every vertex): one hat basis function per vertex");
+        p.add_int("atlas_size", 512).range(128, 2048).costs(Cost::Recompute).more_accurate(Accuracy::Higher, int64_t(2048))
+            .doc("Texels per side of the texture atlas (local response, illumination map)");
+        p.add_float("chunk_angle", 30.0).range(1.0, 89.0).in("degrees").costs(Cost::Recompute)
+            .doc("Largest deviation of a triangle's normal from its chunk's average normal");
+        p.add_int("kernel", 7).range(3, 15).costs(Cost::Recompute).more_accurate(Accuracy::Higher, int64_t(15))
+            .doc("Local kernel size K (odd): K x K texels around each texel");
+        p.add_float("threshold", 3e-5).range(0.0, 1.0).costs(Cost::Recompute).more_accurate(Accuracy::Lower, 0.0)
+            .doc("Smallest vertex-to-vertex factor kept (largest channel); fewer factors, faster global response");
+        p.add_bool("blend", true).costs(Cost::Recompute).doc("Blend local and global responses (§5.4); off shows the double counting of Fig. 6");
+        p.add_enum("response", {"both", "local", "global", "reference"}, "both")
+            .doc("What the image shows: local + global, one of them, or the brute-force reference");
+        p.add_bool("compare", false)
+            .doc("Also compute the brute-force reference each frame (the reference and error AOVs): seconds per light move on large meshes");
+        p.add_bool("shadows", true).doc("Self-shadowing of the illumination map (a shadow map per light)");
+        p.add_int("shadow_map", 1024).range(64, 8192).used_when("shadows", {"true"}).doc("Shadow map texels per side");
+        p.add_path("albedo_map", "").costs(Cost::Recompute)
+            .doc("Surface texture rho multiplying the outgoing radiosity, at the mesh's (u,v); relative to the preset's folder");
+        p.add_float("veins", 0.0).range(0.0, 1.0).costs(Cost::Recompute).doc("Strength of procedural fractal veins in rho (0 = none)");
+        p.add_float("vein_scale", 10.0).range(0.01, 1e5).log().in("mm").costs(Cost::Recompute).doc("Vein period (used when veins > 0)");
+        p.add_color("vein_color", {0.35, 0.3, 0.28}).costs(Cost::Recompute).doc("rho inside a vein");
+        aovs_ = {{"irradiance", 3, "Power per unit area entering the medium: incident irradiance x Fresnel transmittance"},
+                 {"radiosity", 3, "B: power per unit area leaving through subsurface transport, before the outgoing Fresnel term (local + global)"},
+                 {"local", 3, "The local (kernel) part of B"},
+                 {"global", 3, "The global (vertex factor) part of B"},
+                 {"reference", 3, "B by brute-force summation (translucency.compare or response = reference; else 0)"},
+                 {"error", 3, "radiosity - reference (0 without a reference)"}};
+    }
+
+    void declare_stages(StageGraph& g) const override;
+    std::vector<std::string> frame_stages() const override {
+        return {"translucency.mesh", "translucency.atlas", "translucency.kernels", "translucency.factors", "translucency.blend",
+                "translucency.gather", "translucency.albedo"};
+    }
+    std::vector<FrameStepDecl> frame_steps() const override;
+    std::any run_step_cpu(const std::string& step, const FrameStepContext& ctx) const override;
+    void shade_cpu(const ShadeContext& ctx) const override;
+    std::optional<ivec2> texture_size(const Scene& s, const Evaluation& ev) const override {
+        for (size_t i = 0; i < s.objects.size(); ++i)
+            if (const auto a = ev.get<AtlasStage>("translucency.atlas", int(i))) return ivec2(a->atlas.size);
+        return std::nullopt;
+    }
+    std::shared_ptr<const TriMesh> object_mesh(const Scene&, const Evaluation& ev, int object) const override {
+        const auto a = ev.get<AtlasStage>("translucency.atlas", object);
+        return a ? a->display : nullptr;
+    }
+    std::vector<BenchTable> bench_tables() const override { return translucency_bench_tables(); }
+};
+
+// [SECTION] Stages
+const std::vector<std::string> kMaterialKeys = {"translucency.material", "translucency.sigma_s", "translucency.sigma_a", "translucency.eta",
+                                                "translucency.mm_per_unit", "geometry.scale"};
+std::vector<std::string> with_material(std::vector<std::string> keys) {
+    keys.insert(keys.end(), kMaterialKeys.begin(), kMaterialKeys.end());
+    return keys;
+}
+
+void TranslucencyTechnique::declare_stages(StageGraph& g) const {
+    g.add({.name = "translucency.mesh",
+           .help = "Weld, clean and simplify the object's mesh (OpenMesh decimater) to translucency.vertices",
+           .scope = StageScope::Object,
+           .technique = "translucency",
+           .params = {"translucency.vertices"},
+           .inputs = {"scene.geometry"},
+           .memory = [](const StageContext& ctx) {
+               const auto m = ctx.input<TriMesh>("scene.geometry");
+               return MemoryEstimate{double(m ? m->vertex_count() : 0) * 400.0, "mesh preparation: about 400 bytes per input vertex", {}};
+           },
+           .run = [](StageContext& ctx) -> std::any {
+               const auto m = ctx.input<TriMesh>("scene.geometry");
+               PreparedMesh p = prepare_mesh(m->position, m->index, int(ctx.material().get_int("vertices")), m->has_uv ? &m->uv : nullptr);
+               for (const auto& w : p.warnings) ctx.warn(w);
+               return stage_result(std::move(p));
+           }});
+    g.add({.name = "translucency.atlas",
+           .help = "Texture atlas (§5.1): chunks, projection, minimum-area rectangles, packing, borders",
+           .scope = StageScope::Object,
+           .technique = "translucency",
+           .params = {"translucency.atlas_size", "translucency.chunk_angle", "translucency.kernel"},
+           .inputs = {"translucency.mesh"},
+           .memory = [](const StageContext& ctx) {
+               const double n = double(ctx.material().get_int("atlas_size"));
+               return MemoryEstimate{n * n * 70.0, "atlas: " + std::to_string(int(n)) + "² texels x about 70 bytes", {"translucency.atlas_size"}};
+           },
+           .run = [](StageContext& ctx) -> std::any {
+               const Settings s = Settings::from(ctx.obj());
+               AtlasStage a = make_atlas_stage(*ctx.input<PreparedMesh>("translucency.mesh"), atlas_params(s));
+               for (const auto& w : a.atlas.warnings) ctx.warn(w);
+               return stage_result(std::move(a));
+           }});
+    g.add({.name = "translucency.kernels",
+           .help = "Local K x K kernels per texel from R_d (§5.3)",
+           .scope = StageScope::Object,
+           .technique = "translucency",
+           .params = with_material({"translucency.kernel"}),
+           .inputs = {"translucency.mesh", "translucency.atlas"},
+           .memory = [](const StageContext& ctx) {
+               const auto a = ctx.input<AtlasStage>("translucency.atlas");
+               const double K = double(ctx.material().get_int("kernel"));
+               const double inner = a ? a->atlas.fill_ratio * double(a->atlas.size) * double(a->atlas.size) : 0.0;
+               return MemoryEstimate{inner * K * K * 12.0, "kernels: " + std::to_string(int64_t(inner)) + " texels x K² x 3 channels x 4 bytes",
+                                     {"translucency.kernel", "translucency.atlas_size"}};
+           },
+           .run = [](StageContext& ctx) -> std::any {
+               const Settings s = Settings::from(ctx.obj());
+               const auto m = ctx.input<PreparedMesh>("translucency.mesh");
+               const auto a = ctx.input<AtlasStage>("translucency.atlas");
+               return stage_result(build_local_kernels(a->atlas, m->position, m->index, Dipole(s.medium), s.mm_per_unit, s.kernel));
+           }});
+    g.add({.name = "translucency.factors",
+           .help = "Vertex-to-vertex throughput factors above translucency.threshold (§5.2)",
+           .scope = StageScope::Object,
+           .technique = "translucency",
+           .params = with_material({"translucency.threshold", "translucency.blend"}),
+           .inputs = {"translucency.mesh"},
+           .memory = [](const StageContext& ctx) {
+               return factor_memory(*ctx.input<PreparedMesh>("translucency.mesh"), Settings::from(ctx.obj()));
+           },
+           .run = [](StageContext& ctx) -> std::any {
+               const Settings s = Settings::from(ctx.obj());
+               const auto m = ctx.input<PreparedMesh>("translucency.mesh");
+               VertexFactors F = build_vertex_factors(m->position, m->index, Dipole(s.medium), {s.mm_per_unit, s.threshold, s.blend});
+               if (F.count() == 0 && m->vertex_count() > 1)
+                   ctx.warn("translucency.threshold = " + std::to_string(s.threshold) + " drops every factor: the global response is zero");
+               return stage_result(std::move(F));
+           }});
+    g.add({.name = "translucency.blend",
+           .help = "Blending (§5.4): direct weights fitted by least squares, kernels corrected",
+           .scope = StageScope::Object,
+           .technique = "translucency",
+           .params = {"translucency.blend"},
+           .inputs = {"translucency.mesh", "translucency.atlas", "translucency.kernels", "translucency.factors"},
+           .applies = [](const Scene&, const SceneObject& o) { return o.material.get_bool("blend"); },
+           .when_text = "translucency.blend is on",
+           .memory = [](const StageContext& ctx) {
+               const auto k = ctx.input<LocalKernels>("translucency.kernels");
+               return MemoryEstimate{double(k ? k->bytes() + k->texel.size() * 36 : 0), "a corrected copy of the kernels and 9 weights per texel",
+                                     {"translucency.kernel", "translucency.atlas_size"}};
+           },
+           .run = [](StageContext& ctx) -> std::any {
+               const Settings s = Settings::from(ctx.obj());
+               const auto m = ctx.input<PreparedMesh>("translucency.mesh");
+               Blended b{*ctx.input<LocalKernels>("translucency.kernels"), {}};
+               b.weights = fit_blending(ctx.input<AtlasStage>("translucency.atlas")->atlas, m->position, m->index, Dipole(s.medium), s.mm_per_unit,
+                                        *ctx.input<VertexFactors>("translucency.factors"), b.kernels);
+               return stage_result(std::move(b));
+           }});
+    g.add({.name = "translucency.gather",
+           .help = "Per vertex, the texels its irradiance (dual basis) and its direct radiosity (blending) come from",
+           .scope = StageScope::Object,
+           .technique = "translucency",
+           .params = {"translucency.blend"},
+           .inputs = {"translucency.mesh", "translucency.atlas", "translucency.factors", "translucency.blend"},
+           .memory = [](const StageContext& ctx) {
+               const auto a = ctx.input<AtlasStage>("translucency.atlas");
+               const double inner = a ? a->atlas.fill_ratio * double(a->atlas.size) * double(a->atlas.size) : 0.0;
+               return MemoryEstimate{inner * 3.0 * 20.0, "3 entries of 20 bytes per texel", {"translucency.atlas_size"}};
+           },
+           .run = [](StageContext& ctx) -> std::any {
+               const Settings s = Settings::from(ctx.obj());
+               const auto m = ctx.input<PreparedMesh>("translucency.mesh");
+               const auto b = ctx.input<Blended>("translucency.blend");
+               return stage_result(make_gather(ctx.input<AtlasStage>("translucency.atlas")->atlas, m->index,
+                                               ctx.input<VertexFactors>("translucency.factors")->vertex_area, s.mm_per_unit,
+                                               b ? &b->weights : nullptr, b ? &b->kernels : nullptr));
+           }});
+    g.add({.name = "translucency.albedo",
+           .help = "rho per texel: translucency.albedo_map and the procedural veins",
+           .scope = StageScope::Object,
+           .technique = "translucency",
+           .params = {"translucency.albedo_map", "translucency.veins", "translucency.vein_scale", "translucency.vein_color", "translucency.mm_per_unit",
+                      "geometry.scale"},
+           .inputs = {"translucency.mesh", "translucency.atlas"},
+           .applies = [](const Scene&, const SceneObject& o) {
+               return !o.material.get_string("albedo_map").empty() || o.material.get_float("veins") > 0.0;
+           },
+           .when_text = "translucency.albedo_map is set or translucency.veins > 0",
+           .run = [](StageContext& ctx) -> std::any {
+               const Settings s = Settings::from(ctx.obj());
+               return stage_result(texel_albedo(ctx.scene, s, *ctx.input<PreparedMesh>("translucency.mesh"), *ctx.input<AtlasStage>("translucency.atlas")));
+           }});
+}
+
+// [SECTION] Frame steps
+std::vector<std::string> step_keys(std::vector<std::string> extra) {
+    std::vector<std::string> k = {"light.*", "env.*", "effects.*", "geometry.*", "translucency.shadows", "translucency.shadow_map"};
+    k.insert(k.end(), kMaterialKeys.begin(), kMaterialKeys.end());
+    k.insert(k.end(), extra.begin(), extra.end());
+    return k;
+}
+
+std::vector<FrameStepDecl> TranslucencyTechnique::frame_steps() const {
+    const std::vector<std::string> all = {"translucency.mesh", "translucency.atlas", "translucency.kernels", "translucency.factors",
+                                          "translucency.blend", "translucency.gather"};
+    return {{"translucency.illumination", "Irradiance entering the medium per texel (lights x Fresnel, shadow maps, environment)",
+             step_keys({}), {"translucency.atlas"}},
+            {"translucency.vertices", "Irradiance per vertex (dual basis) and the direct radiosity of blending", step_keys({}), all},
+            {"translucency.local", "Local response: K x K kernels over the illumination map", step_keys({}), all},
+            {"translucency.global", "Global response per vertex: the factors times the vertex irradiance, plus the direct part", step_keys({}), all},
+            {"translucency.combine", "The global response interpolated to the texels, radiosity = local + global, texels outside the triangles filled",
+             step_keys({}), all},
+            {"translucency.reference", "Brute-force radiosity (translucency.compare or response = reference)",
+             step_keys({"translucency.compare", "translucency.response"}), all}};
+}
+
+std::any TranslucencyTechnique::run_step_cpu(const std::string& step, const FrameStepContext& ctx) const {
+    auto atlas = [&](int o) { return ctx.eval.get<AtlasStage>("translucency.atlas", o); };
+    if (step == "translucency.illumination") {
+        PerObject<std::vector<vec3>> out;
+        for (int o : ctx.objects) {
+            const SceneObject& obj = ctx.scene.objects[size_t(o)];
+            const Settings s = Settings::from(obj);
+            const auto a = atlas(o);
+            const mat4 model = object_to_world(obj);
+            std::vector<ShadowMap> shadows;
+            if (s.shadows)
+                for (size_t i = 0; i < ctx.lighting.lights.size() && i < size_t(kMaxShadowMaps); ++i)
+                    shadows.push_back(make_shadow_map(*a->display, model, ctx.lighting.lights[i], s.shadow_map));
+            out[o] = illuminate(*a, model, ctx.lighting, s.medium.eta, shadows);
+        }
+        return std::any(std::make_shared<const PerObject<std::vector<vec3>>>(std::move(out)));
+    }
+    const auto& E = ctx.step<PerObject<std::vector<vec3>>>("translucency.illumination");
+    if (step == "translucency.vertices") {
+        PerObject<VertexValues> out;
+        for (int o : ctx.objects) out[o] = gather_vertices(*ctx.eval.get<Gather>("translucency.gather", o), E.at(o));
+        return std::any(std::make_shared<const PerObject<VertexValues>>(std::move(out)));
+    }
+    if (step == "translucency.local") {
+        PerObject<std::vector<vec3>> out;
+        for (int o : ctx.objects) {
+            const auto b = ctx.eval.get<Blended>("translucency.blend", o);
+            out[o] = convolve_local(b ? b->kernels : *ctx.eval.get<LocalKernels>("translucency.kernels", o), E.at(o));
+        }
+        return std::any(std::make_shared<const PerObject<std::vector<vec3>>>(std::move(out)));
+    }
+    if (step == "translucency.global") {
+        const auto& V = ctx.step<PerObject<VertexValues>>("translucency.vertices");
+        PerObject<std::vector<vec3>> out;
+        for (int o : ctx.objects) {
+            const VertexValues& v = V.at(o);
+            std::vector<vec3> B = ctx.eval.get<VertexFactors>("translucency.factors", o)->multiply(v.E);
+            for (size_t i = 0; i < B.size(); ++i) B[i] += v.direct[i];
+            out[o] = std::move(B);
+        }
+        return std::any(std::make_shared<const PerObject<std::vector<vec3>>>(std::move(out)));
+    }
+    if (step == "translucency.combine") {
+        const auto& Lo = ctx.step<PerObject<std::vector<vec3>>>("translucency.local");
+        const auto& Bv = ctx.step<PerObject<std::vector<vec3>>>("translucency.global");
+        PerObject<Maps> out;
+        for (int o : ctx.objects) {
+            const auto a = atlas(o);
+            out[o] = combine(*a, E.at(o), Lo.at(o), interpolate_to_texels(a->atlas, ctx.eval.get<PreparedMesh>("translucency.mesh", o)->index, Bv.at(o)));
+        }
+        return std::any(std::make_shared<const PerObject<Maps>>(std::move(out)));
+    }
+    if (step == "translucency.reference") {
+        PerObject<std::vector<vec3>> out;
+        for (int o : ctx.objects) {
+            const Settings s = Settings::from(ctx.scene.objects[size_t(o)]);
+            if (!s.needs_reference()) continue;
+            const auto a = atlas(o);
+            const auto m = ctx.eval.get<PreparedMesh>("translucency.mesh", o);
+            out[o] = fill_texels(*a, reference_radiosity(a->atlas, texel_positions_mm(a->atlas, m->position, m->index, s.mm_per_unit),
+                                                         Dipole(s.medium), s.mm_per_unit, E.at(o)));
+        }
+        return std::any(std::make_shared<const PerObject<std::vector<vec3>>>(std::move(out)));
+    }
+    return {};
+}
+
+// [SECTION] Shading
+void TranslucencyTechnique::shade_cpu(const ShadeContext& ctx) const {
+    struct Obj {
+        Settings s;
+        const Maps* maps = nullptr;
+        const std::vector<vec3>* reference = nullptr;
+        std::shared_ptr<const std::vector<vec3>> rho;
+        int size = 0;
+    };
+    const auto& maps = ctx.step<PerObject<Maps>>("translucency.combine");
+    const auto& refs = ctx.step<PerObject<std::vector<vec3>>>("translucency.reference");
+    std::map<int, Obj> objs;
+    for (int o : ctx.objects) {
+        Obj& b = objs[o];
+        b.s = Settings::from(ctx.scene.objects[size_t(o)]);
+        b.maps = &maps.at(o);
+        if (auto it = refs.find(o); it != refs.end()) b.reference = &it->second;
+        b.rho = ctx.eval.get<std::vector<vec3>>("translucency.albedo", o);
+        b.size = ctx.eval.get<AtlasStage>("translucency.atlas", o)->atlas.size;
+    }
+    const int out_irr = ctx.out.index("irradiance"), out_rad = ctx.out.index("radiosity"), out_loc = ctx.out.index("local"),
+              out_glo = ctx.out.index("global"), out_ref = ctx.out.index("reference"), out_err = ctx.out.index("error");
+    const GBuffer& gb = ctx.gbuffer;
+    tbb::parallel_for(0, gb.height, [&](int y) {
+        for (int x = 0; x < gb.width; ++x) {
+            const size_t px = gb.index(x, y);
+            if (!ctx.mine(px)) continue;
+            const Obj& b = objs.at(gb.object[px]);
+            const vec2 uv = gb.uv[px];
+            const vec3 wo = ctx.camera.wo(gb.position[px]);
+            vec3 n = gb.normal[px];
+            if (glm::dot(n, wo) < 0.f) n = -n;
+            const vec3 local = sample_texels(b.maps->local, b.size, uv), global = sample_texels(b.maps->global, b.size, uv);
+            const vec3 ref = b.reference ? sample_texels(*b.reference, b.size, uv) : vec3(0.f);
+            const vec3 B = b.s.response == Response::Local ? local
+                         : b.s.response == Response::Global ? global
+                         : b.s.response == Response::Reference ? ref
+                                                               : local + global;
+            const vec3 rho = b.rho ? sample_texels(*b.rho, b.size, uv) : vec3(1.f);
+            const float T = float(fresnel_transmittance(std::clamp(glm::dot(n, wo), 0.f, 1.f), b.s.medium.eta));
+            ctx.out.put(AovWriter::kRadiance, x, y, rho * B * (T * kInvPi));
+            ctx.out.put(AovWriter::kNormal, x, y, n);
+            if (ctx.out.wanted(out_irr)) ctx.out.put(out_irr, x, y, sample_texels(b.maps->irradiance, b.size, uv));
+            ctx.out.put(out_rad, x, y, local + global);
+            ctx.out.put(out_loc, x, y, local);
+            ctx.out.put(out_glo, x, y, global);
+            ctx.out.put(out_ref, x, y, ref);
+            ctx.out.put(out_err, x, y, b.reference ? local + global - ref : vec3(0.f));
+        }
+    });
+}
+}  // namespace
+}  // namespace mesolab::translucency
+
+namespace mesolab {
+void register_translucency(Registry& r) { r.add(std::make_unique<translucency::TranslucencyTechnique>()); }
+}  // namespace mesolab

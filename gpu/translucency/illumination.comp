@@ -1,0 +1,66 @@
+#version 430 core
+// Technique translucency, step translucency.illumination: irradiance entering the medium per
+// non-empty texel (core/translucency/frame.cpp illuminate).
+#include "common.glsl"
+#include "lighting.glsl"
+#include "translucency.glsl"
+layout(local_size_x = 64) in;
+
+layout(std430, binding = 0) readonly buffer Texels { int nonempty[]; };
+layout(std430, binding = 1) readonly buffer Positions { vec4 texel_position[]; };  // per non-empty texel, object space
+layout(std430, binding = 2) readonly buffer Normals { vec4 texel_normal[]; };
+layout(std430, binding = 3) writeonly buffer Irradiance { vec4 E[]; };             // per texel
+
+uniform int u_count;
+uniform mat4 u_model;
+uniform mat3 u_normal_matrix;
+uniform float u_eta;
+uniform float u_env_transmittance;  // 1 - F_dr(eta)
+// Shadow maps (ShadowMap): one per light, up to 4.
+uniform int u_shadow_count;
+uniform sampler2D u_shadow[4];
+uniform mat4 u_shadow_view_proj[4];
+uniform int u_shadow_point[4];
+uniform vec3 u_shadow_origin[4];
+uniform vec3 u_shadow_dir[4];
+uniform float u_shadow_bias[4];
+uniform int u_shadow_res[4];
+uniform int u_shadow_valid[4];
+
+float shadow_depth(int i, ivec2 q) {
+    // Constant indices into the sampler array (dynamically uniform everywhere, but simple for every driver).
+    if (i == 0) return texelFetch(u_shadow[0], q, 0).r;
+    if (i == 1) return texelFetch(u_shadow[1], q, 0).r;
+    if (i == 2) return texelFetch(u_shadow[2], q, 0).r;
+    return texelFetch(u_shadow[3], q, 0).r;
+}
+
+float visibility(int i, vec3 p) {
+    if (i >= u_shadow_count || u_shadow_valid[i] == 0) return 1.0;
+    vec4 c = u_shadow_view_proj[i] * vec4(p, 1.0);
+    if (!(c.w > 0.0)) return 1.0;
+    float nx = c.x / c.w, ny = c.y / c.w;
+    if (!(abs(nx) <= 1.0 && abs(ny) <= 1.0)) return 1.0;
+    int res = u_shadow_res[i];
+    int x = clamp(int(floor((nx * 0.5 + 0.5) * float(res))), 0, res - 1);
+    int y = clamp(int(floor((0.5 - 0.5 * ny) * float(res))), 0, res - 1);  // row 0 at the top
+    float d = u_shadow_point[i] != 0 ? length(p - u_shadow_origin[i]) : dot(p - u_shadow_origin[i], u_shadow_dir[i]);
+    return d - u_shadow_bias[i] <= shadow_depth(i, ivec2(x, res - 1 - y)) ? 1.0 : 0.0;  // GL rows from the bottom
+}
+
+void main() {
+    int k = int(gl_GlobalInvocationID.x);
+    if (k >= u_count) return;
+    vec3 p = (u_model * vec4(texel_position[k].xyz, 1.0)).xyz;
+    vec3 n = normalize(u_normal_matrix * texel_normal[k].xyz);
+    vec3 e = vec3(0.0);
+    for (int i = 0; i < u_light_count; ++i) {
+        vec3 wi, El;
+        light_sample(i, p, wi, El);
+        float c = dot(n, wi);
+        if (c <= 0.0) continue;
+        e += El * (c * fresnel_transmittance(c, u_eta) * visibility(i, p));
+    }
+    e += env_irradiance(n) * u_env_transmittance;
+    E[nonempty[k]] = vec4(e, 0.0);
+}

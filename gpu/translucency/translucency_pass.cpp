@@ -1,0 +1,426 @@
+// GPU pass of technique translucency: the per-frame passes as compute shaders over storage
+// buffers made once from the stage results (core/translucency/translucency.h), then one draw per
+// object sampling the radiosity maps at the atlas coordinates.
+#include "core/profile.h"
+#include "core/scene_stages.h"
+#include "core/translucency/reference.h"
+#include "core/translucency/translucency.h"
+#include "gpu/renderer.h"
+
+#include <glm/gtc/type_ptr.hpp>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <vector>
+
+namespace mesolab::gpu {
+namespace {
+
+using namespace mesolab::translucency;
+
+// [SECTION] Helpers
+template <class T>
+Buffer storage(const std::vector<T>& v) {
+    // At least 16 bytes: binding an empty buffer is an error on some drivers.
+    if (v.empty()) {
+        const float zero[4] = {0, 0, 0, 0};
+        return make_storage_buffer(zero, sizeof zero);
+    }
+    return make_storage_buffer(v.data(), v.size() * sizeof(T));
+}
+
+std::vector<vec4> to_vec4(const std::vector<vec3>& v, float w = 0.f) {
+    std::vector<vec4> out(v.size());
+    for (size_t i = 0; i < v.size(); ++i) out[i] = vec4(v[i], w);
+    return out;
+}
+
+Texture map_texture(int size, const std::vector<vec4>* data = nullptr) {
+    GLuint id = 0;
+    glGenTextures(1, &id);
+    Texture t(id);
+    glBindTexture(GL_TEXTURE_2D, id);
+    glTexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA32F, size, size);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    if (data) glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, size, size, GL_RGBA, GL_FLOAT, data->data());
+    glBindTexture(GL_TEXTURE_2D, 0);
+    return t;
+}
+
+void bind(GLuint binding, const Buffer& b) { glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, b.get()); }
+GLuint groups(size_t n) { return GLuint((n + 63) / 64); }
+void barrier() { glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT); }
+void clear(const Buffer& b) { glClearNamedBufferData(b.get(), GL_R32F, GL_RED, GL_FLOAT, nullptr); }
+
+// [SECTION] The pass
+class TranslucencyPass final : public TechniquePass {
+public:
+    explicit TranslucencyPass(const Technique& t)
+        : illumination_(Program::compute("translucency/illumination.comp")),
+          vertices_(Program::compute("translucency/vertices.comp")),
+          local_(Program::compute("translucency/local.comp")),
+          global_(Program::compute("translucency/global.comp")),
+          combine_(Program::compute("translucency/combine.comp")),
+          reference_(Program::compute("translucency/reference.comp")),
+          shadow_(Program::graphics("translucency/shadow.vert", "translucency/shadow.frag")),
+          draw_(Program::graphics("shaders/mesh.vert", "translucency/translucency.frag", {}, fragment_outputs(t))) {}
+
+    void run_step(const std::string& step, DrawContext& ctx) override {
+        for (int o : ctx.objects) {
+            In in(ctx, o);
+            PerObject& w = work(o, in);
+            if (step == "translucency.illumination") illuminate_step(ctx, o, in, w);
+            else if (step == "translucency.vertices") vertices_step(ctx, in, w);
+            else if (step == "translucency.local") local_step(ctx, in, w);
+            else if (step == "translucency.global") global_step(ctx, in, w);
+            else if (step == "translucency.combine") combine_step(ctx, in, w);
+            else if (step == "translucency.reference") reference_step(ctx, in, w);
+            barrier();
+        }
+        for (GLuint b = 0; b < 8; ++b) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b, 0);
+    }
+
+    void draw(DrawContext& ctx) override {
+        PROFILE_SCOPE("translucency.draw");
+        draw_.use();
+        for (int o : ctx.objects) {
+            const SceneObject& obj = ctx.scene.objects[size_t(o)];
+            const Settings s = Settings::from(obj);
+            PerObject& w = objects_.at(o);
+            ctx.renderer.set_camera_uniforms(draw_, ctx.camera, object_to_world(obj));
+            draw_.bind_texture(1, GL_TEXTURE_2D, w.irradiance.get(), "u_irradiance");
+            draw_.bind_texture(2, GL_TEXTURE_2D, w.local_map.get(), "u_local");
+            draw_.bind_texture(3, GL_TEXTURE_2D, w.global_map.get(), "u_global");
+            draw_.bind_texture(4, GL_TEXTURE_2D, w.reference.get(), "u_reference");
+            const auto rho = ctx.eval.get<std::vector<vec3>>("translucency.albedo", o);
+            GLuint rho_tex = 0;
+            if (rho) {
+                const int size = w.size;
+                rho_tex = ctx.renderer.resources().get<Texture>(rho, "rho", [&] {
+                    const std::vector<vec4> v = to_vec4(*rho, 1.f);
+                    return map_texture(size, &v);
+                }).get();
+            }
+            draw_.bind_texture(5, GL_TEXTURE_2D, rho_tex, "u_rho");
+            glUniform1i(draw_.uniform("u_has_rho"), rho ? 1 : 0);
+            glUniform1i(draw_.uniform("u_has_reference"), w.has_reference ? 1 : 0);
+            glUniform1i(draw_.uniform("u_response"), int(s.response));
+            glUniform1f(draw_.uniform("u_eta"), float(s.medium.eta));
+            ctx.renderer.draw_object(ctx.scene, ctx.eval, o);
+        }
+        glBindVertexArray(0);
+    }
+
+private:
+    // The stage results an object's passes read.
+    struct In {
+        Settings s;
+        std::shared_ptr<const PreparedMesh> mesh;
+        std::shared_ptr<const AtlasStage> atlas;
+        std::shared_ptr<const LocalKernels> kernels;  // raw
+        std::shared_ptr<const Blended> blended;       // null when blending is off
+        std::shared_ptr<const VertexFactors> factors;
+        std::shared_ptr<const Gather> gather;
+        In(const DrawContext& ctx, int o)
+            : s(Settings::from(ctx.scene.objects[size_t(o)])),
+              mesh(ctx.eval.get<PreparedMesh>("translucency.mesh", o)),
+              atlas(ctx.eval.get<AtlasStage>("translucency.atlas", o)),
+              kernels(ctx.eval.get<LocalKernels>("translucency.kernels", o)),
+              blended(ctx.eval.get<Blended>("translucency.blend", o)),
+              factors(ctx.eval.get<VertexFactors>("translucency.factors", o)),
+              gather(ctx.eval.get<Gather>("translucency.gather", o)) {}
+        const LocalKernels& K() const { return blended ? blended->kernels : *kernels; }
+    };
+    // Per object: the frame's buffers and maps.
+    struct PerObject {
+        int size = 0, vertices = 0;
+        Buffer E, local, Ev, D, Bv;
+        Texture irradiance, local_map, global_map, radiosity, reference;
+        std::vector<RenderTarget> shadow;
+        bool has_reference = false;
+    };
+
+    PerObject& work(int o, const In& in) {
+        PerObject& w = objects_[o];
+        const int size = in.atlas->atlas.size, n = int(in.mesh->vertex_count());
+        if (w.size != size) {
+            const size_t texels = size_t(size) * size_t(size);
+            w.E = make_storage_buffer(nullptr, texels * sizeof(vec4), GL_DYNAMIC_COPY);
+            w.local = make_storage_buffer(nullptr, texels * sizeof(vec4), GL_DYNAMIC_COPY);
+            w.irradiance = map_texture(size);
+            w.local_map = map_texture(size);
+            w.global_map = map_texture(size);
+            w.radiosity = map_texture(size);
+            w.reference = map_texture(size);
+            w.size = size;
+        }
+        if (w.vertices != n) {
+            const size_t bytes = size_t(std::max(n, 1)) * sizeof(vec4);
+            w.Ev = make_storage_buffer(nullptr, bytes, GL_DYNAMIC_COPY);
+            w.D = make_storage_buffer(nullptr, bytes, GL_DYNAMIC_COPY);
+            w.Bv = make_storage_buffer(nullptr, bytes, GL_DYNAMIC_COPY);
+            w.vertices = n;
+        }
+        return w;
+    }
+
+    // A storage buffer made once from a stage result.
+    template <class T, class F>
+    const Buffer& buffer(DrawContext& ctx, const std::shared_ptr<const T>& owner, const char* slot, F&& make) {
+        return ctx.renderer.resources().get<Buffer>(owner, slot, [&] { return storage(make()); });
+    }
+
+    // [SECTION] translucency.illumination: shadow maps, then the irradiance per texel
+    void illuminate_step(DrawContext& ctx, int o, const In& in, PerObject& w) {
+        const SceneObject& obj = ctx.scene.objects[size_t(o)];
+        const mat4 model = object_to_world(obj);
+        const AtlasStage& a = *in.atlas;
+        // Shadow maps: the same frame as the CPU's (shadow_frame over the drawn mesh's world bounds).
+        std::vector<ShadowMap> frames;
+        if (in.s.shadows) {
+            Bounds b{vec3(INFINITY), vec3(-INFINITY)};
+            for (const vec3& p : a.display->position) {
+                const vec3 q = vec3(model * vec4(p, 1.f));
+                b.lo = glm::min(b.lo, q), b.hi = glm::max(b.hi, q);
+            }
+            const size_t n = std::min(ctx.lighting.lights.size(), size_t(kMaxShadowMaps));
+            w.shadow.resize(n);
+            for (size_t i = 0; i < n && !a.display->position.empty(); ++i) {
+                frames.push_back(shadow_frame(ctx.lighting.lights[i], 0.5f * (b.lo + b.hi), 0.5f * glm::length(b.hi - b.lo), in.s.shadow_map));
+                if (!frames.back().valid) continue;
+                RenderTarget& rt = w.shadow[i];
+                rt.resize(in.s.shadow_map, in.s.shadow_map, 1);
+                rt.bind();
+                glClearColor(3e38f, 0.f, 0.f, 0.f);
+                glClearDepth(1.0);
+                glDepthMask(GL_TRUE);
+                glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+                glEnable(GL_DEPTH_TEST);
+                glDepthFunc(GL_LESS);
+                shadow_.use();
+                glUniformMatrix4fv(shadow_.uniform("u_model"), 1, GL_FALSE, glm::value_ptr(model));
+                glUniformMatrix4fv(shadow_.uniform("u_view_proj"), 1, GL_FALSE, glm::value_ptr(frames.back().view_proj));
+                glUniform1i(shadow_.uniform("u_point"), frames.back().point ? 1 : 0);
+                glUniform3fv(shadow_.uniform("u_origin"), 1, glm::value_ptr(frames.back().origin));
+                glUniform3fv(shadow_.uniform("u_dir"), 1, glm::value_ptr(frames.back().dir));
+                ctx.renderer.draw_object(ctx.scene, ctx.eval, o);
+                glBindVertexArray(0);
+            }
+            glBindFramebuffer(GL_FRAMEBUFFER, 0);
+        }
+        illumination_.use();
+        ctx.renderer.set_lighting_uniforms(illumination_, ctx.lighting, 0);
+        glUniform1i(illumination_.uniform("u_shadow_count"), int(frames.size()));
+        for (size_t i = 0; i < 4; ++i) {
+            const std::string k = "[" + std::to_string(i) + "]";
+            const bool on = i < frames.size() && frames[i].valid;
+            illumination_.bind_texture(int(6 + i), GL_TEXTURE_2D, on ? w.shadow[i].color(0) : 0, ("u_shadow" + k).c_str());
+            glUniform1i(illumination_.uniform(("u_shadow_valid" + k).c_str()), on ? 1 : 0);
+            if (!on) continue;
+            const ShadowMap& f = frames[i];
+            glUniformMatrix4fv(illumination_.uniform(("u_shadow_view_proj" + k).c_str()), 1, GL_FALSE, glm::value_ptr(f.view_proj));
+            glUniform1i(illumination_.uniform(("u_shadow_point" + k).c_str()), f.point ? 1 : 0);
+            glUniform3fv(illumination_.uniform(("u_shadow_origin" + k).c_str()), 1, glm::value_ptr(f.origin));
+            glUniform3fv(illumination_.uniform(("u_shadow_dir" + k).c_str()), 1, glm::value_ptr(f.dir));
+            glUniform1f(illumination_.uniform(("u_shadow_bias" + k).c_str()), f.bias);
+            glUniform1i(illumination_.uniform(("u_shadow_res" + k).c_str()), f.res);
+        }
+        const mat3 nm = glm::transpose(glm::inverse(mat3(model)));
+        glUniformMatrix4fv(illumination_.uniform("u_model"), 1, GL_FALSE, glm::value_ptr(model));
+        glUniformMatrix3fv(illumination_.uniform("u_normal_matrix"), 1, GL_FALSE, glm::value_ptr(nm));
+        glUniform1f(illumination_.uniform("u_eta"), float(in.s.medium.eta));
+        glUniform1f(illumination_.uniform("u_env_transmittance"), float(1.0 - fresnel_diffuse_reflectance(in.s.medium.eta)));
+        glUniform1i(illumination_.uniform("u_count"), int(a.nonempty.size()));
+        clear(w.E);
+        bind(0, buffer(ctx, in.atlas, "nonempty", [&] { return a.nonempty; }));
+        bind(1, buffer(ctx, in.atlas, "texel_position", [&] {
+            std::vector<vec4> v(a.nonempty.size());
+            for (size_t k = 0; k < v.size(); ++k) v[k] = vec4(a.texel_position[size_t(a.nonempty[k])], 1.f);
+            return v;
+        }));
+        bind(2, buffer(ctx, in.atlas, "texel_normal", [&] {
+            std::vector<vec4> v(a.nonempty.size());
+            for (size_t k = 0; k < v.size(); ++k) v[k] = vec4(a.texel_normal[size_t(a.nonempty[k])], 0.f);
+            return v;
+        }));
+        bind(3, w.E);
+        glDispatchCompute(groups(a.nonempty.size()), 1, 1);
+    }
+
+    // [SECTION] translucency.vertices
+    void vertices_step(DrawContext& ctx, const In& in, PerObject& w) {
+        const Gather& g = *in.gather;
+        vertices_.use();
+        glUniform1i(vertices_.uniform("u_count"), g.n);
+        bind(0, buffer(ctx, in.gather, "start", [&] { return g.start; }));
+        bind(1, buffer(ctx, in.gather, "texel", [&] { return g.texel; }));
+        bind(2, buffer(ctx, in.gather, "w", [&] { return g.w; }));
+        bind(3, w.E);
+        bind(4, w.Ev);
+        bind(5, w.D);
+        glDispatchCompute(groups(size_t(g.n)), 1, 1);
+    }
+
+    // [SECTION] translucency.local
+    void local_step(DrawContext& ctx, const In& in, PerObject& w) {
+        const LocalKernels& K = in.K();
+        local_.use();
+        glUniform1i(local_.uniform("u_count"), int(K.texel.size()));
+        glUniform1i(local_.uniform("u_K"), K.K);
+        glUniform1i(local_.uniform("u_size"), K.size);
+        auto weights = [&] {
+            std::vector<float> v;
+            v.reserve(3 * K.w[0].size());
+            for (int c = 0; c < 3; ++c) v.insert(v.end(), K.w[size_t(c)].begin(), K.w[size_t(c)].end());
+            return v;
+        };
+        if (in.blended) {
+            bind(0, buffer(ctx, in.blended, "kernel_texel", [&] { return K.texel; }));
+            bind(1, buffer(ctx, in.blended, "kernel_w", weights));
+        } else {
+            bind(0, buffer(ctx, in.kernels, "kernel_texel", [&] { return K.texel; }));
+            bind(1, buffer(ctx, in.kernels, "kernel_w", weights));
+        }
+        clear(w.local);
+        bind(2, w.E);
+        bind(3, w.local);
+        glDispatchCompute(groups(K.texel.size()), 1, 1);
+    }
+
+    // [SECTION] translucency.global: the factor arrays bound in pieces that fit the GL's block size
+    void global_step(DrawContext& ctx, const In& in, PerObject& w) {
+        const VertexFactors& F = *in.factors;
+        global_.use();
+        bind(0, buffer(ctx, in.factors, "outer", [&] { return F.outer; }));
+        const Buffer& inner = buffer(ctx, in.factors, "inner", [&] { return F.inner; });
+        const Buffer* value[3] = {&buffer(ctx, in.factors, "vr", [&] { return F.value[0]; }),
+                                  &buffer(ctx, in.factors, "vg", [&] { return F.value[1]; }),
+                                  &buffer(ctx, in.factors, "vb", [&] { return F.value[2]; })};
+        bind(5, w.Ev);
+        bind(6, w.D);
+        bind(7, w.Bv);
+        GLint64 max_block = 0;
+        GLint align = 16;
+        glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
+        glGetIntegerv(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &align);
+        const int64_t align_entries = std::max<int64_t>(1, align / 4);
+        const int64_t cap = std::max<int64_t>(1024, max_block / 4 - align_entries);
+        const int n = F.n;
+        int r0 = 0;
+        while (r0 < n) {
+            const int64_t base = int64_t(F.outer[size_t(r0)]) / align_entries * align_entries;
+            int r1 = r0 + 1;
+            // Rows while their entries fit (a single row always goes, whatever its length).
+            while (r1 < n && int64_t(F.outer[size_t(r1) + 1]) - base <= cap) ++r1;
+            const int64_t entries = std::max<int64_t>(1, int64_t(F.outer[size_t(r1)]) - base);
+            const int64_t avail = std::max<int64_t>(1, int64_t(F.inner.size()) - base);
+            const GLsizeiptr bytes = GLsizeiptr(std::min(entries, avail) * 4);
+            glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 1, inner.get(), GLintptr(base * 4), bytes);
+            for (int c = 0; c < 3; ++c) glBindBufferRange(GL_SHADER_STORAGE_BUFFER, GLuint(2 + c), value[c]->get(), GLintptr(base * 4), bytes);
+            glUniform1i(global_.uniform("u_row0"), r0);
+            glUniform1i(global_.uniform("u_row1"), r1);
+            glUniform1i(global_.uniform("u_base"), int(base));
+            glDispatchCompute(groups(size_t(r1 - r0)), 1, 1);
+            r0 = r1;
+        }
+    }
+
+    // [SECTION] translucency.combine
+    void combine_step(DrawContext& ctx, const In& in, PerObject& w) {
+        const Atlas& a = in.atlas->atlas;
+        combine_.use();
+        glUniform1i(combine_.uniform("u_size"), a.size);
+        bind(0, buffer(ctx, in.atlas, "fill", [&] { return in.atlas->fill; }));
+        bind(1, buffer(ctx, in.atlas, "face", [&] { return a.texel_face; }));
+        bind(2, buffer(ctx, in.atlas, "bary", [&] { return to_vec4(a.texel_bary); }));
+        bind(3, buffer(ctx, in.mesh, "index", [&] { return in.mesh->index; }));
+        bind(4, w.Bv);
+        bind(5, w.E);
+        bind(6, w.local);
+        glBindImageTexture(0, w.irradiance.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        glBindImageTexture(1, w.local_map.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        glBindImageTexture(2, w.global_map.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        glBindImageTexture(3, w.radiosity.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        glDispatchCompute(groups(size_t(a.size) * size_t(a.size)), 1, 1);
+    }
+
+    // [SECTION] translucency.reference: every lit inner texel to every inner texel (O(n²))
+    void reference_step(DrawContext& ctx, const In& in, PerObject& w) {
+        w.has_reference = false;
+        if (!in.s.needs_reference()) return;
+        const Atlas& a = in.atlas->atlas;
+        const double mm = in.s.mm_per_unit;
+        // Positions (mm), the table and the disk term depend on the material and the atlas: made
+        // with the kernels (keyed by both).
+        struct RefData {
+            std::vector<vec4> x, self, sources_x;  // per texel; per inner texel: position, area
+            std::vector<int32_t> sources_t;
+            std::vector<vec4> table;
+            float inv_r_max = 0.f, r_max2 = 0.f;
+        };
+        auto make = [&] {
+            RefData r;
+            const std::vector<vec3> x = texel_positions_mm(a, in.mesh->position, in.mesh->index, mm);
+            const Dipole d(in.s.medium);
+            vec3 lo(INFINITY), hi(-INFINITY);
+            r.x.assign(x.size(), vec4(0.f));
+            r.self.assign(x.size(), vec4(0.f));
+            for (size_t t = 0; t < x.size(); ++t)
+                if (a.texel_kind[t] == Atlas::kInner) lo = glm::min(lo, x[t]), hi = glm::max(hi, x[t]);
+            const RdTable Rd(d, std::max(1e-6, double(glm::length(hi - lo))) * 1.0001);
+            const float s2 = float(mm * mm);
+            for (size_t t = 0; t < x.size(); ++t) {
+                if (a.texel_kind[t] != Atlas::kInner) continue;
+                const float area = a.texel_area[t] * s2;
+                r.x[t] = vec4(x[t], 1.f);
+                r.self[t] = vec4(vec3(d.reflectance_within(std::sqrt(double(area) / 3.14159265358979323846))) - Rd.at_r2(0.f) * area, 0.f);
+                r.sources_x.push_back(vec4(x[t], area));
+                r.sources_t.push_back(int32_t(t));
+            }
+            r.table = to_vec4(Rd.samples());
+            r.inv_r_max = float(1.0 / Rd.r_max());
+            r.r_max2 = float(Rd.r_max() * Rd.r_max());
+            return r;
+        };
+        auto& data = ctx.renderer.resources().get<std::shared_ptr<RefData>>(in.kernels, "reference_data", [&] { return std::make_shared<RefData>(make()); });
+        const RefData& r = *data;
+        // Sources: position and power E A of the lit inner texels, this frame (E read back once).
+        std::vector<vec4> E(size_t(a.size) * size_t(a.size));
+        glGetNamedBufferSubData(w.E.get(), 0, GLsizeiptr(E.size() * sizeof(vec4)), E.data());
+        std::vector<vec4> src;
+        for (size_t k = 0; k < r.sources_t.size(); ++k) {
+            const vec3 e = vec3(E[size_t(r.sources_t[k])]);
+            if (e == vec3(0.f)) continue;
+            src.push_back(vec4(vec3(r.sources_x[k]), 0.f));
+            src.push_back(vec4(e * r.sources_x[k].w, 0.f));
+        }
+        const Buffer sources = storage(src);
+        reference_.use();
+        glUniform1i(reference_.uniform("u_size"), a.size);
+        glUniform1i(reference_.uniform("u_sources"), int(src.size() / 2));
+        glUniform1i(reference_.uniform("u_table_n"), int(r.table.size()));
+        glUniform1f(reference_.uniform("u_inv_r_max"), r.inv_r_max);
+        glUniform1f(reference_.uniform("u_r_max2"), r.r_max2);
+        bind(0, buffer(ctx, in.atlas, "fill", [&] { return in.atlas->fill; }));
+        bind(1, sources);
+        bind(2, buffer(ctx, in.kernels, "reference_x", [&] { return r.x; }));
+        bind(3, buffer(ctx, in.kernels, "reference_self", [&] { return r.self; }));
+        bind(4, w.E);
+        bind(5, buffer(ctx, in.kernels, "reference_table", [&] { return r.table; }));
+        glBindImageTexture(0, w.reference.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        glDispatchCompute(groups(size_t(a.size) * size_t(a.size)), 1, 1);
+        w.has_reference = true;
+    }
+
+    Program illumination_, vertices_, local_, global_, combine_, reference_, shadow_, draw_;
+    std::map<int, PerObject> objects_;
+};
+}  // namespace
+
+void register_translucency_gpu(std::map<std::string, PassFactory>& out) {
+    out["translucency"] = [](const Technique& t) { return std::make_unique<TranslucencyPass>(t); };
+}
+}  // namespace mesolab::gpu
