@@ -1,5 +1,6 @@
 // Blending (core/translucency/blend.h): energy on a plane lit by a spot against the total
 // diffuse reflectance, with and without blending; the fitted global response on the ring.
+#include <cstdio>
 #include "core/mesh.h"
 #include "core/translucency/blend.h"
 #include "core/translucency/mesh_prep.h"
@@ -74,6 +75,8 @@ TEST(Blending, RemovesMostOfTheDoubleCountingOfASpotOnAPlane) {
         for (size_t t = 0; t < plain.size(); ++t) plain[t] += g1[t];
 
         const dvec3 rb = ratio(s, blended), rp = ratio(s, plain);
+        std::printf("%s: energy ratio / R_total, blended %.4f %.4f %.4f, unblended %.4f %.4f %.4f\n", material, rb.x / R.x, rb.y / R.y, rb.z / R.z,
+                    rp.x / R.x, rp.y / R.y, rp.z / R.z);
         for (int c = 0; c < 3; ++c) {
             const double eb = std::abs(rb[c] / R[c] - 1.0), ep = std::abs(rp[c] / R[c] - 1.0);
             EXPECT_LT(eb, 0.09) << material << " blended, channel " << c << ": " << rb[c] << " vs " << R[c];
