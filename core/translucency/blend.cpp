@@ -86,7 +86,7 @@ BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position,
                 for (int dx = -R; dx <= R; ++dx) {
                     if (std::max(std::abs(dx), std::abs(dy)) != R) continue;
                     const size_t p = size_t(ty + dy) * size_t(N) + size_t(tx + dx);
-                    if (atlas.texel_face[p] < 0 || atlas.texel_chunk[p] != atlas.texel_chunk[t]) continue;
+                    if (atlas.texel_face[p] < 0 || atlas.texel_chunk[p] != atlas.texel_chunk[t] || atlas.texel_kind[p] == Atlas::kClamped) continue;
                     const TexelRef rp = ref(atlas, index, p);
                     Eigen::Vector3d a;
                     for (int m = 0; m < 3; ++m) a[m] = hat(rp, src.v[size_t(m)]);
@@ -112,7 +112,7 @@ BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position,
             for (int dy = -h; dy <= h; ++dy)
                 for (int dx = -h; dx <= h; ++dx) {
                     const size_t ts = size_t(ty + dy) * size_t(N) + size_t(tx + dx);
-                    if (atlas.texel_face[ts] < 0) continue;
+                    if (atlas.texel_face[ts] < 0 || atlas.texel_kind[ts] == Atlas::kClamped) continue;  // no weight to correct
                     const TexelRef src = ref(atlas, index, ts);
                     vec3 D(0.f);
                     if (atlas.texel_kind[ts] == Atlas::kInner) {

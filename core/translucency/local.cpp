@@ -53,8 +53,10 @@ LocalKernels build_local_kernels(const Atlas& atlas, const std::vector<vec3>& po
                     const size_t n = size_t(ty + dy) * size_t(N) + size_t(tx + dx);  // inside the atlas: the border
                     const size_t o = k * KK + size_t(dy + h) * size_t(K) + size_t(dx + h);
                     const double area = double(atlas.texel_area[n]) * s2;
-                    vec3 w;
-                    if (dx == 0 && dy == 0) {
+                    vec3 w(0.f);
+                    if (atlas.texel_kind[n] == Atlas::kClamped) {
+                        // A stand-in where the surface ends (a copy of the chunk's nearest point): no surface, no weight.
+                    } else if (dx == 0 && dy == 0) {
                         w = vec3(dipole.reflectance_within(std::sqrt(area / 3.14159265358979323846)));
                     } else {
                         const vec3 d = x[n] - xt;
