@@ -270,25 +270,81 @@ float ShadowMap::visibility(vec3 p) const {
     return distance(p) - bias <= depth[size_t(y) * size_t(res) + size_t(x)] ? 1.f : 0.f;
 }
 
+// Distances only, rasterised the way GL does (pixel centres, a LESS test; edges shared by two
+// triangles can go either way, which only moves silhouettes by a texel): bands of rows in parallel.
 ShadowMap make_shadow_map(const TriMesh& display, const mat4& model, const Light& l, int res) {
     Bounds b{vec3(INFINITY), vec3(-INFINITY)};
-    for (const vec3& p : display.position) {
-        const vec3 w = vec3(model * vec4(p, 1.f));
-        b.lo = glm::min(b.lo, w), b.hi = glm::max(b.hi, w);
+    std::vector<vec3> world(display.position.size());
+    for (size_t i = 0; i < world.size(); ++i) {
+        world[i] = vec3(model * vec4(display.position[i], 1.f));
+        b.lo = glm::min(b.lo, world[i]), b.hi = glm::max(b.hi, world[i]);
     }
     if (display.position.empty()) return ShadowMap{};
     const vec3 centre = 0.5f * (b.lo + b.hi);
     ShadowMap m = shadow_frame(l, centre, 0.5f * glm::length(b.hi - b.lo), res);
     if (!m.valid) return m;
-    RasterCamera cam;
-    cam.width = cam.height = res;
-    cam.view = mat4(1.f);
-    cam.proj = m.view_proj;
-    GBuffer gb;
-    rasterize({{&display, model, 0}}, cam, gb);
     m.depth.assign(size_t(res) * size_t(res), std::numeric_limits<float>::infinity());
-    for (size_t i = 0; i < m.depth.size(); ++i)
-        if (gb.object[i] >= 0) m.depth[i] = m.distance(gb.position[i]);
+    // Window position (x right, y down from the top row) and 1/w, and the distance over w, per vertex.
+    struct V {
+        vec2 p;
+        float inv_w, d_over_w;
+        bool ok;
+    };
+    std::vector<V> v(world.size());
+    for (size_t i = 0; i < world.size(); ++i) {
+        const vec4 c = m.view_proj * vec4(world[i], 1.f);
+        V& o = v[i];
+        o.ok = c.w > 1e-12f;
+        if (!o.ok) continue;
+        o.inv_w = 1.f / c.w;
+        o.p = vec2((c.x * o.inv_w * 0.5f + 0.5f) * float(res), (0.5f - 0.5f * c.y * o.inv_w) * float(res));
+        o.d_over_w = m.distance(world[i]) * o.inv_w;
+    }
+    const size_t T = display.index.size() / 3;
+    const int bands = std::max(1, std::min(64, res / 16));
+    const int band_h = (res + bands - 1) / bands;
+    // Triangles binned by the bands their rows cover.
+    std::vector<std::vector<uint32_t>> binned(static_cast<size_t>(bands));
+    for (size_t f = 0; f < T; ++f) {
+        const V& a = v[display.index[3 * f]];
+        const V& bb = v[display.index[3 * f + 1]];
+        const V& c = v[display.index[3 * f + 2]];
+        if (!a.ok || !bb.ok || !c.ok) continue;
+        const int y0 = std::max(0, int(std::ceil(std::min({a.p.y, bb.p.y, c.p.y}) - 0.5f)));
+        const int y1 = std::min(res - 1, int(std::floor(std::max({a.p.y, bb.p.y, c.p.y}) - 0.5f)));
+        for (int k = y0 / band_h; y0 <= y1 && k <= y1 / band_h; ++k) binned[size_t(k)].push_back(uint32_t(f));
+    }
+    tbb::parallel_for(0, bands, [&](int band) {
+        const int y_lo = band * band_h, y_hi = std::min(res, y_lo + band_h);
+        for (const uint32_t f : binned[size_t(band)]) {
+            const V& a = v[display.index[3 * f]];
+            const V& bb = v[display.index[3 * f + 1]];
+            const V& c = v[display.index[3 * f + 2]];
+            if (!a.ok || !bb.ok || !c.ok) continue;
+            const float area = (bb.p.x - a.p.x) * (c.p.y - a.p.y) - (bb.p.y - a.p.y) * (c.p.x - a.p.x);
+            if (!(std::abs(area) > 1e-12f)) continue;
+            const float miny = std::min({a.p.y, bb.p.y, c.p.y}), maxy = std::max({a.p.y, bb.p.y, c.p.y});
+            const int y0 = std::max(y_lo, int(std::ceil(miny - 0.5f))), y1 = std::min(y_hi - 1, int(std::floor(maxy - 0.5f)));
+            if (y0 > y1) continue;
+            const int x0 = std::max(0, int(std::ceil(std::min({a.p.x, bb.p.x, c.p.x}) - 0.5f)));
+            const int x1 = std::min(res - 1, int(std::floor(std::max({a.p.x, bb.p.x, c.p.x}) - 0.5f)));
+            const float inv_area = 1.f / area;
+            for (int y = y0; y <= y1; ++y) {
+                const float py = float(y) + 0.5f;
+                float* row = m.depth.data() + size_t(y) * size_t(res);
+                for (int x = x0; x <= x1; ++x) {
+                    const float px = float(x) + 0.5f;
+                    const float w0 = ((bb.p.x - px) * (c.p.y - py) - (bb.p.y - py) * (c.p.x - px)) * inv_area;
+                    const float w1 = ((c.p.x - px) * (a.p.y - py) - (c.p.y - py) * (a.p.x - px)) * inv_area;
+                    const float w2 = 1.f - w0 - w1;
+                    if (w0 < 0.f || w1 < 0.f || w2 < 0.f) continue;
+                    const float iw = w0 * a.inv_w + w1 * bb.inv_w + w2 * c.inv_w;
+                    const float d = (w0 * a.d_over_w + w1 * bb.d_over_w + w2 * c.d_over_w) / iw;
+                    if (d < row[x]) row[x] = d;
+                }
+            }
+        }
+    });
     return m;
 }
 

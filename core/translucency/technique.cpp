@@ -119,7 +119,7 @@ public:
         p.add_bool("compare", false)
             .doc("Also compute the brute-force reference each frame (the reference and error AOVs): seconds per light move on large meshes");
         p.add_bool("shadows", true).doc("Self-shadowing of the illumination map (a shadow map per light)");
-        p.add_int("shadow_map", 1024).range(64, 8192).used_when("shadows", {"true"}).doc("Shadow map texels per side");
+        p.add_int("shadow_map", 512).range(64, 8192).used_when("shadows", {"true"}).doc("Shadow map texels per side");
         p.add_path("albedo_map", "").costs(Cost::Recompute)
             .doc("Surface texture rho multiplying the outgoing radiosity, at the mesh's (u,v); relative to the preset's folder");
         p.add_float("veins", 0.0).range(0.0, 1.0).costs(Cost::Recompute).doc("Strength of procedural fractal veins in rho (0 = none)");
@@ -151,6 +151,7 @@ public:
         return a ? a->display : nullptr;
     }
     std::vector<BenchTable> bench_tables() const override { return translucency_bench_tables(); }
+    std::vector<SweepMetricDecl> sweep_metrics() const override;
 };
 
 // [SECTION] Stages
@@ -374,6 +375,66 @@ std::any TranslucencyTechnique::run_step_cpu(const std::string& step, const Fram
         return std::any(std::make_shared<const PerObject<std::vector<vec3>>>(std::move(out)));
     }
     return {};
+}
+
+// [SECTION] Sweep metric: the method against the brute-force reference
+// For each setting, the first translucent object's radiosity (local + global, as the frame
+// computes it) against the reference summed over the same atlas's texels, RMSE over the inner
+// texels relative to the reference's mean (all three channels). The reference is the
+// discretisation-independent part: texels are much smaller than a mean free path.
+std::vector<SweepMetricDecl> TranslucencyTechnique::sweep_metrics() const {
+    auto first = [](const Scene& s) {
+        for (size_t i = 0; i < s.objects.size(); ++i)
+            if (s.objects[i].technique == "translucency") return int(i);
+        throw InputError("no object uses technique translucency (the metric translucency.reference measures the first one's radiosity)");
+    };
+    SweepMetricDecl m;
+    m.name = "translucency.reference";
+    m.label = "radiosity RMSE / mean vs brute force";
+    m.help = "RMSE of the radiosity against the brute-force reference on the same atlas, over the mean of the reference";
+    m.check = [first](const Scene& s) { first(s); };
+    m.prepare = [first](const Scene&, const Evaluation&) {
+        SweepMeasure out;
+        out.error = [first](const Scene& s, const Evaluation& ev) {
+            const int o = first(s);
+            const SceneObject& obj = s.objects[size_t(o)];
+            const Settings st = Settings::from(obj);
+            const auto a = ev.get<AtlasStage>("translucency.atlas", o);
+            const auto m = ev.get<PreparedMesh>("translucency.mesh", o);
+            const auto g = ev.get<Gather>("translucency.gather", o);
+            const auto F = ev.get<VertexFactors>("translucency.factors", o);
+            const auto b = ev.get<Blended>("translucency.blend", o);
+            const auto K = ev.get<LocalKernels>("translucency.kernels", o);
+            if (!a || !m || !g || !F || !K) throw std::logic_error("translucency.reference: the frame's evaluation lacks the translucency stages");
+            const Lighting L = make_lighting(s, ev);
+            const mat4 model = object_to_world(obj);
+            std::vector<ShadowMap> shadows;
+            if (st.shadows)
+                for (size_t i = 0; i < L.lights.size() && i < size_t(kMaxShadowMaps); ++i)
+                    shadows.push_back(make_shadow_map(*a->display, model, L.lights[i], st.shadow_map));
+            const std::vector<vec3> E = illuminate(*a, model, L, st.medium.eta, shadows);
+            const VertexValues v = gather_vertices(*g, E);
+            std::vector<vec3> Bv = F->multiply(v.E);
+            for (size_t i = 0; i < Bv.size(); ++i) Bv[i] += v.direct[i];
+            const std::vector<vec3> local = convolve_local(b ? b->kernels : *K, E);
+            const std::vector<vec3> global = interpolate_to_texels(a->atlas, m->index, Bv);
+            const std::vector<vec3> ref = reference_radiosity(a->atlas, texel_positions_mm(a->atlas, m->position, m->index, st.mm_per_unit),
+                                                              Dipole(st.medium), st.mm_per_unit, E);
+            double se = 0.0, sum = 0.0;
+            size_t n = 0;
+            for (size_t t = 0; t < E.size(); ++t) {
+                if (a->atlas.texel_kind[t] != Atlas::kInner) continue;
+                const vec3 d = local[t] + global[t] - ref[t];
+                se += double(glm::dot(d, d)) / 3.0;
+                sum += double(ref[t].x + ref[t].y + ref[t].z) / 3.0;
+                ++n;
+            }
+            return n && sum > 0.0 ? std::sqrt(se / double(n)) / (sum / double(n)) : 0.0;
+        };
+        out.notes = "Each setting against the brute-force sum over its own atlas (every lit texel to every texel, no kernel, no threshold).";
+        return out;
+    };
+    return {m};
 }
 
 // [SECTION] Shading

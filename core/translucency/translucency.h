@@ -53,7 +53,7 @@ struct Settings {
     std::string material;       // a measured material or "custom"
     Medium medium;
     double mm_per_unit = 1.0;   // mm per object-space unit: translucency.mm_per_unit x geometry.scale
-    int vertices = 0, atlas_size = 512, kernel = 7, shadow_map = 1024;
+    int vertices = 0, atlas_size = 512, kernel = 7, shadow_map = 512;
     float chunk_angle = 30.f, threshold = 0.f;
     bool blend = true, shadows = true, compare = false;
     Response response = Response::Both;
