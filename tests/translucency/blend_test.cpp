@@ -44,8 +44,8 @@ dvec3 ratio(const SpotScene& s, const std::vector<vec3>& B) {
 }  // namespace
 
 // Σ radiosity / Σ irradiance over the plane should be the total diffuse reflectance. Measured
-// here (R, G, B): skin1 blended +2.7%, +6.1%, +8.0%, added without blending +21%, +45%, +82%;
-// marble blended +2.9%, +3.0%, +2.8%, without blending +52%, +73%, +97%.
+// here (R, G, B): skin1 blended +2.0%, +4.9%, +6.9%, added without blending +21%, +45%, +82%;
+// marble blended +2.5%, +2.5%, +2.3%, without blending +52%, +73%, +97%.
 // The 3% that the technique aims at is not reached yet: the F0 factors sample R_d once per pair
 // of vertices, which misjudges the first ring of neighbours beyond the kernel.
 TEST(Blending, RemovesMostOfTheDoubleCountingOfASpotOnAPlane) {
@@ -79,7 +79,7 @@ TEST(Blending, RemovesMostOfTheDoubleCountingOfASpotOnAPlane) {
                     rp.x / R.x, rp.y / R.y, rp.z / R.z);
         for (int c = 0; c < 3; ++c) {
             const double eb = std::abs(rb[c] / R[c] - 1.0), ep = std::abs(rp[c] / R[c] - 1.0);
-            EXPECT_LT(eb, 0.09) << material << " blended, channel " << c << ": " << rb[c] << " vs " << R[c];
+            EXPECT_LT(eb, 0.08) << material << " blended, channel " << c << ": " << rb[c] << " vs " << R[c];
             EXPECT_GT(ep, 0.15) << material << " unblended, channel " << c << ": " << rp[c] << " vs " << R[c];
             EXPECT_LT(eb, 0.5 * ep) << material << " channel " << c;
         }

@@ -94,10 +94,10 @@ TEST(Reference, BlendedResponseFollowsTheReferenceOnASphereAndUnblendedDoesNot) 
     }
     const std::vector<vec3> ref = reference_radiosity(s.atlas, texel_positions_mm(s.atlas, s.m.position, s.m.index, s.mm), d, s.mm, s.E);
     const std::vector<vec3> blended = method(s, d, true), plain = method(s, d, false);
-    // Measured (R, G, B): blended 0.069, 0.152, 0.206; unblended 0.290, 0.689, 1.466 (RMSE over
+    // Measured (R, G, B): blended 0.034, 0.082, 0.158; unblended 0.290, 0.689, 1.466 (RMSE over
     // the reference's mean). Blue's R_d falls within about one vertex spacing (1.3 mm here), where
     // the global part's linear interpolation between vertices is coarse.
-    const double bound[3] = {0.08, 0.17, 0.23};
+    const double bound[3] = {0.05, 0.11, 0.2};
     for (int c = 0; c < 3; ++c) {
         const double eb = relative_rmse(s, blended, ref, c), ep = relative_rmse(s, plain, ref, c);
         std::printf("channel %d: relative RMSE blended %.4f, unblended %.4f\n", c, eb, ep);
