@@ -132,6 +132,8 @@ Gather make_gather(const Atlas& a, const std::vector<uint32_t>& index, const std
     g.w.resize(g.texel.size());
     std::vector<int32_t> next(g.start.begin(), g.start.end() - 1);
     const double s2 = mm_per_unit * mm_per_unit;
+
+
     for (size_t t = 0; t < N; ++t) {
         if (a.texel_kind[t] != Atlas::kInner) continue;
         const size_t f = size_t(a.texel_face[t]);

@@ -391,6 +391,7 @@ std::vector<SweepMetricDecl> TranslucencyTechnique::sweep_metrics() const {
     SweepMetricDecl m;
     m.name = "translucency.reference";
     m.label = "radiosity RMSE / mean vs brute force";
+    m.unit = "fraction of the mean";
     m.help = "RMSE of the radiosity against the brute-force reference on the same atlas, over the mean of the reference";
     m.check = [first](const Scene& s) { first(s); };
     m.prepare = [first](const Scene&, const Evaluation&) {

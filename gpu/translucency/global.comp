@@ -1,15 +1,13 @@
 #version 430 core
 // Technique translucency, step translucency.global: B_i = sum_j F_ij E_j + B_D,i for the rows
-// [u_row0, u_row1) (core/translucency/global.cpp VertexFactors::multiply). The factor arrays are
-// bound from entry u_base on, so that buffers above the GL's storage block size go in pieces.
+// [u_row0, u_row1) (core/translucency/global.cpp VertexFactors::multiply). The entries are bound
+// from entry u_base on, so that buffers above the GL's storage block size go in pieces.
 #include "translucency.glsl"
 layout(local_size_x = 64) in;
 
 layout(std430, binding = 0) readonly buffer Outer { int outer[]; };
-layout(std430, binding = 1) readonly buffer Inner { int inner[]; };
-layout(std430, binding = 2) readonly buffer ValueR { float vr[]; };
-layout(std430, binding = 3) readonly buffer ValueG { float vg[]; };
-layout(std430, binding = 4) readonly buffer ValueB { float vb[]; };
+// One 16-byte entry per factor: (column as int bits, R, G, B): a single load each.
+layout(std430, binding = 1) readonly buffer Entries { vec4 entry[]; };
 layout(std430, binding = 5) readonly buffer VertexE { vec4 Ev[]; };
 layout(std430, binding = 6) readonly buffer VertexD { vec4 D[]; };
 layout(std430, binding = 7) writeonly buffer VertexB { vec4 Bv[]; };
@@ -22,8 +20,8 @@ void main() {
     if (i >= u_row1) return;
     vec3 b = vec3(0.0);
     for (int k = outer[i]; k < outer[i + 1]; ++k) {
-        int j = k - u_base;
-        b += vec3(vr[j], vg[j], vb[j]) * Ev[inner[j]].rgb;
+        vec4 e = entry[k - u_base];
+        b += e.yzw * Ev[floatBitsToInt(e.x)].rgb;
     }
     Bv[i] = vec4(b + D[i].rgb, 0.0);
 }

@@ -9,6 +9,7 @@
 
 #include <glm/gtc/type_ptr.hpp>
 #include <algorithm>
+#include <cstring>
 #include <cmath>
 #include <map>
 #include <vector>
@@ -272,9 +273,8 @@ private:
         glUniform1i(local_.uniform("u_K"), K.K);
         glUniform1i(local_.uniform("u_size"), K.size);
         auto weights = [&] {
-            std::vector<float> v;
-            v.reserve(3 * K.w[0].size());
-            for (int c = 0; c < 3; ++c) v.insert(v.end(), K.w[size_t(c)].begin(), K.w[size_t(c)].end());
+            std::vector<vec4> v(K.w[0].size());
+            for (size_t i = 0; i < v.size(); ++i) v[i] = vec4(K.w[0][i], K.w[1][i], K.w[2][i], 0.f);
             return v;
         };
         if (in.blended) {
@@ -295,10 +295,15 @@ private:
         const VertexFactors& F = *in.factors;
         global_.use();
         bind(0, buffer(ctx, in.factors, "outer", [&] { return F.outer; }));
-        const Buffer& inner = buffer(ctx, in.factors, "inner", [&] { return F.inner; });
-        const Buffer* value[3] = {&buffer(ctx, in.factors, "vr", [&] { return F.value[0]; }),
-                                  &buffer(ctx, in.factors, "vg", [&] { return F.value[1]; }),
-                                  &buffer(ctx, in.factors, "vb", [&] { return F.value[2]; })};
+        const Buffer& entries = buffer(ctx, in.factors, "entries", [&] {
+            std::vector<vec4> e(F.inner.size());
+            for (size_t k = 0; k < e.size(); ++k) {
+                float col;
+                std::memcpy(&col, &F.inner[k], sizeof col);
+                e[k] = vec4(col, F.value[0][k], F.value[1][k], F.value[2][k]);
+            }
+            return e;
+        });
         bind(5, w.Ev);
         bind(6, w.D);
         bind(7, w.Bv);
@@ -306,8 +311,8 @@ private:
         GLint align = 16;
         glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
         glGetIntegerv(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &align);
-        const int64_t align_entries = std::max<int64_t>(1, align / 4);
-        const int64_t cap = std::max<int64_t>(1024, max_block / 4 - align_entries);
+        const int64_t align_entries = std::max<int64_t>(1, align / 16);
+        const int64_t cap = std::max<int64_t>(1024, max_block / 16 - align_entries);
         const int n = F.n;
         int r0 = 0;
         while (r0 < n) {
@@ -315,11 +320,9 @@ private:
             int r1 = r0 + 1;
             // Rows while their entries fit (a single row always goes, whatever its length).
             while (r1 < n && int64_t(F.outer[size_t(r1) + 1]) - base <= cap) ++r1;
-            const int64_t entries = std::max<int64_t>(1, int64_t(F.outer[size_t(r1)]) - base);
+            const int64_t count = std::max<int64_t>(1, int64_t(F.outer[size_t(r1)]) - base);
             const int64_t avail = std::max<int64_t>(1, int64_t(F.inner.size()) - base);
-            const GLsizeiptr bytes = GLsizeiptr(std::min(entries, avail) * 4);
-            glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 1, inner.get(), GLintptr(base * 4), bytes);
-            for (int c = 0; c < 3; ++c) glBindBufferRange(GL_SHADER_STORAGE_BUFFER, GLuint(2 + c), value[c]->get(), GLintptr(base * 4), bytes);
+            glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 1, entries.get(), GLintptr(base * 16), GLsizeiptr(std::min(count, avail) * 16));
             glUniform1i(global_.uniform("u_row0"), r0);
             glUniform1i(global_.uniform("u_row1"), r1);
             glUniform1i(global_.uniform("u_base"), int(base));

@@ -44,7 +44,7 @@ dvec3 ratio(const SpotScene& s, const std::vector<vec3>& B) {
 }  // namespace
 
 // Σ radiosity / Σ irradiance over the plane should be the total diffuse reflectance. Measured
-// here (R, G, B): skin1 blended +2.0%, +4.9%, +6.9%, added without blending +21%, +45%, +82%;
+// here (R, G, B): skin1 blended +2.0%, +4.9%, +6.8%, added without blending +21%, +45%, +82%;
 // marble blended +2.5%, +2.5%, +2.3%, without blending +52%, +73%, +97%.
 // The 3% that the technique aims at is not reached yet: the F0 factors sample R_d once per pair
 // of vertices, which misjudges the first ring of neighbours beyond the kernel.

@@ -152,10 +152,10 @@ TEST(TranslucencyAccuracy, BlendingBringsTheRadiosityCloserToTheReferenceOnASpot
     const Frame blended = wb.render(s, req).frame;
     apply_set(s, "translucency.blend", "false");
     const Frame plain = wb.render(s, req).frame;
-    // Measured (R, G, B): blended 0.099, 0.138, 0.183; unblended 1.33, 2.62, 5.72. Most of the
+    // Measured (R, G, B): blended 0.068, 0.113, 0.178; unblended 1.33, 2.62, 5.72. Most of the
     // blended error sits at the edges of the atlas's smallest chunks, where the border could not
     // be unfolded over enough neighbours and the kernel lacks the surface beyond.
-    const double bound[3] = {0.15, 0.2, 0.25};
+    const double bound[3] = {0.1, 0.15, 0.22};
     for (int c = 0; c < 3; ++c) {
         const double eb = relative_rmse(blended, c), ep = relative_rmse(plain, c);
         std::printf("spot, skin1, channel %d: relative RMSE blended %.4f, unblended %.4f\n", c, eb, ep);
