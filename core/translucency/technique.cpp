@@ -377,6 +377,46 @@ std::any TranslucencyTechnique::run_step_cpu(const std::string& step, const Fram
     return {};
 }
 
+}  // namespace
+
+// [SECTION] The method against the brute-force reference
+double radiosity_error(const Scene& s, const Evaluation& ev, int o) {
+    const SceneObject& obj = s.objects.at(size_t(o));
+    const Settings st = Settings::from(obj);
+    const auto a = ev.get<AtlasStage>("translucency.atlas", o);
+    const auto m = ev.get<PreparedMesh>("translucency.mesh", o);
+    const auto g = ev.get<Gather>("translucency.gather", o);
+    const auto F = ev.get<VertexFactors>("translucency.factors", o);
+    const auto b = ev.get<Blended>("translucency.blend", o);
+    const auto K = ev.get<LocalKernels>("translucency.kernels", o);
+    if (!a || !m || !g || !F || !K) throw std::logic_error("translucency: the evaluation lacks the object's translucency stages");
+    const Lighting L = make_lighting(s, ev);
+    const mat4 model = object_to_world(obj);
+    std::vector<ShadowMap> shadows;
+    if (st.shadows)
+        for (size_t i = 0; i < L.lights.size() && i < size_t(kMaxShadowMaps); ++i)
+            shadows.push_back(make_shadow_map(*a->display, model, L.lights[i], st.shadow_map));
+    const std::vector<vec3> E = illuminate(*a, model, L, st.medium.eta, shadows);
+    const VertexValues v = gather_vertices(*g, E);
+    std::vector<vec3> Bv = F->multiply(v.E);
+    for (size_t i = 0; i < Bv.size(); ++i) Bv[i] += v.direct[i];
+    const std::vector<vec3> local = convolve_local(b ? b->kernels : *K, E);
+    const std::vector<vec3> global = interpolate_to_texels(a->atlas, m->index, Bv);
+    const std::vector<vec3> ref =
+        reference_radiosity(a->atlas, texel_positions_mm(a->atlas, m->position, m->index, st.mm_per_unit), Dipole(st.medium), st.mm_per_unit, E);
+    double se = 0.0, sum = 0.0;
+    size_t n = 0;
+    for (size_t t = 0; t < E.size(); ++t) {
+        if (a->atlas.texel_kind[t] != Atlas::kInner) continue;
+        const vec3 d = local[t] + global[t] - ref[t];
+        se += double(glm::dot(d, d)) / 3.0;
+        sum += double(ref[t].x + ref[t].y + ref[t].z) / 3.0;
+        ++n;
+    }
+    return n && sum > 0.0 ? std::sqrt(se / double(n)) / (sum / double(n)) : 0.0;
+}
+
+namespace {
 // [SECTION] Sweep metric: the method against the brute-force reference
 // For each setting, the first translucent object's radiosity (local + global, as the frame
 // computes it) against the reference summed over the same atlas's texels, RMSE over the inner
@@ -396,42 +436,7 @@ std::vector<SweepMetricDecl> TranslucencyTechnique::sweep_metrics() const {
     m.check = [first](const Scene& s) { first(s); };
     m.prepare = [first](const Scene&, const Evaluation&) {
         SweepMeasure out;
-        out.error = [first](const Scene& s, const Evaluation& ev) {
-            const int o = first(s);
-            const SceneObject& obj = s.objects[size_t(o)];
-            const Settings st = Settings::from(obj);
-            const auto a = ev.get<AtlasStage>("translucency.atlas", o);
-            const auto m = ev.get<PreparedMesh>("translucency.mesh", o);
-            const auto g = ev.get<Gather>("translucency.gather", o);
-            const auto F = ev.get<VertexFactors>("translucency.factors", o);
-            const auto b = ev.get<Blended>("translucency.blend", o);
-            const auto K = ev.get<LocalKernels>("translucency.kernels", o);
-            if (!a || !m || !g || !F || !K) throw std::logic_error("translucency.reference: the frame's evaluation lacks the translucency stages");
-            const Lighting L = make_lighting(s, ev);
-            const mat4 model = object_to_world(obj);
-            std::vector<ShadowMap> shadows;
-            if (st.shadows)
-                for (size_t i = 0; i < L.lights.size() && i < size_t(kMaxShadowMaps); ++i)
-                    shadows.push_back(make_shadow_map(*a->display, model, L.lights[i], st.shadow_map));
-            const std::vector<vec3> E = illuminate(*a, model, L, st.medium.eta, shadows);
-            const VertexValues v = gather_vertices(*g, E);
-            std::vector<vec3> Bv = F->multiply(v.E);
-            for (size_t i = 0; i < Bv.size(); ++i) Bv[i] += v.direct[i];
-            const std::vector<vec3> local = convolve_local(b ? b->kernels : *K, E);
-            const std::vector<vec3> global = interpolate_to_texels(a->atlas, m->index, Bv);
-            const std::vector<vec3> ref = reference_radiosity(a->atlas, texel_positions_mm(a->atlas, m->position, m->index, st.mm_per_unit),
-                                                              Dipole(st.medium), st.mm_per_unit, E);
-            double se = 0.0, sum = 0.0;
-            size_t n = 0;
-            for (size_t t = 0; t < E.size(); ++t) {
-                if (a->atlas.texel_kind[t] != Atlas::kInner) continue;
-                const vec3 d = local[t] + global[t] - ref[t];
-                se += double(glm::dot(d, d)) / 3.0;
-                sum += double(ref[t].x + ref[t].y + ref[t].z) / 3.0;
-                ++n;
-            }
-            return n && sum > 0.0 ? std::sqrt(se / double(n)) / (sum / double(n)) : 0.0;
-        };
+        out.error = [first](const Scene& s, const Evaluation& ev) { return radiosity_error(s, ev, first(s)); };
         out.notes = "Each setting against the brute-force sum over its own atlas (every lit texel to every texel, no kernel, no threshold).";
         return out;
     };

@@ -144,6 +144,12 @@ std::vector<vec3> fill_texels(const AtlasStage& a, const std::vector<vec3>& v);
 // Bilinear look-up of a per-texel map at atlas uv (as GL_LINEAR with clamp to edge).
 vec3 sample_texels(const std::vector<vec3>& map, int size, vec2 uv);
 
+// The radiosity of object `object` as the method computes it against the brute-force reference
+// on the same atlas, for the scene's lights: RMSE over the inner texels (all channels) relative to
+// the reference's mean. CPU; seconds on large meshes (the reference is O(texels²)). Needs the
+// object's stages in `ev`. The sweep metric translucency.reference and the panel use it.
+double radiosity_error(const Scene& s, const Evaluation& ev, int object);
+
 // Per-object outputs of the frame steps.
 template <class T>
 using PerObject = std::map<int, T>;

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 namespace mesolab::panels {
 namespace {
@@ -146,7 +147,21 @@ void register_translucency_panel(PanelRegistry& r) {
             ImGui::SameLine();
             view_button(ctx, "reference", "B by brute force (turn on compare)");
             ImGui::SameLine();
-            view_button(ctx, "error", "radiosity - reference (turn on compare); `mesolab capture` prints its RMSE");
+            view_button(ctx, "error", "radiosity - reference (turn on compare)");
+            // The error's RMSE, measured on demand (the brute force is O(texels²): seconds on large meshes).
+            static std::string rmse;
+            if (ImGui::SmallButton("measure RMSE vs brute force") && ctx.eval) {
+                try {
+                    char b[96];
+                    std::snprintf(b, sizeof b, "radiosity RMSE / mean: %.4f", radiosity_error(ctx.scene, *ctx.eval, ctx.object));
+                    rmse = b;
+                } catch (const std::exception& e) {
+                    rmse = e.what();
+                }
+            }
+            if (ImGui::IsItemHovered())
+                ImGui::SetTooltip("The method's radiosity against the brute-force sum over the same atlas, for the current lights (CPU; the window waits)");
+            if (!rmse.empty()) ImGui::TextUnformatted(rmse.c_str());
             ImGui::TreePop();
         }
     });

@@ -228,3 +228,32 @@ TEST(TranslucencyHardCases, BadSettingsAreErrorsNamingTheKey) {
         EXPECT_NE(std::string(e.what()).find("translucency.albedo_map"), std::string::npos) << e.what();
     }
 }
+
+// [SECTION] Texture
+// rho from an image at the mesh's own uv (Spot has uv) and from the veins: the albedo stage runs,
+// the radiance changes, the radiosity does not (rho multiplies the outgoing light only).
+TEST(TranslucencyTexture, AlbedoMapAndVeinsScaleTheRadianceNotTheRadiosity) {
+    Workbench wb;
+    Scene s = spot(256);
+    apply_set(s, "camera.mode", "texture");
+    RenderRequest req;
+    req.backend = Backend::Cpu;
+    req.aovs = {"radiosity"};
+    const RenderResult plain = wb.render(s, req);
+    EXPECT_EQ(plain.eval.run("translucency.albedo")->status, StageStatus::Skipped);
+    for (const auto& [key, value] : std::vector<std::pair<std::string, std::string>>{
+             {"translucency.albedo_map", test::source_path("presets/basic/maps/sky.exr")}, {"translucency.veins", "0.9"}}) {
+        SCOPED_TRACE(key);
+        Scene t = s;
+        apply_set(t, key, value);
+        const RenderResult textured = wb.render(t, req);
+        EXPECT_EQ(textured.eval.run("translucency.albedo")->status, StageStatus::Ran);
+        const Image &a = plain.frame.aov("radiance"), &b = textured.frame.aov("radiance");
+        const Image &ra = plain.frame.aov("radiosity"), &rb = textured.frame.aov("radiosity");
+        double diff = 0.0, rdiff = 0.0;
+        for (size_t i = 0; i < a.data.size(); ++i) diff += std::abs(a.data[i] - b.data[i]), rdiff += std::abs(ra.data[i] - rb.data[i]);
+        EXPECT_GT(diff, 1.0);
+        EXPECT_EQ(rdiff, 0.0);
+        EXPECT_TRUE(all_finite(textured.frame));
+    }
+}
