@@ -52,7 +52,8 @@ Registry::Registry()
         .more_accurate(Accuracy::Higher, int64_t(1024)).doc("Tessellation: segments around u (teapot: resolution/8 per side of each of its 32 patches)");
     geometry_.add_float("minor_ratio", 0.35).range(0.01, 0.99).costs(Cost::Recompute).used_when("type", {"torus"})
         .doc("Torus tube radius relative to the major radius");
-    geometry_.add_float("scale", 1.0).range(1e-6, 1e6).log().doc("Uniform scale (object -> world)");
+    geometry_.add_float("scale", 1.0).range(1e-6, 1e6).log().costs(Cost::Recompute)
+        .doc("Uniform scale (object -> world); translucency reads it: an object's size in mm changes how light travels inside");
     geometry_.add_vec3("position", {0.0, 0.0, 0.0}).range(-1e6, 1e6).in("scene units").doc("Translation (object -> world)");
 
     scene_effects_.push_back({"environment", true, "Environment light on surfaces (diffuse irradiance from env.color / env.map)"});

@@ -36,6 +36,8 @@ Scene every_technique() {
     apply_set(s, "bumpsynth.lut_size=64");
     apply_set(s, "bumpsynth.ndf_resolution=64");
     apply_set(s, "bumpsynth.detail_distance=100");  // octaves of noise at this distance (the AOV is not empty)
+    apply_set(s, "translucency.atlas_size=128");
+    apply_set(s, "translucency.compare=true");        // the reference and error AOVs hold the brute force
     return s;
 }
 
