@@ -5,6 +5,7 @@
 #include "core/scene_stages.h"
 #include "core/technique.h"
 #include "core/translucency/reference.h"
+#include "core/translucency/paper.h"
 #include "core/translucency/technique.h"
 #include "core/translucency/translucency.h"
 
@@ -201,6 +202,7 @@ void TranslucencyTechnique::declare_stages(StageGraph& g) const {
            .technique = "translucency",
            .params = with_material({"translucency.kernel"}),
            .inputs = {"translucency.mesh", "translucency.atlas"},
+           .paper = PaperFigure{paper::kKernelsMaxMs, "Lensch 2002, §6: kernels 1-2 min (dual Xeon 1.7 GHz)"},
            .memory = [](const StageContext& ctx) {
                const auto a = ctx.input<AtlasStage>("translucency.atlas");
                const double K = double(ctx.material().get_int("kernel"));
@@ -220,6 +222,7 @@ void TranslucencyTechnique::declare_stages(StageGraph& g) const {
            .technique = "translucency",
            .params = with_material({"translucency.threshold", "translucency.blend"}),
            .inputs = {"translucency.mesh"},
+           .paper = PaperFigure{paper::kFactorsMaxMs, "Lensch 2002, §6: form factors 2-8 min (dual Xeon 1.7 GHz)"},
            .memory = [](const StageContext& ctx) {
                return factor_memory(*ctx.input<PreparedMesh>("translucency.mesh"), Settings::from(ctx.obj()));
            },
