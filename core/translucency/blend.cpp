@@ -12,15 +12,29 @@
 namespace mesolab::translucency {
 
 namespace {
-// F0(i, j) per channel (0 where the factor was dropped): binary search in row i.
-vec3 factor(const VertexFactors& F, uint32_t i, uint32_t j) {
-    const int* b = F.inner.data() + F.outer[i];
-    const int* e = F.inner.data() + F.outer[size_t(i) + 1];
-    const int* it = std::lower_bound(b, e, int(j));
-    if (it == e || *it != int(j)) return vec3(0.f);
-    const size_t k = size_t(it - F.inner.data());
-    return {F.value[0][k], F.value[1][k], F.value[2][k]};
-}
+// F0(i, j) per channel (0 where the factor was dropped), through a small direct-mapped cache:
+// a texel's fit and correction ask for the same few vertex pairs hundreds of times (every texel
+// of a triangle shares its corners), and a look-up is a binary search plus three half floats.
+class FactorCache {
+public:
+    explicit FactorCache(const VertexFactors& F) : F_(F), slot_(kSlots) {}
+    vec3 operator()(uint32_t i, uint32_t j) {
+        const uint64_t key = uint64_t(i) << 32 | j;
+        Slot& s = slot_[size_t((key * 0x9e3779b97f4a7c15ull) >> (64 - kBits))];
+        if (s.key != key) s.key = key, s.value = F_.factor(int(i), int(j));
+        return s.value;
+    }
+
+private:
+    static constexpr int kBits = 12;
+    static constexpr size_t kSlots = size_t(1) << kBits;
+    struct Slot {
+        uint64_t key = ~uint64_t(0);
+        vec3 value{0.f};
+    };
+    const VertexFactors& F_;
+    std::vector<Slot> slot_;
+};
 
 struct TexelRef {
     std::array<uint32_t, 3> v{};  // corners of its triangle
@@ -43,12 +57,12 @@ float hat(const TexelRef& p, uint32_t v) {
 }
 
 // The F0 part of the response at receiver p to unit irradiance at source t (dual-basis weights e).
-vec3 global_response(const VertexFactors& F0, const TexelRef& p, const TexelRef& t, const vec3& e) {
+vec3 global_response(FactorCache& F0, const TexelRef& p, const TexelRef& t, const vec3& e) {
     vec3 sum(0.f);
     for (int m = 0; m < 3; ++m) {
         if (p.w[m] == 0.f) continue;
         vec3 row(0.f);
-        for (int k = 0; k < 3; ++k) row += factor(F0, p.v[size_t(m)], t.v[size_t(k)]) * e[k];
+        for (int k = 0; k < 3; ++k) row += F0(p.v[size_t(m)], t.v[size_t(k)]) * e[k];
         sum += p.w[m] * row;
     }
     return sum;
@@ -74,6 +88,7 @@ BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position,
 
     // [SECTION] Fit c per inner texel on the ring just outside its kernel
     tbb::parallel_for(tbb::blocked_range<size_t>(0, L.texel.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+        FactorCache cache(F0);
         for (size_t k = r.begin(); k != r.end(); ++k) {
             const size_t t = size_t(L.texel[k]);
             const int tx = int(t) % N, ty = int(t) / N;
@@ -96,7 +111,7 @@ BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position,
                     Eigen::Vector3d a;
                     for (int m = 0; m < 3; ++m) a[m] = hat(rp, src.v[size_t(m)]);
                     const vec3 d = x[p] - x[t];
-                    const dvec3 target = dipole.Rd(double(glm::length(d))) * double(area_t) - dvec3(global_response(F0, rp, src, e));
+                    const dvec3 target = dipole.Rd(double(glm::length(d))) * double(area_t) - dvec3(global_response(cache, rp, src, e));
                     M += a * a.transpose();
                     for (int c = 0; c < 3; ++c) rhs.col(c) += a * target[c];
                     ++samples;
@@ -115,6 +130,7 @@ BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position,
     // [SECTION] Correct the kernels: w(t', t) -= the blended global response at t' to t
     const size_t KK = size_t(K) * size_t(K);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, L.texel.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+        FactorCache cache(F0);
         for (size_t k = r.begin(); k != r.end(); ++k) {
             const size_t tr = size_t(L.texel[k]);
             const int tx = int(tr) % N, ty = int(tr) / N;
@@ -126,12 +142,12 @@ BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position,
                     const TexelRef src = ref(atlas, index, ts);
                     vec3 D(0.f);
                     if (atlas.texel_kind[ts] == Atlas::kInner) {
-                        D = global_response(F0, recv, src, dual_weights(src, atlas.texel_area[ts] * s2, A));
+                        D = global_response(cache, recv, src, dual_weights(src, atlas.texel_area[ts] * s2, A));
                         const std::array<vec3, 3>& c = B.c[size_t(L.slot[ts])];
                         for (int m = 0; m < 3; ++m) D += hat(recv, src.v[size_t(m)]) * c[size_t(m)];
                     } else {
                         // A border source: only the F0 part (see blend.h); its projection weights as if inner.
-                        D = global_response(F0, recv, src, dual_weights(src, atlas.texel_area[ts] * s2, A));
+                        D = global_response(cache, recv, src, dual_weights(src, atlas.texel_area[ts] * s2, A));
                     }
                     const size_t o = k * KK + size_t(dy + h) * size_t(K) + size_t(dx + h);
                     for (int c = 0; c < 3; ++c) L.w[size_t(c)][o] -= D[c];

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <unordered_map>
 
 namespace mesolab::translucency {
 
@@ -94,19 +95,26 @@ AtlasStage make_atlas_stage(const PreparedMesh& mesh, const AtlasParams& p) {
             });
         }
     }
-    // The drawn mesh: each triangle with its own corners and atlas coordinates.
+    // The drawn mesh: a vertex per mesh vertex and atlas position (corners inside a chunk share
+    // theirs; chunk borders split), so that rasterising it transforms each vertex about once.
     auto m = std::make_shared<TriMesh>();
     const float inv = 1.f / float(a.size);
+    std::unordered_map<uint64_t, uint32_t> made;
     for (size_t f = 0; f < mesh.triangle_count(); ++f) {
         if (a.face_chunk[f] < 0) continue;
         for (int j = 0; j < 3; ++j) {
             const uint32_t v = mesh.index[3 * f + size_t(j)];
             const vec2 c = a.corner_uv[3 * f + size_t(j)];
-            m->index.push_back(uint32_t(m->position.size()));
-            m->position.push_back(mesh.position[v]);
-            m->normal.push_back(mesh.normal[v]);
-            m->tangent.push_back(vec3(0.f));
-            m->uv.push_back(vec2(c.x * inv, 1.f - c.y * inv));
+            const uint64_t key = uint64_t(v) << 32 | uint64_t(uint32_t(a.face_chunk[f]));
+            auto [it, fresh] = made.try_emplace(key, uint32_t(m->position.size()));
+            if (!fresh && m->uv[it->second] != vec2(c.x * inv, 1.f - c.y * inv)) fresh = true, it->second = uint32_t(m->position.size());
+            if (fresh) {
+                m->position.push_back(mesh.position[v]);
+                m->normal.push_back(mesh.normal[v]);
+                m->tangent.push_back(vec3(0.f));
+                m->uv.push_back(vec2(c.x * inv, 1.f - c.y * inv));
+            }
+            m->index.push_back(it->second);
         }
     }
     m->has_uv = true;
@@ -385,13 +393,30 @@ std::vector<vec3> fill_texels(const AtlasStage& a, const std::vector<vec3>& v) {
     return out;
 }
 
-Maps combine(const AtlasStage& a, const std::vector<vec3>& E, const std::vector<vec3>& local, const std::vector<vec3>& global) {
+Maps combine(const AtlasStage& a, const std::vector<uint32_t>& index, const std::vector<vec3>& E, const std::vector<vec3>& local,
+             const std::vector<vec3>& Bv) {
+    // One pass: each texel takes its fill source's irradiance and local part, and the vertex
+    // values interpolated at the source's position.
+    const Atlas& at = a.atlas;
+    const size_t N = E.size();
     Maps m;
-    m.irradiance = fill_texels(a, E);
-    m.local = fill_texels(a, local);
-    m.global = fill_texels(a, global);
-    m.radiosity.resize(m.local.size());
-    for (size_t t = 0; t < m.local.size(); ++t) m.radiosity[t] = m.local[t] + m.global[t];
+    m.irradiance.resize(N);
+    m.local.resize(N);
+    m.global.resize(N);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, N, 4096), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t t = r.begin(); t != r.end(); ++t) {
+            const size_t src = a.fill[t] >= 0 ? size_t(a.fill[t]) : t;
+            m.irradiance[t] = E[src];
+            m.local[t] = local[src];
+            vec3 g(0.f);
+            if (at.texel_face[src] >= 0) {
+                const size_t f = size_t(at.texel_face[src]);
+                const vec3 w = at.texel_bary[src];
+                g = w.x * Bv[index[3 * f]] + w.y * Bv[index[3 * f + 1]] + w.z * Bv[index[3 * f + 2]];
+            }
+            m.global[t] = g;
+        }
+    });
     return m;
 }
 

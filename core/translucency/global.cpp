@@ -8,7 +8,15 @@
 #include <string>
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+
+#include <cstring>
+#include <limits>
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
 
 namespace mesolab::translucency {
 
@@ -40,25 +48,216 @@ std::vector<vec3> project_to_vertices(const Atlas& atlas, const std::vector<uint
     return std::vector<vec3>(E.begin(), E.end());
 }
 
-Eigen::Map<const Eigen::SparseMatrix<float, Eigen::RowMajor>> VertexFactors::channel(int c) const {
-    return {n, n, Eigen::Index(inner.size()), outer.data(), inner.data(), value[size_t(c)].data()};
+// [SECTION] Half floats
+uint16_t half_bits(float f) {
+    uint32_t x;
+    std::memcpy(&x, &f, sizeof x);
+    const uint32_t sign = (x >> 16) & 0x8000u;
+    x &= 0x7fffffffu;
+    if (x >= 0x7f800000u) return uint16_t(sign | 0x7c00u | (x > 0x7f800000u ? 0x200u : 0u));  // inf, NaN
+    if (x >= 0x477ff000u) return uint16_t(sign | 0x7c00u);                                   // rounds above 65504
+    if (x < 0x38800000u) {                                                                  // below 2^-14: subnormal or 0
+        if (x < 0x33000000u) return uint16_t(sign);
+        const uint32_t e = x >> 23, m = (x & 0x7fffffu) | 0x800000u, shift = 126u - e;
+        uint32_t h = m >> shift;
+        const uint32_t rem = m & ((1u << shift) - 1u), half = 1u << (shift - 1u);
+        if (rem > half || (rem == half && (h & 1u))) ++h;
+        return uint16_t(sign | h);
+    }
+    uint32_t h = (x - 0x38000000u) >> 13;
+    const uint32_t rem = x & 0x1fffu;
+    if (rem > 0x1000u || (rem == 0x1000u && (h & 1u))) ++h;
+    return uint16_t(sign | h);
 }
 
+float half_value(uint16_t h) {
+    const uint32_t sign = uint32_t(h & 0x8000u) << 16, e = (h >> 10) & 0x1fu, m = h & 0x3ffu;
+    if (e == 0) {
+        const float v = float(m) * 5.9604644775390625e-8f;  // m 2^-24
+        return sign ? -v : v;
+    }
+    const uint32_t x = sign | (e == 31 ? 0x7f800000u | (m << 13) : ((e + 112u) << 23) | (m << 13));
+    float f;
+    std::memcpy(&f, &x, sizeof f);
+    return f;
+}
+
+namespace {
+vec3 decode(uint64_t p) { return {half_value(uint16_t(p)), half_value(uint16_t(p >> 16)), half_value(uint16_t(p >> 32))}; }
+uint64_t encode(vec3 v, int column) {
+    return uint64_t(half_bits(v.x)) | uint64_t(half_bits(v.y)) << 16 | uint64_t(half_bits(v.z)) << 32 | uint64_t(uint32_t(column) & 0xffffu) << 48;
+}
+
+// E'_j = E_j A_j / 3 × scale, as 4 floats (the fourth 0).
+std::vector<vec4> weighted(const VertexFactors& F, const std::vector<vec3>& E) {
+    std::vector<vec4> Ew(size_t(F.n));
+    for (int j = 0; j < F.n; ++j) Ew[size_t(j)] = vec4(E[size_t(j)] * F.weight(j), 0.f);
+    return Ew;
+}
+
+// [SECTION] The symmetric product: rows [r0, r1) into B (one thread's sums)
+void rows_portable(const VertexFactors& F, const vec4* Ew, vec4* B, int r0, int r1) {
+    const bool wide = !F.col_hi.empty();
+    for (int i = r0; i < r1; ++i) {
+        const vec4 ei = Ew[i];
+        vec4 sum(0.f);
+        for (int k = F.outer[size_t(i)]; k < F.outer[size_t(i) + 1]; ++k) {
+            const uint64_t p = F.pair[size_t(k)];
+            const int j = int(p >> 48) | (wide ? int(F.col_hi[size_t(k)]) << 16 : 0);
+            const vec4 f(decode(p), 0.f);
+            sum += f * Ew[j];
+            if (j != i) B[j] += f * ei;
+        }
+        B[i] += sum;
+    }
+}
+
+#if defined(__x86_64__)
+// The same with F16C's half conversion and FMA: 4 lanes per pair (the fourth masked off).
+__attribute__((target("avx,f16c,fma"))) inline void scatter_f16c(float* b, int j, __m128 f, __m128 ei) {
+    float* bj = b + 4 * size_t(j);
+    _mm_storeu_ps(bj, _mm_fmadd_ps(f, ei, _mm_loadu_ps(bj)));
+}
+
+template <bool Wide>
+__attribute__((target("avx,f16c,fma"))) void rows_f16c(const VertexFactors& F, const vec4* Ew, vec4* B, int r0, int r1) {
+    const __m128 mask = _mm_castsi128_ps(_mm_set_epi32(0, -1, -1, -1));
+    const uint64_t* pair = F.pair.data();
+    const float* e = &Ew[0].x;
+    float* b = &B[0].x;
+#define MESOLAB_HALF3(p) _mm_and_ps(_mm_cvtph_ps(_mm_cvtsi64_si128(int64_t(p))), mask)
+    auto column = [&](int k, uint64_t p) { return int(p >> 48) | (Wide ? int(F.col_hi[size_t(k)]) << 16 : 0); };
+    for (int i = r0; i < r1; ++i) {
+        const __m128 ei = _mm_loadu_ps(e + 4 * size_t(i));
+        int k = F.outer[size_t(i)];
+        const int end = F.outer[size_t(i) + 1];
+        __m128 s0 = _mm_setzero_ps(), s1 = _mm_setzero_ps(), s2 = _mm_setzero_ps(), s3 = _mm_setzero_ps();
+        // The diagonal, when kept, is the row's first pair: it adds to row i once.
+        if (k < end && column(k, pair[k]) == i) s0 = _mm_mul_ps(MESOLAB_HALF3(pair[k]), ei), ++k;
+        // Four independent sums: the FMA's latency, not the loads, would set the pace of one.
+        for (; k + 4 <= end; k += 4) {
+            const uint64_t p0 = pair[k], p1 = pair[k + 1], p2 = pair[k + 2], p3 = pair[k + 3];
+            const int j0 = column(k, p0), j1 = column(k + 1, p1), j2 = column(k + 2, p2), j3 = column(k + 3, p3);
+            const __m128 f0 = MESOLAB_HALF3(p0), f1 = MESOLAB_HALF3(p1), f2 = MESOLAB_HALF3(p2), f3 = MESOLAB_HALF3(p3);
+            s0 = _mm_fmadd_ps(f0, _mm_loadu_ps(e + 4 * size_t(j0)), s0);
+            s1 = _mm_fmadd_ps(f1, _mm_loadu_ps(e + 4 * size_t(j1)), s1);
+            s2 = _mm_fmadd_ps(f2, _mm_loadu_ps(e + 4 * size_t(j2)), s2);
+            s3 = _mm_fmadd_ps(f3, _mm_loadu_ps(e + 4 * size_t(j3)), s3);
+            scatter_f16c(b, j0, f0, ei), scatter_f16c(b, j1, f1, ei), scatter_f16c(b, j2, f2, ei), scatter_f16c(b, j3, f3, ei);
+        }
+        for (; k < end; ++k) {
+            const uint64_t p = pair[k];
+            const int j = column(k, p);
+            const __m128 f = MESOLAB_HALF3(p);
+            s0 = _mm_fmadd_ps(f, _mm_loadu_ps(e + 4 * size_t(j)), s0);
+            scatter_f16c(b, j, f, ei);
+        }
+        const __m128 sum = _mm_add_ps(_mm_add_ps(s0, s1), _mm_add_ps(s2, s3));
+        _mm_storeu_ps(b + 4 * size_t(i), _mm_add_ps(_mm_loadu_ps(b + 4 * size_t(i)), sum));
+    }
+#undef MESOLAB_HALF3
+}
+bool has_f16c() {
+    static const bool yes = __builtin_cpu_supports("avx") && __builtin_cpu_supports("f16c") && __builtin_cpu_supports("fma");
+    return yes;
+}
+#endif
+
+void rows(const VertexFactors& F, const vec4* Ew, vec4* B, int r0, int r1) {
+#if defined(__x86_64__)
+    if (has_f16c()) return F.col_hi.empty() ? rows_f16c<false>(F, Ew, B, r0, r1) : rows_f16c<true>(F, Ew, B, r0, r1);
+#endif
+    rows_portable(F, Ew, B, r0, r1);
+}
+}  // namespace
+
+// [SECTION] Look-ups
+vec3 VertexFactors::rd(size_t k) const { return decode(pair[k]) * scale; }
+
+vec3 VertexFactors::factor(int i, int j) const {
+    const int a = std::min(i, j), b = std::max(i, j);
+    int lo = outer[size_t(a)], hi = outer[size_t(a) + 1];
+    while (lo < hi) {
+        const int mid = (lo + hi) / 2;
+        if (column(size_t(mid)) < b) lo = mid + 1;
+        else hi = mid;
+    }
+    if (lo == outer[size_t(a) + 1] || column(size_t(lo)) != b) return vec3(0.f);
+    return rd(size_t(lo)) * (vertex_area[size_t(j)] / 3.f);
+}
+
+Eigen::SparseMatrix<float, Eigen::RowMajor> VertexFactors::upper(int c) const {
+    std::vector<Eigen::Triplet<float>> t;
+    t.reserve(pair.size());
+    for (int i = 0; i < n; ++i)
+        for (int k = outer[size_t(i)]; k < outer[size_t(i) + 1]; ++k) t.emplace_back(i, column(size_t(k)), rd(size_t(k))[c]);
+    Eigen::SparseMatrix<float, Eigen::RowMajor> m(n, n);
+    m.setFromTriplets(t.begin(), t.end());
+    return m;
+}
+
+// [SECTION] Products
 std::vector<vec3> VertexFactors::multiply(const std::vector<vec3>& E) const {
+    const std::vector<vec4> Ew = weighted(*this, E);
+    tbb::enumerable_thread_specific<std::vector<vec4>> sums([&] { return std::vector<vec4>(size_t(n), vec4(0.f)); });
+    tbb::parallel_for(tbb::blocked_range<int>(0, n, 128), [&](const tbb::blocked_range<int>& r) {
+        rows(*this, Ew.data(), sums.local().data(), r.begin(), r.end());
+    });
     std::vector<vec3> B(size_t(n), vec3(0.f));
-    tbb::parallel_for(tbb::blocked_range<int>(0, n, 256), [&](const tbb::blocked_range<int>& rows) {
-        for (int i = rows.begin(); i != rows.end(); ++i) {
-            vec3 sum(0.f);
-            for (int k = outer[size_t(i)]; k < outer[size_t(i) + 1]; ++k) {
-                const vec3 e = E[size_t(inner[size_t(k)])];
-                sum += vec3(value[0][size_t(k)] * e.x, value[1][size_t(k)] * e.y, value[2][size_t(k)] * e.z);
+    for (const std::vector<vec4>& s : sums)
+        for (size_t i = 0; i < B.size(); ++i) B[i] += vec3(s[i]);
+    return B;
+}
+
+DirectedFactors expand_directed(const VertexFactors& F) {
+    DirectedFactors D;
+    const size_t n = size_t(F.n);
+    std::vector<int64_t> start(n + 1, 0);
+    for (size_t i = 0; i < n; ++i) {
+        start[i + 1] += F.outer[i + 1] - F.outer[i];
+        for (int k = F.outer[i]; k < F.outer[i + 1]; ++k)
+            if (const int j = F.column(size_t(k)); size_t(j) != i) ++start[size_t(j) + 1];
+    }
+    for (size_t i = 0; i < n; ++i) start[i + 1] += start[i];
+    if (start[n] > std::numeric_limits<int>::max()) throw std::length_error("translucency: more than 2^31 factors to expand");
+    D.outer.assign(start.begin(), start.end());
+    D.entry.resize(size_t(start[n]));
+    const bool wide = !F.col_hi.empty();
+    if (wide) D.col_hi.resize(D.entry.size());
+    std::vector<int64_t> next(start.begin(), start.end() - 1);
+    for (size_t i = 0; i < n; ++i)
+        for (int k = F.outer[i]; k < F.outer[i + 1]; ++k) {
+            const uint64_t p = F.pair[size_t(k)];
+            const int j = F.column(size_t(k));
+            const size_t a = size_t(next[i]++);
+            D.entry[a] = p;
+            if (wide) D.col_hi[a] = F.col_hi[size_t(k)];
+            if (size_t(j) == i) continue;
+            const size_t b = size_t(next[size_t(j)]++);
+            D.entry[b] = (p & 0xffffffffffffull) | uint64_t(i & 0xffffu) << 48;
+            if (wide) D.col_hi[b] = uint16_t(i >> 16);
+        }
+    return D;
+}
+
+std::vector<vec3> multiply_directed(const VertexFactors& F, const DirectedFactors& D, const std::vector<vec3>& E) {
+    const std::vector<vec4> Ew = weighted(F, E);
+    std::vector<vec3> B(size_t(F.n), vec3(0.f));
+    tbb::parallel_for(tbb::blocked_range<int>(0, F.n, 256), [&](const tbb::blocked_range<int>& r) {
+        for (int i = r.begin(); i != r.end(); ++i) {
+            vec4 sum(0.f);
+            for (int k = D.outer[size_t(i)]; k < D.outer[size_t(i) + 1]; ++k) {
+                const uint64_t p = D.entry[size_t(k)];
+                const int j = int(p >> 48) | (D.col_hi.empty() ? 0 : int(D.col_hi[size_t(k)]) << 16);
+                sum += vec4(decode(p), 0.f) * Ew[size_t(j)];
             }
-            B[size_t(i)] = sum;
+            B[size_t(i)] = vec3(sum);
         }
     });
     return B;
 }
 
+// [SECTION] Building
 VertexFactors build_vertex_factors(const std::vector<vec3>& position, const std::vector<uint32_t>& index, const Dipole& dipole,
                                    const FactorParams& p) {
     if (!(p.mm_per_unit > 0.0) || !std::isfinite(p.mm_per_unit))
@@ -73,7 +272,7 @@ VertexFactors build_vertex_factors(const std::vector<vec3>& position, const std:
     F.outer.assign(size_t(F.n) + 1, 0);
     if (F.n == 0) return F;
 
-    // Positions in mm; R_d tabulated over the diameter.
+    // Positions in mm; R_d tabulated over the diameter; halves relative to R_d(0) / 2^15.
     std::vector<vec3> x(position.size());
     vec3 lo(INFINITY), hi(-INFINITY);
     for (size_t i = 0; i < x.size(); ++i) {
@@ -82,13 +281,17 @@ VertexFactors build_vertex_factors(const std::vector<vec3>& position, const std:
     }
     const double diameter = std::max(1e-9, double(glm::length(hi - lo)));
     const RdTable Rd(dipole, diameter * 1.0001);
+    const vec3 Rd0 = Rd.at_r2(0.f);
+    for (int c = 0; c < 3; ++c) F.scale[c] = Rd0[c] > 0.f && std::isfinite(Rd0[c]) ? Rd0[c] / 32768.f : 1.f;
+    const vec3 inv_scale = 1.f / F.scale;
     std::vector<float> third(F.vertex_area.size());
     for (size_t j = 0; j < third.size(); ++j) third[j] = F.vertex_area[j] / 3.f;
+    const bool wide = F.n > 65536 || p.wide_columns;
 
-    // Rows in parallel, each into its own buffers, then concatenated.
+    // Rows of the upper triangle in parallel, each into its own buffers, then concatenated.
     struct Row {
-        std::vector<int> col;
-        std::vector<vec3> val;
+        std::vector<uint64_t> pair;
+        std::vector<uint16_t> hi;
     };
     std::vector<Row> rows(size_t(F.n));
     const float thr = p.threshold;
@@ -96,31 +299,35 @@ VertexFactors build_vertex_factors(const std::vector<vec3>& position, const std:
         for (int i = r.begin(); i != r.end(); ++i) {
             Row& row = rows[size_t(i)];
             const vec3 xi = x[size_t(i)];
-            for (int j = 0; j < F.n; ++j) {
-                if (j == i && p.zero_diagonal) continue;
+            const float ai = third[size_t(i)];
+            for (int j = p.zero_diagonal ? i + 1 : i; j < F.n; ++j) {
                 const vec3 d = x[size_t(j)] - xi;
-                const vec3 f = Rd.at_r2(glm::dot(d, d)) * third[size_t(j)];
-                if (std::max(f.x, std::max(f.y, f.z)) < thr || !(f.x > 0.f || f.y > 0.f || f.z > 0.f)) continue;
-                row.col.push_back(j);
-                row.val.push_back(f);
+                const vec3 rd = Rd.at_r2(glm::dot(d, d));
+                const float largest = std::max(rd.x, std::max(rd.y, rd.z));
+                if (!(largest > 0.f) || largest * 0.5f * (ai + third[size_t(j)]) < thr) continue;
+                row.pair.push_back(encode(rd * inv_scale, j));
+                if (wide) row.hi.push_back(uint16_t(j >> 16));
             }
         }
     });
-    for (int i = 0; i < F.n; ++i) F.outer[size_t(i) + 1] = F.outer[size_t(i)] + int(rows[size_t(i)].col.size());
-    const size_t nnz = size_t(F.outer[size_t(F.n)]);
-    F.inner.resize(nnz);
-    for (auto& v : F.value) v.resize(nnz);
+    size_t total = 0;
+    for (int i = 0; i < F.n; ++i) total += rows[size_t(i)].pair.size();
+    if (total > size_t(std::numeric_limits<int>::max()))
+        throw InputError("translucency.threshold: " + std::to_string(p.threshold) + " keeps " + std::to_string(total) +
+                         " vertex pairs, more than 2^31; raise it or lower translucency.vertices");
+    for (int i = 0; i < F.n; ++i) F.outer[size_t(i) + 1] = F.outer[size_t(i)] + int(rows[size_t(i)].pair.size());
+    F.pair.resize(total);
+    if (wide) F.col_hi.resize(total);
     tbb::parallel_for(tbb::blocked_range<int>(0, F.n, 256), [&](const tbb::blocked_range<int>& r) {
         for (int i = r.begin(); i != r.end(); ++i) {
             Row& row = rows[size_t(i)];
-            size_t k = size_t(F.outer[size_t(i)]);
-            for (size_t m = 0; m < row.col.size(); ++m, ++k) {
-                F.inner[k] = row.col[m];
-                for (int c = 0; c < 3; ++c) F.value[size_t(c)][k] = row.val[m][c];
-            }
+            std::copy(row.pair.begin(), row.pair.end(), F.pair.begin() + F.outer[size_t(i)]);
+            if (wide) std::copy(row.hi.begin(), row.hi.end(), F.col_hi.begin() + F.outer[size_t(i)]);
             row = Row{};
         }
     });
+    for (int i = 0; i < F.n; ++i)
+        if (F.outer[size_t(i)] < F.outer[size_t(i) + 1] && F.column(size_t(F.outer[size_t(i)])) == i) ++F.diagonal;
     return F;
 }
 }  // namespace mesolab::translucency

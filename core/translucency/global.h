@@ -8,17 +8,26 @@
 //                reproduces constant irradiance exactly (project_to_vertices)
 //   factors      B_i = Σ_j F_ij E_j,  F_ij = R_d(|x_i − x_j|) ∫ φ_j dA = R_d(|x_i − x_j|) A_j / 3
 //                (Eq. 7 with R_d evaluated once per pair of vertices), kept where the largest
-//                channel is at least `threshold` (the factor count of Table 1)
+//                channel is at least `threshold` (the factor count of Table 1; see below)
 //   radiosity    B(x) = Σ_i B_i φ_i(x): linear interpolation of the vertex values
 // With blending (§5.4) the diagonal F_ii is zero: the local kernels carry the short range.
 //
 // Units: positions in scene units, times mm_per_unit gives mm; R_d in mm⁻², areas in mm²; F
 // is dimensionless (radiosity per unit irradiance).
 //
-// Storage: one compressed-row structure (row starts, column indices) shared by the three colour
-// channels, and one float array of values per channel: 4 + 3 × 4 bytes per factor. Each channel
-// is an Eigen::SparseMatrix<float, RowMajor> through Eigen::Map (channel()); the product runs
-// rows in parallel (TBB).
+// Storage: R_d(|x_i − x_j|) is symmetric, so only the upper triangle (j ≥ i) is kept, row by
+// row, 8 bytes per pair: the three channels as IEEE half floats relative to a per-channel scale
+// (R_d(0) / 2^15, so that every value is a normal half down to 2e-9 R_d(0); rounding ≤ 4.9e-4
+// relative, far below what the threshold drops), and the column's low 16 bits. Meshes above
+// 65,536 vertices add 2 bytes per pair for the high bits. The product scales the irradiance once
+// per vertex, E'_j = E_j A_j / 3 × scale, and runs rows in parallel, each pair adding to both of
+// its rows (per-thread sums): a quarter of the bytes of one float RGB + int column per factor,
+// which is what the product's time is made of. upper() decodes a channel as an Eigen sparse
+// matrix (for checks and tools; the product does not use it).
+//
+// count() is the number of vertex-to-vertex factors as Table 1 counts them (F_ij and F_ji
+// separately); a pair is kept when R_d (A_i + A_j) / 6, the mean of F_ij and F_ji, reaches the
+// threshold in its largest channel.
 #include "core/math.h"
 #include "core/translucency/dipole.h"
 
@@ -31,26 +40,49 @@
 namespace mesolab::translucency {
 
 struct VertexFactors {
-    int n = 0;                               // vertices
-    std::vector<int> outer;                  // n + 1 row starts
-    std::vector<int> inner;                  // column of each factor
-    std::array<std::vector<float>, 3> value; // per channel, parallel to `inner`
-    std::vector<float> vertex_area;          // A_i, mm² (sum of the adjacent triangles' areas)
+    int n = 0;                      // vertices
+    std::vector<int> outer;         // n + 1 row starts into `pair`
+    std::vector<uint64_t> pair;     // bits 0–47: R_d / scale as 3 halves (R, G, B); 48–63: column & 0xffff
+    std::vector<uint16_t> col_hi;   // column >> 16 per pair, only when n > 65536
+    vec3 scale{1.f};                // mm⁻² per unit of the stored halves, per channel
+    std::vector<float> vertex_area; // A_i, mm² (sum of the adjacent triangles' areas)
+    size_t diagonal = 0;            // pairs with j = i
     double threshold = 0.0;
     bool zero_diagonal = false;
 
-    size_t count() const { return inner.size(); }
-    size_t bytes() const { return outer.size() * sizeof(int) + inner.size() * (sizeof(int) + 3 * sizeof(float)); }
-    // Channel c as an Eigen sparse matrix (a view: the factors must outlive it).
-    Eigen::Map<const Eigen::SparseMatrix<float, Eigen::RowMajor>> channel(int c) const;
+    size_t pairs() const { return pair.size(); }
+    size_t count() const { return 2 * pair.size() - diagonal; }
+    size_t bytes() const { return outer.size() * sizeof(int) + pair.size() * sizeof(uint64_t) + col_hi.size() * sizeof(uint16_t); }
+    int column(size_t k) const { return int(pair[k] >> 48) | (col_hi.empty() ? 0 : int(col_hi[k]) << 16); }
+    vec3 rd(size_t k) const;              // R_d of pair k, mm⁻²
+    vec3 factor(int i, int j) const;      // F_ij = R_d A_j / 3 (0 where the pair was dropped)
+    vec3 weight(int j) const { return vertex_area[size_t(j)] / 3.f * scale; }  // E'_j = E_j × weight(j)
+    // Channel c of R_d's upper triangle, decoded (F = upper.selfadjointView<Upper>() diag(A / 3)).
+    Eigen::SparseMatrix<float, Eigen::RowMajor> upper(int c) const;
     // B = F E, rows in parallel.
     std::vector<vec3> multiply(const std::vector<vec3>& E) const;
 };
+
+// Every factor as its own entry, rows complete (for a device without atomic float adds): row i
+// holds F_ij's stored halves for every kept j, in the pair format above (the column replaced).
+struct DirectedFactors {
+    std::vector<int> outer;        // n + 1
+    std::vector<uint64_t> entry;   // as VertexFactors::pair
+    std::vector<uint16_t> col_hi;  // as VertexFactors::col_hi
+};
+DirectedFactors expand_directed(const VertexFactors& F);
+// B = F E over the expanded rows (the CPU reference of the GPU's product).
+std::vector<vec3> multiply_directed(const VertexFactors& F, const DirectedFactors& D, const std::vector<vec3>& E);
+
+// IEEE 754 half-precision bits of a float, rounded to nearest even, and back.
+uint16_t half_bits(float f);
+float half_value(uint16_t h);
 
 struct FactorParams {
     double mm_per_unit = 1.0;   // translucency.mm_per_unit
     float threshold = 0.f;      // translucency.threshold: smallest factor kept (largest channel)
     bool zero_diagonal = false; // blending on
+    bool wide_columns = false;  // keep the columns' high 16 bits below 65,536 vertices too (tests)
 };
 
 // Builds the factors for a mesh (positions, 3 indices per triangle) and a dipole. Rows in

@@ -80,9 +80,10 @@ MemoryEstimate factor_memory(const PreparedMesh& m, const Settings& s) {
         for (const vec3& q : m.position) within += glm::dot(q - p, q - p) <= r2 ? 1 : 0;
     }
     const double count = double(within) / double(samples) * double(n);
-    e.bytes = count * 16.0 + double(n + 1) * 4.0;
+    // Each kept pair: 8 bytes in a row's buffer while building, 8 in the final array.
+    e.bytes = count * 0.5 * (n > 65536 ? 20.0 : 16.0) + double(n + 1) * 4.0;
     e.what = "about " + std::to_string(int64_t(count)) + " vertex-to-vertex factors (" + std::to_string(n) +
-             " vertices, translucency.threshold = " + std::to_string(s.threshold) + ") x 16 bytes";
+             " vertices, translucency.threshold = " + std::to_string(s.threshold) + "), a symmetric pair of them in 8 bytes, twice while building";
     return e;
 }
 
@@ -323,9 +324,12 @@ std::any TranslucencyTechnique::run_step_cpu(const std::string& step, const Fram
             const auto a = atlas(o);
             const mat4 model = object_to_world(obj);
             std::vector<ShadowMap> shadows;
-            if (s.shadows)
+            if (s.shadows) {
+                PROFILE_SCOPE("translucency.shadow_maps");
                 for (size_t i = 0; i < ctx.lighting.lights.size() && i < size_t(kMaxShadowMaps); ++i)
                     shadows.push_back(make_shadow_map(*a->display, model, ctx.lighting.lights[i], s.shadow_map));
+            }
+            PROFILE_SCOPE("translucency.texels");
             out[o] = illuminate(*a, model, ctx.lighting, s.medium.eta, shadows);
         }
         return std::any(std::make_shared<const PerObject<std::vector<vec3>>>(std::move(out)));
@@ -361,7 +365,7 @@ std::any TranslucencyTechnique::run_step_cpu(const std::string& step, const Fram
         PerObject<Maps> out;
         for (int o : ctx.objects) {
             const auto a = atlas(o);
-            out[o] = combine(*a, E.at(o), Lo.at(o), interpolate_to_texels(a->atlas, ctx.eval.get<PreparedMesh>("translucency.mesh", o)->index, Bv.at(o)));
+            out[o] = combine(*a, ctx.eval.get<PreparedMesh>("translucency.mesh", o)->index, E.at(o), Lo.at(o), Bv.at(o));
         }
         return std::any(std::make_shared<const PerObject<Maps>>(std::move(out)));
     }

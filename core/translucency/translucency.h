@@ -134,11 +134,15 @@ struct VertexValues {
 };
 VertexValues gather_vertices(const Gather& g, const std::vector<vec3>& E);
 
-// Every map of a frame: per texel, filled (AtlasStage::fill) for display.
+// Every map of a frame: per texel, filled (AtlasStage::fill) for display. The radiosity is
+// local + global, added where it is looked up.
 struct Maps {
-    std::vector<vec3> irradiance, local, global, radiosity;
+    std::vector<vec3> irradiance, local, global;
 };
-Maps combine(const AtlasStage& a, const std::vector<vec3>& E, const std::vector<vec3>& local, const std::vector<vec3>& global);
+// The maps from the texel irradiance E, the local part and the vertex values Bv (global part,
+// interpolated at each texel's fill source): one pass over the texels.
+Maps combine(const AtlasStage& a, const std::vector<uint32_t>& index, const std::vector<vec3>& E, const std::vector<vec3>& local,
+             const std::vector<vec3>& Bv);
 std::vector<vec3> fill_texels(const AtlasStage& a, const std::vector<vec3>& v);
 
 // Bilinear look-up of a per-texel map at atlas uv (as GL_LINEAR with clamp to edge).

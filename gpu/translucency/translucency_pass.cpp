@@ -64,6 +64,7 @@ public:
           vertices_(Program::compute("translucency/vertices.comp")),
           local_(Program::compute("translucency/local.comp")),
           global_(Program::compute("translucency/global.comp")),
+          global_wide_(Program::compute("translucency/global.comp", {"WIDE_COLUMNS"})),
           combine_(Program::compute("translucency/combine.comp")),
           reference_(Program::compute("translucency/reference.comp")),
           shadow_(Program::graphics("translucency/shadow.vert", "translucency/shadow.frag")),
@@ -262,6 +263,7 @@ private:
         bind(3, w.E);
         bind(4, w.Ev);
         bind(5, w.D);
+        bind(6, factors(ctx, in).weight);
         glDispatchCompute(groups(size_t(g.n)), 1, 1);
     }
 
@@ -290,20 +292,37 @@ private:
         glDispatchCompute(groups(K.texel.size()), 1, 1);
     }
 
-    // [SECTION] translucency.global: the factor arrays bound in pieces that fit the GL's block size
-    void global_step(DrawContext& ctx, const In& in, PerObject& w) {
-        const VertexFactors& F = *in.factors;
-        global_.use();
-        bind(0, buffer(ctx, in.factors, "outer", [&] { return F.outer; }));
-        const Buffer& entries = buffer(ctx, in.factors, "entries", [&] {
-            std::vector<vec4> e(F.inner.size());
-            for (size_t k = 0; k < e.size(); ++k) {
-                float col;
-                std::memcpy(&col, &F.inner[k], sizeof col);
-                e[k] = vec4(col, F.value[0][k], F.value[1][k], F.value[2][k]);
-            }
-            return e;
+    // [SECTION] translucency.global: the factors' rows made complete (expand_directed), bound in
+    // pieces that fit the GL's block size
+    struct GpuFactors {
+        Buffer outer, entry, col_hi, weight;
+        std::vector<int> row_start;  // the rows' first entries, for the pieces
+        bool wide = false;
+    };
+    GpuFactors& factors(DrawContext& ctx, const In& in) {
+        return ctx.renderer.resources().get<GpuFactors>(in.factors, "directed", [&] {
+            PROFILE_SCOPE("translucency.upload_factors");
+            const VertexFactors& F = *in.factors;
+            DirectedFactors D = expand_directed(F);
+            GpuFactors g;
+            g.outer = storage(D.outer);
+            g.entry = storage(D.entry);
+            g.wide = !D.col_hi.empty();
+            if (g.wide) D.col_hi.resize((D.col_hi.size() + 1) / 2 * 2);
+            g.col_hi = storage(D.col_hi);
+            std::vector<vec4> weight(size_t(F.n));
+            for (int j = 0; j < F.n; ++j) weight[size_t(j)] = vec4(F.weight(j), 0.f);
+            g.weight = storage(weight);
+            g.row_start = std::move(D.outer);
+            return g;
         });
+    }
+
+    void global_step(DrawContext& ctx, const In& in, PerObject& w) {
+        const GpuFactors& F = factors(ctx, in);
+        Program& prog = F.wide ? global_wide_ : global_;
+        prog.use();
+        bind(0, F.outer);
         bind(5, w.Ev);
         bind(6, w.D);
         bind(7, w.Bv);
@@ -311,21 +330,25 @@ private:
         GLint align = 16;
         glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
         glGetIntegerv(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &align);
-        const int64_t align_entries = std::max<int64_t>(1, align / 16);
-        const int64_t cap = std::max<int64_t>(1024, max_block / 16 - align_entries);
-        const int n = F.n;
+        // Pieces start at a multiple of `align` entries (at least 2), so that both the 8-byte
+        // entries and the 2-byte high column bits start aligned, and at an even entry.
+        const int64_t align_entries = std::max<int64_t>(2, align);
+        const int64_t cap = std::max<int64_t>(1024, max_block / 8 - align_entries);
+        const int n = int(F.row_start.size()) - 1;
+        const int64_t total = n > 0 ? F.row_start[size_t(n)] : 0;
         int r0 = 0;
         while (r0 < n) {
-            const int64_t base = int64_t(F.outer[size_t(r0)]) / align_entries * align_entries;
+            const int64_t base = int64_t(F.row_start[size_t(r0)]) / align_entries * align_entries;
             int r1 = r0 + 1;
             // Rows while their entries fit (a single row always goes, whatever its length).
-            while (r1 < n && int64_t(F.outer[size_t(r1) + 1]) - base <= cap) ++r1;
-            const int64_t count = std::max<int64_t>(1, int64_t(F.outer[size_t(r1)]) - base);
-            const int64_t avail = std::max<int64_t>(1, int64_t(F.inner.size()) - base);
-            glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 1, entries.get(), GLintptr(base * 16), GLsizeiptr(std::min(count, avail) * 16));
-            glUniform1i(global_.uniform("u_row0"), r0);
-            glUniform1i(global_.uniform("u_row1"), r1);
-            glUniform1i(global_.uniform("u_base"), int(base));
+            while (r1 < n && int64_t(F.row_start[size_t(r1) + 1]) - base <= cap) ++r1;
+            const int64_t count = std::max<int64_t>(2, std::min(int64_t(F.row_start[size_t(r1)]) - base, total - base));
+            glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 1, F.entry.get(), GLintptr(base * 8), GLsizeiptr(count * 8));
+            if (F.wide) glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 2, F.col_hi.get(), GLintptr(base * 2), GLsizeiptr((count + 1) / 2 * 4));
+            else bind(2, F.col_hi);
+            glUniform1i(prog.uniform("u_row0"), r0);
+            glUniform1i(prog.uniform("u_row1"), r1);
+            glUniform1i(prog.uniform("u_base"), int(base));
             glDispatchCompute(groups(size_t(r1 - r0)), 1, 1);
             r0 = r1;
         }
@@ -418,7 +441,7 @@ private:
         w.has_reference = true;
     }
 
-    Program illumination_, vertices_, local_, global_, combine_, reference_, shadow_, draw_;
+    Program illumination_, vertices_, local_, global_, global_wide_, combine_, reference_, shadow_, draw_;
     std::map<int, PerObject> objects_;
 };
 }  // namespace

@@ -36,6 +36,29 @@ TEST(RdTable, AgreesWithTheDipoleWithin1e4) {
     }
 }
 
+TEST(HalfFloat, EveryHalfSurvivesTheRoundTripAndFloatsRoundToTheNearestHalf) {
+    for (uint32_t h = 0; h < 0x10000u; ++h) {
+        const float v = half_value(uint16_t(h));
+        if (std::isnan(v)) continue;
+        ASSERT_EQ(half_bits(v), uint16_t(h)) << h;
+    }
+    EXPECT_EQ(half_value(half_bits(1.f)), 1.f);
+    EXPECT_EQ(half_value(half_bits(65504.f)), 65504.f);
+    EXPECT_TRUE(std::isinf(half_value(half_bits(1e6f))));
+    EXPECT_TRUE(std::isnan(half_value(half_bits(NAN))));
+    EXPECT_EQ(half_value(half_bits(1e-9f)), 0.f);
+    // Random floats over the half's range: the nearest of the two neighbouring halves.
+    uint32_t state = 12345u;
+    for (int k = 0; k < 200000; ++k) {
+        state = state * 1664525u + 1013904223u;
+        const float f = std::ldexp(float(state >> 8) / 16777216.f + 0.5f, int(state % 40u) - 25);
+        const uint16_t h = half_bits(f);
+        const float v = half_value(h), up = half_value(uint16_t(h + 1)), down = h > 0 ? half_value(uint16_t(h - 1)) : 0.f;
+        ASSERT_LE(std::abs(f - v), std::abs(f - up)) << f;
+        ASSERT_LE(std::abs(f - v), std::abs(f - down)) << f;
+    }
+}
+
 TEST(VertexFactors, EqualRdAtTheVertexDistanceTimesAThirdOfTheVertexArea) {
     const PreparedMesh m = sphere(16);
     const Dipole d(measured_material("skin1").medium);
@@ -43,34 +66,54 @@ TEST(VertexFactors, EqualRdAtTheVertexDistanceTimesAThirdOfTheVertexArea) {
     const VertexFactors F = build_vertex_factors(m.position, m.index, d, {mm, 0.f, false});
     const int n = int(m.vertex_count());
     ASSERT_EQ(F.count(), size_t(n) * size_t(n));  // every factor is positive
+    ASSERT_EQ(F.pairs(), size_t(n) * size_t(n + 1) / 2);
     // Vertex areas: independent sum over triangles.
     std::vector<double> A(size_t(n), 0.0);
     for (size_t f = 0; f < m.triangle_count(); ++f) {
         const vec3 a = m.position[m.index[3 * f]], b = m.position[m.index[3 * f + 1]], c = m.position[m.index[3 * f + 2]];
         for (int j = 0; j < 3; ++j) A[m.index[3 * f + size_t(j)]] += 0.5 * glm::length(glm::cross(b - a, c - a)) * mm * mm;
     }
+    // Half floats (≤ 4.9e-4) on the table (1e-4).
     for (int i = 0; i < n; ++i)
-        for (int k = F.outer[size_t(i)]; k < F.outer[size_t(i) + 1]; ++k) {
-            const int j = F.inner[size_t(k)];
+        for (int j = 0; j < n; ++j) {
             const dvec3 expect = d.Rd(glm::length(m.position[size_t(i)] - m.position[size_t(j)]) * mm) * (A[size_t(j)] / 3.0);
-            for (int c = 0; c < 3; ++c) ASSERT_NEAR(F.value[size_t(c)][size_t(k)], expect[c], 2e-4 * expect[c] + 1e-12) << i << "," << j;
+            const vec3 got = F.factor(i, j);
+            for (int c = 0; c < 3; ++c) ASSERT_NEAR(got[c], expect[c], 6e-4 * expect[c] + 1e-12) << i << "," << j;
         }
-    EXPECT_EQ(F.bytes(), size_t(n + 1) * 4 + F.count() * 16);
+    EXPECT_EQ(F.bytes(), size_t(n + 1) * 4 + F.pairs() * 8);
 }
 
-TEST(VertexFactors, TheThresholdKeepsExactlyTheFactorsAboveIt) {
+TEST(VertexFactors, TheThresholdKeepsExactlyThePairsWithAFactorAboveIt) {
     const PreparedMesh m = sphere(24);
     const Dipole d(measured_material("marble").medium);
     const VertexFactors all = build_vertex_factors(m.position, m.index, d, {20.0, 0.f, false});
-    std::vector<float> largest;
-    for (size_t k = 0; k < all.count(); ++k) largest.push_back(std::max({all.value[0][k], all.value[1][k], all.value[2][k]}));
+    auto largest = [](vec3 v) { return std::max({v.x, v.y, v.z}); };
+    // Per kept pair: the mean of F_ij and F_ji, and whether it is on the diagonal.
+    std::vector<std::pair<float, bool>> pairs;
+    for (int i = 0; i < all.n; ++i)
+        for (int k = all.outer[size_t(i)]; k < all.outer[size_t(i) + 1]; ++k) {
+            const int j = all.column(size_t(k));
+            pairs.emplace_back(0.5f * (largest(all.factor(i, j)) + largest(all.factor(j, i))), i == j);
+        }
     size_t prev = all.count();
     for (float thr : {1e-6f, 1e-5f, 1e-4f, 1e-3f}) {
         const VertexFactors F = build_vertex_factors(m.position, m.index, d, {20.0, thr, false});
-        const size_t expect = size_t(std::count_if(largest.begin(), largest.end(), [&](float v) { return v >= thr; }));
-        EXPECT_NEAR(double(F.count()), double(expect), 1e-3 * double(expect) + 2) << thr;  // table vs exact at the edge
+        size_t expect = 0;
+        for (const auto& [v, diag] : pairs)
+            if (v >= thr) expect += diag ? 1 : 2;
+        EXPECT_NEAR(double(F.count()), double(expect), 2e-3 * double(expect) + 4) << thr;  // halves and table vs exact at the edge
         EXPECT_LE(F.count(), prev);
         prev = F.count();
+        for (int i = 0; i < F.n; i += 7)
+            for (int j = 0; j < F.n; j += 5) {
+                const float v = 0.5f * (largest(all.factor(i, j)) + largest(all.factor(j, i)));
+                if (v > 1.01f * thr) {
+                    ASSERT_NE(F.factor(i, j), vec3(0.f)) << thr << " " << i << "," << j;
+                }
+                if (v < 0.99f * thr) {
+                    ASSERT_EQ(F.factor(i, j), vec3(0.f)) << thr << " " << i << "," << j;
+                }
+            }
     }
     // A threshold above every factor drops them all; the product is then zero, not NaN.
     const VertexFactors none = build_vertex_factors(m.position, m.index, d, {20.0, 1e9f, false});
@@ -81,23 +124,40 @@ TEST(VertexFactors, TheThresholdKeepsExactlyTheFactorsAboveIt) {
 TEST(VertexFactors, ZeroDiagonalWhenBlending) {
     const PreparedMesh m = sphere(16);
     const VertexFactors F = build_vertex_factors(m.position, m.index, Dipole(measured_material("marble").medium), {5.0, 0.f, true});
-    for (int i = 0; i < F.n; ++i)
-        for (int k = F.outer[size_t(i)]; k < F.outer[size_t(i) + 1]; ++k) ASSERT_NE(F.inner[size_t(k)], i);
+    for (int i = 0; i < F.n; ++i) {
+        for (int k = F.outer[size_t(i)]; k < F.outer[size_t(i) + 1]; ++k) ASSERT_GT(F.column(size_t(k)), i);
+        ASSERT_EQ(F.factor(i, i), vec3(0.f));
+    }
+    EXPECT_EQ(F.diagonal, 0u);
     EXPECT_EQ(F.count(), size_t(F.n) * size_t(F.n - 1));
 }
 
-TEST(VertexFactors, ParallelProductEqualsEigensProduct) {
+// The symmetric half-float product against Eigen's product of the decoded matrices, and the
+// complete rows the GPU reads against both; also with the columns' high bits stored.
+TEST(VertexFactors, SymmetricProductEqualsEigensAndTheCompleteRows) {
     const PreparedMesh m = sphere(32);
-    const VertexFactors F = build_vertex_factors(m.position, m.index, Dipole(measured_material("skin2").medium), {15.0, 1e-6f, true});
-    std::vector<vec3> E(m.vertex_count());
-    for (size_t i = 0; i < E.size(); ++i) E[i] = vec3(float(i % 7), float(i % 3) + 0.5f, float((i * 13) % 11)) * 0.1f;
-    const std::vector<vec3> B = F.multiply(E);
-    for (int c = 0; c < 3; ++c) {
-        Eigen::VectorXf e(F.n);
-        for (int i = 0; i < F.n; ++i) e[i] = E[size_t(i)][c];
-        const Eigen::VectorXf b = F.channel(c) * e;
-        for (int i = 0; i < F.n; ++i) ASSERT_NEAR(B[size_t(i)][c], b[i], 1e-5f * std::max(1.f, std::abs(b[i])));
-    }
+    for (bool blend : {true, false})
+        for (bool wide : {false, true}) {
+            const VertexFactors F =
+                build_vertex_factors(m.position, m.index, Dipole(measured_material("skin2").medium), {15.0, 1e-6f, blend, wide});
+            ASSERT_EQ(F.col_hi.size(), wide ? F.pairs() : 0u);
+            std::vector<vec3> E(m.vertex_count());
+            for (size_t i = 0; i < E.size(); ++i) E[i] = vec3(float(i % 7), float(i % 3) + 0.5f, float((i * 13) % 11)) * 0.1f;
+            const std::vector<vec3> B = F.multiply(E);
+            const DirectedFactors D = expand_directed(F);
+            ASSERT_EQ(D.entry.size(), F.count());
+            const std::vector<vec3> Bd = multiply_directed(F, D, E);
+            for (int c = 0; c < 3; ++c) {
+                Eigen::VectorXf e(F.n);
+                for (int i = 0; i < F.n; ++i) e[i] = E[size_t(i)][c] * F.vertex_area[size_t(i)] / 3.f;
+                const Eigen::SparseMatrix<float, Eigen::RowMajor> U = F.upper(c);
+                const Eigen::VectorXf b = U.selfadjointView<Eigen::Upper>() * e;
+                for (int i = 0; i < F.n; ++i) {
+                    ASSERT_NEAR(B[size_t(i)][c], b[i], 1e-5f * std::max(1.f, std::abs(b[i]))) << i << " blend " << blend << " wide " << wide;
+                    ASSERT_NEAR(Bd[size_t(i)][c], b[i], 1e-5f * std::max(1.f, std::abs(b[i]))) << i;
+                }
+            }
+        }
 }
 
 TEST(VertexFactors, MillimetresPerUnitScaleDistancesAndAreas) {
@@ -106,11 +166,10 @@ TEST(VertexFactors, MillimetresPerUnitScaleDistancesAndAreas) {
     const VertexFactors a = build_vertex_factors(m.position, m.index, d, {3.0, 0.f, false});
     const VertexFactors b = build_vertex_factors(m.position, m.index, d, {6.0, 0.f, false});
     // Factor (0, j): R_d(6 r) 4 A / 3 against R_d(3 r) A / 3.
-    for (int k = a.outer[0]; k < a.outer[1]; ++k) {
-        const int j = a.inner[size_t(k)];
+    for (int j = 0; j < a.n; ++j) {
         const double r = glm::length(m.position[0] - m.position[size_t(j)]);
         const double ratio = d.Rd(6.0 * r, 0) * 4.0 / d.Rd(3.0 * r, 0);
-        EXPECT_NEAR(b.value[0][size_t(k)] / a.value[0][size_t(k)], ratio, 3e-4 * ratio);
+        EXPECT_NEAR(b.factor(0, j)[0] / a.factor(0, j)[0], ratio, 1.2e-3 * ratio);
     }
 }
 
