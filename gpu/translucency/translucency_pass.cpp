@@ -217,7 +217,8 @@ private:
         ctx.renderer.set_lighting_uniforms(illumination_, ctx.lighting, 0);
         glUniform1i(illumination_.uniform("u_shadow_count"), int(frames.size()));
         for (size_t i = 0; i < 4; ++i) {
-            const std::string k = "[" + std::to_string(i) + "]";
+            std::string k = std::to_string(i);
+            k.insert(k.begin(), '['), k.push_back(']');
             const bool on = i < frames.size() && frames[i].valid;
             illumination_.bind_texture(int(6 + i), GL_TEXTURE_2D, on ? w.shadow[i].color(0) : 0, ("u_shadow" + k).c_str());
             glUniform1i(illumination_.uniform(("u_shadow_valid" + k).c_str()), on ? 1 : 0);
@@ -295,8 +296,12 @@ private:
     // [SECTION] translucency.global: the factors' rows made complete (expand_directed), bound in
     // pieces that fit the GL's block size
     struct GpuFactors {
+        struct Piece {
+            int r0 = 0, r1 = 0;           // rows
+            int64_t base = 0, count = 0;  // entries bound
+        };
         Buffer outer, entry, col_hi, weight;
-        std::vector<int> row_start;  // the rows' first entries, for the pieces
+        std::vector<Piece> pieces;
         bool wide = false;
     };
     GpuFactors& factors(DrawContext& ctx, const In& in) {
@@ -306,14 +311,34 @@ private:
             DirectedFactors D = expand_directed(F);
             GpuFactors g;
             g.outer = storage(D.outer);
+            const int64_t total = D.outer.back();
+            // Two entries of padding: a piece binds at least two (below), and never past the end.
+            D.entry.resize(D.entry.size() + 2, 0);
             g.entry = storage(D.entry);
             g.wide = !D.col_hi.empty();
-            if (g.wide) D.col_hi.resize((D.col_hi.size() + 1) / 2 * 2);
+            if (g.wide) D.col_hi.resize((D.col_hi.size() + 2 + 1) / 2 * 2, 0);
             g.col_hi = storage(D.col_hi);
             std::vector<vec4> weight(size_t(F.n));
             for (int j = 0; j < F.n; ++j) weight[size_t(j)] = vec4(F.weight(j), 0.f);
             g.weight = storage(weight);
-            g.row_start = std::move(D.outer);
+            // Pieces of rows whose entries fit the GL's storage block size, each starting at a
+            // multiple of `align` entries (at least 2), so that both the 8-byte entries and the
+            // 2-byte high column bits start aligned, and at an even entry.
+            GLint64 max_block = 0;
+            GLint align = 16;
+            glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
+            glGetIntegerv(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &align);
+            const int64_t align_entries = std::max<int64_t>(2, align);
+            const int64_t cap = std::max<int64_t>(1024, max_block / 8 - align_entries);
+            const int n = F.n;
+            for (int r0 = 0; r0 < n;) {
+                const int64_t base = int64_t(D.outer[size_t(r0)]) / align_entries * align_entries;
+                int r1 = r0 + 1;
+                while (r1 < n && int64_t(D.outer[size_t(r1) + 1]) - base <= cap) ++r1;
+                const int64_t count = std::max<int64_t>(2, std::min(int64_t(D.outer[size_t(r1)]) - base, total - base));
+                g.pieces.push_back({r0, r1, base, count});
+                r0 = r1;
+            }
             return g;
         });
     }
@@ -326,31 +351,14 @@ private:
         bind(5, w.Ev);
         bind(6, w.D);
         bind(7, w.Bv);
-        GLint64 max_block = 0;
-        GLint align = 16;
-        glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
-        glGetIntegerv(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &align);
-        // Pieces start at a multiple of `align` entries (at least 2), so that both the 8-byte
-        // entries and the 2-byte high column bits start aligned, and at an even entry.
-        const int64_t align_entries = std::max<int64_t>(2, align);
-        const int64_t cap = std::max<int64_t>(1024, max_block / 8 - align_entries);
-        const int n = int(F.row_start.size()) - 1;
-        const int64_t total = n > 0 ? F.row_start[size_t(n)] : 0;
-        int r0 = 0;
-        while (r0 < n) {
-            const int64_t base = int64_t(F.row_start[size_t(r0)]) / align_entries * align_entries;
-            int r1 = r0 + 1;
-            // Rows while their entries fit (a single row always goes, whatever its length).
-            while (r1 < n && int64_t(F.row_start[size_t(r1) + 1]) - base <= cap) ++r1;
-            const int64_t count = std::max<int64_t>(2, std::min(int64_t(F.row_start[size_t(r1)]) - base, total - base));
-            glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 1, F.entry.get(), GLintptr(base * 8), GLsizeiptr(count * 8));
-            if (F.wide) glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 2, F.col_hi.get(), GLintptr(base * 2), GLsizeiptr((count + 1) / 2 * 4));
+        for (const GpuFactors::Piece& p : F.pieces) {
+            glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 1, F.entry.get(), GLintptr(p.base * 8), GLsizeiptr(p.count * 8));
+            if (F.wide) glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 2, F.col_hi.get(), GLintptr(p.base * 2), GLsizeiptr((p.count + 1) / 2 * 4));
             else bind(2, F.col_hi);
-            glUniform1i(prog.uniform("u_row0"), r0);
-            glUniform1i(prog.uniform("u_row1"), r1);
-            glUniform1i(prog.uniform("u_base"), int(base));
-            glDispatchCompute(groups(size_t(r1 - r0)), 1, 1);
-            r0 = r1;
+            glUniform1i(prog.uniform("u_row0"), p.r0);
+            glUniform1i(prog.uniform("u_row1"), p.r1);
+            glUniform1i(prog.uniform("u_base"), int(p.base));
+            glDispatchCompute(groups(size_t(p.r1 - p.r0)), 1, 1);
         }
     }
 
