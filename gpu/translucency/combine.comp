@@ -1,6 +1,6 @@
 #version 430 core
 // Technique translucency, step translucency.combine: the global response interpolated to the
-// texels, radiosity = local + global, every texel shown from its fill source
+// texels, every texel shown from its fill source (radiosity = local + global where it is drawn)
 // (core/translucency/frame.cpp combine, fill_texels; blend.cpp interpolate_to_texels).
 #include "translucency.glsl"
 layout(local_size_x = 64) in;
@@ -15,7 +15,6 @@ layout(std430, binding = 6) readonly buffer Local { vec4 L[]; };
 layout(rgba32f, binding = 0) writeonly uniform image2D u_irradiance;
 layout(rgba32f, binding = 1) writeonly uniform image2D u_local;
 layout(rgba32f, binding = 2) writeonly uniform image2D u_global;
-layout(rgba32f, binding = 3) writeonly uniform image2D u_radiosity;
 uniform int u_size;
 
 void main() {
@@ -33,5 +32,4 @@ void main() {
     imageStore(u_irradiance, q, vec4(E[s].rgb, 1.0));
     imageStore(u_local, q, vec4(l, 1.0));
     imageStore(u_global, q, vec4(g, 1.0));
-    imageStore(u_radiosity, q, vec4(l + g, 1.0));
 }

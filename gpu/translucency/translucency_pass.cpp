@@ -140,7 +140,7 @@ private:
     struct PerObject {
         int size = 0, vertices = 0;
         Buffer E, local, Ev, D, Bv;
-        Texture irradiance, local_map, global_map, radiosity, reference;
+        Texture irradiance, local_map, global_map, reference;
         std::vector<RenderTarget> shadow;
         bool has_reference = false;
     };
@@ -155,7 +155,6 @@ private:
             w.irradiance = map_texture(size);
             w.local_map = map_texture(size);
             w.global_map = map_texture(size);
-            w.radiosity = map_texture(size);
             w.reference = map_texture(size);
             w.size = size;
         }
@@ -377,7 +376,6 @@ private:
         glBindImageTexture(0, w.irradiance.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         glBindImageTexture(1, w.local_map.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         glBindImageTexture(2, w.global_map.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-        glBindImageTexture(3, w.radiosity.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         glDispatchCompute(groups(size_t(a.size) * size_t(a.size)), 1, 1);
     }
 
