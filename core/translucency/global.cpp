@@ -163,9 +163,11 @@ bool has_f16c() {
 }
 #endif
 
-void rows(const VertexFactors& F, const vec4* Ew, vec4* B, int r0, int r1) {
+void rows(const VertexFactors& F, const vec4* Ew, vec4* B, int r0, int r1, bool simd) {
 #if defined(__x86_64__)
-    if (has_f16c()) return F.col_hi.empty() ? rows_f16c<false>(F, Ew, B, r0, r1) : rows_f16c<true>(F, Ew, B, r0, r1);
+    if (simd && has_f16c()) return F.col_hi.empty() ? rows_f16c<false>(F, Ew, B, r0, r1) : rows_f16c<true>(F, Ew, B, r0, r1);
+#else
+    (void)simd;
 #endif
     rows_portable(F, Ew, B, r0, r1);
 }
@@ -197,11 +199,11 @@ Eigen::SparseMatrix<float, Eigen::RowMajor> VertexFactors::upper(int c) const {
 }
 
 // [SECTION] Products
-std::vector<vec3> VertexFactors::multiply(const std::vector<vec3>& E) const {
+std::vector<vec3> VertexFactors::multiply(const std::vector<vec3>& E, bool simd) const {
     const std::vector<vec4> Ew = weighted(*this, E);
     tbb::enumerable_thread_specific<std::vector<vec4>> sums([&] { return std::vector<vec4>(size_t(n), vec4(0.f)); });
     tbb::parallel_for(tbb::blocked_range<int>(0, n, 128), [&](const tbb::blocked_range<int>& r) {
-        rows(*this, Ew.data(), sums.local().data(), r.begin(), r.end());
+        rows(*this, Ew.data(), sums.local().data(), r.begin(), r.end(), simd);
     });
     std::vector<vec3> B(size_t(n), vec3(0.f));
     for (const std::vector<vec4>& s : sums)

@@ -59,8 +59,8 @@ struct VertexFactors {
     vec3 weight(int j) const { return vertex_area[size_t(j)] / 3.f * scale; }  // E'_j = E_j × weight(j)
     // Channel c of R_d's upper triangle, decoded (F = upper.selfadjointView<Upper>() diag(A / 3)).
     Eigen::SparseMatrix<float, Eigen::RowMajor> upper(int c) const;
-    // B = F E, rows in parallel.
-    std::vector<vec3> multiply(const std::vector<vec3>& E) const;
+    // B = F E, rows in parallel; simd = false takes the portable path of CPUs without F16C.
+    std::vector<vec3> multiply(const std::vector<vec3>& E, bool simd = true) const;
 };
 
 // Every factor as its own entry, rows complete (for a device without atomic float adds): row i

@@ -132,8 +132,8 @@ TEST(VertexFactors, ZeroDiagonalWhenBlending) {
     EXPECT_EQ(F.count(), size_t(F.n) * size_t(F.n - 1));
 }
 
-// The symmetric half-float product against Eigen's product of the decoded matrices, and the
-// complete rows the GPU reads against both; also with the columns' high bits stored.
+// The symmetric half-float product (F16C and portable) against Eigen's product of the decoded
+// matrices, and the complete rows the GPU reads against both; also with the columns' high bits.
 TEST(VertexFactors, SymmetricProductEqualsEigensAndTheCompleteRows) {
     const PreparedMesh m = sphere(32);
     for (bool blend : {true, false})
@@ -143,7 +143,7 @@ TEST(VertexFactors, SymmetricProductEqualsEigensAndTheCompleteRows) {
             ASSERT_EQ(F.col_hi.size(), wide ? F.pairs() : 0u);
             std::vector<vec3> E(m.vertex_count());
             for (size_t i = 0; i < E.size(); ++i) E[i] = vec3(float(i % 7), float(i % 3) + 0.5f, float((i * 13) % 11)) * 0.1f;
-            const std::vector<vec3> B = F.multiply(E);
+            const std::vector<vec3> B = F.multiply(E), Bp = F.multiply(E, false);
             const DirectedFactors D = expand_directed(F);
             ASSERT_EQ(D.entry.size(), F.count());
             const std::vector<vec3> Bd = multiply_directed(F, D, E);
@@ -155,6 +155,7 @@ TEST(VertexFactors, SymmetricProductEqualsEigensAndTheCompleteRows) {
                 for (int i = 0; i < F.n; ++i) {
                     ASSERT_NEAR(B[size_t(i)][c], b[i], 1e-5f * std::max(1.f, std::abs(b[i]))) << i << " blend " << blend << " wide " << wide;
                     ASSERT_NEAR(Bd[size_t(i)][c], b[i], 1e-5f * std::max(1.f, std::abs(b[i]))) << i;
+                    ASSERT_NEAR(Bp[size_t(i)][c], b[i], 1e-5f * std::max(1.f, std::abs(b[i]))) << i;
                 }
             }
         }
