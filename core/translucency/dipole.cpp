@@ -99,6 +99,21 @@ double Dipole::Rd(double r, int c) const {
 
 dvec3 Dipole::Rd(double r) const { return {Rd(r, 0), Rd(r, 1), Rd(r, 2)}; }
 
+dvec3 Dipole::laplacian_ratio(double r) const {
+    r = std::abs(r);
+    dvec3 out(0.0);
+    for (int c = 0; c < 3; ++c) {
+        // A step small against every length of the dipole (r, z_r), large against rounding.
+        const double h = 1e-3 * std::max(r, zr_[c]);
+        const double f0 = Rd(r, c), fp = Rd(r + h, c), fm = Rd(std::abs(r - h), c);
+        if (!(f0 > 0.0) || !std::isfinite(f0)) continue;
+        const double d2 = (fp - 2.0 * f0 + fm) / (h * h);
+        const double d1_over_r = r > h ? (fp - fm) / (2.0 * h * r) : d2;  // R_d'(r)/r → R_d''(0)
+        out[c] = (d2 + d1_over_r) / f0;
+    }
+    return out;
+}
+
 // ∫_0^R 2πr z (σ d + 1) e^(-σ d) / d³ dr = 2π z [e^(-σ z)/z - e^(-σ d(R))/d(R)]  (r dr = d dd).
 dvec3 Dipole::reflectance_within(double R) const {
     dvec3 out(0.0);

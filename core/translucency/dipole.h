@@ -66,6 +66,11 @@ public:
     // R_d(r) per channel, mm^-2, r in mm (r < 0 is taken as |r|).
     dvec3 Rd(double r) const;
     double Rd(double r, int channel) const;
+    // ∇²R_d / R_d at r per channel, mm⁻²: the Laplacian in the surface's plane,
+    // (R_d'' + R_d' / r) / R_d, by central differences (r → 0: 2 R_d'' / R_d). Positive where
+    // R_d is convex across the plane (beyond about the source depth z_r); σ_tr² far out. 0 where
+    // R_d is 0.
+    dvec3 laplacian_ratio(double r) const;
     // ∫ 2πr R_d(r) dr over [0, R] per channel (closed form), and R_total (R = ∞).
     dvec3 reflectance_within(double R) const;
     dvec3 total_reflectance() const;

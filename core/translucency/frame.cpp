@@ -151,7 +151,7 @@ Gather make_gather(const Atlas& a, const std::vector<uint32_t>& index, const std
             const uint32_t v = index[3 * f + size_t(j)];
             const size_t e = size_t(next[v]++);
             g.texel[e] = int32_t(t);
-            const float proj = float(area * 3.0 / double(vertex_area[v]) * (4.0 * double(w[j]) - 1.0));
+            const float proj = float(area * 3.0 / double(vertex_area[v]) * double(w[j]));  // project_to_vertices
             vec3 c(0.f);
             if (g.direct) c = blend->c[size_t(kernels->slot[t])][size_t(j)];
             g.w[e] = vec4(proj, c);

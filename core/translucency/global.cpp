@@ -42,11 +42,28 @@ std::vector<vec3> project_to_vertices(const Atlas& atlas, const std::vector<uint
         const glm::dvec3 e = glm::dvec3(texel_irradiance[t]) * (double(atlas.texel_area[t]) * s2);
         for (int j = 0; j < 3; ++j) {
             const uint32_t v = index[3 * f + size_t(j)];
-            E[v] += e * (3.0 / double(vertex_area[v]) * (4.0 * double(w[j]) - 1.0));
+            E[v] += e * (3.0 / double(vertex_area[v]) * double(w[j]));
         }
     }
     return std::vector<vec3>(E.begin(), E.end());
 }
+
+namespace {
+// e^(−x) for x in [0, 20] within 3e-5 relative: 2^(−n) times e^(−g), g = (x log2 e − n) ln 2 in
+// [0, 0.7), by its Taylor series to degree 6 (a quarter of std::exp's cost per factor).
+float exp_minus(float x) {
+    const float y = x * 1.44269504f;  // log2(e)
+    const int n = int(y);
+    const float g = (y - float(n)) * 0.693147181f;
+    const float p = 1.f - g * (1.f - g * (0.5f - g * (1.f / 6.f - g * (1.f / 24.f - g * (1.f / 120.f - g * (1.f / 720.f))))));
+    uint32_t bits;
+    std::memcpy(&bits, &p, sizeof bits);
+    bits -= uint32_t(n) << 23;  // × 2^(−n); n ≤ 29 keeps the result normal
+    float out;
+    std::memcpy(&out, &bits, sizeof out);
+    return out;
+}
+}  // namespace
 
 // [SECTION] Half floats
 uint16_t half_bits(float f) {
@@ -290,6 +307,39 @@ VertexFactors build_vertex_factors(const std::vector<vec3>& position, const std:
     for (size_t j = 0; j < third.size(); ++j) third[j] = F.vertex_area[j] / 3.f;
     const bool wide = F.n > 65536 || p.wide_columns;
 
+    // Interpolation correction (see global.h): q_i per vertex, ∇²R_d / R_d tabulated like R_d.
+    std::vector<float> q(size_t(F.n), 0.f);
+    if (p.interpolation_correction) {
+        std::vector<float> area(size_t(F.n), 0.f);
+        for (size_t f = 0; f + 2 < index.size(); f += 3) {
+            const vec3 a = x[index[f]], b = x[index[f + 1]], c = x[index[f + 2]];
+            const float e2 = glm::dot(b - a, b - a) + glm::dot(c - b, c - b) + glm::dot(a - c, a - c);
+            const float at = 0.5f * glm::length(glm::cross(b - a, c - a));
+            if (!(at > 0.f) || !std::isfinite(e2)) continue;
+            for (int k = 0; k < 3; ++k) q[index[f + size_t(k)]] += at * e2 / 48.f, area[index[f + size_t(k)]] += at;
+        }
+        for (size_t i = 0; i < q.size(); ++i) q[i] = area[i] > 0.f ? q[i] / area[i] : 0.f;
+    }
+    constexpr int kLaplacianSamples = 4096;
+    std::vector<vec3> laplacian;
+    if (p.interpolation_correction) {
+        laplacian.resize(kLaplacianSamples);
+        for (int k = 0; k < kLaplacianSamples; ++k) {
+            const double u = double(k) / double(kLaplacianSamples - 1);
+            laplacian[size_t(k)] = vec3(dipole.laplacian_ratio(u * u * diameter * 1.0001));
+        }
+    }
+    const float inv_diameter = float(1.0 / (diameter * 1.0001));
+    // exp(−(q_i + q_j) ∇²R_d / R_d), only ever shrinking R_d; 0 ≤ exponent ≤ 20.
+    const auto correction = [&](float r2, float qij) {
+        const float u = std::min(1.f, std::sqrt(std::sqrt(r2) * inv_diameter)) * float(kLaplacianSamples - 1);
+        const int k = std::min(int(u), kLaplacianSamples - 2);
+        const float t = u - float(k);
+        const vec3 L = laplacian[size_t(k)] * (1.f - t) + laplacian[size_t(k) + 1] * t;
+        const vec3 x = glm::clamp(qij * L, vec3(0.f), vec3(20.f));
+        return vec3(exp_minus(x.x), exp_minus(x.y), exp_minus(x.z));
+    };
+
     // Rows of the upper triangle in parallel, each into its own buffers, then concatenated.
     struct Row {
         std::vector<uint64_t> pair;
@@ -304,9 +354,16 @@ VertexFactors build_vertex_factors(const std::vector<vec3>& position, const std:
             const float ai = third[size_t(i)];
             for (int j = p.zero_diagonal ? i + 1 : i; j < F.n; ++j) {
                 const vec3 d = x[size_t(j)] - xi;
-                const vec3 rd = Rd.at_r2(glm::dot(d, d));
-                const float largest = std::max(rd.x, std::max(rd.y, rd.z));
-                if (!(largest > 0.f) || largest * 0.5f * (ai + third[size_t(j)]) < thr) continue;
+                const float r2 = glm::dot(d, d);
+                vec3 rd = Rd.at_r2(r2);
+                const float mean_area = 0.5f * (ai + third[size_t(j)]);
+                float largest = std::max(rd.x, std::max(rd.y, rd.z));
+                if (!(largest > 0.f) || largest * mean_area < thr) continue;  // the correction only shrinks
+                if (!laplacian.empty() && j != i) {
+                    rd *= correction(r2, q[size_t(i)] + q[size_t(j)]);
+                    largest = std::max(rd.x, std::max(rd.y, rd.z));
+                    if (!(largest > 0.f) || largest * mean_area < thr) continue;
+                }
                 row.pair.push_back(encode(rd * inv_scale, j));
                 if (wide) row.hi.push_back(uint16_t(j >> 16));
             }

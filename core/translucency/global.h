@@ -2,14 +2,27 @@
 // [SECTION] The global response of Lensch et al. 2002, §5.2: vertex-to-vertex throughput factors.
 // Radiosity far from where light enters is smooth, so it is represented in the hat basis φ_i of
 // the mesh's vertices (φ_i = 1 at vertex i, 0 at the others, linear on each triangle):
-//   irradiance   E(x) ≈ Σ_j E_j φ_j(x),  E_j = ∫ E(x) φ̃_j(x) dA  with the dual basis
-//                φ̃_j(x) = (3 / A_j) (4 λ_j(x) − 1) on the triangles around j (λ_j: x's
-//                barycentric coordinate of j, A_j: the area of those triangles), which
-//                reproduces constant irradiance exactly (project_to_vertices)
-//   factors      B_i = Σ_j F_ij E_j,  F_ij = R_d(|x_i − x_j|) ∫ φ_j dA = R_d(|x_i − x_j|) A_j / 3
-//                (Eq. 7 with R_d evaluated once per pair of vertices), kept where the largest
+//   irradiance   E_j = (3 / A_j) ∫ E(x) φ_j(x) dA (project_to_vertices): each texel's power split
+//                over its triangle's corners by its barycentrics, A_j the area of the triangles
+//                around j. This is the L2 projection with a lumped (diagonal) mass matrix: it
+//                keeps the power exactly and never goes negative. The paper's dual basis
+//                φ̃_j = (3 / A_j)(4 λ_j − 1) is exact for smooth irradiance but splits a sharp
+//                edge (a shadow, a spot) into negative and positive lobes, which an R_d that falls
+//                by 4x per vertex spacing (skin's blue) carries far: the energy of a spot on a
+//                plane then drifts by up to 9% with where it falls on a triangle.
+//   factors      B_i = Σ_j F_ij E_j,  F_ij = R̂_ij A_j / 3 (Eq. 7), kept where the largest
 //                channel is at least `threshold` (the factor count of Table 1; see below)
 //   radiosity    B(x) = Σ_i B_i φ_i(x): linear interpolation of the vertex values
+// Interpolation correction (`FactorParams::interpolation_correction`). Both splits interpolate
+// linearly across a triangle, which overestimates a convex R_d: over a triangle of edges e_k
+// the linear interpolant of f exceeds f by (Σ e_k² / 48) ∇²f on average, once on the source's
+// side and once on the receiver's. So the stored value is
+//   R̂_ij = R_d(r_ij) exp(−(q_i + q_j) ∇²R_d / R_d),  q_i = area-weighted mean of Σ e_k² / 48
+// over the triangles around i (mm²), the inverse of that smoothing, exact for the far field's
+// e^(−σ_tr r) (an eigenfunction of ∇², eigenvalue ≈ σ_tr²). Without it, a spot on a plane of
+// skin1 at the paper's vertex spacing (0.94 mm) receives 55–80% too much at 2.5–4 mm in blue;
+// with it, within 5% (tests/translucency/blend_test.cpp). It only ever shrinks R_d (exponent
+// clamped to [0, 20]); the diagonal stays R_d(0).
 // With blending (§5.4) the diagonal F_ii is zero: the local kernels carry the short range.
 //
 // Units: positions in scene units, times mm_per_unit gives mm; R_d in mm⁻², areas in mm²; F
@@ -83,6 +96,7 @@ struct FactorParams {
     float threshold = 0.f;      // translucency.threshold: smallest factor kept (largest channel)
     bool zero_diagonal = false; // blending on
     bool wide_columns = false;  // keep the columns' high 16 bits below 65,536 vertices too (tests)
+    bool interpolation_correction = true;  // R̂ instead of R_d (above; off: the paper's factors, for tests)
 };
 
 // Builds the factors for a mesh (positions, 3 indices per triangle) and a dipole. Rows in
@@ -91,9 +105,10 @@ struct FactorParams {
 VertexFactors build_vertex_factors(const std::vector<vec3>& position, const std::vector<uint32_t>& index, const Dipole& dipole,
                                    const FactorParams& p);
 
-// E_j = ∫ E φ̃_j dA from per-texel irradiance over an atlas of the same mesh (inner texels:
-// their triangle's barycentrics and surface area), with vertex areas A_j in mm² and texel areas
-// scaled by mm_per_unit². Constant irradiance gives E_j = E up to the texel quadrature.
+// E_j = (3 / A_j) ∫ E φ_j dA from per-texel irradiance over an atlas of the same mesh (inner
+// texels: their triangle's barycentrics and surface area), with vertex areas A_j in mm² and texel
+// areas scaled by mm_per_unit². Σ_j E_j A_j / 3 = Σ_t E_t A_t exactly; constant irradiance gives
+// E_j = E up to the texel quadrature.
 struct Atlas;
 std::vector<vec3> project_to_vertices(const Atlas& atlas, const std::vector<uint32_t>& index, const std::vector<vec3>& texel_irradiance,
                                       const std::vector<float>& vertex_area, double mm_per_unit);

@@ -257,7 +257,7 @@ void TranslucencyTechnique::declare_stages(StageGraph& g) const {
                return stage_result(std::move(b));
            }});
     g.add({.name = "translucency.gather",
-           .help = "Per vertex, the texels its irradiance (dual basis) and its direct radiosity (blending) come from",
+           .help = "Per vertex, the texels its irradiance (hat-weighted) and its direct radiosity (blending) come from",
            .scope = StageScope::Object,
            .technique = "translucency",
            .params = {"translucency.blend"},
@@ -305,7 +305,7 @@ std::vector<FrameStepDecl> TranslucencyTechnique::frame_steps() const {
                                           "translucency.blend", "translucency.gather"};
     return {{"translucency.illumination", "Irradiance entering the medium per texel (lights x Fresnel, shadow maps, environment)",
              step_keys({}), {"translucency.atlas"}},
-            {"translucency.vertices", "Irradiance per vertex (dual basis) and the direct radiosity of blending", step_keys({}), all},
+            {"translucency.vertices", "Irradiance per vertex (hat-weighted) and the direct radiosity of blending", step_keys({}), all},
             {"translucency.local", "Local response: K x K kernels over the illumination map", step_keys({}), all},
             {"translucency.global", "Global response per vertex: the factors times the vertex irradiance, plus the direct part", step_keys({}), all},
             {"translucency.combine", "The global response interpolated to the texels, radiosity = local + global, texels outside the triangles filled",

@@ -12,14 +12,14 @@
 //   translucency.kernels  the K x K local kernels (material, mm_per_unit, kernel)
 //   translucency.factors  the vertex-to-vertex factors above translucency.threshold
 //   translucency.blend    blending (§5.4): the fitted weights and the corrected kernels
-//   translucency.gather   per vertex, the texels it gathers irradiance from (the dual basis) and,
+//   translucency.gather   per vertex, the texels it gathers irradiance from (hat-weighted) and,
 //                         blended, the direct weights: one compressed-row table both devices read
 //   translucency.albedo   ρ per texel: translucency.albedo_map and the veins
 // Frame steps, in order (each a row of the timing tables):
 //   translucency.illumination  irradiance per texel entering the medium: every light times the
 //                              Fresnel transmittance T(cos θi), with the object's shadow map,
 //                              plus the environment times 1 − F_dr
-//   translucency.vertices      E_j per vertex (dual basis) and the direct part B_D (blended)
+//   translucency.vertices      E_j per vertex (hat-weighted) and the direct part B_D (blended)
 //   translucency.local         B_local per inner texel (the kernels)
 //   translucency.global        B_G = F E + B_D per vertex
 //   translucency.combine       B_G interpolated to the texels, B = B_local + B_G, and the texels
@@ -78,7 +78,7 @@ struct AtlasStage {
 };
 AtlasStage make_atlas_stage(const PreparedMesh& mesh, const AtlasParams& p);
 
-// Per vertex j the texels t it reads: w.x = dual-basis projection weight (E_j += w.x E_t) and,
+// Per vertex j the texels t it reads: w.x = projection weight (E_j += w.x E_t, global.h) and,
 // blended, w.yzw = the direct weights c (B_D,j += c ∘ E_t).
 struct Gather {
     int n = 0;

@@ -97,6 +97,33 @@ TEST(Dipole, NoAbsorptionReflectsEverythingAndDecaysAsAPowerLaw) {
     }
 }
 
+// ∇²R_d / R_d (the interpolation correction of the vertex factors) against a five-point stencil
+// in Cartesian coordinates (which never forms R_d' / r), and its far-field limits: σ_tr² + 3σ_tr/r
+// + 4/r² for R_d ~ (σ_tr r + 1) e^(−σ_tr r) / r³, 9 / r² for spectralon's R_d ~ 1 / r³.
+TEST(Dipole, LaplacianRatioMatchesACartesianStencilAndTheFarField) {
+    for (const char* name : {"skin1", "marble", "ketchup", "spectralon"}) {
+        const Dipole d(measured_material(name).medium);
+        for (int c = 0; c < 3; ++c) {
+            const double zr = d.z_r()[c];
+            for (const double r : {0.0, 0.3 * zr, zr, 3.0 * zr, 10.0 * zr}) {
+                const double s = 2e-3 * std::max(r, zr);
+                const auto f = [&](double x, double y) { return d.Rd(std::sqrt(x * x + y * y), c); };
+                const double stencil = (f(r + s, 0) + f(r - s, 0) + f(r, s) + f(r, -s) - 4.0 * f(r, 0)) / (s * s) / f(r, 0);
+                const double got = d.laplacian_ratio(r)[c];
+                EXPECT_NEAR(got, stencil, 2e-3 * std::abs(stencil) + 1e-3 / (zr * zr)) << name << " channel " << c << " r " << r;
+            }
+            const double st = d.sigma_tr()[c];
+            if (st > 0.0) {
+                const double r = 200.0 / st;  // far beyond the virtual source too (σ_tr z_v ≤ 7 here)
+                const double far = st * st + 3.0 * st / r + 4.0 / (r * r);
+                EXPECT_NEAR(d.laplacian_ratio(r)[c], far, 0.005 * far) << name << " channel " << c;
+            } else {
+                EXPECT_NEAR(d.laplacian_ratio(1e3)[c] * 1e6 / 9.0, 1.0, 1e-3) << name << " channel " << c;
+            }
+        }
+    }
+}
+
 TEST(Dipole, IndexOfOneHasNoInterface) {
     Medium m = measured_material("skin1").medium;
     m.eta = 1.0;

@@ -1,6 +1,6 @@
 // The global response (core/translucency/global.h): the tabulated R_d, the vertex-to-vertex
-// factors against R_d(r_ij) A_j / 3, the threshold, the parallel product against Eigen's, the
-// dual-basis projection, units, bad settings.
+// factors against R_d(r_ij) A_j / 3 and the interpolation correction, the threshold, the parallel
+// product against Eigen's, the projection, units, bad settings.
 #include "core/error.h"
 #include "core/mesh.h"
 #include "core/translucency/atlas.h"
@@ -63,7 +63,9 @@ TEST(VertexFactors, EqualRdAtTheVertexDistanceTimesAThirdOfTheVertexArea) {
     const PreparedMesh m = sphere(16);
     const Dipole d(measured_material("skin1").medium);
     const double mm = 10.0;  // a sphere of radius 10 mm
-    const VertexFactors F = build_vertex_factors(m.position, m.index, d, {mm, 0.f, false});
+    FactorParams p{mm, 0.f, false};
+    p.interpolation_correction = false;  // the paper's factors
+    const VertexFactors F = build_vertex_factors(m.position, m.index, d, p);
     const int n = int(m.vertex_count());
     ASSERT_EQ(F.count(), size_t(n) * size_t(n));  // every factor is positive
     ASSERT_EQ(F.pairs(), size_t(n) * size_t(n + 1) / 2);
@@ -81,6 +83,39 @@ TEST(VertexFactors, EqualRdAtTheVertexDistanceTimesAThirdOfTheVertexArea) {
             for (int c = 0; c < 3; ++c) ASSERT_NEAR(got[c], expect[c], 6e-4 * expect[c] + 1e-12) << i << "," << j;
         }
     EXPECT_EQ(F.bytes(), size_t(n + 1) * 4 + F.pairs() * 8);
+}
+
+// R̂_ij = R_d(r_ij) exp(−(q_i + q_j) ∇²R_d / R_d), q_i the area-weighted Σ e² / 48 around i,
+// recomputed here from the triangles and Dipole::laplacian_ratio.
+TEST(VertexFactors, InterpolationCorrectionShrinksRdByTheSmoothingOfBothSides) {
+    const PreparedMesh m = sphere(16);
+    const Dipole d(measured_material("skin1").medium);
+    const double mm = 10.0;
+    const VertexFactors F = build_vertex_factors(m.position, m.index, d, {mm, 0.f, false});
+    const int n = int(m.vertex_count());
+    std::vector<double> A(size_t(n), 0.0), q(size_t(n), 0.0);
+    for (size_t f = 0; f < m.triangle_count(); ++f) {
+        const dvec3 a = dvec3(m.position[m.index[3 * f]]) * mm, b = dvec3(m.position[m.index[3 * f + 1]]) * mm, c = dvec3(m.position[m.index[3 * f + 2]]) * mm;
+        const double area = 0.5 * glm::length(glm::cross(b - a, c - a));
+        const double e2 = glm::dot(b - a, b - a) + glm::dot(c - b, c - b) + glm::dot(a - c, a - c);
+        for (int j = 0; j < 3; ++j) A[m.index[3 * f + size_t(j)]] += area, q[m.index[3 * f + size_t(j)]] += area * e2 / 48.0;
+    }
+    int shrunk = 0;
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+            const double r = glm::length(m.position[size_t(i)] - m.position[size_t(j)]) * mm;
+            const dvec3 L = d.laplacian_ratio(r);
+            dvec3 expect = d.Rd(r) * (A[size_t(j)] / 3.0);
+            if (i != j)
+                for (int c = 0; c < 3; ++c) expect[c] *= std::exp(-std::clamp((q[size_t(i)] / A[size_t(i)] + q[size_t(j)] / A[size_t(j)]) * L[c], 0.0, 20.0));
+            const vec3 got = F.factor(i, j);
+            // Half floats (4.9e-4; normal down to 2e-9 R_d(0)), the tables of R_d (1e-4) and of
+            // ∇²R_d / R_d (linear between samples).
+            for (int c = 0; c < 3; ++c)
+                ASSERT_NEAR(got[c], expect[c], 2e-3 * expect[c] + 4e-9 * d.Rd(0.0, c) * A[size_t(j)] / 3.0) << i << "," << j << " channel " << c;
+            if (i != j && got.z < 0.9f * float(d.Rd(r, 2) * A[size_t(j)] / 3.0)) ++shrunk;
+        }
+    EXPECT_GT(shrunk, n);  // blue's R_d is convex enough to lose over 10% on many pairs
 }
 
 TEST(VertexFactors, TheThresholdKeepsExactlyThePairsWithAFactorAboveIt) {
@@ -164,8 +199,10 @@ TEST(VertexFactors, SymmetricProductEqualsEigensAndTheCompleteRows) {
 TEST(VertexFactors, MillimetresPerUnitScaleDistancesAndAreas) {
     const PreparedMesh m = sphere(12);
     const Dipole d(measured_material("potato").medium);
-    const VertexFactors a = build_vertex_factors(m.position, m.index, d, {3.0, 0.f, false});
-    const VertexFactors b = build_vertex_factors(m.position, m.index, d, {6.0, 0.f, false});
+    FactorParams pa{3.0, 0.f, false}, pb{6.0, 0.f, false};
+    pa.interpolation_correction = pb.interpolation_correction = false;
+    const VertexFactors a = build_vertex_factors(m.position, m.index, d, pa);
+    const VertexFactors b = build_vertex_factors(m.position, m.index, d, pb);
     // Factor (0, j): R_d(6 r) 4 A / 3 against R_d(3 r) A / 3.
     for (int j = 0; j < a.n; ++j) {
         const double r = glm::length(m.position[0] - m.position[size_t(j)]);
@@ -174,7 +211,7 @@ TEST(VertexFactors, MillimetresPerUnitScaleDistancesAndAreas) {
     }
 }
 
-TEST(DualBasis, ConstantIrradianceProjectsToTheSameValueAtEveryVertex) {
+TEST(Projection, ConstantIrradianceProjectsToTheSameValueAtEveryVertexAndPowerIsKept) {
     const PreparedMesh m = sphere(20);
     const Atlas atlas = build_atlas(m.position, m.index, {512, 4, 30.f});
     const double mm = 10.0;
@@ -183,10 +220,28 @@ TEST(DualBasis, ConstantIrradianceProjectsToTheSameValueAtEveryVertex) {
     std::vector<float> err;
     for (const vec3& e : E) err.push_back(std::abs(e.x / 2.f - 1.f));
     std::sort(err.begin(), err.end());
-    // Texel quadrature of (4 λ − 1) over triangles of ~300 texels each.
+    // Texel quadrature of λ over triangles of ~300 texels each.
     EXPECT_LT(err[err.size() / 2], 0.02f);
     EXPECT_LT(err[err.size() * 95 / 100], 0.06f);
-    for (const vec3& e : E) EXPECT_NEAR(e.y / e.x, 0.5f, 1e-5f);
+    for (const vec3& e : E) {
+        EXPECT_NEAR(e.y / e.x, 0.5f, 1e-5f);
+        EXPECT_GT(e.x, 0.f);
+    }
+    // Any irradiance, a sharp spot included: Σ_j E_j A_j / 3 = Σ_t E_t A_t, and never negative.
+    std::vector<vec3> spot(atlas.texel_kind.size(), vec3(0.f));
+    double power = 0.0;
+    for (size_t t = 0; t < spot.size(); ++t)
+        if (atlas.texel_kind[t] == Atlas::kInner && texel_position(atlas, m.position, m.index, t).z > 0.7f) {
+            spot[t] = vec3(1.f);
+            power += double(atlas.texel_area[t]) * mm * mm;
+        }
+    const std::vector<vec3> Es = project_to_vertices(atlas, m.index, spot, A, mm);
+    double projected = 0.0;
+    for (size_t j = 0; j < Es.size(); ++j) {
+        EXPECT_GE(Es[j].x, 0.f) << j;
+        projected += double(Es[j].x) * double(A[j]) / 3.0;
+    }
+    EXPECT_NEAR(projected, power, 1e-5 * power);
 }
 
 TEST(VertexFactors, BadSettingsNameTheirKeys) {
