@@ -12,10 +12,12 @@
 namespace mesolab::translucency {
 
 namespace {
-// The energy equation's weight against the ring's (and ridge's) and the share of each corner's
-// hat that the region must see for it to apply (see the fit).
+// The energy equation's weight against the ring's (and ridge's), the share of each corner's hat
+// that the region must see for it to apply, and the share that must lie beyond the kernel (see
+// the fit).
 constexpr double kEnergyWeight = 10.0;
 constexpr double kHatShare = 0.8;
+constexpr double kShareBeyond = 0.2;
 
 // F0(i, j) per channel (0 where the factor was dropped), through a small direct-mapped cache:
 // a texel's fit and correction ask for the same few vertex pairs hundreds of times (every texel
@@ -156,10 +158,13 @@ BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position,
             // the ridge alone leaves the first ring of vertices, where the zero diagonal is
             // interpolated, short of power. Only where P sees at least 80% of every corner's hat
             // (kernel included): near a chunk's edge the hats reach surface that P does not see,
-            // and c would put power there unchecked (hot spots on Spot, RMSE 0.07 → 0.5).
+            // and c would put power there unchecked (hot spots on Spot, RMSE 0.07 → 0.5). And only
+            // where at least 20% of every corner's hat lies beyond the kernel: where a hat barely
+            // leaves it, matching the power takes a large c of either sign (negative radiosity,
+            // orange dots on the skin bunny of Fig. 6).
             bool hats_inside = true;
             for (int m = 0; m < 3 && hats_inside; ++m)
-                hats_inside = aE[m] > 0.0 && aE[m] + a_in[m] >= kHatShare * double(A[src.v[size_t(m)]]) / 3.0;
+                hats_inside = aE[m] >= kShareBeyond * double(A[src.v[size_t(m)]]) / 3.0 && aE[m] + a_in[m] >= kHatShare * double(A[src.v[size_t(m)]]) / 3.0;
             if (hats_inside) {
                 const double w = kEnergyWeight * (M.trace() + 3.0 * ridge) / aE.squaredNorm();
                 M += w * aE * aE.transpose();
