@@ -32,15 +32,15 @@
 // Units: positions in scene units, times mm_per_unit gives mm; R_d in mm⁻², areas in mm²; F
 // is dimensionless (radiosity per unit irradiance).
 //
-// Storage: R_d(|x_i − x_j|) is symmetric, so only the upper triangle (j ≥ i) is kept, row by
-// row, 8 bytes per pair: the three channels as IEEE half floats relative to a per-channel scale
-// (R_d(0) / 2^15, so that every value is a normal half down to 2e-9 R_d(0); rounding ≤ 4.9e-4
-// relative, far below what the threshold drops), and the column's low 16 bits. Meshes above
-// 65,536 vertices add 2 bytes per pair for the high bits. The product scales the irradiance once
-// per vertex, E'_j = E_j A_j / 3 × scale, and runs rows in parallel, each pair adding to both of
-// its rows (per-thread sums): a quarter of the bytes of one float RGB + int column per factor,
-// which is what the product's time is made of. upper() decodes a channel as an Eigen sparse
-// matrix (for checks and tools; the product does not use it).
+// Storage: R̂_ij, like R_d(|x_i − x_j|), is symmetric, so only the upper triangle (j ≥ i) is
+// kept, row by row, 8 bytes per pair: the three channels as IEEE half floats relative to a
+// per-channel scale (R_d(0) / 2^15, so that every value is a normal half down to 2e-9 R_d(0);
+// rounding ≤ 4.9e-4 relative, far below what the threshold drops), and the column's low 16
+// bits. Meshes above 65,536 vertices add 2 bytes per pair for the high bits. The product scales
+// the irradiance once per vertex, E'_j = E_j A_j / 3 × scale, and runs rows in parallel, each
+// pair adding to both of its rows (per-thread sums): a quarter of the bytes of one float RGB +
+// int column per factor, which is what the product's time is made of. upper() decodes a
+// channel as an Eigen sparse matrix (for checks and tools; the product does not use it).
 //
 // count() is the number of vertex-to-vertex factors as Table 1 counts them (F_ij and F_ji
 // separately); a pair is kept when R_d (A_i + A_j) / 6, the mean of F_ij and F_ji, reaches the
