@@ -244,11 +244,14 @@ Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height, co
     {
         PROFILE_SCOPE("background");
         Image& rad = f.aov("radiance");
+        // A constant environment (no map) needs no ray directions.
+        const bool constant = !lighting.env.map || lighting.env.map->empty();
+        const vec3 L_const = lighting.env.color * lighting.env.intensity;
         if (!cam.texture_mode)
             tbb::parallel_for(0, height, [&](int y) {
                 for (int x = 0; x < width; ++x) {
                     if (gb.object[gb.index(x, y)] >= 0) continue;
-                    const vec3 L = lighting.env.radiance(cam.ray_dir(x, y));
+                    const vec3 L = constant ? L_const : lighting.env.radiance(cam.ray_dir(x, y));
                     float* p = rad.at(x, y);
                     p[0] = L.x, p[1] = L.y, p[2] = L.z;
                 }

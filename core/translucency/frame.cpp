@@ -12,6 +12,7 @@
 #include <cmath>
 #include <limits>
 #include <unordered_map>
+#include <utility>
 
 namespace mesolab::translucency {
 
@@ -339,18 +340,34 @@ ShadowMap make_shadow_map(const TriMesh& display, const mat4& model, const Light
             const int x0 = std::max(0, int(std::ceil(std::min({a.p.x, bb.p.x, c.p.x}) - 0.5f)));
             const int x1 = std::min(res - 1, int(std::floor(std::max({a.p.x, bb.p.x, c.p.x}) - 0.5f)));
             const float inv_area = 1.f / area;
+            // Barycentrics are affine along a row: w_k(x0 + t) = E_k + t dE_k. The row's covered span
+            // is solved from the three edges (one pixel of slack each side), and the loop over it
+            // tests every pixel exactly and has no branches, so it runs on SIMD lanes.
+            const float dE0 = (bb.p.y - c.p.y) * inv_area, dE1 = (c.p.y - a.p.y) * inv_area, dE2 = -(dE0 + dE1);
+            const float d_iw0 = a.inv_w - c.inv_w, d_iw1 = bb.inv_w - c.inv_w;
+            const float d_dw0 = a.d_over_w - c.d_over_w, d_dw1 = bb.d_over_w - c.d_over_w;
             for (int y = y0; y <= y1; ++y) {
-                const float py = float(y) + 0.5f;
+                const float py = float(y) + 0.5f, px = float(x0) + 0.5f;
+                const float E0 = ((bb.p.x - px) * (c.p.y - py) - (bb.p.y - py) * (c.p.x - px)) * inv_area;
+                const float E1 = ((c.p.x - px) * (a.p.y - py) - (c.p.y - py) * (a.p.x - px)) * inv_area;
+                const float E2 = 1.f - E0 - E1;
+                float t_lo = 0.f, t_hi = float(x1 - x0);
+                bool empty = false;
+                for (const auto& [E, dE] : {std::pair{E0, dE0}, std::pair{E1, dE1}, std::pair{E2, dE2}}) {
+                    if (dE > 0.f) t_lo = std::max(t_lo, -E / dE - 1.f);
+                    else if (dE < 0.f) t_hi = std::min(t_hi, -E / dE + 1.f);
+                    else empty |= E < 0.f;
+                }
+                if (empty || !(t_lo <= t_hi)) continue;
+                const int xs = x0 + int(std::ceil(t_lo)), xe = x0 + int(std::floor(t_hi));
                 float* row = m.depth.data() + size_t(y) * size_t(res);
-                for (int x = x0; x <= x1; ++x) {
-                    const float px = float(x) + 0.5f;
-                    const float w0 = ((bb.p.x - px) * (c.p.y - py) - (bb.p.y - py) * (c.p.x - px)) * inv_area;
-                    const float w1 = ((c.p.x - px) * (a.p.y - py) - (c.p.y - py) * (a.p.x - px)) * inv_area;
-                    const float w2 = 1.f - w0 - w1;
-                    if (w0 < 0.f || w1 < 0.f || w2 < 0.f) continue;
-                    const float iw = w0 * a.inv_w + w1 * bb.inv_w + w2 * c.inv_w;
-                    const float d = (w0 * a.d_over_w + w1 * bb.d_over_w + w2 * c.d_over_w) / iw;
-                    if (d < row[x]) row[x] = d;
+                for (int x = xs; x <= xe; ++x) {
+                    const float t = float(x - x0);
+                    const float w0 = E0 + t * dE0, w1 = E1 + t * dE1, w2 = 1.f - w0 - w1;
+                    const float iw = c.inv_w + w0 * d_iw0 + w1 * d_iw1;
+                    const float d = (c.d_over_w + w0 * d_dw0 + w1 * d_dw1) / iw;
+                    const bool inside = (w0 >= 0.f) & (w1 >= 0.f) & (w2 >= 0.f) & (d < row[x]);
+                    row[x] = inside ? d : row[x];
                 }
             }
         }
@@ -363,6 +380,13 @@ std::vector<vec3> illuminate(const AtlasStage& a, const mat4& model, const Light
     std::vector<vec3> E(a.texel_position.size(), vec3(0.f));
     const mat3 normal_matrix = glm::transpose(glm::inverse(mat3(model)));
     const float env_t = float(1.0 - fresnel_diffuse_reflectance(eta));
+    // Schlick's transmittance (fresnel_transmittance) in single precision: c is in (0, 1] here.
+    const float r0 = float((eta - 1.0) / (eta + 1.0) * ((eta - 1.0) / (eta + 1.0)));
+    const auto transmittance = [&](float c) {
+        if (eta == 1.0) return 1.f;
+        const float m = 1.f - std::min(c, 1.f), m2 = m * m;
+        return std::clamp(1.f - (r0 + (1.f - r0) * m2 * m2 * m), 0.f, 1.f);
+    };
     tbb::parallel_for(tbb::blocked_range<size_t>(0, a.nonempty.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t k = r.begin(); k != r.end(); ++k) {
             const size_t t = size_t(a.nonempty[k]);
@@ -375,7 +399,7 @@ std::vector<vec3> illuminate(const AtlasStage& a, const mat4& model, const Light
                 const float c = glm::dot(n, wi);
                 if (c <= 0.f) continue;
                 const float v = i < shadows.size() ? shadows[i].visibility(p) : 1.f;
-                e += El * (c * float(fresnel_transmittance(c, eta)) * v);
+                e += El * (c * transmittance(c) * v);
             }
             e += L.env_irradiance(n) * env_t;
             E[t] = e;
@@ -403,8 +427,10 @@ Maps combine(const AtlasStage& a, const std::vector<uint32_t>& index, const std:
     m.irradiance.resize(N);
     m.local.resize(N);
     m.global.resize(N);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, N, 4096), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t t = r.begin(); t != r.end(); ++t) {
+    // Empty texels stay 0: no irradiance, no local part, no triangle.
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, a.nonempty.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t k = r.begin(); k != r.end(); ++k) {
+            const size_t t = size_t(a.nonempty[k]);
             const size_t src = a.fill[t] >= 0 ? size_t(a.fill[t]) : t;
             m.irradiance[t] = E[src];
             m.local[t] = local[src];
@@ -420,13 +446,16 @@ Maps combine(const AtlasStage& a, const std::vector<uint32_t>& index, const std:
     return m;
 }
 
-vec3 sample_texels(const std::vector<vec3>& map, int size, vec2 uv) {
+TexelTap::TexelTap(int size, vec2 uv) {
     const float fx = uv.x * float(size) - 0.5f, fy = (1.f - uv.y) * float(size) - 0.5f;
     const float x0f = std::floor(fx), y0f = std::floor(fy);
-    const float ax = fx - x0f, ay = fy - y0f;
+    ax = fx - x0f, ay = fy - y0f;
     const int x0 = std::clamp(int(x0f), 0, size - 1), x1 = std::clamp(int(x0f) + 1, 0, size - 1);
     const int y0 = std::clamp(int(y0f), 0, size - 1), y1 = std::clamp(int(y0f) + 1, 0, size - 1);
-    auto at = [&](int x, int y) { return map[size_t(y) * size_t(size) + size_t(x)]; };
-    return glm::mix(glm::mix(at(x0, y0), at(x1, y0), ax), glm::mix(at(x0, y1), at(x1, y1), ax), ay);
+    const size_t n = size_t(size);
+    i00 = size_t(y0) * n + size_t(x0), i10 = size_t(y0) * n + size_t(x1);
+    i01 = size_t(y1) * n + size_t(x0), i11 = size_t(y1) * n + size_t(x1);
 }
+
+vec3 sample_texels(const std::vector<vec3>& map, int size, vec2 uv) { return TexelTap(size, uv)(map); }
 }  // namespace mesolab::translucency

@@ -25,6 +25,64 @@ namespace {
 using OmMesh = OpenMesh::TriMesh_ArrayKernelT<>;
 }
 
+namespace {
+// Position of a point along a 3D Hilbert curve of 2^bits cells per side (Skilling 2004,
+// "Programming the Hilbert curve": axes to transposed index, then its bits interleaved).
+uint64_t hilbert_index(std::array<uint32_t, 3> x, int bits) {
+    const uint32_t top = 1u << (bits - 1);
+    for (uint32_t q = top; q > 1; q >>= 1) {  // inverse undo of the excess work
+        const uint32_t p = q - 1;
+        for (int i = 0; i < 3; ++i) {
+            if (x[size_t(i)] & q) x[0] ^= p;
+            else {
+                const uint32_t t = (x[0] ^ x[size_t(i)]) & p;
+                x[0] ^= t, x[size_t(i)] ^= t;
+            }
+        }
+    }
+    for (int i = 1; i < 3; ++i) x[size_t(i)] ^= x[size_t(i - 1)];  // Gray encode
+    uint32_t t = 0;
+    for (uint32_t q = top; q > 1; q >>= 1)
+        if (x[2] & q) t ^= q - 1;
+    for (uint32_t& v : x) v ^= t;
+    uint64_t h = 0;
+    for (int b = bits - 1; b >= 0; --b)
+        for (int i = 0; i < 3; ++i) h = (h << 1) | ((x[size_t(i)] >> b) & 1u);
+    return h;
+}
+
+// Vertices renumbered in the order of a Hilbert curve through their positions: a vertex's
+// neighbours on the surface get nearby numbers, so the factors of one row (the vertices within
+// the dipole's reach) form long runs of consecutive columns and the product reads E and writes
+// B in cache lines it has just used.
+void reorder_along_hilbert_curve(PreparedMesh& m) {
+    const size_t n = m.position.size();
+    if (n < 2) return;
+    vec3 lo(INFINITY), hi(-INFINITY);
+    for (const vec3& p : m.position) lo = glm::min(lo, p), hi = glm::max(hi, p);
+    const float extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+    if (!(extent > 0.f) || !std::isfinite(extent)) return;
+    constexpr int kBits = 16;
+    const float cells = float((1u << kBits) - 1) / extent;
+    std::vector<std::pair<uint64_t, uint32_t>> key(n);
+    for (size_t i = 0; i < n; ++i) {
+        const vec3 q = (m.position[i] - lo) * cells;
+        key[i] = {hilbert_index({uint32_t(q.x), uint32_t(q.y), uint32_t(q.z)}, kBits), uint32_t(i)};
+    }
+    std::sort(key.begin(), key.end());
+    std::vector<uint32_t> new_of(n);
+    std::vector<vec3> position(n), normal(n);
+    for (size_t k = 0; k < n; ++k) {
+        const uint32_t old = key[k].second;
+        new_of[old] = uint32_t(k);
+        position[k] = m.position[old];
+        normal[k] = m.normal[old];
+    }
+    m.position = std::move(position), m.normal = std::move(normal);
+    for (uint32_t& v : m.index) v = new_of[v];
+}
+}  // namespace
+
 PreparedMesh prepare_mesh(const std::vector<vec3>& position, const std::vector<uint32_t>& index, int target_vertices,
                           const std::vector<vec2>* uv) {
     if (target_vertices < 0) throw InputError("translucency.vertices: " + std::to_string(target_vertices) + " must be >= 0 (0 keeps every vertex)");
@@ -209,6 +267,7 @@ PreparedMesh prepare_mesh(const std::vector<vec3>& position, const std::vector<u
         }
     }
     for (const auto& e : m.edges()) out.boundary_edges += m.is_boundary(e) ? 1 : 0;
+    reorder_along_hilbert_curve(out);
 
     if (out.welded_vertices > 0) out.warnings.push_back(std::to_string(out.welded_vertices) + " duplicate vertices welded");
     if (out.removed_triangles > 0) out.warnings.push_back(std::to_string(out.removed_triangles) + " degenerate or duplicate triangles removed");

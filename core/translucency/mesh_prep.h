@@ -12,6 +12,11 @@
 //   decimate    OpenMesh's decimater down to `target_vertices` (0 = keep): quadric error as the
 //               priority; collapses that flip a normal (> 60°) or leave a triangle with an aspect
 //               ratio worse than 1:6 are refused, so triangles stay well shaped
+//   renumber    vertices in the order of a 3D Hilbert curve through their positions, so that
+//               vertices near each other on the surface get nearby numbers: a row of the
+//               factors (the vertices within the dipole's reach) is then mostly runs of
+//               consecutive columns, and the product reads E and adds to B in cache lines it has
+//               just used (bunny at 10,000 vertices: mean run 1.6 → 13 columns)
 // Holes stay holes (their boundary edges are counted). Everything repaired is counted and said
 // in `warnings`.
 #include "core/math.h"

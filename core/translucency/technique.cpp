@@ -461,9 +461,9 @@ void TranslucencyTechnique::shade_cpu(const ShadeContext& ctx) const {
     };
     const auto& maps = ctx.step<PerObject<Maps>>("translucency.combine");
     const auto& refs = ctx.step<PerObject<std::vector<vec3>>>("translucency.reference");
-    std::map<int, Obj> objs;
+    std::vector<Obj> objs(ctx.scene.objects.size());  // by object id
     for (int o : ctx.objects) {
-        Obj& b = objs[o];
+        Obj& b = objs[size_t(o)];
         b.s = Settings::from(ctx.scene.objects[size_t(o)]);
         b.maps = &maps.at(o);
         if (auto it = refs.find(o); it != refs.end()) b.reference = &it->second;
@@ -472,27 +472,30 @@ void TranslucencyTechnique::shade_cpu(const ShadeContext& ctx) const {
     }
     const int out_irr = ctx.out.index("irradiance"), out_rad = ctx.out.index("radiosity"), out_loc = ctx.out.index("local"),
               out_glo = ctx.out.index("global"), out_ref = ctx.out.index("reference"), out_err = ctx.out.index("error");
+    // The parts only the displayed response or a requested AOV needs are looked up.
+    const bool parts = ctx.out.wanted(out_rad) || ctx.out.wanted(out_loc) || ctx.out.wanted(out_glo) || ctx.out.wanted(out_ref) || ctx.out.wanted(out_err);
     const GBuffer& gb = ctx.gbuffer;
     tbb::parallel_for(0, gb.height, [&](int y) {
         for (int x = 0; x < gb.width; ++x) {
             const size_t px = gb.index(x, y);
             if (!ctx.mine(px)) continue;
-            const Obj& b = objs.at(gb.object[px]);
-            const vec2 uv = gb.uv[px];
+            const Obj& b = objs[size_t(gb.object[px])];
+            const TexelTap tap(b.size, gb.uv[px]);
             const vec3 wo = ctx.camera.wo(gb.position[px]);
             vec3 n = gb.normal[px];
             if (glm::dot(n, wo) < 0.f) n = -n;
-            const vec3 local = sample_texels(b.maps->local, b.size, uv), global = sample_texels(b.maps->global, b.size, uv);
-            const vec3 ref = b.reference ? sample_texels(*b.reference, b.size, uv) : vec3(0.f);
-            const vec3 B = b.s.response == Response::Local ? local
-                         : b.s.response == Response::Global ? global
-                         : b.s.response == Response::Reference ? ref
-                                                               : local + global;
-            const vec3 rho = b.rho ? sample_texels(*b.rho, b.size, uv) : vec3(1.f);
+            const Response r = b.s.response;
+            const bool need_local = parts || r == Response::Both || r == Response::Local;
+            const bool need_global = parts || r == Response::Both || r == Response::Global;
+            const vec3 local = need_local ? tap(b.maps->local) : vec3(0.f), global = need_global ? tap(b.maps->global) : vec3(0.f);
+            const vec3 ref = b.reference ? tap(*b.reference) : vec3(0.f);
+            const vec3 B = r == Response::Local ? local : r == Response::Global ? global : r == Response::Reference ? ref : local + global;
+            const vec3 rho = b.rho ? tap(*b.rho) : vec3(1.f);
             const float T = float(fresnel_transmittance(std::clamp(glm::dot(n, wo), 0.f, 1.f), b.s.medium.eta));
             ctx.out.put(AovWriter::kRadiance, x, y, rho * B * (T * kInvPi));
             ctx.out.put(AovWriter::kNormal, x, y, n);
-            if (ctx.out.wanted(out_irr)) ctx.out.put(out_irr, x, y, sample_texels(b.maps->irradiance, b.size, uv));
+            if (ctx.out.wanted(out_irr)) ctx.out.put(out_irr, x, y, tap(b.maps->irradiance));
+            if (!parts) continue;
             ctx.out.put(out_rad, x, y, local + global);
             ctx.out.put(out_loc, x, y, local);
             ctx.out.put(out_glo, x, y, global);

@@ -147,6 +147,15 @@ std::vector<vec3> fill_texels(const AtlasStage& a, const std::vector<vec3>& v);
 
 // Bilinear look-up of a per-texel map at atlas uv (as GL_LINEAR with clamp to edge).
 vec3 sample_texels(const std::vector<vec3>& map, int size, vec2 uv);
+// The same bilinear look-up, its four texels and weights found once for several maps of one atlas.
+struct TexelTap {
+    size_t i00 = 0, i10 = 0, i01 = 0, i11 = 0;
+    float ax = 0.f, ay = 0.f;
+    TexelTap(int size, vec2 uv);
+    vec3 operator()(const std::vector<vec3>& map) const {
+        return glm::mix(glm::mix(map[i00], map[i10], ax), glm::mix(map[i01], map[i11], ax), ay);
+    }
+};
 
 // The radiosity of object `object` as the method computes it against the brute-force reference
 // on the same atlas, for the scene's lights: RMSE over the inner texels (all channels) relative to

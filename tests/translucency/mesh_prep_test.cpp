@@ -6,7 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <numeric>
+#include <random>
 #include <set>
 #include <utility>
 
@@ -115,4 +118,39 @@ TEST(MeshPrep, BadInputNamesTheKeyOrTheMesh) {
     }
     EXPECT_THROW(prepare_mesh(p, {0, 0, 1}, 0), InputError);
     EXPECT_THROW(prepare_mesh({}, {}, 0), InputError);
+}
+
+// The product of the vertex-to-vertex factors reads rows of vertices within the dipole's reach:
+// numbered along a Hilbert curve, those are runs of nearby numbers (cache lines just used).
+TEST(MeshPrep, VerticesAreNumberedAlongAHilbertCurveSoSurfaceNeighboursGetNearbyNumbers) {
+    // A sphere whose vertices come in a random order (a scan's order may be anything).
+    const TriMesh s = make_primitive(Primitive::Sphere, 128);
+    std::vector<uint32_t> to(s.position.size());
+    std::iota(to.begin(), to.end(), 0u);
+    std::shuffle(to.begin(), to.end(), std::mt19937(7));
+    std::vector<vec3> shuffled(s.position.size());
+    for (size_t i = 0; i < to.size(); ++i) shuffled[to[i]] = s.position[i];
+    std::vector<uint32_t> index = s.index;
+    for (uint32_t& v : index) v = to[v];
+    const PreparedMesh m = prepare_mesh(shuffled, index, 2000);
+    const size_t n = m.vertex_count();
+    // Positions and normals moved together: on a unit sphere the normal is the position.
+    for (size_t i = 0; i < n; ++i) EXPECT_GT(glm::dot(m.normal[i], glm::normalize(m.position[i])), 0.99f) << i;
+    // Edges join vertices whose numbers differ by little: the median gap is a few percent of n
+    // (about n / 3 for a random numbering).
+    std::vector<uint32_t> gap;
+    double edge_len = 0.0;
+    for (size_t f = 0; f < m.triangle_count(); ++f)
+        for (int j = 0; j < 3; ++j) {
+            const uint32_t a = m.index[3 * f + size_t(j)], b = m.index[3 * f + size_t((j + 1) % 3)];
+            gap.push_back(a > b ? a - b : b - a);
+            edge_len += glm::length(m.position[a] - m.position[b]);
+        }
+    edge_len /= double(gap.size());
+    std::nth_element(gap.begin(), gap.begin() + std::ptrdiff_t(gap.size() / 2), gap.end());
+    EXPECT_LT(gap[gap.size() / 2], n / 25) << "median gap between the numbers of an edge's ends";
+    // Consecutive numbers are close on the surface: on average within two edge lengths.
+    double step = 0.0;
+    for (size_t i = 1; i < n; ++i) step += glm::length(m.position[i] - m.position[i - 1]);
+    EXPECT_LT(step / double(n - 1), 2.0 * edge_len);
 }
