@@ -96,6 +96,36 @@ AtlasStage make_atlas_stage(const PreparedMesh& mesh, const AtlasParams& p) {
             });
         }
     }
+    // Illumination sources: a border texel's point lies on a triangle of another chunk (or of
+    // its own, clamped); that chunk's texel under the point, or the nearest of its inner texels
+    // within one texel, holds the same surface.
+    {
+        std::vector<int32_t> source(s.nonempty.size(), -1);
+        tbb::parallel_for(size_t(0), s.nonempty.size(), [&](size_t k) {
+            const size_t t = size_t(s.nonempty[k]);
+            if (a.texel_kind[t] == Atlas::kInner) return;
+            const size_t f = size_t(a.texel_face[t]);
+            const int chunk = a.face_chunk[f];
+            if (chunk < 0) return;
+            const vec3 w = a.texel_bary[t];
+            const vec2 u = w.x * a.corner_uv[3 * f] + w.y * a.corner_uv[3 * f + 1] + w.z * a.corner_uv[3 * f + 2];
+            if (!std::isfinite(u.x) || !std::isfinite(u.y)) return;
+            const int cx = int(std::floor(u.x)), cy = int(std::floor(u.y));
+            float best_d = INFINITY;
+            for (int y = cy - 1; y <= cy + 1; ++y)
+                for (int x = cx - 1; x <= cx + 1; ++x) {
+                    if (x < 0 || y < 0 || x >= a.size || y >= a.size) continue;
+                    const size_t q = a.texel(x, y);
+                    if (a.texel_kind[q] != Atlas::kInner || a.texel_chunk[q] != chunk) continue;
+                    const vec2 d = vec2(float(x) + 0.5f, float(y) + 0.5f) - u;
+                    const float dd = glm::dot(d, d);
+                    if (dd <= 1.f && dd < best_d) best_d = dd, source[k] = int32_t(q);
+                }
+        });
+        for (size_t k = 0; k < s.nonempty.size(); ++k)
+            if (source[k] >= 0) s.copy.push_back(ivec2(s.nonempty[k], source[k]));
+            else s.lit.push_back(s.nonempty[k]);
+    }
     // The drawn mesh: a vertex per mesh vertex and atlas position (corners inside a chunk share
     // theirs; chunk borders split), so that rasterising it transforms each vertex about once.
     auto m = std::make_shared<TriMesh>();
@@ -387,9 +417,9 @@ std::vector<vec3> illuminate(const AtlasStage& a, const mat4& model, const Light
         const float m = 1.f - std::min(c, 1.f), m2 = m * m;
         return std::clamp(1.f - (r0 + (1.f - r0) * m2 * m2 * m), 0.f, 1.f);
     };
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, a.nonempty.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, a.lit.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t k = r.begin(); k != r.end(); ++k) {
-            const size_t t = size_t(a.nonempty[k]);
+            const size_t t = size_t(a.lit[k]);
             const vec3 p = vec3(model * vec4(a.texel_position[t], 1.f));
             const vec3 n = glm::normalize(normal_matrix * a.texel_normal[t]);
             vec3 e(0.f);
@@ -404,6 +434,10 @@ std::vector<vec3> illuminate(const AtlasStage& a, const mat4& model, const Light
             e += L.env_irradiance(n) * env_t;
             E[t] = e;
         }
+    });
+    // Border texels whose surface another chunk holds take its value.
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, a.copy.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t k = r.begin(); k != r.end(); ++k) E[size_t(a.copy[k].x)] = E[size_t(a.copy[k].y)];
     });
     return E;
 }

@@ -1,13 +1,13 @@
 #version 430 core
 // Technique translucency, step translucency.illumination: irradiance entering the medium per
-// non-empty texel (core/translucency/frame.cpp illuminate).
+// lit texel (core/translucency/frame.cpp illuminate; copy_texels.comp fills the other borders).
 #include "common.glsl"
 #include "lighting.glsl"
 #include "translucency.glsl"
 layout(local_size_x = 64) in;
 
-layout(std430, binding = 0) readonly buffer Texels { int nonempty[]; };
-layout(std430, binding = 1) readonly buffer Positions { vec4 texel_position[]; };  // per non-empty texel, object space
+layout(std430, binding = 0) readonly buffer Texels { int lit[]; };  // AtlasStage::lit
+layout(std430, binding = 1) readonly buffer Positions { vec4 texel_position[]; };  // per lit texel, object space
 layout(std430, binding = 2) readonly buffer Normals { vec4 texel_normal[]; };
 layout(std430, binding = 3) writeonly buffer Irradiance { vec4 E[]; };             // per texel
 
@@ -62,5 +62,5 @@ void main() {
         e += El * (c * fresnel_transmittance(c, u_eta) * visibility(i, p));
     }
     e += env_irradiance(n) * u_env_transmittance;
-    E[nonempty[k]] = vec4(e, 0.0);
+    E[lit[k]] = vec4(e, 0.0);
 }

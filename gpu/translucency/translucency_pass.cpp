@@ -61,6 +61,7 @@ class TranslucencyPass final : public TechniquePass {
 public:
     explicit TranslucencyPass(const Technique& t)
         : illumination_(Program::compute("translucency/illumination.comp")),
+          copy_texels_(Program::compute("translucency/copy_texels.comp")),
           vertices_(Program::compute("translucency/vertices.comp")),
           local_(Program::compute("translucency/local.comp")),
           global_(Program::compute("translucency/global.comp")),
@@ -235,21 +236,28 @@ private:
         glUniformMatrix3fv(illumination_.uniform("u_normal_matrix"), 1, GL_FALSE, glm::value_ptr(nm));
         glUniform1f(illumination_.uniform("u_eta"), float(in.s.medium.eta));
         glUniform1f(illumination_.uniform("u_env_transmittance"), float(1.0 - fresnel_diffuse_reflectance(in.s.medium.eta)));
-        glUniform1i(illumination_.uniform("u_count"), int(a.nonempty.size()));
+        glUniform1i(illumination_.uniform("u_count"), int(a.lit.size()));
         clear(w.E);
-        bind(0, buffer(ctx, in.atlas, "nonempty", [&] { return a.nonempty; }));
+        bind(0, buffer(ctx, in.atlas, "lit", [&] { return a.lit; }));
         bind(1, buffer(ctx, in.atlas, "texel_position", [&] {
-            std::vector<vec4> v(a.nonempty.size());
-            for (size_t k = 0; k < v.size(); ++k) v[k] = vec4(a.texel_position[size_t(a.nonempty[k])], 1.f);
+            std::vector<vec4> v(a.lit.size());
+            for (size_t k = 0; k < v.size(); ++k) v[k] = vec4(a.texel_position[size_t(a.lit[k])], 1.f);
             return v;
         }));
         bind(2, buffer(ctx, in.atlas, "texel_normal", [&] {
-            std::vector<vec4> v(a.nonempty.size());
-            for (size_t k = 0; k < v.size(); ++k) v[k] = vec4(a.texel_normal[size_t(a.nonempty[k])], 0.f);
+            std::vector<vec4> v(a.lit.size());
+            for (size_t k = 0; k < v.size(); ++k) v[k] = vec4(a.texel_normal[size_t(a.lit[k])], 0.f);
             return v;
         }));
         bind(3, w.E);
-        glDispatchCompute(groups(a.nonempty.size()), 1, 1);
+        glDispatchCompute(groups(a.lit.size()), 1, 1);
+        if (a.copy.empty()) return;
+        barrier();
+        copy_texels_.use();
+        glUniform1i(copy_texels_.uniform("u_count"), int(a.copy.size()));
+        bind(0, buffer(ctx, in.atlas, "copy", [&] { return a.copy; }));
+        bind(3, w.E);
+        glDispatchCompute(groups(a.copy.size()), 1, 1);
     }
 
     // [SECTION] translucency.vertices
@@ -447,7 +455,7 @@ private:
         w.has_reference = true;
     }
 
-    Program illumination_, vertices_, local_, global_, global_wide_, combine_, reference_, shadow_, draw_;
+    Program illumination_, copy_texels_, vertices_, local_, global_, global_wide_, combine_, reference_, shadow_, draw_;
     std::map<int, PerObject> objects_;
 };
 }  // namespace

@@ -3,6 +3,8 @@
 #include "core/error.h"
 #include "core/mesh.h"
 #include "core/translucency/atlas.h"
+#include "core/translucency/mesh_prep.h"
+#include "core/translucency/translucency.h"
 
 #include <gtest/gtest.h>
 
@@ -277,4 +279,30 @@ TEST(Atlas, BadSettingsNameTheirKeys) {
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("translucency.atlas_size"), std::string::npos);
     }
+}
+
+// The illumination map is lit only where no other chunk holds the same surface: a border texel
+// copies the inner texel of the chunk that owns its point, which lies within a texel of it on
+// the surface. Lit and copied texels split the non-empty ones.
+TEST(AtlasStageTest, BorderTexelsCopyTheInnerTexelThatHoldsTheirSurface) {
+    const TriMesh s = make_primitive(Primitive::Sphere, 48);
+    const PreparedMesh m = prepare_mesh(s.position, s.index, 600);
+    const AtlasStage a = make_atlas_stage(m, AtlasParams{256, 4, 30.f});
+    ASSERT_FALSE(a.copy.empty());
+    EXPECT_EQ(a.lit.size() + a.copy.size(), a.nonempty.size());
+    std::vector<int> seen(a.texel_position.size(), 0);
+    for (int32_t t : a.lit) ++seen[size_t(t)];
+    const float texel = 1.f / a.atlas.scale;  // scene units per texel in a chunk's plane
+    for (const ivec2& c : a.copy) {
+        ++seen[size_t(c.x)];
+        EXPECT_EQ(a.atlas.texel_kind[size_t(c.y)], Atlas::kInner);
+        EXPECT_NE(a.atlas.texel_kind[size_t(c.x)], Atlas::kInner);
+        EXPECT_EQ(a.atlas.texel_chunk[size_t(c.y)], a.atlas.face_chunk[size_t(a.atlas.texel_face[size_t(c.x)])]) << "the chunk that owns the point";
+        // Within a texel in the owning chunk's plane; a chunk tilts by up to 30°.
+        EXPECT_LT(glm::length(a.texel_position[size_t(c.x)] - a.texel_position[size_t(c.y)]), 1.2f * texel) << c.x;
+        EXPECT_GT(glm::dot(a.texel_normal[size_t(c.x)], a.texel_normal[size_t(c.y)]), 0.99f) << c.x;
+    }
+    for (int32_t t : a.nonempty) EXPECT_EQ(seen[size_t(t)], 1) << t;
+    // On a sphere the copies are most of the borders.
+    EXPECT_GT(a.copy.size(), (a.nonempty.size() - a.lit.size()) / 2);
 }
