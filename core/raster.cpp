@@ -1,4 +1,5 @@
 #include "core/raster.h"
+#include "core/profile.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -9,6 +10,7 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 
 namespace mesolab {
@@ -386,6 +388,8 @@ void rasterize(const std::vector<DrawItem>& items, const RasterCamera& cam, GBuf
         size_t begin, end;
     };
     std::vector<Chunk> chunks;
+    std::optional<ProfileScope> phase;
+    phase.emplace("vertices");
     for (size_t i = 0; i < items.size(); ++i) {
         const TriMesh* m = items[i].mesh;
         if (!m || m->triangle_count() == 0) continue;
@@ -395,6 +399,8 @@ void rasterize(const std::vector<DrawItem>& items, const RasterCamera& cam, GBuf
         for (size_t b = 0; b < m->triangle_count(); b += kSetupChunk)
             chunks.push_back({uint32_t(i), b, std::min(b + kSetupChunk, m->triangle_count())});
     }
+    phase.reset();
+    phase.emplace("setup");
     std::vector<std::vector<ScreenTriangle>>& chunk_triangles = scratch.chunk_triangles;
     if (chunk_triangles.size() < chunks.size()) chunk_triangles.resize(chunks.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
@@ -412,6 +418,8 @@ void rasterize(const std::vector<DrawItem>& items, const RasterCamera& cam, GBuf
         for (const ScreenTriangle& t : chunk_triangles[c]) tris.push_back(&t);
     if (tris.size() > size_t(INT32_MAX)) throw std::length_error("rasterize: too many triangles");
 
+    phase.reset();
+    phase.emplace("bin");
     // Bin triangles into tiles (counting sort; every bin stays in submission order).
     const int tiles_x = (width + kTileW - 1) / kTileW, tiles_y = (height + kTileH - 1) / kTileH;
     const size_t n_tiles = size_t(tiles_x) * size_t(tiles_y);
@@ -429,6 +437,8 @@ void rasterize(const std::vector<DrawItem>& items, const RasterCamera& cam, GBuf
     fill.assign(bin_start.begin(), bin_start.end() - 1);
     for (size_t i = 0; i < tris.size(); ++i) for_each_tile(*tris[i], [&](size_t tile) { bins[fill[tile]++] = uint32_t(i); });
 
+    phase.reset();
+    phase.emplace("tiles");
     // Tiles in parallel: depth-tested visibility (nearest triangle per pixel), then the
     // attributes of the visible triangle, once per pixel. Every pixel of `out` is written.
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n_tiles, 1), [&](const tbb::blocked_range<size_t>& r) {
