@@ -33,11 +33,8 @@ vec3 texel(const Image& m, int x, int y) {
 // Radiance lookup
 vec3 Environment::radiance(vec3 dir) const {
     const float len2 = dir.x * dir.x + dir.y * dir.y + dir.z * dir.z;
-    static const Image kNone;
-    const Image& map = this->map ? *this->map : kNone;
-    if (map.empty() || map.width <= 0 || map.height <= 0 || map.channels <= 0 || !(len2 > 0.f) ||
-        !std::isfinite(len2))
-        return color * intensity;
+    if (constant() || !(len2 > 0.f) || !std::isfinite(len2)) return color * intensity;
+    const Image& map = *this->map;
     const vec3 d = dir / std::sqrt(len2);
     const float theta = std::acos(std::clamp(d.z, -1.f, 1.f));
     float phi = std::atan2(d.y, d.x);

@@ -18,6 +18,8 @@ struct Environment {
     // dir need not be normalised; a zero-length (or non-finite) dir gives color * intensity.
     // Texel centres sit at ((i + 0.5) / width, (j + 0.5) / height) in (u, v), as GL sampling.
     vec3 radiance(vec3 dir) const;
+    // True when radiance() is color * intensity in every direction (no usable map).
+    bool constant() const { return !map || map->empty() || map->width <= 0 || map->height <= 0 || map->channels <= 0; }
 };
 
 // Order-2 spherical harmonics (9 coefficients per colour channel) of the environment radiance,

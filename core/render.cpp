@@ -245,7 +245,7 @@ Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height, co
         PROFILE_SCOPE("background");
         Image& rad = f.aov("radiance");
         // A constant environment (no map) needs no ray directions.
-        const bool constant = !lighting.env.map || lighting.env.map->empty();
+        const bool constant = lighting.env.constant();
         const vec3 L_const = lighting.env.color * lighting.env.intensity;
         if (!cam.texture_mode)
             tbb::parallel_for(0, height, [&](int y) {
