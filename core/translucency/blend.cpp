@@ -177,7 +177,6 @@ BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position,
     });
 
     // [SECTION] Correct the kernels: w(t', t) -= the blended global response at t' to t
-    const size_t KK = size_t(K) * size_t(K);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, L.texel.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
         FactorCache cache(F0);
         for (size_t k = r.begin(); k != r.end(); ++k) {
@@ -198,8 +197,8 @@ BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position,
                         // A border source: only the F0 part (see blend.h); its projection weights as if inner.
                         D = global_response(cache, recv, src, source_weights(src, atlas.texel_area[ts] * s2, A));
                     }
-                    const size_t o = k * KK + size_t(dy + h) * size_t(K) + size_t(dx + h);
-                    for (int c = 0; c < 3; ++c) L.w[size_t(c)][o] -= D[c];
+                    const size_t o = L.at(k, dx, dy);
+                    for (int c = 0; c < 3; ++c) L.w[o + size_t(c)] -= D[c];
                 }
         }
     });

@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <unordered_map>
 #include <utility>
@@ -312,92 +313,109 @@ float ShadowMap::visibility(vec3 p) const {
 }
 
 // Distances only, rasterised the way GL does (pixel centres, a LESS test; edges shared by two
-// triangles can go either way, which only moves silhouettes by a texel): bands of rows in parallel.
+// triangles can go either way, which only moves silhouettes by a texel). Each triangle is set up
+// once (its barycentrics and depth as affine functions of the pixel centre), binned by bands of
+// rows, and the bands are filled in parallel.
 ShadowMap make_shadow_map(const TriMesh& display, const mat4& model, const Light& l, int res) {
-    Bounds b{vec3(INFINITY), vec3(-INFINITY)};
-    std::vector<vec3> world(display.position.size());
-    for (size_t i = 0; i < world.size(); ++i) {
-        world[i] = vec3(model * vec4(display.position[i], 1.f));
-        b.lo = glm::min(b.lo, world[i]), b.hi = glm::max(b.hi, world[i]);
-    }
     if (display.position.empty()) return ShadowMap{};
+    std::vector<vec3> world(display.position.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, world.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) world[i] = vec3(model * vec4(display.position[i], 1.f));
+    });
+    Bounds b{vec3(INFINITY), vec3(-INFINITY)};
+    for (const vec3& p : world) b.lo = glm::min(b.lo, p), b.hi = glm::max(b.hi, p);
     const vec3 centre = 0.5f * (b.lo + b.hi);
     ShadowMap m = shadow_frame(l, centre, 0.5f * glm::length(b.hi - b.lo), res);
     if (!m.valid) return m;
     m.depth.assign(size_t(res) * size_t(res), std::numeric_limits<float>::infinity());
-    // Window position (x right, y down from the top row) and 1/w, and the distance over w, per vertex.
+    // Window position (x right, y down from the top row), 1/w and the distance over w, per vertex.
     struct V {
         vec2 p;
         float inv_w, d_over_w;
         bool ok;
     };
     std::vector<V> v(world.size());
-    for (size_t i = 0; i < world.size(); ++i) {
-        const vec4 c = m.view_proj * vec4(world[i], 1.f);
-        V& o = v[i];
-        o.ok = c.w > 1e-12f;
-        if (!o.ok) continue;
-        o.inv_w = 1.f / c.w;
-        o.p = vec2((c.x * o.inv_w * 0.5f + 0.5f) * float(res), (0.5f - 0.5f * c.y * o.inv_w) * float(res));
-        o.d_over_w = m.distance(world[i]) * o.inv_w;
-    }
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, world.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+            const vec4 c = m.view_proj * vec4(world[i], 1.f);
+            V& o = v[i];
+            o.ok = c.w > 1e-12f;
+            if (!o.ok) continue;
+            o.inv_w = 1.f / c.w;
+            o.p = vec2((c.x * o.inv_w * 0.5f + 0.5f) * float(res), (0.5f - 0.5f * c.y * o.inv_w) * float(res));
+            o.d_over_w = m.distance(world[i]) * o.inv_w;
+        }
+    });
+    // Per triangle: w_k(x, y) = e[k].x + x e[k].y + y e[k].z at pixel centre (x, y) (w_2 = 1 − w_0 − w_1
+    // as an affine function too), 1/w and d/w likewise (d = d/w ÷ 1/w; a directional light's 1/w is 1),
+    // and the pixel rows and columns it can cover.
+    struct Tri {
+        vec3 e[3], iw, dw;
+        int x0, x1, y0, y1;  // y0 > y1: nothing to draw
+    };
     const size_t T = display.index.size() / 3;
-    const int bands = std::max(1, std::min(64, res / 16));
-    const int band_h = (res + bands - 1) / bands;
-    // Triangles binned by the bands their rows cover.
-    std::vector<std::vector<uint32_t>> binned(static_cast<size_t>(bands));
-    for (size_t f = 0; f < T; ++f) {
-        const V& a = v[display.index[3 * f]];
-        const V& bb = v[display.index[3 * f + 1]];
-        const V& c = v[display.index[3 * f + 2]];
-        if (!a.ok || !bb.ok || !c.ok) continue;
-        const int y0 = std::max(0, int(std::ceil(std::min({a.p.y, bb.p.y, c.p.y}) - 0.5f)));
-        const int y1 = std::min(res - 1, int(std::floor(std::max({a.p.y, bb.p.y, c.p.y}) - 0.5f)));
-        for (int k = y0 / band_h; y0 <= y1 && k <= y1 / band_h; ++k) binned[size_t(k)].push_back(uint32_t(f));
-    }
-    tbb::parallel_for(0, bands, [&](int band) {
-        const int y_lo = band * band_h, y_hi = std::min(res, y_lo + band_h);
-        for (const uint32_t f : binned[size_t(band)]) {
+    std::vector<Tri> tri(T);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, T, 1024), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t f = r.begin(); f != r.end(); ++f) {
+            Tri& t = tri[f];
+            t.y0 = 1, t.y1 = 0;
             const V& a = v[display.index[3 * f]];
             const V& bb = v[display.index[3 * f + 1]];
             const V& c = v[display.index[3 * f + 2]];
             if (!a.ok || !bb.ok || !c.ok) continue;
             const float area = (bb.p.x - a.p.x) * (c.p.y - a.p.y) - (bb.p.y - a.p.y) * (c.p.x - a.p.x);
             if (!(std::abs(area) > 1e-12f)) continue;
-            const float miny = std::min({a.p.y, bb.p.y, c.p.y}), maxy = std::max({a.p.y, bb.p.y, c.p.y});
-            const int y0 = std::max(y_lo, int(std::ceil(miny - 0.5f))), y1 = std::min(y_hi - 1, int(std::floor(maxy - 0.5f)));
-            if (y0 > y1) continue;
-            const int x0 = std::max(0, int(std::ceil(std::min({a.p.x, bb.p.x, c.p.x}) - 0.5f)));
-            const int x1 = std::min(res - 1, int(std::floor(std::max({a.p.x, bb.p.x, c.p.x}) - 0.5f)));
+            t.y0 = std::max(0, int(std::ceil(std::min({a.p.y, bb.p.y, c.p.y}) - 0.5f)));
+            t.y1 = std::min(res - 1, int(std::floor(std::max({a.p.y, bb.p.y, c.p.y}) - 0.5f)));
+            t.x0 = std::max(0, int(std::ceil(std::min({a.p.x, bb.p.x, c.p.x}) - 0.5f)));
+            t.x1 = std::min(res - 1, int(std::floor(std::max({a.p.x, bb.p.x, c.p.x}) - 0.5f)));
+            if (t.x0 > t.x1) t.y0 = 1, t.y1 = 0;
             const float inv_area = 1.f / area;
-            // Barycentrics are affine along a row: w_k(x0 + t) = E_k + t dE_k. The row's covered span
-            // is solved from the three edges (one pixel of slack each side), and the loop over it
-            // tests every pixel exactly and has no branches, so it runs on SIMD lanes.
-            const float dE0 = (bb.p.y - c.p.y) * inv_area, dE1 = (c.p.y - a.p.y) * inv_area, dE2 = -(dE0 + dE1);
-            const float d_iw0 = a.inv_w - c.inv_w, d_iw1 = bb.inv_w - c.inv_w;
-            const float d_dw0 = a.d_over_w - c.d_over_w, d_dw1 = bb.d_over_w - c.d_over_w;
+            // w_0 = ((b − p) × (c − p)) / area, w_1 = ((c − p) × (a − p)) / area.
+            const auto edge = [&](vec2 p, vec2 q) {
+                return vec3((p.x * q.y - p.y * q.x) * inv_area, (p.y - q.y) * inv_area, (q.x - p.x) * inv_area);
+            };
+            t.e[0] = edge(bb.p, c.p);
+            t.e[1] = edge(c.p, a.p);
+            t.e[2] = vec3(1.f, 0.f, 0.f) - t.e[0] - t.e[1];
+            t.iw = c.inv_w * t.e[2] + a.inv_w * t.e[0] + bb.inv_w * t.e[1];
+            t.dw = c.d_over_w * t.e[2] + a.d_over_w * t.e[0] + bb.d_over_w * t.e[1];
+        }
+    });
+    const int bands = std::max(1, std::min(64, res / 16));
+    const int band_h = (res + bands - 1) / bands;
+    // Copies of the records per band, so that each band reads its triangles in sequence.
+    std::vector<std::vector<Tri>> binned(static_cast<size_t>(bands));
+    for (const Tri& t : tri)
+        for (int k = t.y0 / band_h; t.y0 <= t.y1 && k <= t.y1 / band_h; ++k) binned[size_t(k)].push_back(t);
+    const bool perspective = m.point;
+    typedef float f4 __attribute__((vector_size(16)));
+    typedef int32_t i4 __attribute__((vector_size(16)));
+    tbb::parallel_for(0, bands, [&](int band) {
+        const int y_lo = band * band_h, y_hi = std::min(res, y_lo + band_h);
+        for (const Tri& t : binned[size_t(band)]) {
+            const int y0 = std::max(y_lo, t.y0), y1 = std::min(y_hi - 1, t.y1);
+            // Four pixels at a time across the triangle's columns (the last block shifted left to
+            // stay inside the row): every pixel tested exactly, the depth kept where it is nearer.
+            const float px = float(t.x0) + 0.5f;
+            const int span = t.x1 - t.x0;
             for (int y = y0; y <= y1; ++y) {
-                const float py = float(y) + 0.5f, px = float(x0) + 0.5f;
-                const float E0 = ((bb.p.x - px) * (c.p.y - py) - (bb.p.y - py) * (c.p.x - px)) * inv_area;
-                const float E1 = ((c.p.x - px) * (a.p.y - py) - (c.p.y - py) * (a.p.x - px)) * inv_area;
-                const float E2 = 1.f - E0 - E1;
-                float t_lo = 0.f, t_hi = float(x1 - x0);
-                bool empty = false;
-                for (const auto& [E, dE] : {std::pair{E0, dE0}, std::pair{E1, dE1}, std::pair{E2, dE2}}) {
-                    if (dE > 0.f) t_lo = std::max(t_lo, -E / dE - 1.f);
-                    else if (dE < 0.f) t_hi = std::min(t_hi, -E / dE + 1.f);
-                    else empty |= E < 0.f;
-                }
-                if (empty || !(t_lo <= t_hi)) continue;
-                const int xs = x0 + int(std::ceil(t_lo)), xe = x0 + int(std::floor(t_hi));
+                const float py = float(y) + 0.5f;
+                const float w0r = t.e[0].x + px * t.e[0].y + py * t.e[0].z, w1r = t.e[1].x + px * t.e[1].y + py * t.e[1].z;
+                const float w2r = t.e[2].x + px * t.e[2].y + py * t.e[2].z;
+                const float iwr = t.iw.x + px * t.iw.y + py * t.iw.z, dwr = t.dw.x + px * t.dw.y + py * t.dw.z;
                 float* row = m.depth.data() + size_t(y) * size_t(res);
-                for (int x = xs; x <= xe; ++x) {
-                    const float t = float(x - x0);
-                    const float w0 = E0 + t * dE0, w1 = E1 + t * dE1, w2 = 1.f - w0 - w1;
-                    const float iw = c.inv_w + w0 * d_iw0 + w1 * d_iw1;
-                    const float d = (c.d_over_w + w0 * d_dw0 + w1 * d_dw1) / iw;
-                    const bool inside = (w0 >= 0.f) & (w1 >= 0.f) & (w2 >= 0.f) & (d < row[x]);
-                    row[x] = inside ? d : row[x];
+                for (int s0 = 0; s0 <= span; s0 += 4) {
+                    const int xb = std::min(t.x0 + s0, res - 4);
+                    const f4 s = f4{0.f, 1.f, 2.f, 3.f} + float(xb - t.x0);
+                    const f4 w0 = w0r + s * t.e[0].y, w1 = w1r + s * t.e[1].y, w2 = w2r + s * t.e[2].y;
+                    const f4 dw = dwr + s * t.dw.y;
+                    const f4 d = perspective ? dw / (iwr + s * t.iw.y) : dw;
+                    f4 old;
+                    std::memcpy(&old, row + xb, sizeof old);
+                    const i4 in = (w0 >= 0.f) & (w1 >= 0.f) & (w2 >= 0.f) & (s >= 0.f) & (s <= float(span)) & (d < old);
+                    const f4 out = in ? d : old;
+                    std::memcpy(row + xb, &out, sizeof out);
                 }
             }
         }

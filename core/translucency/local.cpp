@@ -3,6 +3,7 @@
 #include "core/error.h"
 
 #include <cmath>
+#include <cstring>
 #include <string>
 
 #include <tbb/blocked_range.h>
@@ -35,8 +36,8 @@ LocalKernels build_local_kernels(const Atlas& atlas, const std::vector<vec3>& po
     L.slot.assign(atlas.texel_kind.size(), -1);
     for (size_t t = 0; t < atlas.texel_kind.size(); ++t)
         if (atlas.texel_kind[t] == Atlas::kInner) L.slot[t] = int32_t(L.texel.size()), L.texel.push_back(int32_t(t));
-    const size_t KK = size_t(K) * size_t(K);
-    for (auto& w : L.w) w.assign(L.texel.size() * KK, 0.f);
+    L.row = LocalKernels::row_floats(K);
+    L.w.assign(L.texel.size() * size_t(K) * size_t(L.row), 0.f);
 
     const std::vector<vec3> x = texel_positions_mm(atlas, position, index, mm_per_unit);
     const double s2 = mm_per_unit * mm_per_unit;
@@ -51,7 +52,7 @@ LocalKernels build_local_kernels(const Atlas& atlas, const std::vector<vec3>& po
             for (int dy = -h; dy <= h; ++dy)
                 for (int dx = -h; dx <= h; ++dx) {
                     const size_t n = size_t(ty + dy) * size_t(N) + size_t(tx + dx);  // inside the atlas: the border
-                    const size_t o = k * KK + size_t(dy + h) * size_t(K) + size_t(dx + h);
+                    const size_t o = L.at(k, dx, dy);
                     const double area = double(atlas.texel_area[n]) * s2;
                     vec3 w(0.f);
                     if (atlas.texel_kind[n] == Atlas::kClamped) {
@@ -62,7 +63,7 @@ LocalKernels build_local_kernels(const Atlas& atlas, const std::vector<vec3>& po
                         const vec3 d = x[n] - xt;
                         w = Rd.at_r2(glm::dot(d, d)) * float(area);
                     }
-                    for (int c = 0; c < 3; ++c) L.w[size_t(c)][o] = w[c];
+                    for (int c = 0; c < 3; ++c) L.w[o + size_t(c)] = w[c];
                 }
         }
     });
@@ -71,20 +72,29 @@ LocalKernels build_local_kernels(const Atlas& atlas, const std::vector<vec3>& po
 
 std::vector<vec3> convolve_local(const LocalKernels& L, const std::vector<vec3>& E) {
     std::vector<vec3> B(L.slot.size(), vec3(0.f));
-    const int K = L.K, h = (K - 1) / 2, N = L.size;
-    const size_t KK = size_t(K) * size_t(K);
+    const int K = L.K, h = (K - 1) / 2, N = L.size, R = L.row;
+    static_assert(sizeof(vec3) == 3 * sizeof(float));
+    // A kernel row's R floats against the R / 3 texels from (x − h, y + dy): three accumulators of
+    // four lanes, whose lanes hold the channels (r g b r)(g b r g)(b r g b). The texels past x + h
+    // meet zero weights; they lie inside the atlas (an inner texel has h + 1 border texels to its
+    // right and is not on the last row), so they are finite.
+    typedef float f4 __attribute__((vector_size(16)));
+    const float* e = reinterpret_cast<const float*>(E.data());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, L.texel.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t k = r.begin(); k != r.end(); ++k) {
             const int t = L.texel[k], tx = t % N, ty = t / N;
-            const float* w0 = L.w[0].data() + k * KK;
-            const float* w1 = L.w[1].data() + k * KK;
-            const float* w2 = L.w[2].data() + k * KK;
-            vec3 sum(0.f);
-            for (int dy = -h, o = 0; dy <= h; ++dy) {
-                const vec3* row = E.data() + size_t(ty + dy) * size_t(N) + size_t(tx - h);
-                for (int i = 0; i < K; ++i, ++o) sum += vec3(w0[o] * row[i].x, w1[o] * row[i].y, w2[o] * row[i].z);
+            const float* w = L.w.data() + k * size_t(K) * size_t(R);
+            f4 a0 = {0.f, 0.f, 0.f, 0.f}, a1 = a0, a2 = a0;
+            for (int dy = -h; dy <= h; ++dy, w += R) {
+                const float* x = e + 3 * (size_t(ty + dy) * size_t(N) + size_t(tx - h));
+                for (int i = 0; i < R; i += 12) {
+                    f4 w0, w1, w2, x0, x1, x2;
+                    std::memcpy(&w0, w + i, 16), std::memcpy(&w1, w + i + 4, 16), std::memcpy(&w2, w + i + 8, 16);
+                    std::memcpy(&x0, x + i, 16), std::memcpy(&x1, x + i + 4, 16), std::memcpy(&x2, x + i + 8, 16);
+                    a0 += w0 * x0, a1 += w1 * x1, a2 += w2 * x2;
+                }
             }
-            B[size_t(t)] = sum;
+            B[size_t(t)] = vec3(a0[0] + a0[3] + a1[2] + a2[1], a0[1] + a1[0] + a1[3] + a2[2], a0[2] + a1[1] + a2[0] + a2[3]);
         }
     });
     return B;

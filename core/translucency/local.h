@@ -9,7 +9,8 @@
 //                peak when a texel is wider than the source depth z_r.
 // The atlas's borders make every t' of the block a texel of t's chunk that samples the surface
 // (unfolded beyond the chunk's edge), so kernels reach across chunk borders.
-// Kernels are stored for inner texels only: K² weights per channel per inner texel.
+// Kernels are stored for inner texels only: K² weights per channel per inner texel (rows padded
+// for SIMD, see LocalKernels::w).
 #include "core/math.h"
 #include "core/translucency/atlas.h"
 #include "core/translucency/dipole.h"
@@ -23,16 +24,22 @@ namespace mesolab::translucency {
 struct LocalKernels {
     int K = 0;
     int size = 0;                            // the atlas side
+    int row = 0;                             // floats per kernel row: its K taps' (r, g, b), zero-padded to a multiple of 12
     std::vector<int32_t> texel;              // inner texels, in atlas order
     std::vector<int32_t> slot;               // per atlas texel: its index in `texel`, or -1
-    std::array<std::vector<float>, 3> w;     // per channel: K² weights per inner texel, row-major in (dy, dx)
+    // Per inner texel, K rows (dy) of `row` floats: the weights of the taps dx = −h..h, RGB
+    // interleaved as the irradiance map's texels are, so that a kernel row and the K texels it
+    // reads line up for four-wide SIMD (12 floats = 4 texels = three SIMD registers).
+    std::vector<float> w;
 
-    size_t bytes() const { return texel.size() * 4 + slot.size() * 4 + 3 * w[0].size() * 4; }
-    // Weight of the neighbour at (dx, dy) (in [-(K-1)/2, (K-1)/2]) for kernel `k`, channel c.
-    float weight(size_t k, int dx, int dy, int c) const {
+    size_t bytes() const { return texel.size() * 4 + slot.size() * 4 + w.size() * 4; }
+    static int row_floats(int K) { return (3 * K + 11) / 12 * 12; }
+    // Index in `w` of the red weight of the neighbour at (dx, dy) (in [-(K-1)/2, (K-1)/2]) for kernel `k`.
+    size_t at(size_t k, int dx, int dy) const {
         const int h = (K - 1) / 2;
-        return w[size_t(c)][k * size_t(K) * size_t(K) + size_t(dy + h) * size_t(K) + size_t(dx + h)];
+        return (k * size_t(K) + size_t(dy + h)) * size_t(row) + 3 * size_t(dx + h);
     }
+    float weight(size_t k, int dx, int dy, int c) const { return w[at(k, dx, dy) + size_t(c)]; }
 };
 
 // Surface positions of every non-empty atlas texel, in mm (0 for empty texels).

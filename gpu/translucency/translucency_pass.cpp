@@ -283,8 +283,16 @@ private:
         glUniform1i(local_.uniform("u_K"), K.K);
         glUniform1i(local_.uniform("u_size"), K.size);
         auto weights = [&] {
-            std::vector<vec4> v(K.w[0].size());
-            for (size_t i = 0; i < v.size(); ++i) v[i] = vec4(K.w[0][i], K.w[1][i], K.w[2][i], 0.f);
+            // K² taps per kernel, row-major in (dy, dx), one vec4 (RGB) each.
+            const int h = (K.K - 1) / 2;
+            std::vector<vec4> v;
+            v.reserve(K.texel.size() * size_t(K.K) * size_t(K.K));
+            for (size_t k = 0; k < K.texel.size(); ++k)
+                for (int dy = -h; dy <= h; ++dy)
+                    for (int dx = -h; dx <= h; ++dx) {
+                        const float* w = K.w.data() + K.at(k, dx, dy);
+                        v.push_back(vec4(w[0], w[1], w[2], 0.f));
+                    }
             return v;
         };
         if (in.blended) {

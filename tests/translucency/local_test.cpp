@@ -51,7 +51,9 @@ TEST(LocalKernels, WeightsOnAPlaneAreRdAtTheTexelDistanceTimesTheTexelArea) {
             const dvec3 expect = dx == 0 && dy == 0 ? d.reflectance_within(h / std::sqrt(M_PI)) : d.Rd(h * std::hypot(dx, dy)) * (h * h);
             for (int c = 0; c < 3; ++c) EXPECT_NEAR(L.weight(k, dx, dy, c), expect[c], 5e-4 * expect[c]) << dx << "," << dy << " c" << c;
         }
-    EXPECT_EQ(L.bytes(), L.texel.size() * 4 + L.slot.size() * 4 + 3 * L.texel.size() * 49 * 4);
+    // 7 rows of 7 RGB taps, each padded from 21 to 24 floats.
+    EXPECT_EQ(L.row, 24);
+    EXPECT_EQ(L.bytes(), L.texel.size() * 4 + L.slot.size() * 4 + L.texel.size() * 7 * 24 * 4);
 }
 
 TEST(LocalKernels, ConvolutionEqualsTheDirectSum) {
@@ -81,6 +83,36 @@ TEST(LocalKernels, ConvolutionEqualsTheDirectSum) {
     }
 }
 
+// The SIMD convolution reads padded kernel rows and texels past each row's end; on a curved
+// mesh, for every kernel size, every inner texel must still get exactly its K x K weighted sum.
+TEST(LocalKernels, PaddedRowsGiveTheWeightedSumForEveryKernelSize) {
+    const TriMesh s = make_primitive(Primitive::Torus, 40);
+    const PreparedMesh m = prepare_mesh(s.position, s.index, 0);
+    const Atlas a = build_atlas(m.position, m.index, {256, 8, 30.f});
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(0.f, 1.f);
+    std::vector<vec3> E(a.texel_kind.size());
+    for (vec3& e : E) e = vec3(u(rng), u(rng), u(rng));
+    for (int K : {3, 5, 7, 9, 11, 13, 15}) {
+        const LocalKernels L = build_local_kernels(a, m.position, m.index, Dipole(measured_material("ketchup").medium), 40.0, K);
+        ASSERT_GT(L.texel.size(), 500u);
+        EXPECT_EQ(L.row % 12, 0);
+        EXPECT_GE(L.row, 3 * K);
+        const std::vector<vec3> B = convolve_local(L, E);
+        const int h = (K - 1) / 2, N = a.size;
+        double worst = 0.0;
+        for (size_t k = 0; k < L.texel.size(); ++k) {
+            const int t = L.texel[k], tx = t % N, ty = t / N;
+            dvec3 sum(0.0);
+            for (int dy = -h; dy <= h; ++dy)
+                for (int dx = -h; dx <= h; ++dx)
+                    for (int c = 0; c < 3; ++c) sum[c] += double(L.weight(k, dx, dy, c)) * E[size_t(ty + dy) * size_t(N) + size_t(tx + dx)][c];
+            for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(double(B[size_t(t)][c]) - sum[c]) / std::max(sum[c], 1e-30));
+        }
+        EXPECT_LT(worst, 1e-5) << "K = " << K;
+    }
+}
+
 TEST(LocalKernels, AKernelHoldsTheReflectanceOfItsDisk) {
     // Constant irradiance: the kernel's total lies between the reflectance within its inscribed
     // circle (less a texel) and within its circumscribed one.
@@ -107,8 +139,7 @@ TEST(LocalKernels, EveryKernelOnACurvedMeshIsFiniteAndNonNegative) {
     const Atlas a = build_atlas(m.position, m.index, {256, 4, 30.f});
     const LocalKernels L = build_local_kernels(a, m.position, m.index, Dipole(measured_material("wholemilk").medium), 30.0, 7);
     EXPECT_GT(L.texel.size(), 1000u);
-    for (int c = 0; c < 3; ++c)
-        for (float w : L.w[size_t(c)]) ASSERT_TRUE(std::isfinite(w) && w >= 0.f);
+    for (float w : L.w) ASSERT_TRUE(std::isfinite(w) && w >= 0.f);
 }
 
 TEST(LocalKernels, BadKernelSizesNameTheKey) {
