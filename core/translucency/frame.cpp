@@ -471,28 +471,30 @@ std::vector<vec3> fill_texels(const AtlasStage& a, const std::vector<vec3>& v) {
 
 Maps combine(const AtlasStage& a, const std::vector<uint32_t>& index, const std::vector<vec3>& E, const std::vector<vec3>& local,
              const std::vector<vec3>& Bv) {
-    // One pass: each texel takes its fill source's irradiance and local part, and the vertex
-    // values interpolated at the source's position.
     const Atlas& at = a.atlas;
-    const size_t N = E.size();
     Maps m;
-    m.irradiance.resize(N);
-    m.local.resize(N);
-    m.global.resize(N);
-    // Empty texels stay 0: no irradiance, no local part, no triangle.
+    m.texel.resize(E.size());
+    // Texels shown as themselves (the inner ones, and any without a fill source): their
+    // irradiance, local part and the vertex values interpolated at their point. Empty texels get 0
+    // (no irradiance, no local part, no triangle).
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, E.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t t = r.begin(); t != r.end(); ++t) {
+            if (at.texel_face[t] < 0) {
+                m.texel[t] = MapTexel(vec3(0.f), vec3(0.f), vec3(0.f));
+                continue;
+            }
+            if (a.fill[t] >= 0 && size_t(a.fill[t]) != t) continue;
+            const size_t f = size_t(at.texel_face[t]);
+            const vec3 w = at.texel_bary[t];
+            const vec3 g = w.x * Bv[index[3 * f]] + w.y * Bv[index[3 * f + 1]] + w.z * Bv[index[3 * f + 2]];
+            m.texel[t] = MapTexel(E[t], local[t], g);
+        }
+    });
+    // The others take their fill source's record.
     tbb::parallel_for(tbb::blocked_range<size_t>(0, a.nonempty.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t k = r.begin(); k != r.end(); ++k) {
             const size_t t = size_t(a.nonempty[k]);
-            const size_t src = a.fill[t] >= 0 ? size_t(a.fill[t]) : t;
-            m.irradiance[t] = E[src];
-            m.local[t] = local[src];
-            vec3 g(0.f);
-            if (at.texel_face[src] >= 0) {
-                const size_t f = size_t(at.texel_face[src]);
-                const vec3 w = at.texel_bary[src];
-                g = w.x * Bv[index[3 * f]] + w.y * Bv[index[3 * f + 1]] + w.z * Bv[index[3 * f + 2]];
-            }
-            m.global[t] = g;
+            if (a.fill[t] >= 0 && size_t(a.fill[t]) != t) m.texel[t] = m.texel[size_t(a.fill[t])];
         }
     });
     return m;

@@ -487,14 +487,14 @@ void TranslucencyTechnique::shade_cpu(const ShadeContext& ctx) const {
             const Response r = b.s.response;
             const bool need_local = parts || r == Response::Both || r == Response::Local;
             const bool need_global = parts || r == Response::Both || r == Response::Global;
-            const vec3 local = need_local ? tap(b.maps->local) : vec3(0.f), global = need_global ? tap(b.maps->global) : vec3(0.f);
+            const vec3 local = need_local ? tap(*b.maps, &MapTexel::local) : vec3(0.f), global = need_global ? tap(*b.maps, &MapTexel::global) : vec3(0.f);
             const vec3 ref = b.reference ? tap(*b.reference) : vec3(0.f);
             const vec3 B = r == Response::Local ? local : r == Response::Global ? global : r == Response::Reference ? ref : local + global;
             const vec3 rho = b.rho ? tap(*b.rho) : vec3(1.f);
             const float T = float(fresnel_transmittance(std::clamp(glm::dot(n, wo), 0.f, 1.f), b.s.medium.eta));
             ctx.out.put(AovWriter::kRadiance, x, y, rho * B * (T * kInvPi));
             ctx.out.put(AovWriter::kNormal, x, y, n);
-            if (ctx.out.wanted(out_irr)) ctx.out.put(out_irr, x, y, tap(b.maps->irradiance));
+            if (ctx.out.wanted(out_irr)) ctx.out.put(out_irr, x, y, tap(*b.maps, &MapTexel::irradiance));
             if (!parts) continue;
             ctx.out.put(out_rad, x, y, local + global);
             ctx.out.put(out_loc, x, y, local);

@@ -141,13 +141,19 @@ struct VertexValues {
 };
 VertexValues gather_vertices(const Gather& g, const std::vector<vec3>& E);
 
-// Every map of a frame: per texel, filled (AtlasStage::fill) for display. The radiosity is
-// local + global, added where it is looked up.
+// Every map of a frame, per texel, filled (AtlasStage::fill) for display. The radiosity is
+// local + global, added where it is looked up. One record per texel, so that a look-up of the
+// radiosity reads its parts from the same cache lines.
+struct MapTexel {
+    vec3 irradiance, local, global;
+    MapTexel() {}  // left unset: combine writes every texel
+    MapTexel(vec3 e, vec3 l, vec3 g) : irradiance(e), local(l), global(g) {}
+};
 struct Maps {
-    std::vector<vec3> irradiance, local, global;
+    std::vector<MapTexel> texel;
 };
 // The maps from the texel irradiance E, the local part and the vertex values Bv (global part,
-// interpolated at each texel's fill source): one pass over the texels.
+// interpolated at each texel's fill source): one parallel pass over the texels.
 Maps combine(const AtlasStage& a, const std::vector<uint32_t>& index, const std::vector<vec3>& E, const std::vector<vec3>& local,
              const std::vector<vec3>& Bv);
 std::vector<vec3> fill_texels(const AtlasStage& a, const std::vector<vec3>& v);
@@ -161,6 +167,10 @@ struct TexelTap {
     TexelTap(int size, vec2 uv);
     vec3 operator()(const std::vector<vec3>& map) const {
         return glm::mix(glm::mix(map[i00], map[i10], ax), glm::mix(map[i01], map[i11], ax), ay);
+    }
+    vec3 operator()(const Maps& m, vec3 MapTexel::*part) const {
+        const MapTexel* t = m.texel.data();
+        return glm::mix(glm::mix(t[i00].*part, t[i10].*part, ax), glm::mix(t[i01].*part, t[i11].*part, ax), ay);
     }
 };
 
