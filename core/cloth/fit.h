@@ -1,0 +1,76 @@
+#pragma once
+// [SECTION] Fitting the cloth model to samples (Daubert et al. 2001, §5).
+// For one sample point, alternately:
+//   1. the lobes (k_d and C_x, C_y, C_z, n of every lobe, each colour channel its own problem) by
+//      Levenberg–Marquardt (Ceres), minimising Σ (T(v_s) f_L(l_s, v_s) − r_s)² over the samples,
+//      with T held fixed (1 everywhere in the first round);
+//   2. every table entry in closed form, per channel (Eq. 4): T(v) = ⟨r(v), f(v)⟩ / ⟨f(v), f(v)⟩
+//      over the samples of view direction v (the best factor in the least-squares sense);
+// until the table's entries change by less than `tolerance` on average (the paper: 0.1, usually
+// two rounds). Without a lookup table only step 1 runs.
+//
+// Robustness: the exponents are kept in [n_min, n_max] and k_d >= 0 by bounds; a lobe value that
+// would overflow rejects the step; the lobes start from several shapes (forward, retro, grazing,
+// the paper's slightly anisotropic grey start) and exponents, and the lowest cost wins. Samples
+// with no energy or a table direction without samples leave T at 1.
+#include "core/cloth/lafortune.h"
+
+#include <string>
+#include <vector>
+
+namespace mesolab::cloth {
+
+// One BRDF value: light and view directions (unit, local frame, z >= 0) and f_r per channel (sr⁻¹).
+struct BrdfSample {
+    dvec3 l{0.0, 0.0, 1.0}, v{0.0, 0.0, 1.0};
+    dvec3 f{0.0};
+    int view = 0;  // index of v in PointSamples::views
+};
+
+// The samples of one sample point (or of a group of points, for a mip level).
+struct PointSamples {
+    std::vector<dvec3> views;  // the distinct view directions (the table's directions)
+    std::vector<BrdfSample> s;
+    // Alpha per view direction from the acquisition (empty: 1).
+    std::vector<double> alpha;
+};
+
+// Groups samples by view direction: directions within 1e-6 of each other are one table entry.
+PointSamples group_by_view(std::vector<BrdfSample> samples);
+
+struct FitOptions {
+    int lobes = 2;              // 1–3
+    bool lookup_table = true;
+    double tolerance = 0.1;     // stop when the mean |ΔT| of a round is below this
+    int max_rounds = 8;
+    int max_iterations = 200;   // Levenberg–Marquardt iterations per solve
+    double n_min = 0.1, n_max = 1e4;
+    double C_max = 1e3;         // |C| bound
+    // Extra starting points for the lobes (tried besides the built-in ones); their lobe count
+    // must equal `lobes`.
+    std::vector<Lafortune> starts;
+    bool builtin_starts = true;
+};
+
+struct FitReport {
+    int rounds = 0;               // lobe fits (1 + table updates)
+    bool converged = false;       // the table met the tolerance (always true without a table)
+    double rms = 0.0;             // RMS of f_r − r over all samples and channels, sr⁻¹
+    double rel_rms = 0.0;         // rms / RMS of r (0 when r is all zero)
+    int starts_tried = 0;
+};
+
+// The model of one point. InputError naming the option for lobes outside [1, 3], a non-positive
+// tolerance, or starts with the wrong lobe count.
+ClothBrdf fit_brdf(const PointSamples& samples, const FitOptions& options, FitReport* report = nullptr);
+
+// The lobes alone for a fixed table (step 1): per channel, the best of `starts` after LM.
+Lafortune fit_lobes(const PointSamples& samples, const ViewTable& table, const std::vector<Lafortune>& starts, const FitOptions& options,
+                    int* starts_tried = nullptr);
+
+// The table for fixed lobes (step 2, Eq. 4), alpha from the samples (1 without).
+ViewTable fit_table(const PointSamples& samples, const Lafortune& L);
+
+// The built-in starting points for `lobes` lobes, scaled to the samples' magnitude.
+std::vector<Lafortune> default_starts(const PointSamples& samples, int lobes);
+}  // namespace mesolab::cloth

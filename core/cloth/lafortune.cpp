@@ -1,0 +1,65 @@
+// The cloth reflectance model (see lafortune.h).
+#include "core/cloth/lafortune.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace mesolab::cloth {
+
+// [SECTION] Lafortune lobes
+dvec3 LafortuneLobe::f(dvec3 l, dvec3 v) const {
+    dvec3 out(0.0);
+    for (int c = 0; c < 3; ++c) {
+        const double a = Cx[c] * l.x * v.x + Cy[c] * l.y * v.y + Cz[c] * l.z * v.z;
+        out[c] = a > 0.0 ? std::pow(a, n[c]) : 0.0;
+    }
+    return out;
+}
+
+dvec3 Lafortune::f(dvec3 l, dvec3 v) const {
+    dvec3 out = kd;
+    for (const LafortuneLobe& lobe : lobes) out += lobe.f(l, v);
+    return out;
+}
+
+// [SECTION] View table
+dvec4 ViewTable::at(dvec3 w) const {
+    if (v.empty()) return dvec4(1.0);
+    const double len = glm::length(w);
+    if (!(len > 0.0) || !std::isfinite(len)) return T[0];
+    w /= len;
+    // The three nearest directions by angle (largest cosine).
+    std::array<int, 3> best{-1, -1, -1};
+    std::array<double, 3> cb{-2.0, -2.0, -2.0};
+    for (size_t i = 0; i < v.size(); ++i) {
+        const double c = glm::dot(v[i], w);
+        if (c <= cb[2]) continue;
+        int k = 2;
+        while (k > 0 && c > cb[size_t(k - 1)]) {
+            cb[size_t(k)] = cb[size_t(k - 1)], best[size_t(k)] = best[size_t(k - 1)];
+            --k;
+        }
+        cb[size_t(k)] = c, best[size_t(k)] = int(i);
+    }
+    dvec4 sum(0.0);
+    double wsum = 0.0;
+    for (int k = 0; k < 3 && best[size_t(k)] >= 0; ++k) {
+        const double angle = std::acos(std::clamp(cb[size_t(k)], -1.0, 1.0));
+        if (angle < 1e-9) return T[size_t(best[size_t(k)])];
+        const double wk = 1.0 / angle;
+        sum += wk * T[size_t(best[size_t(k)])];
+        wsum += wk;
+    }
+    return sum / wsum;
+}
+
+// [SECTION] The model of a sample point
+dvec3 ClothBrdf::f(dvec3 l, dvec3 v) const {
+    const dvec3 fl = L.f(l, v);
+    if (table.empty()) return fl;
+    return dvec3(table.at(v)) * fl;
+}
+
+double ClothBrdf::alpha(dvec3 v) const { return table.empty() ? 1.0 : table.at(v).w; }
+}  // namespace mesolab::cloth

@@ -1,0 +1,56 @@
+#pragma once
+// [SECTION] Cloth (Daubert, Lensch, Heidrich, Seidel 2001, Efficient Cloth Modeling and
+// Rendering): the reflectance model of one sample point of a stitch pattern, §3.
+//
+//   f_r(l, v) = T(v) ∘ f_L(l, v)                                                   (Eq. 1)
+//   f_L(l, v) = k_d + Σ_i ⌈C_x,i l_x v_x + C_y,i l_y v_y + C_z,i l_z v_z⌉^n_i        (Eq. 2)
+//
+// per colour channel (∘: channel by channel), with l and v unit vectors in the sample point's
+// local frame (z: its average normal, x: its tangent) and ⌈a⌉ = max(a, 0) (the paper's footnote:
+// a lobe whose base is negative contributes nothing). Units: f_r, f_L and k_d (= ρ_d / π) in
+// sr⁻¹; C dimensionless per unit of base, n > 0. T(v) is a view-dependent table (colour and alpha
+// per view direction of the acquisition, interpolated between them): the colour takes up
+// shadowing, masking and colour shifts the lobes cannot; the alpha (1 = surface, 0 = a hole seen
+// straight through) is not part of f_r and is used for transparency when rendering.
+#include "core/math.h"
+
+#include <string>
+#include <vector>
+
+namespace mesolab::cloth {
+using glm::dvec3;
+using glm::dvec4;
+
+// One cosine lobe of Eq. 2, one value per colour channel.
+struct LafortuneLobe {
+    dvec3 Cx{0.0}, Cy{0.0}, Cz{0.0}, n{1.0};
+    // ⌈C_x l_x v_x + C_y l_y v_y + C_z l_z v_z⌉^n per channel.
+    dvec3 f(dvec3 l, dvec3 v) const;
+};
+
+// f_L of Eq. 2.
+struct Lafortune {
+    dvec3 kd{0.0};  // the diffuse term ρ_d / π, sr⁻¹
+    std::vector<LafortuneLobe> lobes;
+    dvec3 f(dvec3 l, dvec3 v) const;
+};
+
+// T(v): colour (rgb) and alpha per table direction. Between directions the table is interpolated
+// over the three nearest directions by angle (inverse-angle weights; an exact hit returns its
+// entry), which needs no structure in the directions, so measured and acquired tables read alike.
+struct ViewTable {
+    std::vector<dvec3> v;  // unit view directions, local frame, z >= 0
+    std::vector<dvec4> T;  // per direction: rgb factor, alpha
+    bool empty() const { return v.empty(); }
+    // T(v); (1, 1, 1, 1) for an empty table.
+    dvec4 at(dvec3 v) const;
+};
+
+// The fitted model of one sample point (or of a group of them: a mip level's entry).
+struct ClothBrdf {
+    Lafortune L;
+    ViewTable table;  // empty: no lookup table (T = 1)
+    dvec3 f(dvec3 l, dvec3 v) const;  // f_r = T(v) ∘ f_L(l, v), sr⁻¹
+    double alpha(dvec3 v) const;      // the table's alpha (1 without a table)
+};
+}  // namespace mesolab::cloth

@@ -1,0 +1,270 @@
+// Cloth sample and model files (see samples.h).
+#include "core/cloth/samples.h"
+#include "core/error.h"
+#include "core/scene.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+namespace mesolab::cloth {
+
+namespace {
+// [SECTION] CSV rows
+std::vector<std::string> split_row(const std::string& line) {
+    std::vector<std::string> out;
+    std::string cell;
+    std::istringstream in(line);
+    while (std::getline(in, cell, ',')) {
+        const size_t a = cell.find_first_not_of(" \t\r"), b = cell.find_last_not_of(" \t\r");
+        out.push_back(a == std::string::npos ? "" : cell.substr(a, b - a + 1));
+    }
+    if (!line.empty() && line.back() == ',') out.emplace_back();
+    return out;
+}
+
+bool parse_number(const std::string& s, double& x) {
+    if (s.empty()) return false;
+    char* end = nullptr;
+    x = std::strtod(s.c_str(), &end);  // out of range: ±inf or 0, which the checks below name
+    return end == s.c_str() + s.size();
+}
+
+bool blank(const std::string& line) { return line.find_first_not_of(" \t\r") == std::string::npos; }
+
+std::string where(const std::string& source, size_t line) { return source + ":" + std::to_string(line) + ": "; }
+
+// A direction of the local frame, normalised; InputError naming the line when it is zero,
+// not finite or below the horizon.
+dvec3 direction(const double* x, const char* what, const std::string& at) {
+    const dvec3 d(x[0], x[1], x[2]);
+    const double len = glm::length(d);
+    if (!std::isfinite(len) || !(len > 0.0)) throw InputError(at + what + " direction has zero length or is not finite");
+    const dvec3 u = d / len;
+    if (u.z < -1e-9)
+        throw InputError(at + what + " direction (" + std::to_string(x[0]) + ", " + std::to_string(x[1]) + ", " + std::to_string(x[2]) +
+                         ") is below the horizon (z < 0 in the local frame, z = the normal)");
+    return dvec3(u.x, u.y, std::max(u.z, 0.0));
+}
+
+std::string read_all(const std::string& path, const char* what) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path + ": cannot read the " + std::string(what) + " file");
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+}  // namespace
+
+// [SECTION] Samples
+SampleSet parse_samples_csv(const std::string& text, const std::string& source) {
+    SampleSet set;
+    std::map<std::string, size_t> point_of;
+    std::vector<std::vector<BrdfSample>> rows;
+    std::istringstream in(text);
+    std::string line;
+    size_t n = 0;
+    int columns = 0;
+    bool header_allowed = true;
+    while (std::getline(in, line)) {
+        ++n;
+        if (blank(line)) continue;
+        const std::vector<std::string> cells = split_row(line);
+        const int c = int(cells.size());
+        const std::string at = where(source, n);
+        if (c != 9 && c != 10)
+            throw InputError(at + "expected 9 values (lx,ly,lz,vx,vy,vz,r,g,b) or 10 (point first), found " + std::to_string(c));
+        double x[9];
+        bool numeric = true;
+        for (int k = 0; k < 9; ++k) numeric = numeric && parse_number(cells[size_t(c - 9 + k)], x[k]);
+        if (!numeric) {
+            if (header_allowed) {
+                header_allowed = false;
+                continue;
+            }
+            throw InputError(at + "a value is not a number: \"" + line + "\"");
+        }
+        header_allowed = false;
+        if (columns == 0) columns = c;
+        if (c != columns) throw InputError(at + "has " + std::to_string(c) + " values; the rows above have " + std::to_string(columns));
+        for (int k = 6; k < 9; ++k) {
+            if (!std::isfinite(x[k])) throw InputError(at + "the BRDF value " + cells[size_t(c - 9 + k)] + " is not finite");
+            if (x[k] < 0.0) throw InputError(at + "the BRDF value " + cells[size_t(c - 9 + k)] + " is negative (f_r >= 0, in 1/sr)");
+        }
+        const std::string name = c == 10 ? cells[0] : "";
+        auto [it, fresh] = point_of.try_emplace(name, set.names.size());
+        if (fresh) set.names.push_back(name), rows.emplace_back();
+        BrdfSample s;
+        s.l = direction(x, "the light", at);
+        s.v = direction(x + 3, "the view", at);
+        s.f = dvec3(x[6], x[7], x[8]);
+        rows[it->second].push_back(s);
+        ++set.rows;
+    }
+    if (set.rows == 0) throw InputError(source + ": no samples (rows lx,ly,lz,vx,vy,vz,r,g,b)");
+    for (auto& r : rows) set.points.push_back(group_by_view(std::move(r)));
+    return set;
+}
+
+SampleSet read_samples_csv(const std::string& path) { return parse_samples_csv(read_all(path, "samples"), path); }
+
+// [SECTION] Directions to evaluate
+std::vector<DirectionRow> parse_directions_csv(const std::string& text, const std::string& source, const std::vector<std::string>& names) {
+    std::map<std::string, int> index;
+    for (size_t i = 0; i < names.size(); ++i) index[names[i]] = int(i);
+    const bool need_point = names.size() > 1;
+    std::vector<DirectionRow> out;
+    std::istringstream in(text);
+    std::string line;
+    size_t n = 0;
+    bool header_allowed = true;
+    while (std::getline(in, line)) {
+        ++n;
+        if (blank(line)) continue;
+        const std::vector<std::string> cells = split_row(line);
+        const int c = int(cells.size());
+        const std::string at = where(source, n);
+        if (c != 6 && c != 7) throw InputError(at + "expected 6 values (lx,ly,lz,vx,vy,vz) or 7 (point first), found " + std::to_string(c));
+        double x[6];
+        bool numeric = true;
+        for (int k = 0; k < 6; ++k) numeric = numeric && parse_number(cells[size_t(c - 6 + k)], x[k]);
+        if (!numeric) {
+            if (header_allowed) {
+                header_allowed = false;
+                continue;
+            }
+            throw InputError(at + "a value is not a number: \"" + line + "\"");
+        }
+        header_allowed = false;
+        DirectionRow r;
+        if (c == 7) {
+            auto it = index.find(cells[0]);
+            if (it == index.end()) throw InputError(at + "the model has no point \"" + cells[0] + "\"");
+            r.point = it->second;
+        } else if (need_point) {
+            throw InputError(at + "the model has " + std::to_string(names.size()) + " points: start each row with the point");
+        }
+        r.l = direction(x, "the light", at);
+        r.v = direction(x + 3, "the view", at);
+        out.push_back(r);
+    }
+    return out;
+}
+
+std::vector<DirectionRow> read_directions_csv(const std::string& path, const std::vector<std::string>& names) {
+    return parse_directions_csv(read_all(path, "directions"), path, names);
+}
+
+// [SECTION] Models
+namespace {
+using nlohmann::json;
+json j3(dvec3 v) { return json::array({v.x, v.y, v.z}); }
+
+dvec3 d3(const json& j, const std::string& at) {
+    if (!j.is_array() || j.size() != 3) throw InputError(at + ": expected [r, g, b]");
+    dvec3 v;
+    for (int c = 0; c < 3; ++c) {
+        if (!j[size_t(c)].is_number()) throw InputError(at + ": expected numbers");
+        v[c] = j[size_t(c)].get<double>();
+        if (!std::isfinite(v[c])) throw InputError(at + ": not finite");
+    }
+    return v;
+}
+
+const json& key(const json& j, const char* k, const std::string& at) {
+    if (!j.is_object() || !j.contains(k)) throw InputError(at + ": missing \"" + k + "\"");
+    return j.at(k);
+}
+}  // namespace
+
+std::string model_to_json(const ClothModel& m) {
+    json points = json::array();
+    for (size_t i = 0; i < m.brdfs.size(); ++i) {
+        const ClothBrdf& b = m.brdfs[i];
+        json lobes = json::array();
+        for (const LafortuneLobe& l : b.L.lobes) lobes.push_back({{"Cx", j3(l.Cx)}, {"Cy", j3(l.Cy)}, {"Cz", j3(l.Cz)}, {"n", j3(l.n)}});
+        json p = {{"point", i < m.names.size() ? m.names[i] : ""}, {"kd", j3(b.L.kd)}, {"lobes", lobes}};
+        if (!b.table.empty()) {
+            json v = json::array(), T = json::array();
+            for (size_t k = 0; k < b.table.v.size(); ++k) {
+                v.push_back(j3(b.table.v[k]));
+                const dvec4 t = b.table.T[k];
+                T.push_back(json::array({t.x, t.y, t.z, t.w}));
+            }
+            p["table"] = {{"v", v}, {"T", T}};
+        }
+        if (i < m.reports.size()) {
+            const FitReport& r = m.reports[i];
+            p["fit"] = {{"rounds", r.rounds}, {"converged", r.converged}, {"rms", r.rms}, {"rel_rms", r.rel_rms}};
+        }
+        points.push_back(p);
+    }
+    const json j = {{"schema", 1}, {"kind", "mesolab.cloth.model"}, {"lobes", m.lobes}, {"lookup_table", m.lookup_table}, {"points", points}};
+    return j.dump(1) + "\n";
+}
+
+ClothModel model_from_json(const std::string& text, const std::string& source) {
+    json j;
+    try {
+        j = json::parse(text);
+    } catch (const json::parse_error& e) {
+        throw InputError(source + ": not JSON (" + e.what() + ")");
+    }
+    if (!j.is_object() || j.value("kind", "") != "mesolab.cloth.model")
+        throw InputError(source + ": not a cloth model (expected \"kind\": \"mesolab.cloth.model\")");
+    if (j.value("schema", 0) != 1) throw InputError(source + ": schema " + j.value("schema", json(0)).dump() + " is not 1");
+    ClothModel m;
+    const json& lobes = key(j, "lobes", source);
+    if (!lobes.is_number_integer() || lobes.get<int>() < 1 || lobes.get<int>() > 3) throw InputError(source + ": \"lobes\" must be 1, 2 or 3");
+    m.lobes = lobes.get<int>();
+    m.lookup_table = j.value("lookup_table", true);
+    const json& points = key(j, "points", source);
+    if (!points.is_array() || points.empty()) throw InputError(source + ": \"points\" must be a non-empty array");
+    for (size_t i = 0; i < points.size(); ++i) {
+        const std::string at = source + ": points[" + std::to_string(i) + "]";
+        const json& p = points[i];
+        ClothBrdf b;
+        m.names.push_back(p.value("point", ""));
+        b.L.kd = d3(key(p, "kd", at), at + ".kd");
+        const json& ls = key(p, "lobes", at);
+        if (!ls.is_array() || int(ls.size()) != m.lobes)
+            throw InputError(at + ".lobes: expected " + std::to_string(m.lobes) + " lobes");
+        for (size_t k = 0; k < ls.size(); ++k) {
+            const std::string lk = at + ".lobes[" + std::to_string(k) + "]";
+            LafortuneLobe l;
+            l.Cx = d3(key(ls[k], "Cx", lk), lk + ".Cx"), l.Cy = d3(key(ls[k], "Cy", lk), lk + ".Cy");
+            l.Cz = d3(key(ls[k], "Cz", lk), lk + ".Cz"), l.n = d3(key(ls[k], "n", lk), lk + ".n");
+            for (int c = 0; c < 3; ++c)
+                if (!(l.n[c] > 0.0)) throw InputError(lk + ".n: exponents must be > 0");
+            b.L.lobes.push_back(l);
+        }
+        if (p.contains("table")) {
+            const json& t = p.at("table");
+            const json& v = key(t, "v", at + ".table");
+            const json& T = key(t, "T", at + ".table");
+            if (!v.is_array() || !T.is_array() || v.size() != T.size() || v.empty())
+                throw InputError(at + ".table: \"v\" and \"T\" must be arrays of the same non-zero length");
+            for (size_t k = 0; k < v.size(); ++k) {
+                const dvec3 d = d3(v[k], at + ".table.v[" + std::to_string(k) + "]");
+                if (!(glm::length(d) > 0.0)) throw InputError(at + ".table.v[" + std::to_string(k) + "]: zero direction");
+                b.table.v.push_back(std::abs(glm::length(d) - 1.0) > 1e-12 ? glm::normalize(d) : d);
+                const json& e = T[k];
+                if (!e.is_array() || e.size() != 4) throw InputError(at + ".table.T[" + std::to_string(k) + "]: expected [r, g, b, alpha]");
+                const dvec3 rgb = d3(json::array({e[0], e[1], e[2]}), at + ".table.T[" + std::to_string(k) + "]");
+                if (!e[3].is_number()) throw InputError(at + ".table.T[" + std::to_string(k) + "]: alpha is not a number");
+                b.table.T.push_back(dvec4(rgb, e[3].get<double>()));
+            }
+        }
+        m.brdfs.push_back(std::move(b));
+    }
+    return m;
+}
+
+void write_model(const std::string& path, const ClothModel& m) { write_text_atomic(path, model_to_json(m)); }
+
+ClothModel read_model(const std::string& path) { return model_from_json(read_all(path, "model"), path); }
+}  // namespace mesolab::cloth
