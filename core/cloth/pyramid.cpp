@@ -1,0 +1,106 @@
+// The mip levels of a fabric's BRDF array (see pyramid.h).
+#include "core/cloth/pyramid.h"
+#include "core/error.h"
+
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <mutex>
+#include <string>
+
+namespace mesolab::cloth {
+
+glm::dmat3 local_frame(dvec3 n, dvec3 t) {
+    const double ln = glm::length(n);
+    n = ln > 0.0 ? n / ln : dvec3(0.0, 0.0, 1.0);
+    t -= n * glm::dot(t, n);
+    if (!(glm::length(t) > 1e-9)) t = std::abs(n.x) < 0.9 ? dvec3(1.0, 0.0, 0.0) - n * n.x : dvec3(0.0, 1.0, 0.0) - n * n.y;
+    t = glm::normalize(t);
+    const dvec3 b = glm::cross(n, t);
+    // Rows x, y, z: glm is column-major, so build the transpose.
+    return glm::transpose(glm::dmat3(t, b, n));
+}
+
+size_t BrdfPyramid::count() const {
+    size_t n = 0;
+    for (const auto& l : level) n += l.size();
+    return n;
+}
+
+size_t BrdfPyramid::bytes() const {
+    size_t b = 0;
+    for (const auto& l : level)
+        for (const ClothBrdf& e : l) b += (3 + 12 * e.L.lobes.size()) * 4 + e.table.T.size() * 4 * 4 + 6 * 4;
+    return b;  // the table's directions are shared by every entry (the acquisition's views)
+}
+
+PointSamples block_samples(const SampleGrid& g, int k, int bx, int by, glm::dmat3& frame) {
+    const int s = 1 << k, P = s * s;
+    dvec3 n(0.0), t(0.0);
+    std::vector<dvec3> mean(g.l.size(), dvec3(0.0));
+    std::vector<double> alpha(g.views.size(), 0.0);
+    for (int y = by * s; y < (by + 1) * s; ++y)
+        for (int x = bx * s; x < (bx + 1) * s; ++x) {
+            const size_t p = size_t(y) * size_t(g.res) + size_t(x);
+            n += g.normal[p], t += g.tangent[p];
+            for (size_t i = 0; i < mean.size(); ++i) mean[i] += g.f[p][i];
+            for (size_t i = 0; i < alpha.size(); ++i) alpha[i] += g.alpha.empty() || g.alpha[p].empty() ? 1.0 : g.alpha[p][i];
+        }
+    frame = local_frame(n, t);
+    PointSamples ps;
+    ps.views.reserve(g.views.size());
+    for (const dvec3& v : g.views) ps.views.push_back(frame * v);
+    ps.alpha.resize(alpha.size());
+    for (size_t i = 0; i < alpha.size(); ++i) ps.alpha[i] = alpha[i] / double(P);
+    ps.s.resize(g.l.size());
+    for (size_t i = 0; i < g.l.size(); ++i) ps.s[i] = {frame * g.l[i], frame * g.v[i], mean[i] / double(P), g.view_of[i]};
+    return ps;
+}
+
+BrdfPyramid fit_pyramid(const SampleGrid& g, const FitOptions& o, const ProgressFn& progress, const std::atomic<bool>* cancel) {
+    if (g.res < 1 || g.res > 1024 || (g.res & (g.res - 1)) != 0)
+        throw InputError("cloth.spatial: " + std::to_string(g.res) + " sample points per side must be a power of two in [1, 1024]");
+    const size_t N = size_t(g.res) * size_t(g.res);
+    if (g.f.size() != N || g.normal.size() != N || g.tangent.size() != N || (!g.alpha.empty() && g.alpha.size() != N) || g.v.size() != g.l.size() ||
+        g.view_of.size() != g.l.size())
+        throw InputError("cloth.spatial: the sample grid's arrays do not match its " + std::to_string(g.res) + "² points");
+    for (const auto& f : g.f)
+        if (f.size() != g.l.size()) throw InputError("cloth.spatial: a sample point has " + std::to_string(f.size()) + " values for " + std::to_string(g.l.size()) + " direction pairs");
+    BrdfPyramid out;
+    out.res = g.res;
+    struct Entry {
+        int k, x, y;
+    };
+    std::vector<Entry> entries;
+    for (int k = 0; (g.res >> k) >= 1; ++k) {
+        const int side = g.res >> k;
+        out.level.emplace_back(size_t(side) * size_t(side));
+        out.frame.emplace_back(size_t(side) * size_t(side));
+        out.report.emplace_back(size_t(side) * size_t(side));
+        for (int y = 0; y < side; ++y)
+            for (int x = 0; x < side; ++x) entries.push_back({k, x, y});
+    }
+    std::atomic<size_t> done{0};
+    std::mutex progress_mutex;  // the callback is called from one thread at a time
+    std::atomic<bool> stopped{false};
+    tbb::parallel_for(size_t(0), entries.size(), [&](size_t i) {
+        if (stopped.load(std::memory_order_relaxed) || (cancel && cancel->load(std::memory_order_relaxed))) {
+            stopped = true;
+            return;
+        }
+        const Entry& e = entries[i];
+        const size_t at = size_t(e.y) * size_t(g.res >> e.k) + size_t(e.x);
+        glm::dmat3 frame;
+        const PointSamples ps = block_samples(g, e.k, e.x, e.y, frame);
+        out.level[size_t(e.k)][at] = fit_brdf(ps, o, &out.report[size_t(e.k)][at]);
+        out.frame[size_t(e.k)][at] = frame;
+        const size_t d = ++done;
+        if (progress && (d % 16 == 0 || d == entries.size())) {
+            std::lock_guard<std::mutex> lock(progress_mutex);
+            progress("cloth.fit", double(d) / double(entries.size()));
+        }
+    });
+    if (stopped) throw Cancelled();
+    return out;
+}
+}  // namespace mesolab::cloth
