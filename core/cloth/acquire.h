@@ -1,0 +1,41 @@
+#pragma once
+// [SECTION] Virtual acquisition of a stitch (Daubert et al. 2001, §4, Fig. 3), ray cast with
+// Embree 3.
+//
+// Lighting: the stitch mesh (its 3 × 3 tiles) is lit per light direction l at every vertex,
+// directly (n·l where a shadow ray towards l escapes) and indirectly by one bounce through
+// precomputed visibility (the micro-geometry paper's method on a triangle mesh): per vertex,
+// `visibility_rays` cosine-distributed directions over its hemisphere, each remembered as the
+// point it hits (triangle and barycentrics) or as escaping. The yarn is Lambertian with the
+// vertex's colour ρ: L_direct = ρ/π · n·l · V(l), and the bounce adds ρ/π · (π/K) Σ_k L_direct(hit_k).
+// Light of unit irradiance on a plane perpendicular to l; no environment.
+//
+// Sampling: a grid of `spatial` × `spatial` points on the top face of the centre tile's box;
+// for each view direction v a ray from far along v through the point, back along −v: the first
+// surface it meets (parallax) gives the radiance for every light, and alpha 1; a ray that leaves
+// the fabric through a hole gives 0 and alpha 0. The value stored is the pattern's BRDF
+// f_r(l, v) = L_o / (E_0 cos θ_l), θ_l from the pattern's normal (+z). Per point the normals
+// of the surface its rays hit are averaged into its normal; its tangent is the pattern's x axis.
+// Light and view directions: `directions` each, spread evenly over the hemisphere (a Fibonacci
+// spiral in cos θ, from cos θ = 1 down to 0.05).
+#include "core/cloth/pyramid.h"
+#include "core/cloth/stitch.h"
+#include "core/stage.h"
+
+#include <atomic>
+
+namespace mesolab::cloth {
+
+struct AcquireParams {
+    int spatial = 32;          // sample points per side (a power of two)
+    int directions = 32;       // light directions, and as many view directions
+    int visibility_rays = 64;  // per vertex, for the indirect bounce (0: direct light only)
+};
+
+// `directions` unit directions over the upper hemisphere, cos θ from 1 to 0.05 (see above).
+std::vector<dvec3> hemisphere_directions(int n);
+
+// InputError naming cloth.spatial (not a power of two in [1, 256]) or cloth.directions (outside
+// [4, 128]). Progress: ("cloth.acquire", fraction); a set `cancel` stops it with Cancelled.
+SampleGrid acquire(const StitchMesh& stitch, const AcquireParams& p, const ProgressFn& progress = {}, const std::atomic<bool>* cancel = nullptr);
+}  // namespace mesolab::cloth
