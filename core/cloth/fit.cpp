@@ -36,7 +36,7 @@ namespace {
 // l_z v_z, the table's factor t and the value r.
 struct ChannelData {
     std::vector<std::array<double, 3>> a;  // l_x v_x, l_y v_y, l_z v_z
-    std::vector<double> t, r;
+    std::vector<double> t, r;              // t and r already times the sample's weight
 };
 
 // Below this base a lobe contributes nothing (and no gradient): a^n is below 1e-4.5 for n >= 0.5.
@@ -92,8 +92,8 @@ ChannelData channel_data(const PointSamples& ps, const ViewTable& table, int c) 
     d.a.reserve(ps.s.size()), d.t.reserve(ps.s.size()), d.r.reserve(ps.s.size());
     for (const BrdfSample& s : ps.s) {
         d.a.push_back({s.l.x * s.v.x, s.l.y * s.v.y, s.l.z * s.v.z});
-        d.t.push_back(table.empty() ? 1.0 : table.T[size_t(s.view)][c]);
-        d.r.push_back(s.f[c]);
+        d.t.push_back(s.w * (table.empty() ? 1.0 : table.T[size_t(s.view)][c]));
+        d.r.push_back(s.w * s.f[c]);
     }
     return d;
 }
@@ -142,8 +142,7 @@ void sanitise(const ChannelData& d, int lobes, std::vector<double>& x, const Fit
 
 // Levenberg–Marquardt from x (in place, kept within the bounds); returns the final cost, or +inf
 // when the start itself cannot be evaluated.
-double solve(const ChannelData& d, int lobes, std::vector<double>& x, const FitOptions& o) {
-    sanitise(d, lobes, x, o);
+double solve(const ChannelData& d, int lobes, std::vector<double>& x, const FitOptions& o, int iterations) {
     // Ceres reports its line searches' numerical trouble through glog; the fit's own report
     // (rms, rounds, converged) says how it went, so only fatal messages are kept.
     static const bool quiet = [] {
@@ -169,11 +168,11 @@ double solve(const ChannelData& d, int lobes, std::vector<double>& x, const FitO
         return std::numeric_limits<double>::infinity();
     ceres::Solver::Options so;
     so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-    so.linear_solver_type = ceres::DENSE_QR;
-    so.max_num_iterations = o.max_iterations;
-    so.function_tolerance = 1e-14;
+    so.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+    so.max_num_iterations = iterations;
+    so.function_tolerance = 1e-9;
     so.gradient_tolerance = 1e-14;
-    so.parameter_tolerance = 1e-12;
+    so.parameter_tolerance = 1e-10;
     so.num_threads = 1;
     so.logging_type = ceres::SILENT;
     so.minimizer_progress_to_stdout = false;
@@ -186,7 +185,8 @@ double rms_of(const PointSamples& ps, const ClothBrdf& b, double* rel) {
     double e2 = 0.0, r2 = 0.0;
     for (const BrdfSample& s : ps.s) {
         const dvec3 f = b.L.f(s.l, s.v) * (b.table.empty() ? dvec3(1.0) : dvec3(b.table.T[size_t(s.view)]));
-        for (int c = 0; c < 3; ++c) e2 += (f[c] - s.f[c]) * (f[c] - s.f[c]), r2 += s.f[c] * s.f[c];
+        const double w2 = s.w * s.w;
+        for (int c = 0; c < 3; ++c) e2 += w2 * (f[c] - s.f[c]) * (f[c] - s.f[c]), r2 += w2 * s.f[c] * s.f[c];
     }
     const double n = std::max<double>(1.0, 3.0 * double(ps.s.size()));
     if (rel) *rel = r2 > 0.0 ? std::sqrt(e2 / r2) : 0.0;
@@ -235,12 +235,21 @@ Lafortune fit_lobes(const PointSamples& ps, const ViewTable& table, const std::v
     if (tried) *tried = 0;
     for (int c = 0; c < 3; ++c) {
         const ChannelData d = channel_data(ps, table, c);
-        double best_cost = std::numeric_limits<double>::infinity();
-        std::vector<double> best_x;
+        // Every start a few iterations; the two lowest on to convergence.
+        std::vector<std::pair<double, std::vector<double>>> tried_x;
         for (const Lafortune& s : starts) {
             std::vector<double> x = pack(s, c);
-            const double cost = solve(d, lobes, x, o);
+            sanitise(d, lobes, x, o);
+            const double cost = starts.size() > 2 ? solve(d, lobes, x, o, o.screen_iterations) : 0.0;
             if (tried && c == 0) ++*tried;
+            if (std::isfinite(cost)) tried_x.emplace_back(cost, std::move(x));
+        }
+        std::sort(tried_x.begin(), tried_x.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+        double best_cost = std::numeric_limits<double>::infinity();
+        std::vector<double> best_x;
+        for (size_t k = 0; k < tried_x.size() && k < 2; ++k) {
+            std::vector<double> x = tried_x[k].second;
+            const double cost = solve(d, lobes, x, o, o.max_iterations);
             if (cost < best_cost) best_cost = cost, best_x = x;
         }
         if (best_x.empty()) {
@@ -263,8 +272,9 @@ ViewTable fit_table(const PointSamples& ps, const Lafortune& L) {
     std::vector<dvec3> num(ps.views.size(), dvec3(0.0)), den(ps.views.size(), dvec3(0.0));
     for (const BrdfSample& s : ps.s) {
         const dvec3 f = L.f(s.l, s.v);
-        num[size_t(s.view)] += s.f * f;
-        den[size_t(s.view)] += f * f;
+        const double w2 = s.w * s.w;
+        num[size_t(s.view)] += w2 * s.f * f;
+        den[size_t(s.view)] += w2 * f * f;
     }
     t.T.resize(ps.views.size());
     for (size_t i = 0; i < ps.views.size(); ++i) {

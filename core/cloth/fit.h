@@ -2,16 +2,17 @@
 // [SECTION] Fitting the cloth model to samples (Daubert et al. 2001, §5).
 // For one sample point, alternately:
 //   1. the lobes (k_d and C_x, C_y, C_z, n of every lobe, each colour channel its own problem) by
-//      Levenberg–Marquardt (Ceres), minimising Σ (T(v_s) f_L(l_s, v_s) − r_s)² over the samples,
-//      with T held fixed (1 everywhere in the first round);
-//   2. every table entry in closed form, per channel (Eq. 4): T(v) = ⟨r(v), f(v)⟩ / ⟨f(v), f(v)⟩
+//      Levenberg–Marquardt (Ceres), minimising Σ w_s² (T(v_s) f_L(l_s, v_s) − r_s)² over the
+//      samples (w = cos θ_l: radiance, see BrdfSample::w), with T held fixed (1 in the first round);
+//   2. every table entry in closed form, per channel (Eq. 4): T(v) = ⟨w r, w f⟩ / ⟨w f, w f⟩
 //      over the samples of view direction v (the best factor in the least-squares sense);
 // until the table's entries change by less than `tolerance` on average (the paper: 0.1, usually
 // two rounds). Without a lookup table only step 1 runs.
 //
 // Robustness: the exponents are kept in [n_min, n_max] and k_d >= 0 by bounds; a lobe value that
 // would overflow rejects the step; the lobes start from several shapes (forward, retro, grazing,
-// the paper's slightly anisotropic grey start) and exponents, and the lowest cost wins. Samples
+// the paper's slightly anisotropic grey start) and exponents: each runs a few iterations, the two
+// lowest continue to convergence, and the lowest cost wins. Samples
 // with no energy or a table direction without samples leave T at 1.
 #include "core/cloth/lafortune.h"
 
@@ -25,6 +26,10 @@ struct BrdfSample {
     dvec3 l{0.0, 0.0, 1.0}, v{0.0, 0.0, 1.0};
     dvec3 f{0.0};
     int view = 0;  // index of v in PointSamples::views
+    // Weight of the sample's residual: cos θ_l, so that the fit minimises the error in reflected
+    // radiance under unit irradiance (the paper fits radiance samples), not in f_r, whose values
+    // towards grazing light are large but reach the image multiplied by a small cosine.
+    double w = 1.0;
 };
 
 // The samples of one sample point (or of a group of points, for a mip level).
@@ -43,7 +48,8 @@ struct FitOptions {
     bool lookup_table = true;
     double tolerance = 0.1;     // stop when the mean |ΔT| of a round is below this
     int max_rounds = 8;
-    int max_iterations = 200;   // Levenberg–Marquardt iterations per solve
+    int max_iterations = 60;    // Levenberg–Marquardt iterations per solve
+    int screen_iterations = 12; // iterations every start gets before the best two continue
     double n_min = 0.1, n_max = 1e4;
     double C_max = 1e3;         // |C| bound
     // Extra starting points for the lobes (tried besides the built-in ones); their lobe count
@@ -55,8 +61,8 @@ struct FitOptions {
 struct FitReport {
     int rounds = 0;               // lobe fits (1 + table updates)
     bool converged = false;       // the table met the tolerance (always true without a table)
-    double rms = 0.0;             // RMS of f_r − r over all samples and channels, sr⁻¹
-    double rel_rms = 0.0;         // rms / RMS of r (0 when r is all zero)
+    double rms = 0.0;             // weighted RMS of f_r − r over all samples and channels (w (f_r − r): radiance per unit irradiance, sr⁻¹)
+    double rel_rms = 0.0;         // rms / weighted RMS of r (0 when r is all zero)
     int starts_tried = 0;
 };
 

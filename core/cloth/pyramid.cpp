@@ -4,6 +4,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
 #include <mutex>
 #include <string>
@@ -53,7 +54,8 @@ PointSamples block_samples(const SampleGrid& g, int k, int bx, int by, glm::dmat
     ps.alpha.resize(alpha.size());
     for (size_t i = 0; i < alpha.size(); ++i) ps.alpha[i] = alpha[i] / double(P);
     ps.s.resize(g.l.size());
-    for (size_t i = 0; i < g.l.size(); ++i) ps.s[i] = {frame * g.l[i], frame * g.v[i], mean[i] / double(P), g.view_of[i]};
+    // Weighted by cos θ_l from the fabric's normal: the radiance the sample stands for.
+    for (size_t i = 0; i < g.l.size(); ++i) ps.s[i] = {frame * g.l[i], frame * g.v[i], mean[i] / double(P), g.view_of[i], std::max(g.l[i].z, 0.0)};
     return ps;
 }
 
@@ -68,38 +70,44 @@ BrdfPyramid fit_pyramid(const SampleGrid& g, const FitOptions& o, const Progress
         if (f.size() != g.l.size()) throw InputError("cloth.spatial: a sample point has " + std::to_string(f.size()) + " values for " + std::to_string(g.l.size()) + " direction pairs");
     BrdfPyramid out;
     out.res = g.res;
-    struct Entry {
-        int k, x, y;
-    };
-    std::vector<Entry> entries;
+    size_t total = 0;
     for (int k = 0; (g.res >> k) >= 1; ++k) {
-        const int side = g.res >> k;
-        out.level.emplace_back(size_t(side) * size_t(side));
-        out.frame.emplace_back(size_t(side) * size_t(side));
-        out.report.emplace_back(size_t(side) * size_t(side));
-        for (int y = 0; y < side; ++y)
-            for (int x = 0; x < side; ++x) entries.push_back({k, x, y});
+        const size_t side = size_t(g.res >> k);
+        out.level.emplace_back(side * side);
+        out.frame.emplace_back(side * side);
+        out.report.emplace_back(side * side);
+        total += side * side;
     }
     std::atomic<size_t> done{0};
-    std::mutex progress_mutex;  // the callback is called from one thread at a time
     std::atomic<bool> stopped{false};
-    tbb::parallel_for(size_t(0), entries.size(), [&](size_t i) {
-        if (stopped.load(std::memory_order_relaxed) || (cancel && cancel->load(std::memory_order_relaxed))) {
-            stopped = true;
-            return;
-        }
-        const Entry& e = entries[i];
-        const size_t at = size_t(e.y) * size_t(g.res >> e.k) + size_t(e.x);
-        glm::dmat3 frame;
-        const PointSamples ps = block_samples(g, e.k, e.x, e.y, frame);
-        out.level[size_t(e.k)][at] = fit_brdf(ps, o, &out.report[size_t(e.k)][at]);
-        out.frame[size_t(e.k)][at] = frame;
-        const size_t d = ++done;
-        if (progress && (d % 16 == 0 || d == entries.size())) {
-            std::lock_guard<std::mutex> lock(progress_mutex);
-            progress("cloth.fit", double(d) / double(entries.size()));
-        }
-    });
+    std::mutex progress_mutex;  // the callback is called from one thread at a time
+    // Coarse to fine: the single top entry tries every start; each finer entry starts from its
+    // parent's lobes and the paper's grey start only (a block's mean is close to its parts').
+    for (int k = int(out.level.size()) - 1; k >= 0 && !stopped; --k) {
+        const int side = g.res >> k;
+        tbb::parallel_for(size_t(0), size_t(side) * size_t(side), [&](size_t at) {
+            if (stopped.load(std::memory_order_relaxed) || (cancel && cancel->load(std::memory_order_relaxed))) {
+                stopped = true;
+                return;
+            }
+            const int x = int(at % size_t(side)), y = int(at / size_t(side));
+            glm::dmat3 frame;
+            const PointSamples ps = block_samples(g, k, x, y, frame);
+            FitOptions eo = o;
+            if (k + 1 < int(out.level.size())) {
+                const ClothBrdf& parent = out.level[size_t(k + 1)][size_t(y / 2) * size_t(side / 2) + size_t(x / 2)];
+                eo.starts = {parent.L, default_starts(ps, o.lobes)[0]};
+                eo.builtin_starts = false;
+            }
+            out.level[size_t(k)][at] = fit_brdf(ps, eo, &out.report[size_t(k)][at]);
+            out.frame[size_t(k)][at] = frame;
+            const size_t d = ++done;
+            if (progress && (d % 16 == 0 || d == total)) {
+                std::lock_guard<std::mutex> lock(progress_mutex);
+                progress("cloth.fit", double(d) / double(total));
+            }
+        });
+    }
     if (stopped) throw Cancelled();
     return out;
 }

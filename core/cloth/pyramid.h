@@ -48,7 +48,8 @@ struct BrdfPyramid {
 // expressed in the block's frame (returned in `frame`).
 PointSamples block_samples(const SampleGrid& g, int k, int bx, int by, glm::dmat3& frame);
 
-// Every entry of every level, in parallel. `progress` gets ("cloth.fit", fraction done); a set
+// Every entry of every level, coarse to fine, the entries of a level in parallel: the top entry
+// tries every start; a finer one starts from its parent's lobes and the paper's grey start. `progress` gets ("cloth.fit", fraction done); a set
 // `cancel` stops it with Cancelled. InputError naming cloth.spatial for a res that is not a
 // power of two in [1, 1024], or a grid whose arrays do not match.
 BrdfPyramid fit_pyramid(const SampleGrid& g, const FitOptions& o, const ProgressFn& progress = {}, const std::atomic<bool>* cancel = nullptr);

@@ -102,6 +102,7 @@ SampleSet parse_samples_csv(const std::string& text, const std::string& source) 
         s.l = direction(x, "the light", at);
         s.v = direction(x + 3, "the view", at);
         s.f = dvec3(x[6], x[7], x[8]);
+        s.w = s.l.z;  // the fit weighs radiance: f_r cos θ_l
         rows[it->second].push_back(s);
         ++set.rows;
     }
