@@ -18,6 +18,7 @@
 #include <vector>
 
 namespace mesolab::cloth {
+using glm::dvec2;
 using glm::dvec3;
 using glm::dvec4;
 
