@@ -7,6 +7,8 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <bit>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -264,6 +266,104 @@ ClothModel model_from_json(const std::string& text, const std::string& source) {
     }
     return m;
 }
+
+// [SECTION] Acquired samples (binary)
+namespace {
+static_assert(std::endian::native == std::endian::little, "cloth sample files are little-endian");
+constexpr const char* kSamplesMagic = "mesolab cloth samples\n";
+
+template <class T>
+void put(std::string& out, T x) {
+    char b[sizeof(T)];
+    std::memcpy(b, &x, sizeof(T));
+    out.append(b, sizeof(T));
+}
+void put3(std::string& out, dvec3 v) { put(out, v.x), put(out, v.y), put(out, v.z); }
+
+struct Reader {
+    const std::string& bytes;
+    const std::string& source;
+    size_t at = 0;
+    template <class T>
+    T get() {
+        if (at + sizeof(T) > bytes.size()) throw InputError(source + ": the file ends early (truncated at byte " + std::to_string(at) + ")");
+        T x;
+        std::memcpy(&x, bytes.data() + at, sizeof(T));
+        at += sizeof(T);
+        return x;
+    }
+    double finite(double x, const char* what) {
+        if (!std::isfinite(x)) throw InputError(source + ": a non-finite " + std::string(what) + " at byte " + std::to_string(at));
+        return x;
+    }
+    dvec3 get3(const char* what) {
+        const double x = get<double>(), y = get<double>(), z = get<double>();
+        return dvec3(finite(x, what), finite(y, what), finite(z, what));
+    }
+};
+}  // namespace
+
+std::string sample_grid_bytes(const SampleGrid& g) {
+    std::string out = kSamplesMagic;
+    out += nlohmann::json{{"schema", 1}, {"res", g.res}, {"pairs", g.l.size()}, {"views", g.views.size()}}.dump() + "\n";
+    for (const dvec3& v : g.views) put3(out, v);
+    for (size_t i = 0; i < g.l.size(); ++i) put3(out, g.l[i]), put3(out, g.v[i]), put(out, int32_t(g.view_of[i]));
+    for (size_t p = 0; p < g.f.size(); ++p) {
+        put3(out, g.normal[p]), put3(out, g.tangent[p]);
+        for (size_t k = 0; k < g.views.size(); ++k) put(out, float(g.alpha.empty() || g.alpha[p].empty() ? 1.0 : g.alpha[p][k]));
+        for (const dvec3& f : g.f[p]) put(out, float(f.x)), put(out, float(f.y)), put(out, float(f.z));
+    }
+    return out;
+}
+
+SampleGrid sample_grid_from_bytes(const std::string& bytes, const std::string& source) {
+    const std::string magic = kSamplesMagic;
+    if (bytes.compare(0, magic.size(), magic) != 0) throw InputError(source + ": not a cloth sample file (expected it to start with \"mesolab cloth samples\")");
+    const size_t eol = bytes.find('\n', magic.size());
+    if (eol == std::string::npos) throw InputError(source + ": the header line is missing");
+    nlohmann::json h;
+    try {
+        h = nlohmann::json::parse(bytes.substr(magic.size(), eol - magic.size()));
+    } catch (const nlohmann::json::parse_error& e) {
+        throw InputError(source + ": the header is not JSON (" + e.what() + ")");
+    }
+    if (h.value("schema", 0) != 1) throw InputError(source + ": schema " + h.value("schema", nlohmann::json(0)).dump() + " is not 1");
+    const long long res = h.value("res", -1LL), pairs = h.value("pairs", -1LL), views = h.value("views", -1LL);
+    if (res < 1 || res > 1024 || (res & (res - 1)) != 0) throw InputError(source + ": res " + std::to_string(res) + " is not a power of two in [1, 1024]");
+    if (views < 1 || views > 1 << 16 || pairs < 1 || pairs > views * (1LL << 16))
+        throw InputError(source + ": " + std::to_string(pairs) + " pairs over " + std::to_string(views) + " views is not a sample grid");
+    const size_t R2 = size_t(res) * size_t(res), P = size_t(pairs), V = size_t(views);
+    const size_t expect = eol + 1 + V * 24 + P * 52 + R2 * (48 + V * 4 + P * 12);
+    if (bytes.size() != expect)
+        throw InputError(source + ": " + std::to_string(bytes.size()) + " bytes, expected " + std::to_string(expect) + " for its header (truncated or not this format)");
+    Reader r{bytes, source, eol + 1};
+    SampleGrid g;
+    g.res = int(res);
+    for (size_t k = 0; k < V; ++k) g.views.push_back(r.get3("view direction"));
+    for (size_t i = 0; i < P; ++i) {
+        g.l.push_back(r.get3("light direction"));
+        g.v.push_back(r.get3("view direction"));
+        const int32_t vi = r.get<int32_t>();
+        if (vi < 0 || size_t(vi) >= V) throw InputError(source + ": pair " + std::to_string(i) + " names view " + std::to_string(vi) + " of " + std::to_string(V));
+        g.view_of.push_back(vi);
+    }
+    g.f.resize(R2), g.alpha.resize(R2), g.normal.resize(R2), g.tangent.resize(R2);
+    for (size_t p = 0; p < R2; ++p) {
+        g.normal[p] = r.get3("normal"), g.tangent[p] = r.get3("tangent");
+        g.alpha[p].resize(V);
+        for (size_t k = 0; k < V; ++k) g.alpha[p][k] = r.finite(double(r.get<float>()), "alpha");
+        g.f[p].resize(P);
+        for (size_t i = 0; i < P; ++i) {
+            const double x = r.get<float>(), y = r.get<float>(), z = r.get<float>();
+            g.f[p][i] = dvec3(r.finite(x, "value"), r.finite(y, "value"), r.finite(z, "value"));
+        }
+    }
+    return g;
+}
+
+void write_sample_grid(const std::string& path, const SampleGrid& g) { write_text_atomic(path, sample_grid_bytes(g)); }
+
+SampleGrid read_sample_grid(const std::string& path) { return sample_grid_from_bytes(read_all(path, "sample"), path); }
 
 void write_model(const std::string& path, const ClothModel& m) { write_text_atomic(path, model_to_json(m)); }
 

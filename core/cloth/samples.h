@@ -10,11 +10,18 @@
 // Directions (CSV, for evaluating a model): rows `lx,ly,lz,vx,vy,vz`, with a first column `point`
 // when the model has several points.
 //
+// Acquired samples (binary, `mesolab export cloth-samples`): a line "mesolab cloth samples", a
+// JSON header line {"schema": 1, "res", "pairs", "views"}, then little-endian arrays: the views
+// (f64 × 3 each), the pairs' l and v (f64 × 3) and view indices (i32), and per point its normal
+// and tangent (f64 × 3), alpha per view (f32) and f_r per pair (f32 × 3). Written atomically;
+// reading checks every size and value and names the file.
+//
 // Model (JSON): {"schema": 1, "kind": "mesolab.cloth.model", "lobes": N, "lookup_table": bool,
 //   "points": [{"point": ID, "kd": [r,g,b], "lobes": [{"Cx": [..], "Cy": [..], "Cz": [..],
 //   "n": [..]}, ...], "table": {"v": [[x,y,z], ...], "T": [[r,g,b,alpha], ...]},
 //   "fit": {"rounds", "converged", "rms", "rel_rms"}}, ...]}: the units of lafortune.h.
 #include "core/cloth/fit.h"
+#include "core/cloth/pyramid.h"
 
 #include <string>
 #include <vector>
@@ -48,4 +55,8 @@ std::string model_to_json(const ClothModel& m);
 ClothModel model_from_json(const std::string& text, const std::string& source);  // InputError naming the key
 void write_model(const std::string& path, const ClothModel& m);                  // atomically
 ClothModel read_model(const std::string& path);
+void write_sample_grid(const std::string& path, const SampleGrid& g);
+SampleGrid read_sample_grid(const std::string& path);
+std::string sample_grid_bytes(const SampleGrid& g);
+SampleGrid sample_grid_from_bytes(const std::string& bytes, const std::string& source);
 }  // namespace mesolab::cloth
