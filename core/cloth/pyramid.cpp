@@ -54,8 +54,14 @@ PointSamples block_samples(const SampleGrid& g, int k, int bx, int by, glm::dmat
     ps.alpha.resize(alpha.size());
     for (size_t i = 0; i < alpha.size(); ++i) ps.alpha[i] = alpha[i] / double(P);
     ps.s.resize(g.l.size());
-    // Weighted by cos θ_l from the fabric's normal: the radiance the sample stands for.
-    for (size_t i = 0; i < g.l.size(); ++i) ps.s[i] = {frame * g.l[i], frame * g.v[i], mean[i] / double(P), g.view_of[i], std::max(g.l[i].z, 0.0)};
+    // The paper's foreshortening (§3): the model times cos θ̂_l in the entry's frame gives the
+    // radiance, f_r cos θ_l from the fabric's normal as acquired; so f = f_r cos θ_l / cos θ̂_l,
+    // weighted by cos θ̂_l (radiance). Light at or below 0.05 of the entry's horizon is left out.
+    for (size_t i = 0; i < g.l.size(); ++i) {
+        const dvec3 l = frame * g.l[i];
+        const bool above = l.z > 0.05;
+        ps.s[i] = {l, frame * g.v[i], above ? mean[i] * (g.l[i].z / (l.z * double(P))) : dvec3(0.0), g.view_of[i], above ? l.z : 0.0};
+    }
     return ps;
 }
 

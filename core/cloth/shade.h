@@ -4,8 +4,8 @@
 // one unit per tile) and its footprint (how many tiles one pixel covers); light and view
 // directions are given in the pattern's frame (the garment's interpolated normal as z, its
 // tangent as x). The BRDF array entry under the point is evaluated in the entry's own frame:
-// f_r = T(v̂) ∘ f_L(l̂, v̂), and the reflected radiance is f_r cos θ_l E (θ_l from the garment's
-// normal, as the acquisition measured it); the table's alpha says whether a hole shows the
+// f_r = T(v̂) ∘ f_L(l̂, v̂), and the reflected radiance is f_r cos θ̂_l E (the paper's
+// foreshortening, in the entry's frame); the table's alpha says whether a hole shows the
 // background.
 //
 // Mip level: λ = log2(footprint × res) + bias, the number of sample points a pixel covers, as a

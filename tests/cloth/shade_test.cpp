@@ -48,7 +48,7 @@ TEST(ClothShade, TheLevelFollowsTheFootprint) {
     const size_t at = size_t(0.6 * 16) * 16 + size_t(0.3 * 16);
     EXPECT_EQ(s.index, int(at));
     const glm::dmat3& F = p.frame[0][at];
-    const dvec3 want = p.level[0][at].f(F * l, F * v) * l.z * dvec3(2.0, 1.0, 0.5);
+    const dvec3 want = p.level[0][at].f(F * l, F * v) * (F * l).z * dvec3(2.0, 1.0, 0.5);
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(s.radiance[c], want[c], 1e-12 * std::max(1.0, want[c]));
     EXPECT_EQ(s.alpha, p.level[0][at].alpha(F * v));
     EXPECT_THROW(mip_mode_named("trilinear"), InputError);
