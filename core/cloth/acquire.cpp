@@ -15,9 +15,9 @@
 
 namespace mesolab::cloth {
 
-std::vector<dvec3> hemisphere_directions(int n) {
+std::vector<dvec3> hemisphere_directions(int n, double z_min) {
     std::vector<dvec3> d;
-    const double golden = M_PI * (3.0 - std::sqrt(5.0)), z_min = 0.05;
+    const double golden = M_PI * (3.0 - std::sqrt(5.0));
     for (int i = 0; i < n; ++i) {
         const double z = 1.0 - (1.0 - z_min) * (double(i) + 0.5) / double(n);
         const double r = std::sqrt(std::max(0.0, 1.0 - z * z)), phi = golden * double(i);

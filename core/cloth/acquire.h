@@ -32,8 +32,9 @@ struct AcquireParams {
     int visibility_rays = 64;  // per vertex, for the indirect bounce (0: direct light only)
 };
 
-// `directions` unit directions over the upper hemisphere, cos θ from 1 to 0.05 (see above).
-std::vector<dvec3> hemisphere_directions(int n);
+// n unit directions over the upper hemisphere, a Fibonacci spiral with cos θ evenly from 1 down
+// to z_min (0.05 for the acquisition, see above).
+std::vector<dvec3> hemisphere_directions(int n, double z_min = 0.05);
 
 // InputError naming cloth.spatial (not a power of two in [1, 256]) or cloth.directions (outside
 // [4, 128]). Progress: ("cloth.acquire", fraction); a set `cancel` stops it with Cancelled.

@@ -10,6 +10,7 @@
 #include <bit>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <sstream>
 
@@ -60,29 +61,29 @@ std::string read_all(const std::string& path, const char* what) {
     s << in.rdbuf();
     return s.str();
 }
-}  // namespace
 
-// [SECTION] Samples
-SampleSet parse_samples_csv(const std::string& text, const std::string& source) {
-    SampleSet set;
-    std::map<std::string, size_t> point_of;
-    std::vector<std::vector<BrdfSample>> rows;
+// Every row of numbers in a CSV text: `values` numbers, optionally preceded by a point column;
+// blank lines skipped, one header line allowed, every row as wide as the first. `fn(cells, x, at)`
+// gets the row's cells, its numbers and "SOURCE:LINE: " for its errors.
+void for_each_row(const std::string& text, const std::string& source, int values, const std::string& names,
+                  const std::function<void(const std::vector<std::string>&, const double*, const std::string&)>& fn) {
     std::istringstream in(text);
     std::string line;
     size_t n = 0;
     int columns = 0;
     bool header_allowed = true;
+    std::vector<double> x(static_cast<size_t>(values));
     while (std::getline(in, line)) {
         ++n;
         if (blank(line)) continue;
         const std::vector<std::string> cells = split_row(line);
         const int c = int(cells.size());
         const std::string at = where(source, n);
-        if (c != 9 && c != 10)
-            throw InputError(at + "expected 9 values (lx,ly,lz,vx,vy,vz,r,g,b) or 10 (point first), found " + std::to_string(c));
-        double x[9];
+        if (c != values && c != values + 1)
+            throw InputError(at + "expected " + std::to_string(values) + " values (" + names + ") or " + std::to_string(values + 1) + " (point first), found " +
+                             std::to_string(c));
         bool numeric = true;
-        for (int k = 0; k < 9; ++k) numeric = numeric && parse_number(cells[size_t(c - 9 + k)], x[k]);
+        for (int k = 0; k < values; ++k) numeric = numeric && parse_number(cells[size_t(c - values + k)], x[size_t(k)]);
         if (!numeric) {
             if (header_allowed) {
                 header_allowed = false;
@@ -93,9 +94,21 @@ SampleSet parse_samples_csv(const std::string& text, const std::string& source) 
         header_allowed = false;
         if (columns == 0) columns = c;
         if (c != columns) throw InputError(at + "has " + std::to_string(c) + " values; the rows above have " + std::to_string(columns));
-        for (int k = 6; k < 9; ++k) {
-            if (!std::isfinite(x[k])) throw InputError(at + "the BRDF value " + cells[size_t(c - 9 + k)] + " is not finite");
-            if (x[k] < 0.0) throw InputError(at + "the BRDF value " + cells[size_t(c - 9 + k)] + " is negative (f_r >= 0, in 1/sr)");
+        fn(cells, x.data(), at);
+    }
+}
+}  // namespace
+
+// [SECTION] Samples
+SampleSet parse_samples_csv(const std::string& text, const std::string& source) {
+    SampleSet set;
+    std::map<std::string, size_t> point_of;
+    std::vector<std::vector<BrdfSample>> rows;
+    for_each_row(text, source, 9, "lx,ly,lz,vx,vy,vz,r,g,b", [&](const std::vector<std::string>& cells, const double* x, const std::string& at) {
+        const size_t c = cells.size();
+        for (size_t k = 6; k < 9; ++k) {
+            if (!std::isfinite(x[k])) throw InputError(at + "the BRDF value " + cells[c - 9 + k] + " is not finite");
+            if (x[k] < 0.0) throw InputError(at + "the BRDF value " + cells[c - 9 + k] + " is negative (f_r >= 0, in 1/sr)");
         }
         const std::string name = c == 10 ? cells[0] : "";
         auto [it, fresh] = point_of.try_emplace(name, set.names.size());
@@ -107,7 +120,7 @@ SampleSet parse_samples_csv(const std::string& text, const std::string& source) 
         s.w = s.l.z;  // the fit weighs radiance: f_r cos θ_l
         rows[it->second].push_back(s);
         ++set.rows;
-    }
+    });
     if (set.rows == 0) throw InputError(source + ": no samples (rows lx,ly,lz,vx,vy,vz,r,g,b)");
     for (auto& r : rows) set.points.push_back(group_by_view(std::move(r)));
     return set;
@@ -119,42 +132,20 @@ SampleSet read_samples_csv(const std::string& path) { return parse_samples_csv(r
 std::vector<DirectionRow> parse_directions_csv(const std::string& text, const std::string& source, const std::vector<std::string>& names) {
     std::map<std::string, int> index;
     for (size_t i = 0; i < names.size(); ++i) index[names[i]] = int(i);
-    const bool need_point = names.size() > 1;
     std::vector<DirectionRow> out;
-    std::istringstream in(text);
-    std::string line;
-    size_t n = 0;
-    bool header_allowed = true;
-    while (std::getline(in, line)) {
-        ++n;
-        if (blank(line)) continue;
-        const std::vector<std::string> cells = split_row(line);
-        const int c = int(cells.size());
-        const std::string at = where(source, n);
-        if (c != 6 && c != 7) throw InputError(at + "expected 6 values (lx,ly,lz,vx,vy,vz) or 7 (point first), found " + std::to_string(c));
-        double x[6];
-        bool numeric = true;
-        for (int k = 0; k < 6; ++k) numeric = numeric && parse_number(cells[size_t(c - 6 + k)], x[k]);
-        if (!numeric) {
-            if (header_allowed) {
-                header_allowed = false;
-                continue;
-            }
-            throw InputError(at + "a value is not a number: \"" + line + "\"");
-        }
-        header_allowed = false;
+    for_each_row(text, source, 6, "lx,ly,lz,vx,vy,vz", [&](const std::vector<std::string>& cells, const double* x, const std::string& at) {
         DirectionRow r;
-        if (c == 7) {
+        if (cells.size() == 7) {
             auto it = index.find(cells[0]);
             if (it == index.end()) throw InputError(at + "the model has no point \"" + cells[0] + "\"");
             r.point = it->second;
-        } else if (need_point) {
+        } else if (names.size() > 1) {
             throw InputError(at + "the model has " + std::to_string(names.size()) + " points: start each row with the point");
         }
         r.l = direction(x, "the light", at);
         r.v = direction(x + 3, "the view", at);
         out.push_back(r);
-    }
+    });
     return out;
 }
 

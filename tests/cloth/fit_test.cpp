@@ -1,6 +1,7 @@
 // The cloth model and its fit (core/cloth/lafortune.h, fit.h): analytic values, recovery of known
 // lobes from noiseless samples, the closed-form table, and the hard cases.
 #include "core/cloth/fit.h"
+#include "core/cloth/acquire.h"
 #include "core/error.h"
 
 #include <gtest/gtest.h>
@@ -13,17 +14,7 @@ using namespace mesolab;
 using namespace mesolab::cloth;
 
 namespace {
-// n directions spread evenly over the upper hemisphere (a Fibonacci spiral), z in (0, 1].
-std::vector<dvec3> hemisphere(int n, double z_min = 0.02) {
-    std::vector<dvec3> d;
-    const double golden = M_PI * (3.0 - std::sqrt(5.0));
-    for (int i = 0; i < n; ++i) {
-        const double z = 1.0 - (1.0 - z_min) * (double(i) + 0.5) / double(n);
-        const double r = std::sqrt(std::max(0.0, 1.0 - z * z)), phi = golden * double(i);
-        d.emplace_back(r * std::cos(phi), r * std::sin(phi), z);
-    }
-    return d;
-}
+std::vector<dvec3> hemisphere(int n, double z_min = 0.02) { return hemisphere_directions(n, z_min); }
 
 PointSamples samples_of(const ClothBrdf& truth, const std::vector<dvec3>& lights, const std::vector<dvec3>& views) {
     std::vector<BrdfSample> s;

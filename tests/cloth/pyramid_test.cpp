@@ -1,6 +1,7 @@
 // The mip levels of a BRDF array (core/cloth/pyramid.h): level counts, entries that reproduce
 // uniform and two-material grids, frames, cancellation.
 #include "core/cloth/pyramid.h"
+#include "core/cloth/acquire.h"
 #include "core/error.h"
 
 #include <gtest/gtest.h>
@@ -12,16 +13,7 @@ using namespace mesolab;
 using namespace mesolab::cloth;
 
 namespace {
-std::vector<dvec3> hemisphere(int n, double z_min) {
-    std::vector<dvec3> d;
-    const double golden = M_PI * (3.0 - std::sqrt(5.0));
-    for (int i = 0; i < n; ++i) {
-        const double z = 1.0 - (1.0 - z_min) * (double(i) + 0.5) / double(n);
-        const double r = std::sqrt(std::max(0.0, 1.0 - z * z)), phi = golden * double(i);
-        d.emplace_back(r * std::cos(phi), r * std::sin(phi), z);
-    }
-    return d;
-}
+std::vector<dvec3> hemisphere(int n, double z_min = 0.02) { return hemisphere_directions(n, z_min); }
 
 Lafortune one_lobe(dvec3 kd, dvec3 Cxy, dvec3 Cz, dvec3 n) {
     Lafortune L;
