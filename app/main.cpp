@@ -1,14 +1,19 @@
 // mesolab: interactive workbench for meso-scale appearance. Subcommands: gui (default),
-// capture, bench, sweep, preset validate|schema|show, info.
+// capture, bench, sweep, preset validate|schema|show, info, export, and the techniques' own
+// commands (`mesolab TECHNIQUE COMMAND`, declared by Technique::commands()).
 #include "gpu/renderer.h"
 #include "app/commands.h"
 #include "app/workbench.h"
 #include "core/bench.h"
 #include "core/error.h"
 
+#include "core/technique.h"
+
 #include <CLI/CLI.hpp>
+#include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <deque>
 #include <iostream>
 #include <new>
 
@@ -17,9 +22,11 @@ using namespace mesolab;
 int main(int argc, char** argv) {
     mesolab::gpu::install_gpu_compute();  // stages may run their GPU variants (e.g. microgeom.device=gpu)
     // `mesolab PRESET` and `mesolab` alone mean `mesolab gui ...`.
-    static const char* kCommands[] = {"gui", "capture", "bench", "sweep", "preset", "info", "export", "-h", "--help", "--version"};
+    std::vector<std::string> commands = {"gui", "capture", "bench", "sweep", "preset", "info", "export", "-h", "--help", "--version"};
+    for (const Technique* t : Registry::instance().techniques())
+        if (!t->commands().empty()) commands.push_back(t->name());
     std::vector<char*> args(argv, argv + argc);
-    bool known = argc > 1 && std::any_of(std::begin(kCommands), std::end(kCommands), [&](const char* c) { return std::strcmp(argv[1], c) == 0; });
+    bool known = argc > 1 && std::any_of(commands.begin(), commands.end(), [&](const std::string& c) { return c == argv[1]; });
     static char gui_word[] = "gui";
     if (!known) args.insert(args.begin() + 1, gui_word);
 
@@ -112,6 +119,36 @@ int main(int argc, char** argv) {
 
     auto* info = app.add_subcommand("info", "GL vendor/renderer/version of the headless context, CPU threads, versions");
 
+    // The techniques' commands: `mesolab TECHNIQUE COMMAND ...`, built from their declarations.
+    struct TechniqueCommand {
+        CLI::App* app;
+        CommandDecl decl;
+        std::map<std::string, std::string> values;  // by positional name / long option name
+        std::vector<std::pair<std::string, CLI::Option*>> given;
+    };
+    std::deque<TechniqueCommand> technique_commands;  // stable addresses for CLI11's bindings
+    for (const Technique* t : Registry::instance().techniques()) {
+        const std::vector<CommandDecl> decls = t->commands();
+        if (decls.empty()) continue;
+        auto* tc = app.add_subcommand(t->name(), t->title() + ": commands of the technique");
+        tc->require_subcommand(1);
+        for (const CommandDecl& d : decls) {
+            TechniqueCommand& c = technique_commands.emplace_back(TechniqueCommand{tc->add_subcommand(d.name, d.help), d, {}});
+            for (const CommandArgDecl& a : d.positionals) {
+                auto* opt = c.app->add_option(a.name, c.values[a.name], a.help);
+                if (a.required) opt->required();
+                c.given.emplace_back(a.name, opt);
+            }
+            for (const CommandArgDecl& a : d.options) {
+                std::string key = a.name.substr(a.name.rfind(',') == std::string::npos ? 0 : a.name.rfind(',') + 1);
+                key.erase(0, key.find_first_not_of('-'));  // "-o,--output" -> "output", "--lookup-table" -> "lookup-table"
+                auto* opt = c.app->add_option(a.name, c.values[key], a.help);
+                if (a.required) opt->required();
+                c.given.emplace_back(key, opt);
+            }
+        }
+    }
+
     try {
         app.parse(int(args.size()), args.data());
     } catch (const CLI::CallForHelp& e) {
@@ -135,6 +172,18 @@ int main(int argc, char** argv) {
         if (psh->parsed()) return run_preset_show(show_file, show_sets);
         if (info->parsed()) return run_info();
         if (x->parsed()) return run_export(exp);
+        for (TechniqueCommand& c : technique_commands) {
+            if (!c.app->parsed()) continue;
+            std::map<std::string, std::string> values;
+            for (const auto& [key, opt] : c.given)
+                if (opt->count() > 0) values[key] = c.values[key];
+            const auto t0 = std::chrono::steady_clock::now();
+            const std::string summary = c.decl.run(values, tty_progress());
+            tty_progress_done();
+            const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+            std::printf("%s\n(%.0f ms)\n", summary.c_str(), ms);
+            return 0;
+        }
     } catch (const InputError& e) {
         tty_progress_done();
         std::fprintf(stderr, "mesolab: error: %s\n", e.what());

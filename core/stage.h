@@ -139,6 +139,9 @@ public:
     // Report progress in [0,1]; throws Cancelled when cancellation was requested.
     void progress(double fraction) const;
     bool cancelled() const { return cancel_ && cancel_->load(std::memory_order_relaxed); }
+    // The cancellation flag itself (null when the evaluation cannot be cancelled), for long
+    // computations that check it between their own units of work.
+    const std::atomic<bool>* cancel_flag() const { return cancel_; }
     // A warning shown with the stage (capture prints it, the sidecar and the GUI list it, with
     // the object's name for object stages).
     void warn(std::string message) { warnings.push_back(std::move(message)); }

@@ -62,6 +62,26 @@ struct ExportDecl {
                               const std::string& path, const ProgressFn& progress)> run;
 };
 
+// [SECTION] Technique commands
+// A terminal command of a technique, `mesolab TECHNIQUE COMMAND ARGS...` (cloth's `fit` and
+// `eval` on measured samples). The app builds the command line from the declaration and names
+// no technique.
+struct CommandArgDecl {
+    std::string name;   // positional: "samples"; option: "-o,--output", "--lobes"
+    std::string help;
+    bool required = false;
+};
+
+struct CommandDecl {
+    std::string name;   // "fit"
+    std::string help;
+    std::vector<CommandArgDecl> positionals, options;
+    // Runs the command with the given values: positionals by name, options by their long name
+    // without dashes ("output", "lobes"; options not given are absent). Returns the summary for
+    // the terminal; InputError for bad input (exit status 2, naming the file, line or option).
+    std::function<std::string(const std::map<std::string, std::string>& args, const ProgressFn& progress)> run;
+};
+
 // [SECTION] Sweep metrics
 // An error metric of a technique for `mesolab sweep --metric NAME`: a distance between what a knob
 // setting computes and what the reference setting computes, for a quantity the default metric (the
@@ -124,6 +144,8 @@ public:
     virtual std::shared_ptr<const TriMesh> object_mesh(const Scene&, const Evaluation&, int /*object*/) const { return nullptr; }
     // Data exports (mesolab export NAME).
     virtual std::vector<ExportDecl> exports() const { return {}; }
+    // Terminal commands (mesolab NAME COMMAND).
+    virtual std::vector<CommandDecl> commands() const { return {}; }
     // Timing tables reproducing the paper's (bench NAME).
     virtual std::vector<BenchTable> bench_tables() const { return {}; }
     // Error metrics for `mesolab sweep --metric NAME`, besides the default radiance RMSE.

@@ -45,7 +45,9 @@ dvec4 ViewTable::at(dvec3 w) const {
     dvec4 sum(0.0);
     double wsum = 0.0;
     for (int k = 0; k < 3 && best[size_t(k)] >= 0; ++k) {
-        const double angle = std::acos(std::clamp(cb[size_t(k)], -1.0, 1.0));
+        // The angle from its sine and cosine: exact for nearby directions, where acos is not.
+        const dvec3& d = v[size_t(best[size_t(k)])];
+        const double angle = std::atan2(glm::length(glm::cross(d, w)), glm::dot(d, w));
         if (angle < 1e-9) return T[size_t(best[size_t(k)])];
         const double wk = 1.0 / angle;
         sum += wk * T[size_t(best[size_t(k)])];

@@ -1,0 +1,55 @@
+#pragma once
+// [SECTION] Technique cloth (Daubert et al. 2001): an object's settings, read in one place, and
+// what the CPU shading and the GPU pass share.
+//
+// Stages (per object): cloth.stitch (the stitch mesh) → cloth.acquire (the sample grid, or the
+// file cloth.samples names) → cloth.fit (the BRDF pyramid); cloth.garment (the drawn mesh). A
+// frame reads the pyramid: per pixel the garment's uv times cloth.repeat gives the pattern
+// coordinates, the screen-space uv derivatives the footprint (tiles per pixel) and so the mip
+// level (shade.h); the entry's model in its own frame gives the radiance per light, and the
+// table's alpha mixes it with the background seen through holes (the environment along the
+// pixel's ray; objects behind the garment do not show through).
+#include "core/cloth/acquire.h"
+#include "core/cloth/shade.h"
+#include "core/cloth/stitch.h"
+#include "core/raster.h"
+#include "core/scene.h"
+
+#include <string>
+#include <vector>
+
+namespace mesolab::cloth {
+
+struct Settings {
+    StitchParams stitch;
+    int stitch_resolution = 48;  // marching-cubes cells per tile side
+    AcquireParams acquire;
+    std::string samples;         // resolved path of acquired samples to read instead of acquiring ("" = acquire)
+    FitOptions fit;
+    double repeat = 8.0;         // pattern tiles across the garment's uv square
+    MipMode mip = MipMode::Blend;
+    double mip_bias = 0.0;
+    std::string garment = "curtain";  // curtain, sleeve or geometry (the object's own mesh)
+    static Settings from(const Scene& s, const SceneObject& o);
+};
+
+// The pyramid as the GPU reads it: one record of `stride` vec4s per entry, entries level by
+// level (level_first[k] = the first entry of level k), each record:
+//   [0]   k_d (rgb), lobe count
+//   [1-3] the entry's frame rows x, y, z (xyz); [1].w = table size
+//   then per lobe 4 vec4: C_x, C_y, C_z, n (rgb); then per table direction 2 vec4: v (xyz), T (rgba).
+struct PackedPyramid {
+    int res = 0, stride = 0;
+    int lobes = 0, dirs = 0;  // of the widest entry: the table starts at vec4 4 + 4 lobes
+    std::vector<int> level_first;
+    std::vector<vec4> data;
+};
+PackedPyramid pack_pyramid(const BrdfPyramid& p);
+
+// Screen-space size of a pixel in uv units at pixel (x, y) of `object`: max(|∂uv/∂x|, |∂uv/∂y|),
+// each by the difference with the pixel's partner in its 2 × 2 quad (as OpenGL's fine
+// derivatives), or with the other neighbour where the partner shows something else; uv jumps by
+// whole units (seams of a wrapped parameterisation) are taken modulo 1. 0 where no neighbour
+// shows the object.
+double uv_footprint(const GBuffer& gb, int x, int y, int object);
+}  // namespace mesolab::cloth
