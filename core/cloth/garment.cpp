@@ -39,7 +39,7 @@ TriMesh grid_mesh(int nu, int nv, const std::function<vec3(float, float)>& P, co
 }  // namespace
 
 TriMesh make_curtain(int folds, float depth, int resolution) {
-    if (resolution < 4 || resolution > 4096) throw InputError("geometry.resolution: " + std::to_string(resolution) + " must be in [4, 4096]");
+    if (resolution < 4 || resolution > 4096) throw InputError("cloth.garment_resolution: " + std::to_string(resolution) + " must be in [4, 4096]");
     folds = std::max(0, folds);
     auto y = [&](float x, float z) { return depth * (0.6f + 0.2f * (1.f - z)) * std::sin(kPi * float(folds) * (x + 1.f)); };
     auto P = [&](float s, float t) {
@@ -64,7 +64,7 @@ TriMesh make_curtain(int folds, float depth, int resolution) {
 }
 
 TriMesh make_sleeve(float bend, int resolution) {
-    if (resolution < 4 || resolution > 4096) throw InputError("geometry.resolution: " + std::to_string(resolution) + " must be in [4, 4096]");
+    if (resolution < 4 || resolution > 4096) throw InputError("cloth.garment_resolution: " + std::to_string(resolution) + " must be in [4, 4096]");
     const float r = 0.35f, L = 2.f;
     // The axis: an arc of length L bent by `bend` in the xz plane (straight along z when 0).
     auto axis = [&](float t, vec3& c, vec3& d, vec3& side) {
@@ -91,6 +91,6 @@ TriMesh make_sleeve(float bend, int resolution) {
 TriMesh make_garment(const std::string& name, int resolution) {
     if (name == "curtain") return make_curtain(4, 0.18f, resolution);
     if (name == "sleeve") return make_sleeve(1.0f, resolution);
-    throw InputError("cloth.garment: \"" + name + "\" must be curtain or sleeve (or use geometry.type=mesh with uv)");
+    throw InputError("cloth.garment: \"" + name + "\" must be curtain or sleeve (cloth.garment = geometry wears the object's own mesh)");
 }
 }  // namespace mesolab::cloth
