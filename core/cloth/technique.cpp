@@ -78,6 +78,22 @@ PackedPyramid pack_pyramid(const BrdfPyramid& p) {
             }
         }
     }
+    // The shared views: the top entry's directions taken back to the pattern frame, checked on every entry.
+    if (dirs > 0 && !p.level.empty()) {
+        const ClothBrdf& top = p.level.back()[0];
+        const glm::dmat3 Ft = glm::transpose(p.frame.back()[0]);
+        std::vector<dvec3> views;
+        for (const dvec3& v : top.table.v) views.push_back(Ft * v);
+        bool shared = views.size() == dirs;
+        for (size_t k = 0; k < p.level.size() && shared; ++k)
+            for (size_t i = 0; i < p.level[k].size() && shared; ++i) {
+                const auto& tv = p.level[k][i].table.v;
+                shared = tv.size() == views.size();
+                for (size_t d = 0; d < tv.size() && shared; ++d) shared = glm::length(p.frame[k][i] * views[d] - tv[d]) < 1e-6;
+            }
+        if (shared)
+            for (const dvec3& v : views) out.shared_views.push_back(vec4(vec3(v), 0.f));
+    }
     return out;
 }
 

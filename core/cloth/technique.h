@@ -43,6 +43,11 @@ struct PackedPyramid {
     int lobes = 0, dirs = 0;  // of the widest entry: the table starts at vec4 4 + 4 lobes
     std::vector<int> level_first;
     std::vector<vec4> data;
+    // When every entry's table holds the same directions in its own frame (the acquisition's
+    // views, rotated by the entry's frame: the pyramid's case), those directions in the pattern
+    // frame, so that the three nearest are found once per pixel for every entry (angles do not
+    // change under the rotation); empty otherwise.
+    std::vector<vec4> shared_views;
 };
 PackedPyramid pack_pyramid(const BrdfPyramid& p);
 

@@ -20,6 +20,9 @@ uniform int u_level_first[16];
 uniform float u_repeat;
 uniform int u_mip;            // 0 off, 1 nearest, 2 blend
 uniform float u_bias;
+#define MAX_SHARED_VIEWS 128
+uniform int u_shared_views;   // > 0: every entry's table holds these directions in its own frame (PackedPyramid::shared_views)
+uniform vec3 u_views[MAX_SHARED_VIEWS];
 
 // Fragment outputs o_<aov> are generated from the technique's declaration and inserted after #version.
 
@@ -48,8 +51,33 @@ vec4 table_at(int first, int count, vec3 w) {
     return sum / wsum;
 }
 
+// The same for the shared views, once per pixel: the three nearest to w (pattern frame) and
+// their normalised weights; an exact hit keeps only itself.
+void nearest_views(vec3 w, out ivec3 idx, out vec3 wt) {
+    int b0 = -1, b1 = -1, b2 = -1;
+    float c0 = -2.0, c1 = -2.0, c2 = -2.0;
+    for (int i = 0; i < u_shared_views; ++i) {
+        float c = dot(u_views[i], w);
+        if (c <= c2) continue;
+        if (c > c0) { b2 = b1; c2 = c1; b1 = b0; c1 = c0; b0 = i; c0 = c; }
+        else if (c > c1) { b2 = b1; c2 = c1; b1 = i; c1 = c; }
+        else { b2 = i; c2 = c; }
+    }
+    idx = ivec3(b0, b1, b2);
+    wt = vec3(0.0);
+    float wsum = 0.0;
+    for (int k = 0; k < 3 && idx[k] >= 0; ++k) {
+        vec3 d = u_views[idx[k]];
+        float angle = atan(length(cross(d, w)), dot(d, w));
+        if (angle < 1e-7) { idx = ivec3(idx[k], -1, -1); wt = vec3(1.0, 0.0, 0.0); return; }
+        wt[k] = 1.0 / angle;
+        wsum += wt[k];
+    }
+    wt /= wsum;
+}
+
 // The entry under pattern coordinates uv at level k: radiance summed over the lights, alpha, index.
-vec4 entry_radiance(int k, vec2 uv, vec3 p, vec3 T, vec3 B, vec3 N, vec3 v, out int index) {
+vec4 entry_radiance(int k, vec2 uv, vec3 p, vec3 T, vec3 B, vec3 N, vec3 v, ivec3 vidx, vec3 vwt, out int index) {
     int side = u_res >> k;
     vec2 w = uv - floor(uv);
     int x = min(side - 1, int(w.x * float(side))), y = min(side - 1, int(w.y * float(side)));
@@ -74,7 +102,14 @@ vec4 entry_radiance(int k, vec2 uv, vec3 p, vec3 T, vec3 B, vec3 N, vec3 v, out 
         }
         L += f * max(lh.z, 0.0) * E;
     }
-    vec4 t = table_at(base + 4 + 4 * u_max_lobes, dirs, vh);
+    int table = base + 4 + 4 * u_max_lobes;
+    vec4 t;
+    if (u_shared_views > 0) {
+        t = vec4(0.0);
+        for (int j = 0; j < 3 && vidx[j] >= 0; ++j) t += vwt[j] * P[table + 2 * vidx[j] + 1];
+    } else {
+        t = table_at(table, dirs, vh);
+    }
     return vec4(t.rgb * L, t.a);
 }
 
@@ -101,9 +136,12 @@ void main() {
     int k0 = int(floor(lambda)), k1 = min(top, k0 + 1);
     float t = u_mip == 2 ? lambda - float(k0) : 0.0;
     vec2 uv = v_uv * u_repeat;
+    ivec3 vidx = ivec3(-1);
+    vec3 vwt = vec3(0.0);
+    if (u_shared_views > 0) nearest_views(v, vidx, vwt);
     int index, index1;
-    vec4 a = entry_radiance(k0, uv, p, T, B, N, v, index);
-    if (t > 0.0 && k1 != k0) a = mix(a, entry_radiance(k1, uv, p, T, B, N, v, index1), t);
+    vec4 a = entry_radiance(k0, uv, p, T, B, N, v, vidx, vwt, index);
+    if (t > 0.0 && k1 != k0) a = mix(a, entry_radiance(k1, uv, p, T, B, N, v, vidx, vwt, index1), t);
     float alpha = clamp(a.a, 0.0, 1.0);
     vec3 bg = u_texture_mode != 0 ? vec3(0.0) : env_radiance(-wo);  // holes show the background along the ray
     o_radiance = vec4(alpha * a.rgb + (1.0 - alpha) * bg, 1.0);

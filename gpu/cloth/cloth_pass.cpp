@@ -6,6 +6,7 @@
 #include "gpu/renderer.h"
 
 #include <algorithm>
+#include <vector>
 
 namespace mesolab::gpu {
 namespace {
@@ -46,6 +47,14 @@ public:
             glUniform1f(program_.uniform("u_repeat"), float(s.repeat));
             glUniform1i(program_.uniform("u_mip"), s.mip == cloth::MipMode::Off ? 0 : s.mip == cloth::MipMode::Nearest ? 1 : 2);
             glUniform1f(program_.uniform("u_bias"), float(s.mip_bias));
+            // Shared table directions: the nearest three are found once per pixel (at most 128; else each entry searches).
+            const int shared = g.layout.shared_views.size() <= 128 ? int(g.layout.shared_views.size()) : 0;
+            glUniform1i(program_.uniform("u_shared_views"), shared);
+            if (shared > 0) {
+                std::vector<float> v;
+                for (int k = 0; k < shared; ++k) v.insert(v.end(), {g.layout.shared_views[size_t(k)].x, g.layout.shared_views[size_t(k)].y, g.layout.shared_views[size_t(k)].z});
+                glUniform3fv(program_.uniform("u_views"), shared, v.data());
+            }
             ctx.renderer.draw_object(ctx.scene, ctx.eval, i);
         }
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);

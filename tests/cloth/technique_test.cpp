@@ -215,3 +215,19 @@ TEST(ClothFrames, NoLightAGrazingViewAndTheObjectsOwnMeshStayFinite) {
     for (float v : f.aov("radiance").data) sum += v;
     EXPECT_GT(sum, 0.0);
 }
+
+// The pyramid's tables share the acquisition's views (rotated into each entry's frame), so the GPU
+// finds the three nearest once per pixel; the packed views are those directions.
+TEST(ClothPacking, ThePyramidsTablesShareTheAcquisitionsViews) {
+    Workbench wb;
+    const Scene s = small_curtain("weave");
+    const Evaluation ev = wb.evaluate(s, Registry::instance().frame_stages(s));
+    const auto g = ev.get<cloth::SampleGrid>("cloth.acquire", 0);
+    const auto p = ev.get<cloth::BrdfPyramid>("cloth.fit", 0);
+    ASSERT_TRUE(g && p);
+    const cloth::PackedPyramid packed = cloth::pack_pyramid(*p);
+    ASSERT_EQ(packed.shared_views.size(), g->views.size());
+    for (size_t i = 0; i < g->views.size(); ++i) EXPECT_LT(glm::length(dvec3(vec3(packed.shared_views[i])) - g->views[i]), 1e-6) << i;
+    EXPECT_EQ(packed.data.size(), p->count() * size_t(packed.stride));
+    EXPECT_EQ(packed.stride, 4 + 4 * 2 + 2 * int(g->views.size()));
+}
