@@ -328,6 +328,10 @@ ClothBrdf fit_brdf(const PointSamples& ps, const FitOptions& o, FitReport* repor
             ++rep.rounds;
         }
     }
+    // The bound on f_r: twice the largest sample.
+    dvec3 peak(0.0);
+    for (const BrdfSample& s : ps.s) peak = glm::max(peak, s.f);
+    b.f_max = 2.0 * peak;
     rep.rms = rms_of(ps, b, &rep.rel_rms);
     if (report) *report = rep;
     return b;

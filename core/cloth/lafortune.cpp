@@ -58,9 +58,9 @@ dvec4 ViewTable::at(dvec3 w) const {
 
 // [SECTION] The model of a sample point
 dvec3 ClothBrdf::f(dvec3 l, dvec3 v) const {
-    const dvec3 fl = L.f(l, v);
-    if (table.empty()) return fl;
-    return dvec3(table.at(v)) * fl;
+    const dvec3 fl = glm::min(L.f(l, v), dvec3(1e300));  // an overflowing lobe stays finite: 0 × it is 0
+    if (table.empty()) return glm::min(fl, f_max);
+    return glm::min(dvec3(table.at(v)) * fl, f_max);
 }
 
 double ClothBrdf::alpha(dvec3 v) const { return table.empty() ? 1.0 : table.at(v).w; }

@@ -14,6 +14,7 @@
 // straight through) is not part of f_r and is used for transparency when rendering.
 #include "core/math.h"
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -51,6 +52,11 @@ struct ViewTable {
 struct ClothBrdf {
     Lafortune L;
     ViewTable table;  // empty: no lookup table (T = 1)
+    // Per channel, the most f_r may reach: twice the largest sample value of its fit (fit.h).
+    // Between sparse samples or outside them, a lobe with a base above 1 and a large exponent can
+    // grow without bound (10^100 and more; with few view directions the table can even cancel such
+    // a lobe at the samples), so evaluations clamp to this. Infinite: no bound (a model not from a fit).
+    dvec3 f_max{std::numeric_limits<double>::infinity()};
     dvec3 f(dvec3 l, dvec3 v) const;  // f_r = T(v) ∘ f_L(l, v), sr⁻¹
     double alpha(dvec3 v) const;      // the table's alpha (1 without a table)
 };

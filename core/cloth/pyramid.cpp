@@ -35,6 +35,23 @@ size_t BrdfPyramid::bytes() const {
     return b;  // the table's directions are shared by every entry (the acquisition's views)
 }
 
+dvec3 entry_reflectance(const ClothBrdf& b, const glm::dmat3& F, dvec3 l, dvec3 v) {
+    const dvec3 lh = F * l;
+    if (!(lh.z > 0.0)) return dvec3(0.0);
+    // Up to height z with the same azimuth (straight along x when there is none).
+    auto lift = [](dvec3 w, double z) {
+        if (w.z >= z) return w;
+        const double h = std::sqrt(w.x * w.x + w.y * w.y);
+        const dvec2 d = h > 1e-12 ? dvec2(w.x, w.y) / h : dvec2(1.0, 0.0);
+        return dvec3(d * std::sqrt(1.0 - z * z), z);
+    };
+    // The lobes where they were fitted; the table (a look-up, bounded) at the view itself.
+    const dvec3 vh = F * v;
+    const dvec3 fl = glm::min(b.L.f(lift(lh, kFittedLightZ), lift(vh, 0.0)), dvec3(1e300));
+    const dvec3 T = b.table.empty() ? dvec3(1.0) : dvec3(b.table.at(vh));
+    return glm::min(T * fl, b.f_max) * lh.z;
+}
+
 PointSamples block_samples(const SampleGrid& g, int k, int bx, int by, glm::dmat3& frame) {
     const int s = 1 << k, P = s * s;
     dvec3 n(0.0), t(0.0);
@@ -59,7 +76,7 @@ PointSamples block_samples(const SampleGrid& g, int k, int bx, int by, glm::dmat
     // weighted by cos θ̂_l (radiance). Light at or below 0.05 of the entry's horizon is left out.
     for (size_t i = 0; i < g.l.size(); ++i) {
         const dvec3 l = frame * g.l[i];
-        const bool above = l.z > 0.05;
+        const bool above = l.z > kFittedLightZ;
         ps.s[i] = {l, frame * g.v[i], above ? mean[i] * (g.l[i].z / (l.z * double(P))) : dvec3(0.0), g.view_of[i], above ? l.z : 0.0};
     }
     return ps;

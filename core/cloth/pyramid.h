@@ -44,6 +44,18 @@ struct BrdfPyramid {
     size_t bytes() const;  // the fitted representation as stored in floats: lobes, tables, frames
 };
 
+// Light at or below this height above an entry's horizon (z in its frame) is left out of its fit.
+constexpr double kFittedLightZ = 0.05;
+
+// Reflected radiance per unit irradiance of the entry (b, F: its model and frame) for light and
+// view directions in the pattern frame: f_r(l̂', v̂') cos θ̂_l (the paper's foreshortening in the
+// entry's frame). The model is evaluated only where it was fitted: a light below kFittedLightZ in
+// the entry's frame is evaluated at that height with the same azimuth (l̂'), and a view below the
+// entry's horizon on it (v̂'), since outside its samples a fitted lobe can grow without bound
+// (a base above 1 to a large exponent); the table is read at v̂ itself, and f_r is bounded by
+// ClothBrdf::f_max. Radiance still goes to 0 with cos θ̂_l.
+dvec3 entry_reflectance(const ClothBrdf& b, const glm::dmat3& F, dvec3 l, dvec3 v);
+
 // The samples of the block of 2^k × 2^k points at (bx, by) of level k, averaged per pair and
 // expressed in the block's frame (returned in `frame`).
 PointSamples block_samples(const SampleGrid& g, int k, int bx, int by, glm::dmat3& frame);

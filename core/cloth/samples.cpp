@@ -182,6 +182,7 @@ std::string model_to_json(const ClothModel& m) {
         json lobes = json::array();
         for (const LafortuneLobe& l : b.L.lobes) lobes.push_back({{"Cx", j3(l.Cx)}, {"Cy", j3(l.Cy)}, {"Cz", j3(l.Cz)}, {"n", j3(l.n)}});
         json p = {{"point", i < m.names.size() ? m.names[i] : ""}, {"kd", j3(b.L.kd)}, {"lobes", lobes}};
+        if (std::isfinite(b.f_max.x) && std::isfinite(b.f_max.y) && std::isfinite(b.f_max.z)) p["f_max"] = j3(b.f_max);
         if (!b.table.empty()) {
             json v = json::array(), T = json::array();
             for (size_t k = 0; k < b.table.v.size(); ++k) {
@@ -235,6 +236,11 @@ ClothModel model_from_json(const std::string& text, const std::string& source) {
             for (int c = 0; c < 3; ++c)
                 if (!(l.n[c] > 0.0)) throw InputError(lk + ".n: exponents must be > 0");
             b.L.lobes.push_back(l);
+        }
+        if (p.contains("f_max")) {
+            b.f_max = d3(p.at("f_max"), at + ".f_max");
+            for (int c = 0; c < 3; ++c)
+                if (!(b.f_max[c] >= 0.0)) throw InputError(at + ".f_max: must be >= 0");
         }
         if (p.contains("table")) {
             const json& t = p.at("table");

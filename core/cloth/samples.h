@@ -18,7 +18,7 @@
 //
 // Model (JSON): {"schema": 1, "kind": "mesolab.cloth.model", "lobes": N, "lookup_table": bool,
 //   "points": [{"point": ID, "kd": [r,g,b], "lobes": [{"Cx": [..], "Cy": [..], "Cz": [..],
-//   "n": [..]}, ...], "table": {"v": [[x,y,z], ...], "T": [[r,g,b,alpha], ...]},
+//   "n": [..]}, ...], "f_max": [r,g,b] (optional: the bound on f_r), "table": {"v": [[x,y,z], ...], "T": [[r,g,b,alpha], ...]},
 //   "fit": {"rounds", "converged", "rms", "rel_rms"}}, ...]}: the units of lafortune.h.
 #include "core/cloth/fit.h"
 #include "core/cloth/pyramid.h"

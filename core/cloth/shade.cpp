@@ -28,9 +28,9 @@ Eval at_level(const BrdfPyramid& p, int k, dvec2 uv, dvec3 l, dvec3 v, dvec3 E) 
     const size_t at = size_t(y) * size_t(side) + size_t(x);
     const ClothBrdf& b = p.level[size_t(k)][at];
     const glm::dmat3& F = p.frame[size_t(k)][at];
-    const dvec3 lh = F * l, vh = F * v;
+    const dvec3 vh = F * v;
     Eval e;
-    e.radiance = b.f(lh, vh) * std::max(lh.z, 0.0) * E;  // foreshortening in the entry's frame (§3)
+    e.radiance = entry_reflectance(b, F, l, v) * E;  // foreshortening in the entry's frame (§3)
     e.alpha = b.alpha(vh);
     int offset = 0;
     for (int j = 0; j < k; ++j) offset += int(p.level[size_t(j)].size());

@@ -50,7 +50,7 @@ PackedPyramid pack_pyramid(const BrdfPyramid& p) {
     size_t lobes = 0, dirs = 0, count = 0;
     for (const auto& level : p.level)
         for (const ClothBrdf& b : level) lobes = std::max(lobes, b.L.lobes.size()), dirs = std::max(dirs, b.table.v.size()), ++count;
-    out.stride = int(4 + 4 * lobes + 2 * dirs);
+    out.stride = int(5 + 4 * lobes + 2 * dirs);
     out.lobes = int(lobes), out.dirs = int(dirs);
     out.data.assign(count * size_t(out.stride), vec4(0.f));
     size_t e = 0;
@@ -64,14 +64,16 @@ PackedPyramid pack_pyramid(const BrdfPyramid& p) {
             // glm is column-major: row j of F is (F[0][j], F[1][j], F[2][j]).
             for (int j = 0; j < 3; ++j) r[1 + j] = vec4(float(F[0][j]), float(F[1][j]), float(F[2][j]), 0.f);
             r[1].w = float(b.table.v.size());
-            vec4* q = r + 4;
+            constexpr double kFloatMax = 3.0e38;
+            r[4] = vec4(vec3(glm::min(b.f_max, dvec3(kFloatMax))), 0.f);
+            vec4* q = r + 5;
             for (const LafortuneLobe& l : b.L.lobes) {
                 *q++ = vec4(vec3(l.Cx), 0.f);
                 *q++ = vec4(vec3(l.Cy), 0.f);
                 *q++ = vec4(vec3(l.Cz), 0.f);
                 *q++ = vec4(vec3(l.n), 0.f);
             }
-            q = r + 4 + 4 * lobes;
+            q = r + 5 + 4 * lobes;
             for (size_t d = 0; d < b.table.v.size(); ++d) {
                 *q++ = vec4(vec3(b.table.v[d]), 0.f);
                 *q++ = vec4(b.table.T[d]);
@@ -179,7 +181,7 @@ public:
             .used_when("lookup_table", {"true"}).doc("Stop alternating when the table changes less than this on average");
         p.add_enum("garment", {"curtain", "sleeve", "geometry"}, "curtain").costs(Cost::Recompute)
             .doc("What wears the fabric: a folded curtain, a bent sleeve, or the object's own mesh (geometry.*, with uv)");
-        p.add_int("garment_resolution", 160).range(4, 2048).costs(Cost::Recompute).used_when("garment", {"curtain", "sleeve"})
+        p.add_int("garment_resolution", 64).range(4, 2048).costs(Cost::Recompute).used_when("garment", {"curtain", "sleeve"})
             .doc("Quads along each side of the procedural garment");
         p.add_float("repeat", 8.0).range(0.01, 1e4).log().in("tiles").doc("Pattern tiles across the garment's uv square");
         p.add_enum("mip", {"off", "nearest", "blend"}, "blend")
@@ -508,8 +510,7 @@ std::vector<SweepMetricDecl> ClothTechnique::sweep_metrics() const {
                     const ClothBrdf& b = p->level[0][e];
                     const glm::dmat3& F = p->frame[0][e];
                     for (size_t i = 0; i < g->l.size(); ++i) {
-                        const dvec3 lh = F * g->l[i], vh = F * g->v[i];
-                        const dvec3 model = b.f(lh, vh) * std::max(lh.z, 0.0);
+                        const dvec3 model = entry_reflectance(b, F, g->l[i], g->v[i]);
                         const dvec3 r = g->f[rp][i] * g->l[i].z;
                         const dvec3 d = model - r;
                         se += glm::dot(d, d), sr += glm::dot(r, r);

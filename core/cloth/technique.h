@@ -37,10 +37,11 @@ struct Settings {
 // level (level_first[k] = the first entry of level k), each record:
 //   [0]   k_d (rgb), lobe count
 //   [1-3] the entry's frame rows x, y, z (xyz); [1].w = table size
+//   [4]   f_max (rgb; ClothBrdf::f_max, the bound on f_r, at most 3e38)
 //   then per lobe 4 vec4: C_x, C_y, C_z, n (rgb); then per table direction 2 vec4: v (xyz), T (rgba).
 struct PackedPyramid {
     int res = 0, stride = 0;
-    int lobes = 0, dirs = 0;  // of the widest entry: the table starts at vec4 4 + 4 lobes
+    int lobes = 0, dirs = 0;  // of the widest entry: the table starts at vec4 5 + 4 lobes
     std::vector<int> level_first;
     std::vector<vec4> data;
     // When every entry's table holds the same directions in its own frame (the acquisition's

@@ -15,7 +15,7 @@ layout(std430, binding = 0) readonly buffer Pyramid { vec4 P[]; };
 uniform int u_res;            // sample points per side at level 0
 uniform int u_levels;
 uniform int u_stride;         // vec4s per entry
-uniform int u_max_lobes;      // lobes of the widest entry: the table starts at 4 + 4 u_max_lobes
+uniform int u_max_lobes;      // lobes of the widest entry: the table starts at 5 + 4 u_max_lobes
 uniform int u_level_first[16];
 uniform float u_repeat;
 uniform int u_mip;            // 0 off, 1 nearest, 2 blend
@@ -76,6 +76,15 @@ void nearest_views(vec3 w, out ivec3 idx, out vec3 wt) {
     wt /= wsum;
 }
 
+// core/cloth/pyramid.cpp entry_reflectance: the model only where it was fitted (light at least
+// 0.05 above the entry's horizon, the view on or above it), same azimuth.
+vec3 lift(vec3 w, float z) {
+    if (w.z >= z) return w;
+    float h = length(w.xy);
+    vec2 d = h > 1e-12 ? w.xy / h : vec2(1.0, 0.0);
+    return vec3(d * sqrt(1.0 - z * z), z);
+}
+
 // The entry under pattern coordinates uv at level k: radiance summed over the lights, alpha, index.
 vec4 entry_radiance(int k, vec2 uv, vec3 p, vec3 T, vec3 B, vec3 N, vec3 v, ivec3 vidx, vec3 vwt, out int index) {
     int side = u_res >> k;
@@ -87,22 +96,8 @@ vec4 entry_radiance(int k, vec2 uv, vec3 p, vec3 T, vec3 B, vec3 N, vec3 v, ivec
     vec3 Fx = P[base + 1].xyz, Fy = P[base + 2].xyz, Fz = P[base + 3].xyz;
     int lobes = int(h.w), dirs = int(P[base + 1].w);
     vec3 vh = vec3(dot(Fx, v), dot(Fy, v), dot(Fz, v));
-    vec3 L = vec3(0.0);
-    for (int i = 0; i < u_light_count; ++i) {
-        vec3 wi, E;
-        light_sample(i, p, wi, E);
-        vec3 l = vec3(dot(T, wi), dot(B, wi), dot(N, wi));
-        if (l.z <= 0.0) continue;  // behind the garment's surface
-        vec3 lh = vec3(dot(Fx, l), dot(Fy, l), dot(Fz, l));
-        vec3 f = h.rgb;
-        for (int j = 0; j < lobes; ++j) {
-            int o = base + 4 + 4 * j;
-            vec3 a = P[o].rgb * (lh.x * vh.x) + P[o + 1].rgb * (lh.y * vh.y) + P[o + 2].rgb * (lh.z * vh.z);
-            f += mix(vec3(0.0), pow(max(a, vec3(0.0)), P[o + 3].rgb), greaterThan(a, vec3(0.0)));
-        }
-        L += f * max(lh.z, 0.0) * E;
-    }
-    int table = base + 4 + 4 * u_max_lobes;
+    vec3 vf = lift(vh, 0.0);
+    int table = base + 5 + 4 * u_max_lobes;
     vec4 t;
     if (u_shared_views > 0) {
         t = vec4(0.0);
@@ -110,7 +105,26 @@ vec4 entry_radiance(int k, vec2 uv, vec3 p, vec3 T, vec3 B, vec3 N, vec3 v, ivec
     } else {
         t = table_at(table, dirs, vh);
     }
-    return vec4(t.rgb * L, t.a);
+    if (dirs == 0) t = vec4(1.0);
+    vec3 f_max = P[base + 4].rgb;
+    vec3 L = vec3(0.0);
+    for (int i = 0; i < u_light_count; ++i) {
+        vec3 wi, E;
+        light_sample(i, p, wi, E);
+        vec3 l = vec3(dot(T, wi), dot(B, wi), dot(N, wi));
+        if (l.z <= 0.0) continue;  // behind the garment's surface
+        vec3 lh = vec3(dot(Fx, l), dot(Fy, l), dot(Fz, l));
+        if (lh.z <= 0.0) continue;
+        vec3 lf = lift(lh, 0.05);
+        vec3 f = h.rgb;
+        for (int j = 0; j < lobes; ++j) {
+            int o = base + 5 + 4 * j;
+            vec3 a = P[o].rgb * (lf.x * vf.x) + P[o + 1].rgb * (lf.y * vf.y) + P[o + 2].rgb * (lf.z * vf.z);
+            f += mix(vec3(0.0), pow(max(a, vec3(0.0)), P[o + 3].rgb), greaterThan(a, vec3(0.0)));
+        }
+        L += min(t.rgb * min(f, vec3(1e30)), f_max) * lh.z * E;  // an overflowing lobe stays finite
+    }
+    return vec4(L, t.a);
 }
 
 void main() {

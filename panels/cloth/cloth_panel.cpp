@@ -112,8 +112,7 @@ void brdf_slice(const SampleGrid& g, const BrdfPyramid& p) {
     const glm::dmat3& F = p.frame[0][size_t(point)];
     for (size_t i = 0; i < g.l.size(); ++i) {
         if (glm::length(g.l[i] - ld) > 1e-9) continue;
-        const dvec3 lh = F * g.l[i], vh = F * g.v[i];
-        const dvec3 a = g.f[size_t(point)][i] * g.l[i].z, f = b.f(lh, vh) * std::max(lh.z, 0.0);
+        const dvec3 a = g.f[size_t(point)][i] * g.l[i].z, f = entry_reflectance(b, F, g.l[i], g.v[i]);
         acq.push_back((a.x + a.y + a.z) / 3.0);
         fit.push_back((f.x + f.y + f.z) / 3.0);
     }

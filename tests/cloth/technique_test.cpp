@@ -229,5 +229,41 @@ TEST(ClothPacking, ThePyramidsTablesShareTheAcquisitionsViews) {
     ASSERT_EQ(packed.shared_views.size(), g->views.size());
     for (size_t i = 0; i < g->views.size(); ++i) EXPECT_LT(glm::length(dvec3(vec3(packed.shared_views[i])) - g->views[i]), 1e-6) << i;
     EXPECT_EQ(packed.data.size(), p->count() * size_t(packed.stride));
-    EXPECT_EQ(packed.stride, 4 + 4 * 2 + 2 * int(g->views.size()));
+    EXPECT_EQ(packed.stride, 5 + 4 * 2 + 2 * int(g->views.size()));
+}
+
+// With few directions the lobes are barely constrained between samples (a base above 1 to a large
+// exponent, which the table can even cancel at the samples): evaluated at many unseen directions,
+// every entry stays finite and within twice its brightest sample (ClothBrdf::f_max).
+TEST(ClothHardCases, SparseDirectionsStayBoundedBetweenSamples) {
+    Workbench wb;
+    Scene s = small_curtain("weave");
+    apply_set(s, "cloth.directions", "6");
+    const Evaluation ev = wb.evaluate(s, Registry::instance().frame_stages(s));
+    const auto g = ev.get<cloth::SampleGrid>("cloth.acquire", 0);
+    const auto p = ev.get<cloth::BrdfPyramid>("cloth.fit", 0);
+    ASSERT_TRUE(g && p);
+    const auto dense = cloth::hemisphere_directions(40, 0.0);
+    size_t checked = 0;
+    for (size_t k = 0; k < p->level.size(); ++k)
+        for (size_t e = 0; e < p->level[k].size(); ++e) {
+            const cloth::ClothBrdf& b = p->level[k][e];
+            for (int c = 0; c < 3; ++c) ASSERT_TRUE(std::isfinite(b.f_max[c])) << k << " " << e;
+            for (const dvec3& l : dense)
+                for (const dvec3& v : dense) {
+                    const dvec3 r = cloth::entry_reflectance(b, p->frame[k][e], l, v);
+                    for (int c = 0; c < 3; ++c) {
+                        ASSERT_TRUE(std::isfinite(r[c]) && r[c] >= 0.0) << k << " " << e;
+                        ASSERT_LE(r[c], b.f_max[c] + 1e-12) << k << " " << e;
+                    }
+                    ++checked;
+                }
+        }
+    double brightest = 0.0;
+    for (const auto& point : g->f)
+        for (const dvec3& f : point) brightest = std::max({brightest, f.x, f.y, f.z});
+    for (const auto& level : p->level)
+        for (const cloth::ClothBrdf& b : level)  // an entry's samples carry cos θ_l / cos θ̂_l <= 1 / 0.05 (pyramid.h)
+            EXPECT_LE(std::max({b.f_max.x, b.f_max.y, b.f_max.z}), 2.0 * brightest / cloth::kFittedLightZ + 1e-9);
+    EXPECT_EQ(checked, p->count() * dense.size() * dense.size());
 }
