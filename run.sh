@@ -22,6 +22,6 @@ echo "== no display: headless showcase"
 ./build/mesolab capture presets -o screenshots
 echo "== short bench: three fast tables, median of 3 runs per cell"
 ./build/mesolab bench basic microgeom-geometry bumpsynth-frame --repeat 3
-echo "== full timing tables: core/basic/README.md, core/microgeom/README.md, core/bumpsynth/README.md, core/translucency/README.md"
-echo "   regenerate them (every table, median of 5 runs; about 13 minutes on an idle 2-core machine):"
+echo "== full timing tables: core/basic/README.md, core/microgeom/README.md, core/bumpsynth/README.md, core/translucency/README.md, core/cloth/README.md"
+echo "   regenerate them (every table, median of 5 runs; about 18 minutes on an idle 2-core machine):"
 echo "     GLIBC_TUNABLES=glibc.malloc.hugetlb=1 build/mesolab bench --update-pages"
