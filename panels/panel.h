@@ -8,6 +8,7 @@
 #include "core/scene.h"
 #include "core/stage.h"
 #include <functional>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -60,4 +61,9 @@ bool hemisphere_widget(const ParamDecl& d, ParamTable& t, Dirty& dirty, float di
 void last_widget_rect(float out[4]);
 // Widgets for every used parameter of a table.
 bool param_table_widgets(ParamTable& t, Dirty& dirty, const char* id_suffix = "");
+// Widgets for the named parameters of a table that are in use, in the order given.
+bool param_widgets(ParamTable& t, Dirty& dirty, std::initializer_list<const char*> names, const char* id_suffix = "");
+// A small button that shows AOV `aov` in the viewport (highlighted while it is shown), with a
+// tooltip; nothing where the panel has no viewport (ctx.aov is null).
+void aov_button(PanelContext& ctx, const char* aov, const char* help);
 }  // namespace mesolab::panels

@@ -217,4 +217,22 @@ bool hemisphere_widget(const ParamDecl& d, ParamTable& t, Dirty& dirty, float di
     }
     return changed;
 }
+// [SECTION] Named widgets and AOV buttons
+bool param_widgets(ParamTable& t, Dirty& dirty, std::initializer_list<const char*> names, const char* id_suffix) {
+    bool changed = false;
+    for (const char* n : names) {
+        const ParamDecl* d = t.group().find(n);
+        if (d && t.is_used(*d)) changed |= param_widget(*d, t, dirty, id_suffix);
+    }
+    return changed;
+}
+
+void aov_button(PanelContext& ctx, const char* aov, const char* help) {
+    if (!ctx.aov) return;
+    const bool on = *ctx.aov == aov;
+    if (on) ImGui::PushStyleColor(ImGuiCol_Button, ImGui::GetStyleColorVec4(ImGuiCol_ButtonActive));
+    if (ImGui::SmallButton(aov)) *ctx.aov = aov;
+    if (on) ImGui::PopStyleColor();
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", help);
+}
 }  // namespace mesolab::panels

@@ -18,13 +18,6 @@ namespace {
 
 using namespace mesolab::cloth;
 
-void group(ParamTable& t, Dirty& dirty, std::initializer_list<const char*> names) {
-    for (const char* n : names) {
-        const ParamDecl* d = t.group().find(n);
-        if (d && t.is_used(*d)) param_widget(*d, t, dirty, "##cloth");
-    }
-}
-
 void stage_line(const Evaluation* ev, const char* stage, int object) {
     if (!ev) return;
     for (const StageRun* r : ev->runs_of(stage))
@@ -138,14 +131,6 @@ void brdf_slice(const SampleGrid& g, const BrdfPyramid& p) {
                 all[all.size() / 2]);
 }
 
-void view_button(PanelContext& ctx, const char* aov, const char* help) {
-    if (!ctx.aov) return;
-    const bool on = *ctx.aov == aov;
-    if (on) ImGui::PushStyleColor(ImGuiCol_Button, ImGui::GetStyleColorVec4(ImGuiCol_ButtonActive));
-    if (ImGui::SmallButton(aov)) *ctx.aov = aov;
-    if (on) ImGui::PopStyleColor();
-    if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", help);
-}
 }  // namespace
 
 void register_cloth_panel(PanelRegistry& r) {
@@ -159,19 +144,19 @@ void register_cloth_panel(PanelRegistry& r) {
         ParamTable& m = o.material;
         const int i = ctx.object;
         if (ImGui::TreeNodeEx("Stitch", ImGuiTreeNodeFlags_DefaultOpen)) {
-            group(m, ctx.dirty, {"stitch", "yarn_radius", "loop_height", "color_a", "color_b", "stitch_resolution"});
+            param_widgets(m, ctx.dirty, {"stitch", "yarn_radius", "loop_height", "color_a", "color_b", "stitch_resolution"}, "##cloth");
             if (ctx.eval)
                 if (const auto s = ctx.eval->get<StitchMesh>("cloth.stitch", i)) stitch_preview(*s);
             stage_line(ctx.eval, "cloth.stitch", i);
             ImGui::TreePop();
         }
         if (ImGui::TreeNodeEx("Acquisition", ImGuiTreeNodeFlags_DefaultOpen)) {
-            group(m, ctx.dirty, {"spatial", "directions", "visibility_rays", "samples"});
+            param_widgets(m, ctx.dirty, {"spatial", "directions", "visibility_rays", "samples"}, "##cloth");
             stage_line(ctx.eval, "cloth.acquire", i);
             ImGui::TreePop();
         }
         if (ImGui::TreeNodeEx("Fit", ImGuiTreeNodeFlags_DefaultOpen)) {
-            group(m, ctx.dirty, {"lobes", "lookup_table", "tolerance"});
+            param_widgets(m, ctx.dirty, {"lobes", "lookup_table", "tolerance"}, "##cloth");
             stage_line(ctx.eval, "cloth.fit", i);
             if (ctx.eval) {
                 const auto g = ctx.eval->get<SampleGrid>("cloth.acquire", i);
@@ -182,14 +167,14 @@ void register_cloth_panel(PanelRegistry& r) {
             ImGui::TreePop();
         }
         if (ImGui::TreeNodeEx("Garment and mip blending", ImGuiTreeNodeFlags_DefaultOpen)) {
-            group(m, ctx.dirty, {"garment", "garment_resolution", "repeat", "mip", "mip_bias"});
-            view_button(ctx, "radiance", "The garment");
+            param_widgets(m, ctx.dirty, {"garment", "garment_resolution", "repeat", "mip", "mip_bias"}, "##cloth");
+            aov_button(ctx, "radiance", "The garment");
             ImGui::SameLine();
-            view_button(ctx, "mip_level", "The mip level read per pixel (0: one BRDF per sample point)");
+            aov_button(ctx, "mip_level", "The mip level read per pixel (0: one BRDF per sample point)");
             ImGui::SameLine();
-            view_button(ctx, "brdf_index", "The BRDF read per pixel");
+            aov_button(ctx, "brdf_index", "The BRDF read per pixel");
             ImGui::SameLine();
-            view_button(ctx, "alpha", "The table's alpha: 0 where a hole shows the background");
+            aov_button(ctx, "alpha", "The table's alpha: 0 where a hole shows the background");
             ImGui::TreePop();
         }
     });

@@ -19,10 +19,7 @@ using namespace mesolab::translucency;
 
 void group(ParamTable& t, Dirty& dirty, const char* title, std::initializer_list<const char*> names, bool open) {
     if (!ImGui::TreeNodeEx(title, open ? ImGuiTreeNodeFlags_DefaultOpen : 0)) return;
-    for (const char* n : names) {
-        const ParamDecl* d = t.group().find(n);
-        if (d && t.is_used(*d)) param_widget(*d, t, dirty, "##tr");
-    }
+    param_widgets(t, dirty, names, "##tr");
     ImGui::TreePop();
 }
 
@@ -70,15 +67,6 @@ void rd_plot(const Medium& m) {
     ImGui::SameLine();
     help_marker("Jensen et al. 2001's dipole: the fraction of the power entering the surface that leaves it again, per channel. "
                 "The mean free path 1/sigma'_t and sigma_tr set how far light travels: compare the plot's range with the object's size in mm.");
-}
-
-void view_button(PanelContext& ctx, const char* aov, const char* help) {
-    if (!ctx.aov) return;
-    const bool on = *ctx.aov == aov;
-    if (on) ImGui::PushStyleColor(ImGuiCol_Button, ImGui::GetStyleColorVec4(ImGuiCol_ButtonActive));
-    if (ImGui::SmallButton(aov)) *ctx.aov = aov;
-    if (on) ImGui::PopStyleColor();
-    if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", help);
 }
 
 double mb(double bytes) { return bytes / 1048576.0; }
@@ -136,18 +124,18 @@ void register_translucency_panel(PanelRegistry& r) {
             }
             if (ImGui::IsItemHovered()) ImGui::SetTooltip("camera.mode: the object, or its texture atlas one pixel per texel");
             ImGui::SameLine();
-            view_button(ctx, "radiance", "What is displayed: rho T(cos) B / pi");
+            aov_button(ctx, "radiance", "What is displayed: rho T(cos) B / pi");
             ImGui::SameLine();
-            view_button(ctx, "irradiance", "The illumination map: irradiance entering the medium");
+            aov_button(ctx, "irradiance", "The illumination map: irradiance entering the medium");
             ImGui::SameLine();
-            view_button(ctx, "local", "The local (kernel) part of B");
-            view_button(ctx, "global", "The global (vertex factor) part of B");
+            aov_button(ctx, "local", "The local (kernel) part of B");
+            aov_button(ctx, "global", "The global (vertex factor) part of B");
             ImGui::SameLine();
-            view_button(ctx, "radiosity", "B = local + global");
+            aov_button(ctx, "radiosity", "B = local + global");
             ImGui::SameLine();
-            view_button(ctx, "reference", "B by brute force (turn on compare)");
+            aov_button(ctx, "reference", "B by brute force (turn on compare)");
             ImGui::SameLine();
-            view_button(ctx, "error", "radiosity - reference (turn on compare)");
+            aov_button(ctx, "error", "radiosity - reference (turn on compare)");
             // The error's RMSE, measured on demand (the brute force is O(texels²): seconds on large meshes).
             static std::string rmse;
             if (ImGui::SmallButton("measure RMSE vs brute force") && ctx.eval) {
