@@ -58,6 +58,15 @@ Buffer make_storage_buffer(const void* data, size_t bytes, GLenum usage) {
     return Buffer(id);
 }
 
+Texture make_buffer_texture(const Buffer& b, GLenum format, GLintptr offset, GLsizeiptr bytes) {
+    // Direct state access: no texture unit's binding changes.
+    GLuint id = 0;
+    glCreateTextures(GL_TEXTURE_BUFFER, 1, &id);
+    if (offset == 0 && bytes == 0) glTextureBuffer(id, format, b.get());
+    else glTextureBufferRange(id, format, b.get(), offset, bytes);
+    return Texture(id);
+}
+
 void delete_buffer(GLuint id) { if (gl_context_current()) glDeleteBuffers(1, &id); }
 void delete_texture(GLuint id) { if (gl_context_current()) glDeleteTextures(1, &id); }
 void delete_framebuffer(GLuint id) { if (gl_context_current()) glDeleteFramebuffers(1, &id); }

@@ -42,6 +42,12 @@ using Query = GlName<delete_query>;
 // A new shader storage buffer holding `bytes` (data may be null); leaves GL_SHADER_STORAGE_BUFFER unbound.
 Buffer make_storage_buffer(const void* data, size_t bytes, GLenum usage = GL_STATIC_DRAW);
 
+// A buffer texture (GL_TEXTURE_BUFFER, read with texelFetch) over `bytes` of `b` from `offset`
+// (all of it when bytes is 0), whose texels have `format` (GL_RGBA32F, GL_RG32UI, ...). Shaders
+// read their big read-only tables through these: on llvmpipe a texel fetch gathers all lanes at
+// once, where a storage-buffer read goes lane by lane, component by component (about twice as fast).
+Texture make_buffer_texture(const Buffer& b, GLenum format, GLintptr offset = 0, GLsizeiptr bytes = 0);
+
 // A linked program. Sources are looked up by embedded name (e.g. "basic/basic.frag"); a line
 // `#include "common.glsl"` is replaced by the embedded file of that name (recursively, once).
 // `defines` lines ("NAME VALUE") are inserted after #version, then the fragment shader's

@@ -1,35 +1,36 @@
 #version 430 core
 // Technique translucency, step translucency.combine: the global response interpolated to the
 // texels, every texel shown from its fill source (radiosity = local + global where it is drawn)
-// (core/translucency/frame.cpp combine, fill_texels; blend.cpp interpolate_to_texels).
+// (core/translucency/frame.cpp combine, fill_texels; blend.cpp interpolate_to_texels). Only the
+// non-empty texels run: the maps' empty texels are cleared once, when the maps are made.
 #include "translucency.glsl"
 layout(local_size_x = 64) in;
 
-layout(std430, binding = 0) readonly buffer Fill { int fill[]; };
-layout(std430, binding = 1) readonly buffer Face { int face[]; };     // per texel, -1 where empty
-layout(std430, binding = 2) readonly buffer Bary { vec4 bary[]; };
-layout(std430, binding = 3) readonly buffer Index { uint tri[]; };
-layout(std430, binding = 4) readonly buffer VertexB { vec4 Bv[]; };
-layout(std430, binding = 5) readonly buffer Irradiance { vec4 E[]; };
-layout(std430, binding = 6) readonly buffer Local { vec4 L[]; };
+uniform isamplerBuffer u_shown;   // per non-empty texel: (texel, source, face of the source or -1)
+uniform samplerBuffer u_bary;     // per non-empty texel: the source's barycentrics
+uniform usamplerBuffer u_tri;     // index, 3 per face
+uniform samplerBuffer u_Bv;       // global response per vertex
+uniform samplerBuffer u_E;        // irradiance per texel
+uniform samplerBuffer u_L;        // local response per texel
 layout(rgba32f, binding = 0) writeonly uniform image2D u_irradiance;
 layout(rgba32f, binding = 1) writeonly uniform image2D u_local;
 layout(rgba32f, binding = 2) writeonly uniform image2D u_global;
+uniform int u_count;
 uniform int u_size;
 
 void main() {
-    int t = int(gl_GlobalInvocationID.x);
-    if (t >= u_size * u_size) return;
-    int s = fill[t] >= 0 ? fill[t] : t;
+    int k = int(gl_GlobalInvocationID.x);
+    if (k >= u_count) return;
+    ivec3 r = texelFetch(u_shown, k).xyz;
+    int t = r.x, s = r.y, f = r.z;
     vec3 g = vec3(0.0);
-    if (face[s] >= 0) {
-        int f = face[s];
-        vec3 w = bary[s].xyz;
-        g = w.x * Bv[tri[3 * f]].rgb + w.y * Bv[tri[3 * f + 1]].rgb + w.z * Bv[tri[3 * f + 2]].rgb;
+    if (f >= 0) {
+        vec3 w = texelFetch(u_bary, k).xyz;
+        g = w.x * texelFetch(u_Bv, int(texelFetch(u_tri, 3 * f).x)).rgb + w.y * texelFetch(u_Bv, int(texelFetch(u_tri, 3 * f + 1).x)).rgb +
+            w.z * texelFetch(u_Bv, int(texelFetch(u_tri, 3 * f + 2).x)).rgb;
     }
-    vec3 l = L[s].rgb;
     ivec2 q = ivec2(t % u_size, t / u_size);
-    imageStore(u_irradiance, q, vec4(E[s].rgb, 1.0));
-    imageStore(u_local, q, vec4(l, 1.0));
+    imageStore(u_irradiance, q, vec4(texelFetch(u_E, s).rgb, 1.0));
+    imageStore(u_local, q, vec4(texelFetch(u_L, s).rgb, 1.0));
     imageStore(u_global, q, vec4(g, 1.0));
 }

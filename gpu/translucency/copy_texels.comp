@@ -4,14 +4,15 @@
 // illuminate).
 layout(local_size_x = 64) in;
 
-layout(std430, binding = 0) readonly buffer Pairs { ivec2 copy_pair[]; };  // (texel, source)
-layout(std430, binding = 3) buffer Irradiance { vec4 E[]; };               // per texel
+uniform isamplerBuffer u_copy;  // (texel, source)
+uniform samplerBuffer u_E;      // the irradiance below, read where it was lit
+layout(std430, binding = 3) writeonly buffer Irradiance { vec4 E[]; };  // per texel
 
 uniform int u_count;
 
 void main() {
     int k = int(gl_GlobalInvocationID.x);
     if (k >= u_count) return;
-    ivec2 p = copy_pair[k];
-    E[p.x] = E[p.y];
+    ivec2 p = texelFetch(u_copy, k).xy;
+    E[p.x] = texelFetch(u_E, p.y);
 }

@@ -6,9 +6,9 @@
 #include "translucency.glsl"
 layout(local_size_x = 64) in;
 
-layout(std430, binding = 0) readonly buffer Texels { int lit[]; };  // AtlasStage::lit
-layout(std430, binding = 1) readonly buffer Positions { vec4 texel_position[]; };  // per lit texel, object space
-layout(std430, binding = 2) readonly buffer Normals { vec4 texel_normal[]; };
+uniform isamplerBuffer u_lit;       // AtlasStage::lit
+uniform samplerBuffer u_position;   // per lit texel, object space
+uniform samplerBuffer u_normal;
 layout(std430, binding = 3) writeonly buffer Irradiance { vec4 E[]; };             // per texel
 
 uniform int u_count;
@@ -51,8 +51,8 @@ float visibility(int i, vec3 p) {
 void main() {
     int k = int(gl_GlobalInvocationID.x);
     if (k >= u_count) return;
-    vec3 p = (u_model * vec4(texel_position[k].xyz, 1.0)).xyz;
-    vec3 n = normalize(u_normal_matrix * texel_normal[k].xyz);
+    vec3 p = (u_model * vec4(texelFetch(u_position, k).xyz, 1.0)).xyz;
+    vec3 n = normalize(u_normal_matrix * texelFetch(u_normal, k).xyz);
     vec3 e = vec3(0.0);
     for (int i = 0; i < u_light_count; ++i) {
         vec3 wi, El;
@@ -62,5 +62,5 @@ void main() {
         e += El * (c * fresnel_transmittance(c, u_eta) * visibility(i, p));
     }
     e += env_irradiance(n) * u_env_transmittance;
-    E[lit[k]] = vec4(e, 0.0);
+    E[texelFetch(u_lit, k).x] = vec4(e, 0.0);
 }

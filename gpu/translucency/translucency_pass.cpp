@@ -51,6 +51,12 @@ Texture map_texture(int size, const std::vector<vec4>* data = nullptr) {
     return t;
 }
 
+// A table made once from a stage result: its buffer and a buffer texture over it (texelFetch).
+struct Table {
+    Buffer buffer;
+    Texture texture;
+};
+
 void bind(GLuint binding, const Buffer& b) { glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, b.get()); }
 GLuint groups(size_t n) { return GLuint((n + 63) / 64); }
 void barrier() { glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT); }
@@ -83,7 +89,12 @@ public:
             else if (step == "translucency.reference") reference_step(ctx, in, w);
             barrier();
         }
-        for (GLuint b = 0; b < 8; ++b) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b, 0);
+        for (GLuint b = 0; b < 8; ++b) {
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b, 0);
+            glActiveTexture(GL_TEXTURE0 + b);
+            glBindTexture(GL_TEXTURE_BUFFER, 0);
+        }
+        glActiveTexture(GL_TEXTURE0);
     }
 
     void draw(DrawContext& ctx) override {
@@ -141,7 +152,9 @@ private:
     struct PerObject {
         int size = 0, vertices = 0;
         Buffer E, local, Ev, D, Bv;
+        Texture E_tex, local_tex, Ev_tex, Bv_tex;  // buffer textures over E, local, Ev, Bv
         Texture irradiance, local_map, global_map, reference;
+        std::weak_ptr<const AtlasStage> maps_atlas;  // the atlas whose empty texels the maps hold cleared
         std::vector<RenderTarget> shadow;
         bool has_reference = false;
     };
@@ -153,26 +166,44 @@ private:
             const size_t texels = size_t(size) * size_t(size);
             w.E = make_storage_buffer(nullptr, texels * sizeof(vec4), GL_DYNAMIC_COPY);
             w.local = make_storage_buffer(nullptr, texels * sizeof(vec4), GL_DYNAMIC_COPY);
+            w.E_tex = make_buffer_texture(w.E, GL_RGBA32F);
+            w.local_tex = make_buffer_texture(w.local, GL_RGBA32F);
             w.irradiance = map_texture(size);
             w.local_map = map_texture(size);
             w.global_map = map_texture(size);
             w.reference = map_texture(size);
             w.size = size;
+            w.maps_atlas.reset();
+        }
+        // Combine writes the non-empty texels only: the maps' other texels are cleared once per atlas.
+        if (w.maps_atlas.owner_before(in.atlas) || in.atlas.owner_before(w.maps_atlas) || w.maps_atlas.expired()) {
+            const float empty[4] = {0.f, 0.f, 0.f, 1.f};
+            for (const Texture* t : {&w.irradiance, &w.local_map, &w.global_map}) glClearTexImage(t->get(), 0, GL_RGBA, GL_FLOAT, empty);
+            w.maps_atlas = in.atlas;
         }
         if (w.vertices != n) {
             const size_t bytes = size_t(std::max(n, 1)) * sizeof(vec4);
             w.Ev = make_storage_buffer(nullptr, bytes, GL_DYNAMIC_COPY);
             w.D = make_storage_buffer(nullptr, bytes, GL_DYNAMIC_COPY);
             w.Bv = make_storage_buffer(nullptr, bytes, GL_DYNAMIC_COPY);
+            w.Ev_tex = make_buffer_texture(w.Ev, GL_RGBA32F);
+            w.Bv_tex = make_buffer_texture(w.Bv, GL_RGBA32F);
             w.vertices = n;
         }
         return w;
     }
 
-    // A storage buffer made once from a stage result.
+    // A buffer texture made once from a stage result (texels of `format`).
     template <class T, class F>
-    const Buffer& buffer(DrawContext& ctx, const std::shared_ptr<const T>& owner, const char* slot, F&& make) {
-        return ctx.renderer.resources().get<Buffer>(owner, slot, [&] { return storage(make()); });
+    GLuint table(DrawContext& ctx, const std::shared_ptr<const T>& owner, const char* slot, GLenum format, F&& make) {
+        return ctx.renderer.resources()
+            .get<Table>(owner, slot, [&] {
+                Table t;
+                t.buffer = storage(make());
+                t.texture = make_buffer_texture(t.buffer, format);
+                return t;
+            })
+            .texture.get();
     }
 
     // [SECTION] translucency.illumination: shadow maps, then the irradiance per texel
@@ -238,24 +269,26 @@ private:
         glUniform1f(illumination_.uniform("u_env_transmittance"), float(1.0 - fresnel_diffuse_reflectance(in.s.medium.eta)));
         glUniform1i(illumination_.uniform("u_count"), int(a.lit.size()));
         clear(w.E);
-        bind(0, buffer(ctx, in.atlas, "lit", [&] { return a.lit; }));
-        bind(1, buffer(ctx, in.atlas, "texel_position", [&] {
+        // Units 1-3 (0 holds the environment map, 6-9 the shadow maps).
+        illumination_.bind_texture(1, GL_TEXTURE_BUFFER, table(ctx, in.atlas, "lit", GL_R32I, [&] { return a.lit; }), "u_lit");
+        illumination_.bind_texture(2, GL_TEXTURE_BUFFER, table(ctx, in.atlas, "texel_position", GL_RGBA32F, [&] {
             std::vector<vec4> v(a.lit.size());
             for (size_t k = 0; k < v.size(); ++k) v[k] = vec4(a.texel_position[size_t(a.lit[k])], 1.f);
             return v;
-        }));
-        bind(2, buffer(ctx, in.atlas, "texel_normal", [&] {
+        }), "u_position");
+        illumination_.bind_texture(3, GL_TEXTURE_BUFFER, table(ctx, in.atlas, "texel_normal", GL_RGBA32F, [&] {
             std::vector<vec4> v(a.lit.size());
             for (size_t k = 0; k < v.size(); ++k) v[k] = vec4(a.texel_normal[size_t(a.lit[k])], 0.f);
             return v;
-        }));
+        }), "u_normal");
         bind(3, w.E);
         glDispatchCompute(groups(a.lit.size()), 1, 1);
         if (a.copy.empty()) return;
         barrier();
         copy_texels_.use();
         glUniform1i(copy_texels_.uniform("u_count"), int(a.copy.size()));
-        bind(0, buffer(ctx, in.atlas, "copy", [&] { return a.copy; }));
+        copy_texels_.bind_texture(0, GL_TEXTURE_BUFFER, table(ctx, in.atlas, "copy", GL_RG32I, [&] { return a.copy; }), "u_copy");
+        copy_texels_.bind_texture(1, GL_TEXTURE_BUFFER, w.E_tex.get(), "u_E");
         bind(3, w.E);
         glDispatchCompute(groups(a.copy.size()), 1, 1);
     }
@@ -265,13 +298,13 @@ private:
         const Gather& g = *in.gather;
         vertices_.use();
         glUniform1i(vertices_.uniform("u_count"), g.n);
-        bind(0, buffer(ctx, in.gather, "start", [&] { return g.start; }));
-        bind(1, buffer(ctx, in.gather, "texel", [&] { return g.texel; }));
-        bind(2, buffer(ctx, in.gather, "w", [&] { return g.w; }));
-        bind(3, w.E);
+        vertices_.bind_texture(0, GL_TEXTURE_BUFFER, table(ctx, in.gather, "start", GL_R32I, [&] { return g.start; }), "u_start");
+        vertices_.bind_texture(1, GL_TEXTURE_BUFFER, table(ctx, in.gather, "texel", GL_R32I, [&] { return g.texel; }), "u_texel");
+        vertices_.bind_texture(2, GL_TEXTURE_BUFFER, table(ctx, in.gather, "w", GL_RGBA32F, [&] { return g.w; }), "u_w");
+        vertices_.bind_texture(3, GL_TEXTURE_BUFFER, w.E_tex.get(), "u_E");
+        vertices_.bind_texture(4, GL_TEXTURE_BUFFER, factors(ctx, in).weight_tex.get(), "u_weight");
         bind(4, w.Ev);
         bind(5, w.D);
-        bind(6, factors(ctx, in).weight);
         glDispatchCompute(groups(size_t(g.n)), 1, 1);
     }
 
@@ -296,14 +329,14 @@ private:
             return v;
         };
         if (in.blended) {
-            bind(0, buffer(ctx, in.blended, "kernel_texel", [&] { return K.texel; }));
-            bind(1, buffer(ctx, in.blended, "kernel_w", weights));
+            local_.bind_texture(0, GL_TEXTURE_BUFFER, table(ctx, in.blended, "kernel_texel", GL_R32I, [&] { return K.texel; }), "u_texel");
+            local_.bind_texture(1, GL_TEXTURE_BUFFER, table(ctx, in.blended, "kernel_w", GL_RGBA32F, weights), "u_w");
         } else {
-            bind(0, buffer(ctx, in.kernels, "kernel_texel", [&] { return K.texel; }));
-            bind(1, buffer(ctx, in.kernels, "kernel_w", weights));
+            local_.bind_texture(0, GL_TEXTURE_BUFFER, table(ctx, in.kernels, "kernel_texel", GL_R32I, [&] { return K.texel; }), "u_texel");
+            local_.bind_texture(1, GL_TEXTURE_BUFFER, table(ctx, in.kernels, "kernel_w", GL_RGBA32F, weights), "u_w");
         }
+        local_.bind_texture(2, GL_TEXTURE_BUFFER, w.E_tex.get(), "u_E");
         clear(w.local);
-        bind(2, w.E);
         bind(3, w.local);
         glDispatchCompute(groups(K.texel.size()), 1, 1);
     }
@@ -311,11 +344,14 @@ private:
     // [SECTION] translucency.global: the factors' rows made complete (expand_directed), bound in
     // pieces that fit the GL's block size
     struct GpuFactors {
+        // Rows [r0, r1) read through buffer textures over their pairs of entries from pair `base` on.
         struct Piece {
-            int r0 = 0, r1 = 0;           // rows
-            int64_t base = 0, count = 0;  // entries bound
+            int r0 = 0, r1 = 0;
+            int64_t base = 0;  // in pairs of entries
+            Texture entry, col_hi;
         };
         Buffer outer, entry, col_hi, weight;
+        Texture weight_tex;
         std::vector<Piece> pieces;
         bool wide = false;
     };
@@ -323,35 +359,54 @@ private:
         return ctx.renderer.resources().get<GpuFactors>(in.factors, "directed", [&] {
             PROFILE_SCOPE("translucency.upload_factors");
             const VertexFactors& F = *in.factors;
-            DirectedFactors D = expand_directed(F);
+            const DirectedFactors D0 = expand_directed(F);
+            // Rows padded to an even length with zero entries, so that a texel holds two entries
+            // of the same row.
+            DirectedFactors D;
+            D.outer.assign(D0.outer.size(), 0);
+            D.entry.reserve(D0.entry.size() + size_t(F.n) + 2);
+            for (int i = 0; i < F.n; ++i) {
+                const int b = D0.outer[size_t(i)], e = D0.outer[size_t(i) + 1];
+                D.outer[size_t(i)] = int(D.entry.size());
+                D.entry.insert(D.entry.end(), D0.entry.begin() + b, D0.entry.begin() + e);
+                if (!D0.col_hi.empty()) D.col_hi.insert(D.col_hi.end(), D0.col_hi.begin() + b, D0.col_hi.begin() + e);
+                if ((e - b) & 1) {
+                    D.entry.push_back(0);
+                    if (!D0.col_hi.empty()) D.col_hi.push_back(0);
+                }
+            }
+            D.outer[size_t(F.n)] = int(D.entry.size());
+            const int64_t total_pairs = int64_t(D.entry.size()) / 2;
             GpuFactors g;
             g.outer = storage(D.outer);
-            const int64_t total = D.outer.back();
-            // Two entries of padding: a piece binds at least two (below), and never past the end.
-            D.entry.resize(D.entry.size() + 2, 0);
+            D.entry.resize(D.entry.size() + 2, 0);  // a piece binds at least one pair
             g.entry = storage(D.entry);
-            g.wide = !D.col_hi.empty();
-            if (g.wide) D.col_hi.resize((D.col_hi.size() + 2 + 1) / 2 * 2, 0);
+            g.wide = !D0.col_hi.empty();
+            if (g.wide) D.col_hi.resize(D.col_hi.size() + 2, 0);
             g.col_hi = storage(D.col_hi);
             std::vector<vec4> weight(size_t(F.n));
             for (int j = 0; j < F.n; ++j) weight[size_t(j)] = vec4(F.weight(j), 0.f);
             g.weight = storage(weight);
-            // Pieces of rows whose entries fit the GL's storage block size, each starting at a
-            // multiple of `align` entries (at least 2), so that both the 8-byte entries and the
-            // 2-byte high column bits start aligned, and at an even entry.
-            GLint64 max_block = 0;
+            g.weight_tex = make_buffer_texture(g.weight, GL_RGBA32F);
+            // Pieces of rows whose pairs fit the GL's buffer texture size (one piece on every
+            // driver we know: 2^27 texels), each starting at a pair whose 16-byte entry texel and
+            // 4-byte high-column texel are both at a multiple of the offset alignment.
+            GLint64 max_texels = 0;
             GLint align = 16;
-            glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
-            glGetIntegerv(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &align);
-            const int64_t align_entries = std::max<int64_t>(2, align);
-            const int64_t cap = std::max<int64_t>(1024, max_block / 8 - align_entries);
+            glGetInteger64v(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
+            glGetIntegerv(GL_TEXTURE_BUFFER_OFFSET_ALIGNMENT, &align);
+            const int64_t align_pairs = std::max<int64_t>(1, (align + 3) / 4);
+            const int64_t cap = std::max<int64_t>(1024, max_texels - align_pairs);
             const int n = F.n;
             for (int r0 = 0; r0 < n;) {
-                const int64_t base = int64_t(D.outer[size_t(r0)]) / align_entries * align_entries;
+                const int64_t base = int64_t(D.outer[size_t(r0)]) / 2 / align_pairs * align_pairs;
                 int r1 = r0 + 1;
-                while (r1 < n && int64_t(D.outer[size_t(r1) + 1]) - base <= cap) ++r1;
-                const int64_t count = std::max<int64_t>(2, std::min(int64_t(D.outer[size_t(r1)]) - base, total - base));
-                g.pieces.push_back({r0, r1, base, count});
+                while (r1 < n && int64_t(D.outer[size_t(r1) + 1]) / 2 - base <= cap) ++r1;
+                const int64_t count = std::max<int64_t>(1, std::min(int64_t(D.outer[size_t(r1)]) / 2 - base, total_pairs - base));
+                GpuFactors::Piece p{r0, r1, base, {}, {}};
+                p.entry = make_buffer_texture(g.entry, GL_RGBA32UI, GLintptr(base * 16), GLsizeiptr(count * 16));
+                if (g.wide) p.col_hi = make_buffer_texture(g.col_hi, GL_R32UI, GLintptr(base * 4), GLsizeiptr(count * 4));
+                g.pieces.push_back(std::move(p));
                 r0 = r1;
             }
             return g;
@@ -363,13 +418,12 @@ private:
         Program& prog = F.wide ? global_wide_ : global_;
         prog.use();
         bind(0, F.outer);
-        bind(5, w.Ev);
         bind(6, w.D);
         bind(7, w.Bv);
+        prog.bind_texture(2, GL_TEXTURE_BUFFER, w.Ev_tex.get(), "u_Ev");
         for (const GpuFactors::Piece& p : F.pieces) {
-            glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 1, F.entry.get(), GLintptr(p.base * 8), GLsizeiptr(p.count * 8));
-            if (F.wide) glBindBufferRange(GL_SHADER_STORAGE_BUFFER, 2, F.col_hi.get(), GLintptr(p.base * 2), GLsizeiptr((p.count + 1) / 2 * 4));
-            else bind(2, F.col_hi);
+            prog.bind_texture(0, GL_TEXTURE_BUFFER, p.entry.get(), "u_entry");
+            if (F.wide) prog.bind_texture(1, GL_TEXTURE_BUFFER, p.col_hi.get(), "u_col_hi");
             glUniform1i(prog.uniform("u_row0"), p.r0);
             glUniform1i(prog.uniform("u_row1"), p.r1);
             glUniform1i(prog.uniform("u_base"), int(p.base));
@@ -380,19 +434,35 @@ private:
     // [SECTION] translucency.combine
     void combine_step(DrawContext& ctx, const In& in, PerObject& w) {
         const Atlas& a = in.atlas->atlas;
+        const AtlasStage& A = *in.atlas;
         combine_.use();
         glUniform1i(combine_.uniform("u_size"), a.size);
-        bind(0, buffer(ctx, in.atlas, "fill", [&] { return in.atlas->fill; }));
-        bind(1, buffer(ctx, in.atlas, "face", [&] { return a.texel_face; }));
-        bind(2, buffer(ctx, in.atlas, "bary", [&] { return to_vec4(a.texel_bary); }));
-        bind(3, buffer(ctx, in.mesh, "index", [&] { return in.mesh->index; }));
-        bind(4, w.Bv);
-        bind(5, w.E);
-        bind(6, w.local);
+        glUniform1i(combine_.uniform("u_count"), int(A.nonempty.size()));
+        // Per non-empty texel: (texel, fill source, the source's face) and the source's barycentrics.
+        combine_.bind_texture(0, GL_TEXTURE_BUFFER, table(ctx, in.atlas, "shown", GL_RGBA32I, [&] {
+            std::vector<glm::ivec4> v(A.nonempty.size());
+            for (size_t k = 0; k < v.size(); ++k) {
+                const int t = A.nonempty[k], f = A.fill[size_t(t)], s = f >= 0 ? f : t;
+                v[k] = glm::ivec4(t, s, a.texel_face[size_t(s)], 0);
+            }
+            return v;
+        }), "u_shown");
+        combine_.bind_texture(1, GL_TEXTURE_BUFFER, table(ctx, in.atlas, "shown_bary", GL_RGBA32F, [&] {
+            std::vector<vec4> v(A.nonempty.size());
+            for (size_t k = 0; k < v.size(); ++k) {
+                const int t = A.nonempty[k], f = A.fill[size_t(t)], s = f >= 0 ? f : t;
+                v[k] = vec4(a.texel_bary[size_t(s)], 0.f);
+            }
+            return v;
+        }), "u_bary");
+        combine_.bind_texture(2, GL_TEXTURE_BUFFER, table(ctx, in.mesh, "index", GL_R32UI, [&] { return in.mesh->index; }), "u_tri");
+        combine_.bind_texture(3, GL_TEXTURE_BUFFER, w.Bv_tex.get(), "u_Bv");
+        combine_.bind_texture(4, GL_TEXTURE_BUFFER, w.E_tex.get(), "u_E");
+        combine_.bind_texture(5, GL_TEXTURE_BUFFER, w.local_tex.get(), "u_L");
         glBindImageTexture(0, w.irradiance.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         glBindImageTexture(1, w.local_map.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         glBindImageTexture(2, w.global_map.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-        glDispatchCompute(groups(size_t(a.size) * size_t(a.size)), 1, 1);
+        glDispatchCompute(groups(A.nonempty.size()), 1, 1);
     }
 
     // [SECTION] translucency.reference: every lit inner texel to every inner texel (O(n²))
@@ -452,12 +522,12 @@ private:
         glUniform1i(reference_.uniform("u_table_n"), int(r.table.size()));
         glUniform1f(reference_.uniform("u_inv_r_max"), r.inv_r_max);
         glUniform1f(reference_.uniform("u_r_max2"), r.r_max2);
-        bind(0, buffer(ctx, in.atlas, "fill", [&] { return in.atlas->fill; }));
+        bind(0, ctx.renderer.resources().get<Buffer>(in.atlas, "fill", [&] { return storage(in.atlas->fill); }));
         bind(1, sources);
-        bind(2, buffer(ctx, in.kernels, "reference_x", [&] { return r.x; }));
-        bind(3, buffer(ctx, in.kernels, "reference_self", [&] { return r.self; }));
+        bind(2, ctx.renderer.resources().get<Buffer>(in.kernels, "reference_x", [&] { return storage(r.x); }));
+        bind(3, ctx.renderer.resources().get<Buffer>(in.kernels, "reference_self", [&] { return storage(r.self); }));
         bind(4, w.E);
-        bind(5, buffer(ctx, in.kernels, "reference_table", [&] { return r.table; }));
+        bind(5, ctx.renderer.resources().get<Buffer>(in.kernels, "reference_table", [&] { return storage(r.table); }));
         glBindImageTexture(0, w.reference.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         glDispatchCompute(groups(size_t(a.size) * size_t(a.size)), 1, 1);
         w.has_reference = true;
