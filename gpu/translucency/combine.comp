@@ -15,6 +15,7 @@ uniform samplerBuffer u_L;        // local response per texel
 layout(rgba32f, binding = 0) writeonly uniform image2D u_irradiance;
 layout(rgba32f, binding = 1) writeonly uniform image2D u_local;
 layout(rgba32f, binding = 2) writeonly uniform image2D u_global;
+layout(rgba32f, binding = 3) writeonly uniform image2D u_radiosity;  // local + global
 uniform int u_count;
 uniform int u_size;
 
@@ -30,7 +31,9 @@ void main() {
             w.z * texelFetch(u_Bv, int(texelFetch(u_tri, 3 * f + 2).x)).rgb;
     }
     ivec2 q = ivec2(t % u_size, t / u_size);
+    vec3 l = texelFetch(u_L, s).rgb;
     imageStore(u_irradiance, q, vec4(texelFetch(u_E, s).rgb, 1.0));
-    imageStore(u_local, q, vec4(texelFetch(u_L, s).rgb, 1.0));
+    imageStore(u_local, q, vec4(l, 1.0));
     imageStore(u_global, q, vec4(g, 1.0));
+    imageStore(u_radiosity, q, vec4(l + g, 1.0));
 }

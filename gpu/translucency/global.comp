@@ -5,7 +5,9 @@
 // scale (vertices.comp), so an entry is R_d / scale. Entries and Ev are read through buffer
 // textures, a texel holding two entries; the piece's texels start at pair u_base.
 #include "translucency.glsl"
-layout(local_size_x = 64) in;
+// Eight invocations share a row (x: every eighth pair), eight rows a work group (y): the
+// invocations that run in step read neighbouring texels and loop as long as each other.
+layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(std430, binding = 0) readonly buffer Outer { int outer[]; };
 // Two 8-byte entries per texel, each: R and G as halves; B as a half and the column's low 16 bits.
@@ -19,21 +21,29 @@ uniform int u_row0;
 uniform int u_row1;
 uniform int u_base;
 
+shared vec3 partial[8][8];
+
 void main() {
-    int i = u_row0 + int(gl_GlobalInvocationID.x);
-    if (i >= u_row1) return;
+    int lane = int(gl_LocalInvocationID.x), r = int(gl_LocalInvocationID.y);
+    int i = u_row0 + int(gl_WorkGroupID.x) * 8 + r;
     vec3 b = vec3(0.0);
-    int k1 = (outer[i + 1] >> 1) - u_base;
-    for (int k = (outer[i] >> 1) - u_base; k < k1; ++k) {
-        uvec4 p = texelFetch(u_entry, k);
-        int j0 = int(p.y >> 16u), j1 = int(p.w >> 16u);
+    if (i < u_row1) {
+        int k1 = (outer[i + 1] >> 1) - u_base;
+        for (int k = (outer[i] >> 1) - u_base + lane; k < k1; k += 8) {
+            uvec4 p = texelFetch(u_entry, k);
+            int j0 = int(p.y >> 16u), j1 = int(p.w >> 16u);
 #ifdef WIDE_COLUMNS
-        uint hi = texelFetch(u_col_hi, k).x;
-        j0 |= int(hi & 0xffffu) << 16;
-        j1 |= int(hi >> 16u) << 16;
+            uint hi = texelFetch(u_col_hi, k).x;
+            j0 |= int(hi & 0xffffu) << 16;
+            j1 |= int(hi >> 16u) << 16;
 #endif
-        b += vec3(unpackHalf2x16(p.x), unpackHalf2x16(p.y).x) * texelFetch(u_Ev, j0).rgb;
-        b += vec3(unpackHalf2x16(p.z), unpackHalf2x16(p.w).x) * texelFetch(u_Ev, j1).rgb;
+            b += vec3(unpackHalf2x16(p.x), unpackHalf2x16(p.y).x) * texelFetch(u_Ev, j0).rgb;
+            b += vec3(unpackHalf2x16(p.z), unpackHalf2x16(p.w).x) * texelFetch(u_Ev, j1).rgb;
+        }
     }
+    partial[r][lane] = b;
+    barrier();
+    if (lane != 0 || i >= u_row1) return;
+    for (int l = 1; l < 8; ++l) b += partial[r][l];
     Bv[i] = vec4(b + D[i].rgb, 0.0);
 }

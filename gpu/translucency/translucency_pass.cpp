@@ -75,7 +75,7 @@ public:
           combine_(Program::compute("translucency/combine.comp")),
           reference_(Program::compute("translucency/reference.comp")),
           shadow_(Program::graphics("translucency/shadow.vert", "translucency/shadow.frag")),
-          draw_(Program::graphics("shaders/mesh.vert", "translucency/translucency.frag", {}, fragment_outputs(t))) {}
+          outputs_(fragment_outputs(t)) {}
 
     void run_step(const std::string& step, DrawContext& ctx) override {
         for (int o : ctx.objects) {
@@ -99,30 +99,46 @@ public:
 
     void draw(DrawContext& ctx) override {
         PROFILE_SCOPE("translucency.draw");
-        draw_.use();
+        const auto in_frame = [&](const char* aov) {
+            const auto& l = ctx.renderer.layout();
+            return std::any_of(l.begin(), l.end(), [&](const AovDecl& a) { return a.name == aov; });
+        };
         for (int o : ctx.objects) {
             const SceneObject& obj = ctx.scene.objects[size_t(o)];
             const Settings s = Settings::from(obj);
             PerObject& w = objects_.at(o);
-            ctx.renderer.set_camera_uniforms(draw_, ctx.camera, object_to_world(obj));
-            draw_.bind_texture(1, GL_TEXTURE_2D, w.irradiance.get(), "u_irradiance");
-            draw_.bind_texture(2, GL_TEXTURE_2D, w.local_map.get(), "u_local");
-            draw_.bind_texture(3, GL_TEXTURE_2D, w.global_map.get(), "u_global");
-            draw_.bind_texture(4, GL_TEXTURE_2D, w.reference.get(), "u_reference");
             const auto rho = ctx.eval.get<std::vector<vec3>>("translucency.albedo", o);
-            GLuint rho_tex = 0;
+            // The variant that samples only the maps this frame shows.
+            int need = 0;
+            if (rho) need |= kHasRho;
+            if (in_frame("irradiance")) need |= kNeedIrradiance;
+            if (in_frame("local") || in_frame("global")) need |= kNeedParts;
+            if (in_frame("radiosity") || in_frame("error")) need |= kNeedRadiosity;
+            if (w.has_reference && (in_frame("reference") || in_frame("error"))) need |= kNeedReference | kNeedRadiosity;
+            const Program& prog = draw_program(need);
+            prog.use();
+            ctx.renderer.set_camera_uniforms(prog, ctx.camera, object_to_world(obj));
+            const Texture& B = s.response == Response::Local ? w.local_map
+                               : s.response == Response::Global ? w.global_map
+                               : s.response == Response::Reference ? w.reference
+                                                                    : w.radiosity_map;
+            prog.bind_texture(1, GL_TEXTURE_2D, B.get(), "u_B");
+            if (need & kNeedIrradiance) prog.bind_texture(2, GL_TEXTURE_2D, w.irradiance.get(), "u_irradiance");
+            if (need & kNeedParts) {
+                prog.bind_texture(3, GL_TEXTURE_2D, w.local_map.get(), "u_local");
+                prog.bind_texture(4, GL_TEXTURE_2D, w.global_map.get(), "u_global");
+            }
+            if (need & kNeedRadiosity) prog.bind_texture(5, GL_TEXTURE_2D, w.radiosity_map.get(), "u_radiosity");
+            if (need & kNeedReference) prog.bind_texture(6, GL_TEXTURE_2D, w.reference.get(), "u_reference");
             if (rho) {
                 const int size = w.size;
-                rho_tex = ctx.renderer.resources().get<Texture>(rho, "rho", [&] {
+                const GLuint rho_tex = ctx.renderer.resources().get<Texture>(rho, "rho", [&] {
                     const std::vector<vec4> v = to_vec4(*rho, 1.f);
                     return map_texture(size, &v);
                 }).get();
+                prog.bind_texture(7, GL_TEXTURE_2D, rho_tex, "u_rho");
             }
-            draw_.bind_texture(5, GL_TEXTURE_2D, rho_tex, "u_rho");
-            glUniform1i(draw_.uniform("u_has_rho"), rho ? 1 : 0);
-            glUniform1i(draw_.uniform("u_has_reference"), w.has_reference ? 1 : 0);
-            glUniform1i(draw_.uniform("u_response"), int(s.response));
-            glUniform1f(draw_.uniform("u_eta"), float(s.medium.eta));
+            glUniform1f(prog.uniform("u_eta"), float(s.medium.eta));
             ctx.renderer.draw_object(ctx.scene, ctx.eval, o);
         }
         glBindVertexArray(0);
@@ -153,7 +169,7 @@ private:
         int size = 0, vertices = 0;
         Buffer E, local, Ev, D, Bv;
         Texture E_tex, local_tex, Ev_tex, Bv_tex;  // buffer textures over E, local, Ev, Bv
-        Texture irradiance, local_map, global_map, reference;
+        Texture irradiance, local_map, global_map, radiosity_map, reference;
         std::weak_ptr<const AtlasStage> maps_atlas;  // the atlas whose empty texels the maps hold cleared
         std::vector<RenderTarget> shadow;
         bool has_reference = false;
@@ -171,6 +187,7 @@ private:
             w.irradiance = map_texture(size);
             w.local_map = map_texture(size);
             w.global_map = map_texture(size);
+            w.radiosity_map = map_texture(size);
             w.reference = map_texture(size);
             w.size = size;
             w.maps_atlas.reset();
@@ -178,7 +195,7 @@ private:
         // Combine writes the non-empty texels only: the maps' other texels are cleared once per atlas.
         if (w.maps_atlas.owner_before(in.atlas) || in.atlas.owner_before(w.maps_atlas) || w.maps_atlas.expired()) {
             const float empty[4] = {0.f, 0.f, 0.f, 1.f};
-            for (const Texture* t : {&w.irradiance, &w.local_map, &w.global_map}) glClearTexImage(t->get(), 0, GL_RGBA, GL_FLOAT, empty);
+            for (const Texture* t : {&w.irradiance, &w.local_map, &w.global_map, &w.radiosity_map}) glClearTexImage(t->get(), 0, GL_RGBA, GL_FLOAT, empty);
             w.maps_atlas = in.atlas;
         }
         if (w.vertices != n) {
@@ -427,7 +444,7 @@ private:
             glUniform1i(prog.uniform("u_row0"), p.r0);
             glUniform1i(prog.uniform("u_row1"), p.r1);
             glUniform1i(prog.uniform("u_base"), int(p.base));
-            glDispatchCompute(groups(size_t(p.r1 - p.r0)), 1, 1);
+            glDispatchCompute(GLuint((p.r1 - p.r0 + 7) / 8), 1, 1);
         }
     }
 
@@ -462,6 +479,7 @@ private:
         glBindImageTexture(0, w.irradiance.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         glBindImageTexture(1, w.local_map.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         glBindImageTexture(2, w.global_map.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        glBindImageTexture(3, w.radiosity_map.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         glDispatchCompute(groups(A.nonempty.size()), 1, 1);
     }
 
@@ -533,7 +551,23 @@ private:
         w.has_reference = true;
     }
 
-    Program illumination_, copy_texels_, vertices_, local_, global_, global_wide_, combine_, reference_, shadow_, draw_;
+    // [SECTION] Display variants, made on first use
+    enum : int { kHasRho = 1, kNeedIrradiance = 2, kNeedParts = 4, kNeedRadiosity = 8, kNeedReference = 16 };
+    const Program& draw_program(int need) {
+        auto it = draw_.find(need);
+        if (it != draw_.end()) return it->second;
+        std::vector<std::string> defines;
+        if (need & kHasRho) defines.push_back("HAS_RHO");
+        if (need & kNeedIrradiance) defines.push_back("NEED_IRRADIANCE");
+        if (need & kNeedParts) defines.push_back("NEED_PARTS");
+        if (need & kNeedRadiosity) defines.push_back("NEED_RADIOSITY");
+        if (need & kNeedReference) defines.push_back("NEED_REFERENCE");
+        return draw_.emplace(need, Program::graphics("shaders/mesh.vert", "translucency/translucency.frag", defines, outputs_)).first->second;
+    }
+
+    Program illumination_, copy_texels_, vertices_, local_, global_, global_wide_, combine_, reference_, shadow_;
+    std::string outputs_;
+    std::map<int, Program> draw_;
     std::map<int, PerObject> objects_;
 };
 }  // namespace
