@@ -290,10 +290,17 @@ void Renderer::render(const Scene& s, const Evaluation& ev, int width, int heigh
             // Background: the environment through each pixel; objects overwrite it.
             glDisable(GL_DEPTH_TEST);
             bind_outputs({common_aovs().front()}, b);
-            impl_->background.use();
-            glUniformMatrix4fv(impl_->background.uniform("u_inv_view_proj"), 1, GL_FALSE, glm::value_ptr(cam.inv_view_proj));
-            set_lighting_uniforms(impl_->background, lighting, 0);
-            impl_->draw_fullscreen_triangle();
+            if (!lighting.env.map) {
+                // A constant environment is the radiance's clear colour: no pass over every pixel.
+                const vec3 c = lighting.env.color * lighting.env.intensity;
+                const float rgba[4] = {c.r, c.g, c.b, 1.f};
+                glClearBufferfv(GL_COLOR, 0, rgba);
+            } else {
+                impl_->background.use();
+                glUniformMatrix4fv(impl_->background.uniform("u_inv_view_proj"), 1, GL_FALSE, glm::value_ptr(cam.inv_view_proj));
+                set_lighting_uniforms(impl_->background, lighting, 0);
+                impl_->draw_fullscreen_triangle();
+            }
         }
         glEnable(GL_DEPTH_TEST);
         glDepthFunc(GL_LESS);

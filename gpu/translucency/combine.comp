@@ -6,9 +6,8 @@
 #include "translucency.glsl"
 layout(local_size_x = 64) in;
 
-uniform isamplerBuffer u_shown;   // per non-empty texel: (texel, source, face of the source or -1)
-uniform samplerBuffer u_bary;     // per non-empty texel: the source's barycentrics
-uniform usamplerBuffer u_tri;     // index, 3 per face
+uniform isamplerBuffer u_shown;   // per non-empty texel: texel, source, the source's vertices 0 and 1 (-1: none)
+uniform samplerBuffer u_bary;     // per non-empty texel: the source's barycentrics, the bits of its vertex 2
 uniform samplerBuffer u_Bv;       // global response per vertex
 uniform samplerBuffer u_E;        // irradiance per texel
 uniform samplerBuffer u_L;        // local response per texel
@@ -22,13 +21,12 @@ uniform int u_size;
 void main() {
     int k = int(gl_GlobalInvocationID.x);
     if (k >= u_count) return;
-    ivec3 r = texelFetch(u_shown, k).xyz;
-    int t = r.x, s = r.y, f = r.z;
+    ivec4 r = texelFetch(u_shown, k);
+    int t = r.x, s = r.y;
     vec3 g = vec3(0.0);
-    if (f >= 0) {
-        vec3 w = texelFetch(u_bary, k).xyz;
-        g = w.x * texelFetch(u_Bv, int(texelFetch(u_tri, 3 * f).x)).rgb + w.y * texelFetch(u_Bv, int(texelFetch(u_tri, 3 * f + 1).x)).rgb +
-            w.z * texelFetch(u_Bv, int(texelFetch(u_tri, 3 * f + 2).x)).rgb;
+    if (r.z >= 0) {
+        vec4 w = texelFetch(u_bary, k);
+        g = w.x * texelFetch(u_Bv, r.z).rgb + w.y * texelFetch(u_Bv, r.w).rgb + w.z * texelFetch(u_Bv, floatBitsToInt(w.w)).rgb;
     }
     ivec2 q = ivec2(t % u_size, t / u_size);
     vec3 l = texelFetch(u_L, s).rgb;

@@ -360,6 +360,7 @@ private:
 
     // [SECTION] translucency.global: the factors' rows made complete (expand_directed), bound in
     // pieces that fit the GL's block size
+    static constexpr int kRowQuantum = 32;  // entries: global.comp's 8 invocations x 2 texels x 2 entries
     struct GpuFactors {
         // Rows [r0, r1) read through buffer textures over their pairs of entries from pair `base` on.
         struct Piece {
@@ -377,20 +378,20 @@ private:
             PROFILE_SCOPE("translucency.upload_factors");
             const VertexFactors& F = *in.factors;
             const DirectedFactors D0 = expand_directed(F);
-            // Rows padded to an even length with zero entries, so that a texel holds two entries
-            // of the same row.
+            // Rows padded with zero entries to a multiple of kRowQuantum: a texel holds two entries
+            // of the same row, and the shader's eight invocations of a row read two texels each
+            // per step, without a last partial step.
             DirectedFactors D;
             D.outer.assign(D0.outer.size(), 0);
-            D.entry.reserve(D0.entry.size() + size_t(F.n) + 2);
+            D.entry.reserve(D0.entry.size() + size_t(F.n) * (kRowQuantum / 2) + 2);
             for (int i = 0; i < F.n; ++i) {
                 const int b = D0.outer[size_t(i)], e = D0.outer[size_t(i) + 1];
                 D.outer[size_t(i)] = int(D.entry.size());
                 D.entry.insert(D.entry.end(), D0.entry.begin() + b, D0.entry.begin() + e);
                 if (!D0.col_hi.empty()) D.col_hi.insert(D.col_hi.end(), D0.col_hi.begin() + b, D0.col_hi.begin() + e);
-                if ((e - b) & 1) {
-                    D.entry.push_back(0);
-                    if (!D0.col_hi.empty()) D.col_hi.push_back(0);
-                }
+                const int pad = (kRowQuantum - (e - b) % kRowQuantum) % kRowQuantum;
+                D.entry.insert(D.entry.end(), size_t(pad), 0);
+                if (!D0.col_hi.empty()) D.col_hi.insert(D.col_hi.end(), size_t(pad), 0);
             }
             D.outer[size_t(F.n)] = int(D.entry.size());
             const int64_t total_pairs = int64_t(D.entry.size()) / 2;
@@ -437,9 +438,9 @@ private:
         bind(0, F.outer);
         bind(6, w.D);
         bind(7, w.Bv);
-        prog.bind_texture(2, GL_TEXTURE_BUFFER, w.Ev_tex.get(), "u_Ev");
+        glBindImageTexture(1, w.Ev_tex.get(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
         for (const GpuFactors::Piece& p : F.pieces) {
-            prog.bind_texture(0, GL_TEXTURE_BUFFER, p.entry.get(), "u_entry");
+            glBindImageTexture(0, p.entry.get(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32UI);
             if (F.wide) prog.bind_texture(1, GL_TEXTURE_BUFFER, p.col_hi.get(), "u_col_hi");
             glUniform1i(prog.uniform("u_row0"), p.r0);
             glUniform1i(prog.uniform("u_row1"), p.r1);
@@ -455,24 +456,34 @@ private:
         combine_.use();
         glUniform1i(combine_.uniform("u_size"), a.size);
         glUniform1i(combine_.uniform("u_count"), int(A.nonempty.size()));
-        // Per non-empty texel: (texel, fill source, the source's face) and the source's barycentrics.
+        // Per non-empty texel: (texel, fill source, the source's first two vertices) and (the
+        // barycentrics, the third vertex's bits); vertex -1 where the source has no triangle.
+        const auto shown = [&](size_t k, int& t, int& s, int& f) {
+            t = A.nonempty[k];
+            s = A.fill[size_t(t)] >= 0 ? A.fill[size_t(t)] : t;
+            f = a.texel_face[size_t(s)];
+        };
         combine_.bind_texture(0, GL_TEXTURE_BUFFER, table(ctx, in.atlas, "shown", GL_RGBA32I, [&] {
             std::vector<glm::ivec4> v(A.nonempty.size());
             for (size_t k = 0; k < v.size(); ++k) {
-                const int t = A.nonempty[k], f = A.fill[size_t(t)], s = f >= 0 ? f : t;
-                v[k] = glm::ivec4(t, s, a.texel_face[size_t(s)], 0);
+                int t, s, f;
+                shown(k, t, s, f);
+                v[k] = f >= 0 ? glm::ivec4(t, s, in.mesh->index[3 * size_t(f)], in.mesh->index[3 * size_t(f) + 1]) : glm::ivec4(t, s, -1, -1);
             }
             return v;
         }), "u_shown");
         combine_.bind_texture(1, GL_TEXTURE_BUFFER, table(ctx, in.atlas, "shown_bary", GL_RGBA32F, [&] {
             std::vector<vec4> v(A.nonempty.size());
             for (size_t k = 0; k < v.size(); ++k) {
-                const int t = A.nonempty[k], f = A.fill[size_t(t)], s = f >= 0 ? f : t;
-                v[k] = vec4(a.texel_bary[size_t(s)], 0.f);
+                int t, s, f;
+                shown(k, t, s, f);
+                const int32_t v2 = f >= 0 ? int32_t(in.mesh->index[3 * size_t(f) + 2]) : -1;
+                float bits;
+                std::memcpy(&bits, &v2, sizeof bits);
+                v[k] = vec4(f >= 0 ? a.texel_bary[size_t(s)] : vec3(0.f), bits);
             }
             return v;
         }), "u_bary");
-        combine_.bind_texture(2, GL_TEXTURE_BUFFER, table(ctx, in.mesh, "index", GL_R32UI, [&] { return in.mesh->index; }), "u_tri");
         combine_.bind_texture(3, GL_TEXTURE_BUFFER, w.Bv_tex.get(), "u_Bv");
         combine_.bind_texture(4, GL_TEXTURE_BUFFER, w.E_tex.get(), "u_E");
         combine_.bind_texture(5, GL_TEXTURE_BUFFER, w.local_tex.get(), "u_L");
