@@ -16,24 +16,16 @@ uniform mat4 u_model;
 uniform mat3 u_normal_matrix;
 uniform float u_eta;
 uniform float u_env_transmittance;  // 1 - F_dr(eta)
-// Shadow maps (ShadowMap): one per light, up to 4.
+// Shadow maps (ShadowMap): one per light, up to 4, as the layers of u_shadow.
 uniform int u_shadow_count;
-uniform sampler2D u_shadow[4];
+uniform sampler2DArray u_shadow;
+uniform int u_shadow_res;
 uniform mat4 u_shadow_view_proj[4];
 uniform int u_shadow_point[4];
 uniform vec3 u_shadow_origin[4];
 uniform vec3 u_shadow_dir[4];
 uniform float u_shadow_bias[4];
-uniform int u_shadow_res[4];
 uniform int u_shadow_valid[4];
-
-float shadow_depth(int i, ivec2 q) {
-    // Constant indices into the sampler array (dynamically uniform everywhere, but simple for every driver).
-    if (i == 0) return texelFetch(u_shadow[0], q, 0).r;
-    if (i == 1) return texelFetch(u_shadow[1], q, 0).r;
-    if (i == 2) return texelFetch(u_shadow[2], q, 0).r;
-    return texelFetch(u_shadow[3], q, 0).r;
-}
 
 float visibility(int i, vec3 p) {
     if (i >= u_shadow_count || u_shadow_valid[i] == 0) return 1.0;
@@ -41,11 +33,11 @@ float visibility(int i, vec3 p) {
     if (!(c.w > 0.0)) return 1.0;
     float nx = c.x / c.w, ny = c.y / c.w;
     if (!(abs(nx) <= 1.0 && abs(ny) <= 1.0)) return 1.0;
-    int res = u_shadow_res[i];
+    int res = u_shadow_res;
     int x = clamp(int(floor((nx * 0.5 + 0.5) * float(res))), 0, res - 1);
     int y = clamp(int(floor((0.5 - 0.5 * ny) * float(res))), 0, res - 1);  // row 0 at the top
     float d = u_shadow_point[i] != 0 ? length(p - u_shadow_origin[i]) : dot(p - u_shadow_origin[i], u_shadow_dir[i]);
-    return d - u_shadow_bias[i] <= shadow_depth(i, ivec2(x, res - 1 - y)) ? 1.0 : 0.0;  // GL rows from the bottom
+    return d - u_shadow_bias[i] <= texelFetch(u_shadow, ivec3(x, res - 1 - y, i), 0).r ? 1.0 : 0.0;  // GL rows from the bottom
 }
 
 void main() {

@@ -164,6 +164,40 @@ private:
               gather(ctx.eval.get<Gather>("translucency.gather", o)) {}
         const LocalKernels& K() const { return blended ? blended->kernels : *kernels; }
     };
+    // One shadow map per light as the layers of one texture (a single fetch in the shader, whatever
+    // the light), with one depth buffer they share in turn.
+    struct ShadowLayers {
+        int res = 0, layers = 0;
+        Texture color, depth;
+        Framebuffer fbo;
+        void resize(int r, int n) {
+            if (r == res && n == layers) return;
+            GLuint id = 0;
+            glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &id);
+            color = Texture(id);
+            glTextureStorage3D(id, 1, GL_R32F, r, r, n);
+            glTextureParameteri(id, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+            glTextureParameteri(id, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+            glCreateTextures(GL_TEXTURE_2D, 1, &id);
+            depth = Texture(id);
+            glTextureStorage2D(id, 1, GL_DEPTH_COMPONENT32F, r, r);
+            glCreateFramebuffers(1, &id);
+            fbo = Framebuffer(id);
+            glNamedFramebufferTexture(id, GL_DEPTH_ATTACHMENT, depth.get(), 0);
+            glNamedFramebufferDrawBuffer(id, GL_COLOR_ATTACHMENT0);
+            res = r, layers = n;
+        }
+        // Binds layer i as the target, cleared: no surface (3e38) at the far plane.
+        void begin(int i) const {
+            glNamedFramebufferTextureLayer(fbo.get(), GL_COLOR_ATTACHMENT0, color.get(), 0, i);
+            glBindFramebuffer(GL_FRAMEBUFFER, fbo.get());
+            glViewport(0, 0, res, res);
+            const float far_distance[4] = {3e38f, 0.f, 0.f, 0.f}, one = 1.f;
+            glDepthMask(GL_TRUE);
+            glClearNamedFramebufferfv(fbo.get(), GL_COLOR, 0, far_distance);
+            glClearNamedFramebufferfv(fbo.get(), GL_DEPTH, 0, &one);
+        }
+    };
     // Per object: the frame's buffers and maps.
     struct PerObject {
         int size = 0, vertices = 0;
@@ -171,7 +205,7 @@ private:
         Texture E_tex, local_tex, Ev_tex, Bv_tex;  // buffer textures over E, local, Ev, Bv
         Texture irradiance, local_map, global_map, radiosity_map, reference;
         std::weak_ptr<const AtlasStage> maps_atlas;  // the atlas whose empty texels the maps hold cleared
-        std::vector<RenderTarget> shadow;
+        ShadowLayers shadow;
         bool has_reference = false;
     };
 
@@ -237,17 +271,11 @@ private:
                 b.lo = glm::min(b.lo, q), b.hi = glm::max(b.hi, q);
             }
             const size_t n = std::min(ctx.lighting.lights.size(), size_t(kMaxShadowMaps));
-            w.shadow.resize(n);
+            w.shadow.resize(in.s.shadow_map, int(std::max<size_t>(n, 1)));
             for (size_t i = 0; i < n && !a.display->position.empty(); ++i) {
                 frames.push_back(shadow_frame(ctx.lighting.lights[i], 0.5f * (b.lo + b.hi), 0.5f * glm::length(b.hi - b.lo), in.s.shadow_map));
                 if (!frames.back().valid) continue;
-                RenderTarget& rt = w.shadow[i];
-                rt.resize(in.s.shadow_map, in.s.shadow_map, 1);
-                rt.bind();
-                glClearColor(3e38f, 0.f, 0.f, 0.f);
-                glClearDepth(1.0);
-                glDepthMask(GL_TRUE);
-                glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+                w.shadow.begin(int(i));
                 glEnable(GL_DEPTH_TEST);
                 glDepthFunc(GL_LESS);
                 shadow_.use();
@@ -264,11 +292,11 @@ private:
         illumination_.use();
         ctx.renderer.set_lighting_uniforms(illumination_, ctx.lighting, 0);
         glUniform1i(illumination_.uniform("u_shadow_count"), int(frames.size()));
+        illumination_.bind_texture(6, GL_TEXTURE_2D_ARRAY, frames.empty() ? 0 : w.shadow.color.get(), "u_shadow");
         for (size_t i = 0; i < 4; ++i) {
             std::string k = std::to_string(i);
             k.insert(k.begin(), '['), k.push_back(']');
             const bool on = i < frames.size() && frames[i].valid;
-            illumination_.bind_texture(int(6 + i), GL_TEXTURE_2D, on ? w.shadow[i].color(0) : 0, ("u_shadow" + k).c_str());
             glUniform1i(illumination_.uniform(("u_shadow_valid" + k).c_str()), on ? 1 : 0);
             if (!on) continue;
             const ShadowMap& f = frames[i];
@@ -277,8 +305,8 @@ private:
             glUniform3fv(illumination_.uniform(("u_shadow_origin" + k).c_str()), 1, glm::value_ptr(f.origin));
             glUniform3fv(illumination_.uniform(("u_shadow_dir" + k).c_str()), 1, glm::value_ptr(f.dir));
             glUniform1f(illumination_.uniform(("u_shadow_bias" + k).c_str()), f.bias);
-            glUniform1i(illumination_.uniform(("u_shadow_res" + k).c_str()), f.res);
         }
+        glUniform1i(illumination_.uniform("u_shadow_res"), in.s.shadow_map);
         const mat3 nm = glm::transpose(glm::inverse(mat3(model)));
         glUniformMatrix4fv(illumination_.uniform("u_model"), 1, GL_FALSE, glm::value_ptr(model));
         glUniformMatrix3fv(illumination_.uniform("u_normal_matrix"), 1, GL_FALSE, glm::value_ptr(nm));
