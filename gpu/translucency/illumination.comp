@@ -1,6 +1,7 @@
 #version 430 core
 // Technique translucency, step translucency.illumination: irradiance entering the medium per
-// lit texel (core/translucency/frame.cpp illuminate; copy_texels.comp fills the other borders).
+// lit texel, written also to the border texels that copy it (AtlasStage::copy; core/translucency/frame.cpp
+// illuminate).
 #include "common.glsl"
 #include "lighting.glsl"
 #include "translucency.glsl"
@@ -9,6 +10,8 @@ layout(local_size_x = 64) in;
 uniform isamplerBuffer u_lit;       // AtlasStage::lit
 uniform samplerBuffer u_position;   // per lit texel, object space
 uniform samplerBuffer u_normal;
+uniform isamplerBuffer u_copy_start;   // per lit texel: its copies' range in u_copy_target
+uniform isamplerBuffer u_copy_target;
 layout(std430, binding = 3) writeonly buffer Irradiance { vec4 E[]; };             // per texel
 
 uniform int u_count;
@@ -55,4 +58,6 @@ void main() {
     }
     e += env_irradiance(n) * u_env_transmittance;
     E[texelFetch(u_lit, k).x] = vec4(e, 0.0);
+    int m1 = texelFetch(u_copy_start, k + 1).x;
+    for (int m = texelFetch(u_copy_start, k).x; m < m1; ++m) E[texelFetch(u_copy_target, m).x] = vec4(e, 0.0);
 }

@@ -67,7 +67,6 @@ class TranslucencyPass final : public TechniquePass {
 public:
     explicit TranslucencyPass(const Technique& t)
         : illumination_(Program::compute("translucency/illumination.comp")),
-          copy_texels_(Program::compute("translucency/copy_texels.comp")),
           vertices_(Program::compute("translucency/vertices.comp")),
           local_(Program::compute("translucency/local.comp")),
           global_(Program::compute("translucency/global.comp")),
@@ -326,16 +325,26 @@ private:
             for (size_t k = 0; k < v.size(); ++k) v[k] = vec4(a.texel_normal[size_t(a.lit[k])], 0.f);
             return v;
         }), "u_normal");
+        // Per lit texel, the border texels that copy it (AtlasStage::copy), written with it.
+        struct Copies {
+            std::vector<int32_t> start, target;
+        };
+        const Copies& copies = ctx.renderer.resources().get<Copies>(in.atlas, "copies", [&] {
+            Copies c;
+            std::vector<int32_t> lit_index(a.atlas.texel_kind.size(), -1);
+            for (size_t k = 0; k < a.lit.size(); ++k) lit_index[size_t(a.lit[k])] = int32_t(k);
+            c.start.assign(a.lit.size() + 1, 0);
+            for (const ivec2& p : a.copy) ++c.start[size_t(lit_index[size_t(p.y)]) + 1];
+            for (size_t k = 0; k < a.lit.size(); ++k) c.start[k + 1] += c.start[k];
+            c.target.resize(a.copy.size());
+            std::vector<int32_t> next(c.start.begin(), c.start.end() - 1);
+            for (const ivec2& p : a.copy) c.target[size_t(next[size_t(lit_index[size_t(p.y)])]++)] = p.x;
+            return c;
+        });
+        illumination_.bind_texture(4, GL_TEXTURE_BUFFER, table(ctx, in.atlas, "copy_start", GL_R32I, [&] { return copies.start; }), "u_copy_start");
+        illumination_.bind_texture(5, GL_TEXTURE_BUFFER, table(ctx, in.atlas, "copy_target", GL_R32I, [&] { return copies.target; }), "u_copy_target");
         bind(3, w.E);
         glDispatchCompute(groups(a.lit.size()), 1, 1);
-        if (a.copy.empty()) return;
-        barrier();
-        copy_texels_.use();
-        glUniform1i(copy_texels_.uniform("u_count"), int(a.copy.size()));
-        copy_texels_.bind_texture(0, GL_TEXTURE_BUFFER, table(ctx, in.atlas, "copy", GL_RG32I, [&] { return a.copy; }), "u_copy");
-        copy_texels_.bind_texture(1, GL_TEXTURE_BUFFER, w.E_tex.get(), "u_E");
-        bind(3, w.E);
-        glDispatchCompute(groups(a.copy.size()), 1, 1);
     }
 
     // [SECTION] translucency.vertices
@@ -604,7 +613,7 @@ private:
         return draw_.emplace(need, Program::graphics("shaders/mesh.vert", "translucency/translucency.frag", defines, outputs_)).first->second;
     }
 
-    Program illumination_, copy_texels_, vertices_, local_, global_, global_wide_, combine_, reference_, shadow_;
+    Program illumination_, vertices_, local_, global_, global_wide_, combine_, reference_, shadow_;
     std::string outputs_;
     std::map<int, Program> draw_;
     std::map<int, PerObject> objects_;
