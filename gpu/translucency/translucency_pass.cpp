@@ -71,7 +71,8 @@ public:
           local_(Program::compute("translucency/local.comp")),
           global_(Program::compute("translucency/global.comp")),
           global_wide_(Program::compute("translucency/global.comp", {"WIDE_COLUMNS"})),
-          combine_(Program::compute("translucency/combine.comp")),
+          combine_radiosity_(Program::compute("translucency/combine.comp")),
+          combine_parts_(Program::compute("translucency/combine.comp", {"WRITE_PARTS"})),
           reference_(Program::compute("translucency/reference.comp")),
           shadow_(Program::graphics("translucency/shadow.vert", "translucency/shadow.frag")),
           outputs_(fragment_outputs(t)) {}
@@ -88,6 +89,10 @@ public:
             else if (step == "translucency.reference") reference_step(ctx, in, w);
             barrier();
         }
+        unbind_step_inputs();
+    }
+
+    static void unbind_step_inputs() {
         for (GLuint b = 0; b < 8; ++b) {
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b, 0);
             glActiveTexture(GL_TEXTURE0 + b);
@@ -107,6 +112,13 @@ public:
             const Settings s = Settings::from(obj);
             PerObject& w = objects_.at(o);
             const auto rho = ctx.eval.get<std::vector<vec3>>("translucency.albedo", o);
+            if (shows_parts(ctx, s) && !w.parts_written) {
+                // Steps reused from a frame that did not show them: the parts from the step's buffers.
+                PROFILE_SCOPE("translucency.combine_parts");
+                combine(ctx, In(ctx, o), w, true);
+                barrier();
+                unbind_step_inputs();
+            }
             // The variant that samples only the maps this frame shows.
             int need = 0;
             if (rho) need |= kHasRho;
@@ -206,6 +218,7 @@ private:
         std::weak_ptr<const AtlasStage> maps_atlas;  // the atlas whose empty texels the maps hold cleared
         ShadowLayers shadow;
         bool has_reference = false;
+        bool parts_written = false;  // the irradiance, local and global maps hold the last combine's values
     };
 
     PerObject& work(int o, const In& in) {
@@ -487,12 +500,25 @@ private:
     }
 
     // [SECTION] translucency.combine
+    // The irradiance, local and global maps are written when the frame shows one of them (as an
+    // AOV, or as the displayed response); else by the first frame that does, from the step's buffers.
+    static bool shows_parts(const DrawContext& ctx, const Settings& s) {
+        const auto& l = ctx.renderer.layout();
+        const bool aov = std::any_of(l.begin(), l.end(), [](const AovDecl& a) { return a.name == "irradiance" || a.name == "local" || a.name == "global"; });
+        return aov || s.response == Response::Local || s.response == Response::Global;
+    }
+
     void combine_step(DrawContext& ctx, const In& in, PerObject& w) {
+        combine(ctx, in, w, shows_parts(ctx, in.s));
+    }
+
+    void combine(DrawContext& ctx, const In& in, PerObject& w, bool parts) {
         const Atlas& a = in.atlas->atlas;
         const AtlasStage& A = *in.atlas;
-        combine_.use();
-        glUniform1i(combine_.uniform("u_size"), a.size);
-        glUniform1i(combine_.uniform("u_count"), int(A.nonempty.size()));
+        Program& prog = parts ? combine_parts_ : combine_radiosity_;
+        prog.use();
+        glUniform1i(prog.uniform("u_size"), a.size);
+        glUniform1i(prog.uniform("u_count"), int(A.nonempty.size()));
         // Per non-empty texel: (texel, fill source, the source's first two vertices) and (the
         // barycentrics, the third vertex's bits); vertex -1 where the source has no triangle.
         const auto shown = [&](size_t k, int& t, int& s, int& f) {
@@ -500,7 +526,7 @@ private:
             s = A.fill[size_t(t)] >= 0 ? A.fill[size_t(t)] : t;
             f = a.texel_face[size_t(s)];
         };
-        combine_.bind_texture(0, GL_TEXTURE_BUFFER, table(ctx, in.atlas, "shown", GL_RGBA32I, [&] {
+        prog.bind_texture(0, GL_TEXTURE_BUFFER, table(ctx, in.atlas, "shown", GL_RGBA32I, [&] {
             std::vector<glm::ivec4> v(A.nonempty.size());
             for (size_t k = 0; k < v.size(); ++k) {
                 int t, s, f;
@@ -509,7 +535,7 @@ private:
             }
             return v;
         }), "u_shown");
-        combine_.bind_texture(1, GL_TEXTURE_BUFFER, table(ctx, in.atlas, "shown_bary", GL_RGBA32F, [&] {
+        prog.bind_texture(1, GL_TEXTURE_BUFFER, table(ctx, in.atlas, "shown_bary", GL_RGBA32F, [&] {
             std::vector<vec4> v(A.nonempty.size());
             for (size_t k = 0; k < v.size(); ++k) {
                 int t, s, f;
@@ -521,14 +547,17 @@ private:
             }
             return v;
         }), "u_bary");
-        combine_.bind_texture(3, GL_TEXTURE_BUFFER, w.Bv_tex.get(), "u_Bv");
-        combine_.bind_texture(4, GL_TEXTURE_BUFFER, w.E_tex.get(), "u_E");
-        combine_.bind_texture(5, GL_TEXTURE_BUFFER, w.local_tex.get(), "u_L");
-        glBindImageTexture(0, w.irradiance.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-        glBindImageTexture(1, w.local_map.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-        glBindImageTexture(2, w.global_map.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        prog.bind_texture(3, GL_TEXTURE_BUFFER, w.Bv_tex.get(), "u_Bv");
+        prog.bind_texture(4, GL_TEXTURE_BUFFER, w.E_tex.get(), "u_E");
+        prog.bind_texture(5, GL_TEXTURE_BUFFER, w.local_tex.get(), "u_L");
+        if (parts) {
+            glBindImageTexture(0, w.irradiance.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+            glBindImageTexture(1, w.local_map.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+            glBindImageTexture(2, w.global_map.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        }
         glBindImageTexture(3, w.radiosity_map.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         glDispatchCompute(groups(A.nonempty.size()), 1, 1);
+        w.parts_written = parts;
     }
 
     // [SECTION] translucency.reference: every lit inner texel to every inner texel (O(n²))
@@ -613,7 +642,7 @@ private:
         return draw_.emplace(need, Program::graphics("shaders/mesh.vert", "translucency/translucency.frag", defines, outputs_)).first->second;
     }
 
-    Program illumination_, vertices_, local_, global_, global_wide_, combine_, reference_, shadow_;
+    Program illumination_, vertices_, local_, global_, global_wide_, combine_radiosity_, combine_parts_, reference_, shadow_;
     std::string outputs_;
     std::map<int, Program> draw_;
     std::map<int, PerObject> objects_;

@@ -102,6 +102,26 @@ TEST(TranslucencyCpuGpu, AgreeTexelForTexelInTextureModeWithBlendingOffAndAPoint
     test::expect_frames_agree(cpu, gpu, {"radiance", "irradiance", "radiosity", "local", "global"}, 2e-3, 3e-2, 0.98, 0.995);
 }
 
+// The GPU writes the irradiance, local and global maps only for frames that show them: a frame
+// asking for them after radiance-only frames (its steps reused) still gets this frame's values.
+TEST(TranslucencyCpuGpu, PartsShownAfterRadianceOnlyFramesAreCurrent) {
+    Workbench wb;
+    Scene s = small_sphere();
+    RenderRequest req;
+    req.width = 160, req.height = 120;
+    req.backend = Backend::Gpu;
+    req.aovs = {"radiance"};
+    wb.render(s, req);
+    apply_set(s, "light.direction", "40,120");  // the steps rerun, for radiance alone
+    wb.render(s, req);
+    req.aovs = {"radiance", "irradiance", "local", "global"};
+    const RenderResult gpu = wb.render(s, req);
+    for (const auto& st : gpu.frame.steps) EXPECT_EQ(st.status, StageStatus::Cached) << st.name;
+    req.backend = Backend::Cpu;
+    const Frame cpu = wb.render(s, req).frame;
+    test::expect_frames_agree(cpu, gpu.frame, {"radiance", "irradiance", "local", "global"}, 2e-3, 3e-2, 0.98, 0.995);
+}
+
 // [SECTION] What a change reruns
 TEST(TranslucencyStages, MovingALightRecomputesNoStageAndRerunsTheFramePasses) {
     Workbench wb;
