@@ -102,6 +102,29 @@ TEST(TranslucencyCpuGpu, AgreeTexelForTexelInTextureModeWithBlendingOffAndAPoint
     test::expect_frames_agree(cpu, gpu, {"radiance", "irradiance", "radiosity", "local", "global"}, 2e-3, 3e-2, 0.98, 0.995);
 }
 
+// Above 65,536 vertices a factor's column takes 2 more bytes: the GPU's wide-column variant
+// (a sphere of 68,082 vertices kept whole, 2 m across, so that few factors pass the threshold).
+TEST(TranslucencyCpuGpu, AgreeAboveSixtyFiveThousandVertices) {
+    Workbench wb;
+    Scene s = small_sphere();
+    apply_set(s, "geometry.resolution", "370");
+    apply_set(s, "translucency.vertices", "0");
+    apply_set(s, "translucency.mm_per_unit", "2000");
+    apply_set(s, "translucency.atlas_size", "256");
+    RenderRequest req;
+    req.width = 160, req.height = 120;
+    req.aovs = {"radiance", "global"};
+    req.backend = Backend::Cpu;
+    const RenderResult cpu = wb.render(s, req);
+    const auto F = cpu.eval.get<translucency::VertexFactors>("translucency.factors", 0);
+    ASSERT_TRUE(F);
+    ASSERT_GT(F->n, 65536);
+    ASSERT_EQ(F->col_hi.size(), F->pairs());
+    req.backend = Backend::Gpu;
+    const Frame gpu = wb.render(s, req).frame;
+    test::expect_frames_agree(cpu.frame, gpu, {"radiance", "global"}, 2e-3, 3e-2, 0.98, 0.995);
+}
+
 // The GPU writes the irradiance, local and global maps only for frames that show them: a frame
 // asking for them after radiance-only frames (its steps reused) still gets this frame's values.
 TEST(TranslucencyCpuGpu, PartsShownAfterRadianceOnlyFramesAreCurrent) {
