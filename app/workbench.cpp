@@ -68,6 +68,7 @@ RenderResult Workbench::render(const Scene& s, const RenderRequest& req) {
         r.gpu_ms = g.last_gpu_ms();
         r.frame = g.read_frame();
     }
+    if (req.coverage) r.frame.coverage = frame_coverage(s, r.eval, size.x, size.y);
     return r;
 }
 

@@ -27,6 +27,7 @@ struct RenderRequest {
     Backend backend = Backend::Gpu;
     int width = 512, height = 512;
     std::vector<std::string> aovs;  // besides radiance (frame_layout); empty = every AOV of the scene
+    bool coverage = false;          // also fill Frame::coverage (untimed; either backend)
     ProgressFn progress;
 };
 

@@ -370,6 +370,7 @@ void rasterize(const std::vector<DrawItem>& items, const RasterCamera& cam, GBuf
     out.height = height;
     out.depth.resize(n_pixels);
     out.object.resize(n_pixels);
+    out.primitive.resize(n_pixels);
     out.position.resize(n_pixels);
     out.normal.resize(n_pixels);
     out.tangent.resize(n_pixels);
@@ -462,6 +463,7 @@ void rasterize(const std::vector<DrawItem>& items, const RasterCamera& cam, GBuf
                 for (size_t x = 0; x < span; ++x) {
                     const size_t local = local_row + x, o = o_row + x;
                     const int32_t id = buf.tri_id[local];
+                    out.primitive[o] = id;
                     if (id < 0) {
                         out.object[o] = -1;
                         out.position[o] = vec3(0.f);

@@ -40,6 +40,7 @@ struct GBuffer {
     int width = 0, height = 0;
     std::vector<float> depth;       // window depth in [0,1], 1 where nothing was drawn
     std::vector<int32_t> object;    // object_id or -1
+    std::vector<int32_t> primitive; // the drawn triangle (numbered over every item's triangles after clipping) or -1
     std::vector<vec3> position;     // world position
     std::vector<vec3> normal;       // normalised interpolated world normal
     std::vector<vec3> tangent;      // normalised interpolated world tangent (may be 0 if mesh has none)

@@ -90,6 +90,45 @@ Lighting make_lighting(const Scene& s, const Evaluation& ev) {
     return L;
 }
 
+// [SECTION] Coverage
+size_t Coverage::covered_count() const { return size_t(std::count_if(object.begin(), object.end(), [](int32_t o) { return o >= 0; })); }
+
+Coverage coverage_of(const GBuffer& gb) {
+    Coverage c;
+    c.width = gb.width, c.height = gb.height;
+    c.object = gb.object;
+    c.edge.assign(gb.object.size(), 0);
+    tbb::parallel_for(0, gb.height, [&](int y) {
+        for (int x = 0; x < gb.width; ++x) {
+            const size_t p = gb.index(x, y);
+            bool edge = false;
+            for (int dy = -1; dy <= 1 && !edge; ++dy)
+                for (int dx = -1; dx <= 1 && !edge; ++dx) {
+                    const int nx = x + dx, ny = y + dy;
+                    if (nx < 0 || ny < 0 || nx >= gb.width || ny >= gb.height) continue;
+                    const size_t q = gb.index(nx, ny);
+                    edge = gb.primitive[q] != gb.primitive[p] || gb.object[q] != gb.object[p];
+                }
+            c.edge[p] = edge;
+        }
+    });
+    return c;
+}
+
+Coverage frame_coverage(const Scene& s, const Evaluation& ev, int width, int height) {
+    const FrameCamera cam = make_camera(s, world_bounds(s, ev), width, height);
+    std::vector<DrawItem> items;
+    std::vector<std::shared_ptr<const TriMesh>> keep;
+    for (size_t i = 0; i < s.objects.size(); ++i) {
+        keep.push_back(drawn_mesh(s, ev, int(i)));
+        if (!keep.back()) throw std::logic_error("frame_coverage: scene.geometry was not evaluated for object " + std::to_string(i));
+        items.push_back({keep.back().get(), object_to_world(s.objects[i]), int(i)});
+    }
+    GBuffer gb;
+    rasterize(items, cam.raster, gb);
+    return coverage_of(gb);
+}
+
 // [SECTION] Frames
 Frame make_frame(const std::vector<AovDecl>& layout, int width, int height) {
     Frame f;

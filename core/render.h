@@ -62,12 +62,29 @@ struct FrameStepRun {
     double ms = 0;                          // CPU: wall time; GPU: the step's GL timer query (NaN: no valid answer)
 };
 
+// Which object each pixel of a frame shows, from the CPU rasteriser's G-buffer (the GPU covers the
+// same pixels, both following GL's rules, but for sub-pixel differences on silhouettes).
+struct Coverage {
+    int width = 0, height = 0;
+    std::vector<int32_t> object;  // object index, -1 for the background
+    // 1 where a pixel lies on an edge: a pixel of its 3x3 neighbourhood shows another triangle,
+    // another object or the background (silhouettes, triangle edges, texture-space seams).
+    std::vector<uint8_t> edge;
+    bool empty() const { return object.empty(); }
+    bool covered(size_t pixel) const { return object[pixel] >= 0; }
+    size_t covered_count() const;
+};
+Coverage coverage_of(const GBuffer& gb);
+// The coverage of a frame of `s` at width x height (rasterises without shading).
+Coverage frame_coverage(const Scene& s, const Evaluation& ev, int width, int height);
+
 // AOV images of one frame, all width x height, row 0 at the top.
 struct Frame {
     int width = 0, height = 0;
     std::vector<AovDecl> layout;
     std::map<std::string, Image> aovs;
     std::vector<FrameStepRun> steps;  // the frame steps that ran before shading, in order
+    Coverage coverage;                // filled on request (frame_coverage): tests, error statistics over object pixels
     Image& aov(const std::string& name) { return aovs.at(name); }
     const Image& aov(const std::string& name) const { return aovs.at(name); }
     bool has(const std::string& name) const { return aovs.count(name) != 0; }

@@ -108,6 +108,23 @@ struct SweepMetricDecl {
     std::function<SweepMeasure(const Scene& ref, const Evaluation& ref_eval)> prepare;
 };
 
+// [SECTION] CPU and GPU agreement
+// How closely the GPU pass reproduces the CPU reference (absolute differences, value by value, in
+// each AOV's own units), over the pixels the objects cover (Coverage, core/render.h). Edges are
+// pixels next to another triangle, another object or the background: silhouettes, where the two
+// rasterisers' coverage can differ by sub-pixel rounding, and triangle edges, where interpolated
+// attributes change slope. Everywhere else each value must be within `interior_max`: a few
+// arbitrarily wrong pixels inside a face fail. A technique states its own tolerances, with the
+// reasons, in Technique::agreement(); every preset is held to them (tests/gallery).
+struct FrameAgreement {
+    double tight = 1e-3;         // most values agree to this
+    double frac_tight = 0.99;    // the fraction of covered values within `tight`
+    double loose = 2e-2;         // nearly all values agree to this
+    double frac_loose = 0.995;   // the fraction of covered values within `loose`
+    double interior_max = 2e-2;  // every value off edges
+    std::string why;             // where the differences come from
+};
+
 // The AOVs every technique writes: radiance and normal.
 const std::vector<AovDecl>& common_aovs();
 
@@ -150,6 +167,8 @@ public:
     virtual std::vector<BenchTable> bench_tables() const { return {}; }
     // Error metrics for `mesolab sweep --metric NAME`, besides the default radiance RMSE.
     virtual std::vector<SweepMetricDecl> sweep_metrics() const { return {}; }
+    // How closely its GPU frames follow the CPU reference (see FrameAgreement).
+    virtual FrameAgreement agreement() const { return {}; }
 
 protected:
     ParamGroup params_;

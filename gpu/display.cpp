@@ -7,19 +7,19 @@
 namespace mesolab::gpu {
 
 DisplayPass::DisplayPass() : program_(Program::graphics("shaders/fullscreen.vert", "shaders/display.frag")) {
+    // The one texture made without make_texture (gpu/gl.h): its storage is mutable so that it keeps
+    // its name across resizes.
     GLuint ids[1] = {0};
-    glGenTextures(1, ids);
+    glCreateTextures(GL_TEXTURE_2D, 1, ids);
     texture_ = Texture(ids[0]);
+    glTextureParameteri(ids[0], GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTextureParameteri(ids[0], GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTextureParameteri(ids[0], GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTextureParameteri(ids[0], GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
     glGenFramebuffers(1, ids);
     fbo_ = Framebuffer(ids[0]);
     glGenVertexArrays(1, ids);
     vao_ = VertexArray(ids[0]);
-    glBindTexture(GL_TEXTURE_2D, texture_.get());
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glBindTexture(GL_TEXTURE_2D, 0);
     check_gl("DisplayPass()");
 }
 
@@ -29,9 +29,11 @@ void DisplayPass::run(GLuint source, int width, int height, DisplayMode mode, in
     if (width < 1 || height < 1) throw std::logic_error("DisplayPass::run: empty frame " + std::to_string(width) + "x" + std::to_string(height));
     if (width != width_ || height != height_) {
         // Mutable storage: the texture keeps its name (ImGui draw lists may hold it).
+        GLint previous = 0;
+        glGetIntegerv(GL_TEXTURE_BINDING_2D, &previous);
         glBindTexture(GL_TEXTURE_2D, texture_.get());
         glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, width, height, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
-        glBindTexture(GL_TEXTURE_2D, 0);
+        glBindTexture(GL_TEXTURE_2D, GLuint(previous));
         glBindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
         glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, texture_.get(), 0);
         const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);

@@ -67,6 +67,40 @@ Texture make_buffer_texture(const Buffer& b, GLenum format, GLintptr offset, GLs
     return Texture(id);
 }
 
+// [SECTION] Textures
+Texture make_texture(const TextureSpec& spec, const TexelData& level0) {
+    if (spec.width < 1 || spec.height < 1 || spec.layers < 1 || spec.levels < 1)
+        throw std::invalid_argument("make_texture: size " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + "x" +
+                                    std::to_string(spec.layers) + " with " + std::to_string(spec.levels) + " levels");
+    GLuint id = 0;
+    glCreateTextures(spec.target, 1, &id);
+    Texture t(id);
+    if (spec.target == GL_TEXTURE_2D_ARRAY) glTextureStorage3D(id, spec.levels, spec.format, spec.width, spec.height, spec.layers);
+    else glTextureStorage2D(id, spec.levels, spec.format, spec.width, spec.height);
+    glTextureParameteri(id, GL_TEXTURE_MIN_FILTER, GLint(spec.min_filter));
+    glTextureParameteri(id, GL_TEXTURE_MAG_FILTER, GLint(spec.mag_filter));
+    glTextureParameteri(id, GL_TEXTURE_WRAP_S, GLint(spec.wrap_s));
+    glTextureParameteri(id, GL_TEXTURE_WRAP_T, GLint(spec.wrap_t));
+    if (level0.pixels) upload_texture(t, spec, 0, level0);
+    check_gl("make_texture");
+    return t;
+}
+
+void upload_texture(const Texture& t, const TextureSpec& spec, int level, const TexelData& texels) {
+    GLint unpack_buffer = 0, alignment = 4;
+    glGetIntegerv(GL_PIXEL_UNPACK_BUFFER_BINDING, &unpack_buffer);
+    glGetIntegerv(GL_UNPACK_ALIGNMENT, &alignment);
+    if (unpack_buffer) glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    const int w = std::max(1, spec.width >> level), h = std::max(1, spec.height >> level);
+    if (spec.target == GL_TEXTURE_2D_ARRAY)
+        glTextureSubImage3D(t.get(), level, 0, 0, 0, w, h, spec.layers, texels.format, texels.type, texels.pixels);
+    else
+        glTextureSubImage2D(t.get(), level, 0, 0, w, h, texels.format, texels.type, texels.pixels);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, alignment);
+    if (unpack_buffer) glBindBuffer(GL_PIXEL_UNPACK_BUFFER, GLuint(unpack_buffer));
+}
+
 void delete_buffer(GLuint id) { if (gl_context_current()) glDeleteBuffers(1, &id); }
 void delete_texture(GLuint id) { if (gl_context_current()) glDeleteTextures(1, &id); }
 void delete_framebuffer(GLuint id) { if (gl_context_current()) glDeleteFramebuffers(1, &id); }
@@ -314,22 +348,10 @@ void RenderTarget::resize(int width, int height, int color_attachments) {
                                     " colour attachments (this GL allows 0.." + std::to_string(max_attachments) + ")");
     if (fbo_ && width == width_ && height == height_ && color_attachments == attachments()) return;
 
-    GLint old_fbo = 0, old_texture = 0;
+    GLint old_fbo = 0;
     glGetIntegerv(GL_FRAMEBUFFER_BINDING, &old_fbo);
-    glGetIntegerv(GL_TEXTURE_BINDING_2D, &old_texture);
 
-    auto make_texture = [&](GLenum format) {
-        GLuint id = 0;
-        glGenTextures(1, &id);
-        Texture t(id);
-        glBindTexture(GL_TEXTURE_2D, id);
-        glTexStorage2D(GL_TEXTURE_2D, 1, format, width, height);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-        return t;
-    };
+    const auto attachment = [&](GLenum format) { return make_texture({.format = format, .width = width, .height = height}); };
 
     GLuint fbo = 0;
     glGenFramebuffers(1, &fbo);
@@ -337,10 +359,10 @@ void RenderTarget::resize(int width, int height, int color_attachments) {
     glBindFramebuffer(GL_FRAMEBUFFER, fbo);
     std::vector<Texture> new_color;
     for (int i = 0; i < color_attachments; ++i) {
-        new_color.push_back(make_texture(GL_RGBA32F));
+        new_color.push_back(attachment(GL_RGBA32F));
         glFramebufferTexture2D(GL_FRAMEBUFFER, GLenum(GL_COLOR_ATTACHMENT0 + i), GL_TEXTURE_2D, new_color.back().get(), 0);
     }
-    Texture new_depth = make_texture(GL_DEPTH_COMPONENT32F);
+    Texture new_depth = attachment(GL_DEPTH_COMPONENT32F);
     glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, new_depth.get(), 0);
     std::vector<GLenum> buffers;
     for (int i = 0; i < color_attachments; ++i) buffers.push_back(GLenum(GL_COLOR_ATTACHMENT0 + i));
@@ -352,7 +374,6 @@ void RenderTarget::resize(int width, int height, int color_attachments) {
     }
     const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
 
-    glBindTexture(GL_TEXTURE_2D, GLuint(old_texture));
     glBindFramebuffer(GL_FRAMEBUFFER, GLuint(old_fbo));
     check_gl("RenderTarget::resize");
     if (status != GL_FRAMEBUFFER_COMPLETE)

@@ -48,6 +48,34 @@ Buffer make_storage_buffer(const void* data, size_t bytes, GLenum usage = GL_STA
 // once, where a storage-buffer read goes lane by lane, component by component (about twice as fast).
 Texture make_buffer_texture(const Buffer& b, GLenum format, GLintptr offset = 0, GLsizeiptr bytes = 0);
 
+// [SECTION] Textures
+// What a texture is made of: target, sized format, size, mip levels and sampling. make_texture
+// creates it with immutable storage through direct state access, so no texture unit's binding
+// changes: a texture made while a pass binds its inputs (a stage result uploaded on first use)
+// can never unbind one of them.
+struct TextureSpec {
+    GLenum target = GL_TEXTURE_2D;   // GL_TEXTURE_2D or GL_TEXTURE_2D_ARRAY
+    GLenum format = GL_RGBA32F;      // sized internal format: GL_RGBA32F, GL_RG32F, GL_R32UI, GL_DEPTH_COMPONENT32F, ...
+    int width = 1, height = 1;
+    int layers = 1;                  // GL_TEXTURE_2D_ARRAY only
+    int levels = 1;                  // mip levels, level l is max(1, width >> l) x max(1, height >> l)
+    GLenum min_filter = GL_NEAREST, mag_filter = GL_NEAREST;
+    GLenum wrap_s = GL_CLAMP_TO_EDGE, wrap_t = GL_CLAMP_TO_EDGE;
+};
+// Texels of one mip level (every layer), rows tightly packed, first row at t = 0, as
+// glTexSubImage reads them: `format` and `type` say how (GL_RGBA and GL_FLOAT, GL_RED_INTEGER and
+// GL_UNSIGNED_INT, ...).
+struct TexelData {
+    GLenum format = GL_RGBA;
+    GLenum type = GL_FLOAT;
+    const void* pixels = nullptr;
+};
+// A new texture; `level0`, when given, fills level 0. Throws std::runtime_error on a GL error.
+Texture make_texture(const TextureSpec& spec, const TexelData& level0 = {});
+// Fills mip level `level` of a texture made from `spec` (client memory: whatever pixel-unpack
+// buffer is bound is set aside for the call, and the unpack alignment is 1).
+void upload_texture(const Texture& t, const TextureSpec& spec, int level, const TexelData& texels);
+
 // A linked program. Sources are looked up by embedded name (e.g. "basic/basic.frag"); a line
 // `#include "common.glsl"` is replaced by the embedded file of that name (recursively, once).
 // `defines` lines ("NAME VALUE") are inserted after #version, then the fragment shader's

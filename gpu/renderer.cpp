@@ -136,22 +136,15 @@ GLuint Renderer::texture(const std::shared_ptr<const Image>& img, bool repeat) {
         .get<Texture>(img, repeat ? "texture.repeat" : "texture.clamp",
                       [&] {
                           PROFILE_SCOPE("upload.texture");
-                          GLuint id = 0;
-                          glGenTextures(1, &id);
-                          Texture t(id);
-                          glBindTexture(GL_TEXTURE_2D, id);
                           std::vector<float> rgba(size_t(img->width) * size_t(img->height) * 4, 1.f);
                           for (size_t i = 0; i < size_t(img->width) * size_t(img->height); ++i)
                               for (int c = 0; c < 4; ++c) {
                                   const int src = img->channels >= 3 ? std::min(c, img->channels - 1) : 0;
                                   if (c < 3 || img->channels == 4) rgba[i * 4 + size_t(c)] = img->data[i * size_t(img->channels) + size_t(src)];
                               }
-                          glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-                          glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, img->width, img->height, 0, GL_RGBA, GL_FLOAT, rgba.data());
-                          glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-                          glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-                          glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
-                          glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, repeat ? GL_REPEAT : GL_CLAMP_TO_EDGE);
+                          Texture t = make_texture({.format = GL_RGBA32F, .width = img->width, .height = img->height, .min_filter = GL_LINEAR,
+                                                    .mag_filter = GL_LINEAR, .wrap_s = GL_REPEAT, .wrap_t = repeat ? GLenum(GL_REPEAT) : GLenum(GL_CLAMP_TO_EDGE)},
+                                                   {GL_RGBA, GL_FLOAT, rgba.data()});
                           check_gl("texture upload");
                           return t;
                       })

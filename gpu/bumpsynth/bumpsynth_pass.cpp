@@ -14,16 +14,6 @@ namespace {
 
 using namespace mesolab::bumpsynth;
 
-GLuint make_texture(GLenum target) {
-    GLuint id = 0;
-    glGenTextures(1, &id);
-    glBindTexture(target, id);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glTexParameteri(target, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTexParameteri(target, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    return id;
-}
-
 class BumpsynthPass final : public TechniquePass {
 public:
     explicit BumpsynthPass(const Technique& t)
@@ -32,8 +22,7 @@ public:
 
     void draw(DrawContext& ctx) override {
         PROFILE_SCOPE("bumpsynth.draw");
-        // Upload first (once per stage result, kept in the renderer's resource cache): creating a
-        // texture binds it to the active unit.
+        // The GL objects of the stage results (made once per result, kept in the renderer's resource cache).
         GpuResources& res = ctx.renderer.resources();
         struct Bound { GLuint ndf, lut, noise, smith, albedo, index; GLuint cdf; };
         std::map<int, Bound> bound;
@@ -134,9 +123,7 @@ private:
                 rg[k * 2] = ndf.value(i, j);
                 rg[k * 2 + 1] = ndf.cell_area(i, j) > 0.0 ? 1.f : 0.f;
             }
-        Texture t(make_texture(GL_TEXTURE_2D));
-        glTexImage2D(GL_TEXTURE_2D, 0, GL_RG32F, W, W, 0, GL_RG, GL_FLOAT, rg.data());
-        return t;
+        return make_texture({.format = GL_RG32F, .width = W, .height = W}, {GL_RG, GL_FLOAT, rg.data()});
     }
 
     // Look-up table: layers m, t, b.
@@ -152,39 +139,25 @@ private:
                 rgba[2 * layer + k * 4 + size_t(c)] = e.b[c];
             }
         }
-        Texture t(make_texture(GL_TEXTURE_2D_ARRAY));
-        glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_RGBA32F, S, S, 3, 0, GL_RGBA, GL_FLOAT, rgba.data());
-        return t;
+        return make_texture({.target = GL_TEXTURE_2D_ARRAY, .format = GL_RGBA32F, .width = S, .height = S, .layers = 3}, {GL_RGBA, GL_FLOAT, rgba.data()});
     }
 
     // Noise texture: RG32F mip chain, bilinear within a level, wrapping.
     static Texture upload_noise(const NoiseTexture& n) {
-        Texture t(make_texture(GL_TEXTURE_2D));
-        const int levels = int(n.levels.size());
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_BASE_LEVEL, 0);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, levels - 1);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_NEAREST);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
-        for (int l = 0; l < levels; ++l) {
-            const int s = std::max(1, n.size >> l);
-            glTexImage2D(GL_TEXTURE_2D, l, GL_RG32F, s, s, 0, GL_RG, GL_FLOAT, n.levels[size_t(l)].data());
-        }
+        const TextureSpec spec{.format = GL_RG32F, .width = n.size, .height = n.size, .levels = int(n.levels.size()),
+                               .min_filter = GL_LINEAR_MIPMAP_NEAREST, .mag_filter = GL_LINEAR, .wrap_s = GL_REPEAT, .wrap_t = GL_REPEAT};
+        Texture t = make_texture(spec);
+        for (int l = 0; l < spec.levels; ++l) upload_texture(t, spec, l, {GL_RG, GL_FLOAT, n.levels[size_t(l)].data()});
         return t;
     }
 
     // Index texture: RG32F, fetched texel by texel (bilinear in the shader, as on the CPU).
     static Texture upload_index(const IndexMap& m) {
-        Texture t(make_texture(GL_TEXTURE_2D));
-        glTexImage2D(GL_TEXTURE_2D, 0, GL_RG32F, m.width, m.height, 0, GL_RG, GL_FLOAT, m.u.data());
-        return t;
+        return make_texture({.format = GL_RG32F, .width = m.width, .height = m.height}, {GL_RG, GL_FLOAT, m.u.data()});
     }
 
     static Texture upload_smith(const SmithTable& s) {
-        Texture t(make_texture(GL_TEXTURE_2D));
-        glTexImage2D(GL_TEXTURE_2D, 0, GL_R32F, SmithTable::kPhi, SmithTable::kTheta, 0, GL_RED, GL_FLOAT, s.values().data());
-        return t;
+        return make_texture({.format = GL_R32F, .width = SmithTable::kPhi, .height = SmithTable::kTheta}, {GL_RED, GL_FLOAT, s.values().data()});
     }
 
     Program program_, depth_;

@@ -19,19 +19,12 @@ using namespace mesolab::microgeom;
 constexpr int kGridW = 64, kGridH = 32;
 
 // RGBA32F texture, nearest filtering (the shader fetches texels).
-GLuint make_rgba_texture(const float* rgba, int w, int h) {
-    GLuint id = 0;
-    glGenTextures(1, &id);
-    glBindTexture(GL_TEXTURE_2D, id);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, rgba);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    return id;
+Texture make_rgba_texture(const float* rgba, int w, int h) {
+    return make_texture({.format = GL_RGBA32F, .width = w, .height = h}, {GL_RGBA, GL_FLOAT, rgba});
 }
 
 // RGBA32F texture from per-texel vec3 (alpha 1).
-GLuint make_rgb_texture(const std::vector<vec3>& v, int w, int h) {
+Texture make_rgb_texture(const std::vector<vec3>& v, int w, int h) {
     std::vector<float> rgba(size_t(w) * size_t(h) * 4, 1.f);
     for (size_t i = 0; i < v.size(); ++i)
         for (int c = 0; c < 3; ++c) rgba[i * 4 + size_t(c)] = v[i][c];
@@ -52,22 +45,15 @@ struct BrdfTables {
 
 // S_i: one R32UI layer per direction.
 Texture upload_visibility(const Visibility& vis) {
-    GLuint id = 0;
-    glGenTextures(1, &id);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, id);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_R32UI, vis.width, vis.height, vis.count, 0, GL_RED_INTEGER, GL_UNSIGNED_INT, vis.hit.data());
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    check_gl("microgeom.upload");
-    return Texture(id);
+    return make_texture({.target = GL_TEXTURE_2D_ARRAY, .format = GL_R32UI, .width = vis.width, .height = vis.height, .layers = vis.count},
+                        {GL_RED_INTEGER, GL_UNSIGNED_INT, vis.hit.data()});
 }
 
 Texture upload_normals(const Heightfield& hf) {
     std::vector<vec3> normals(hf.h.size());
     for (int y = 0; y < hf.height; ++y)
         for (int x = 0; x < hf.width; ++x) normals[hf.index(x, y)] = hf.normal(x, y);
-    return Texture(make_rgb_texture(normals, hf.width, hf.height));
+    return make_rgb_texture(normals, hf.width, hf.height);
 }
 
 DirectionBuffers upload_directions(const DirectionSet& dirs) {
@@ -110,7 +96,7 @@ Texture upload_per_light(const LightsScatter& s, const Heightfield& hf) {
     stacked.reserve(size_t(hf.width) * size_t(hf.height) * std::max<size_t>(1, s.lights.size()));
     for (const LightScatter& one : s.lights) stacked.insert(stacked.end(), one.result.E_indirect.begin(), one.result.E_indirect.end());
     if (stacked.empty()) stacked.assign(size_t(hf.width) * size_t(hf.height), vec3(0.f));
-    return Texture(make_rgb_texture(stacked, hf.width, int(stacked.size() / size_t(hf.width))));
+    return make_rgb_texture(stacked, hf.width, int(stacked.size() / size_t(hf.width)));
 }
 
 // microgeom.scatter_directions: one RGBA32F layer per direction above the horizon (at least one layer).
@@ -120,21 +106,14 @@ Texture upload_per_direction(const DirectionalScatter& s) {
     std::vector<float> rgba(size_t(s.width) * size_t(s.height) * size_t(layers) * 4, 0.f);
     for (size_t k = 0; k < s.E.size(); ++k)
         for (int c = 0; c < 3; ++c) rgba[k * 4 + size_t(c)] = s.E[k][c];
-    GLuint id = 0;
-    glGenTextures(1, &id);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, id);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_RGBA32F, s.width, s.height, layers, 0, GL_RGBA, GL_FLOAT, rgba.data());
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    check_gl("microgeom.upload_directions");
-    return Texture(id);
+    return make_texture({.target = GL_TEXTURE_2D_ARRAY, .format = GL_RGBA32F, .width = s.width, .height = s.height, .layers = layers},
+                        {GL_RGBA, GL_FLOAT, rgba.data()});
 }
 
 Texture upload_folded(const Importance& imp) {
     std::vector<vec3> mask(imp.folded.size());
     for (size_t k = 0; k < mask.size(); ++k) mask[k] = vec3(float(imp.folded[k]));
-    return Texture(make_rgb_texture(mask, imp.width, imp.height));
+    return make_rgb_texture(mask, imp.width, imp.height);
 }
 
 Ellipses upload_ellipses(const EllipseMap& em) {
@@ -145,8 +124,8 @@ Ellipses upload_ellipses(const EllipseMap& em) {
         rgba1[k * 4 + 0] = e.a, rgba1[k * 4 + 1] = e.b;
     }
     Ellipses r;
-    r.t0 = Texture(make_rgba_texture(rgba0.data(), em.width, em.height));
-    r.t1 = Texture(make_rgba_texture(rgba1.data(), em.width, em.height));
+    r.t0 = make_rgba_texture(rgba0.data(), em.width, em.height);
+    r.t1 = make_rgba_texture(rgba1.data(), em.width, em.height);
     return r;
 }
 
@@ -162,8 +141,8 @@ BrdfTables upload_brdf(const SimulatedBrdf& b) {
     for (size_t k = 0; k < size_t(nodes); ++k)
         for (int c = 0; c < 3; ++c) env[k * 4 + size_t(c)] = b.env.empty() ? 0.f : b.env[k][c];
     BrdfTables r;
-    r.table = Texture(make_rgba_texture(rgba.data(), nodes, nodes));
-    r.env = Texture(make_rgba_texture(env.data(), nodes, 1));
+    r.table = make_rgba_texture(rgba.data(), nodes, nodes);
+    r.env = make_rgba_texture(env.data(), nodes, 1);
     check_gl("microgeom.upload_brdf");
     return r;
 }
@@ -175,8 +154,7 @@ public:
     void draw(DrawContext& ctx) override {
         PROFILE_SCOPE("microgeom.draw");
         GpuResources& res = ctx.renderer.resources();
-        // The objects' results and materials, parsed once per frame; uploads first (creating a
-        // texture binds it to the active unit, which must not disturb the units bound below).
+        // The objects' results and materials, parsed once per frame, and their GL objects.
         struct Bound {
             ObjectFrame f;
             GLuint vis = 0, normals = 0, albedo = 0, e_env = 0, e_light = 0, e_dirs = 0, folded = 0;
@@ -191,9 +169,9 @@ public:
             const Heightfield& hf = *f.hf;
             b.vis = res.get<Texture>(f.vis, "microgeom.vis", [&] { return upload_visibility(*f.vis); }).get();
             b.normals = res.get<Texture>(f.hf, "microgeom.normals", [&] { return upload_normals(hf); }).get();
-            b.albedo = res.get<Texture>(f.hf, "microgeom.albedo", [&] { return Texture(make_rgb_texture(hf.albedo, hf.width, hf.height)); }).get();
+            b.albedo = res.get<Texture>(f.hf, "microgeom.albedo", [&] { return make_rgb_texture(hf.albedo, hf.width, hf.height); }).get();
             b.dirs = &res.get<DirectionBuffers>(f.dirs, "microgeom.directions", [&] { return upload_directions(*f.dirs); });
-            if (f.env) b.e_env = res.get<Texture>(f.env, "microgeom.E_env", [&] { return Texture(make_rgb_texture(f.env->result.E_indirect, hf.width, hf.height)); }).get();
+            if (f.env) b.e_env = res.get<Texture>(f.env, "microgeom.E_env", [&] { return make_rgb_texture(f.env->result.E_indirect, hf.width, hf.height); }).get();
             if (f.lights) b.e_light = res.get<Texture>(f.lights, "microgeom.E_light", [&] { return upload_per_light(*f.lights, hf); }).get();
             if (f.table) b.e_dirs = res.get<Texture>(f.table, "microgeom.E_dirs", [&] { return upload_per_direction(*f.table); }).get();
             if (f.imp && !f.imp->folded.empty()) b.folded = res.get<Texture>(f.imp, "microgeom.folded", [&] { return upload_folded(*f.imp); }).get();

@@ -292,29 +292,22 @@ Texture VisibilityProgram::compute_texture(const Heightfield& hf, const Directio
         throw std::runtime_error("microgeom visibility (GPU): " + std::to_string(dirs.size()) +
                                  " directions exceed GL_MAX_ARRAY_TEXTURE_LAYERS (" + std::to_string(max_layers) + ")");
     const Prepared P = prepare(hf, dirs);
-    GLint previous_tex = 0, previous_unpack = 0, previous_align = 4;
-    glGetIntegerv(GL_TEXTURE_BINDING_2D_ARRAY, &previous_tex);
+    GLint previous_unpack = 0, previous_align = 4;
     glGetIntegerv(GL_PIXEL_UNPACK_BUFFER_BINDING, &previous_unpack);
     glGetIntegerv(GL_UNPACK_ALIGNMENT, &previous_align);
-    GLuint id = 0;
-    glGenTextures(1, &id);
-    Texture tex(id);
-    glBindTexture(GL_TEXTURE_2D_ARRAY, id);
-    glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_R32UI, P.W, P.H, P.N);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    Texture tex = make_texture({.target = GL_TEXTURE_2D_ARRAY, .format = GL_R32UI, .width = P.W, .height = P.H, .layers = P.N});
     auto restore = [&] {
         glBindBuffer(GL_PIXEL_UNPACK_BUFFER, GLuint(previous_unpack));
         glPixelStorei(GL_UNPACK_ALIGNMENT, previous_align);
-        glBindTexture(GL_TEXTURE_2D_ARRAY, GLuint(previous_tex));
     };
     try {
+        // Each batch of directions goes from the storage buffer the shader wrote into its layers,
+        // on the GPU (the buffer is the pixel-unpack source).
         run(program_, P, [&](int d0, int d1, GLuint out) {
             glMemoryBarrier(GL_PIXEL_BUFFER_BARRIER_BIT);
             glBindBuffer(GL_PIXEL_UNPACK_BUFFER, out);
             glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-            glBindTexture(GL_TEXTURE_2D_ARRAY, id);
-            glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, d0, P.W, P.H, d1 - d0, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
+            glTextureSubImage3D(tex.get(), 0, 0, 0, d0, P.W, P.H, d1 - d0, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
             glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
             check_gl("microgeom.visibility texture");
         });

@@ -36,19 +36,10 @@ std::vector<vec4> to_vec4(const std::vector<vec3>& v, float w = 0.f) {
     return out;
 }
 
+// An atlas-sized RGBA32F map, sampled bilinearly at the atlas coordinates.
 Texture map_texture(int size, const std::vector<vec4>* data = nullptr) {
-    GLuint id = 0;
-    glGenTextures(1, &id);
-    Texture t(id);
-    glBindTexture(GL_TEXTURE_2D, id);
-    glTexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA32F, size, size);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    if (data) glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, size, size, GL_RGBA, GL_FLOAT, data->data());
-    glBindTexture(GL_TEXTURE_2D, 0);
-    return t;
+    return make_texture({.format = GL_RGBA32F, .width = size, .height = size, .min_filter = GL_LINEAR, .mag_filter = GL_LINEAR},
+                        {GL_RGBA, GL_FLOAT, data ? data->data() : nullptr});
 }
 
 // A table made once from a stage result: its buffer and a buffer texture over it (texelFetch).
@@ -183,15 +174,9 @@ private:
         Framebuffer fbo;
         void resize(int r, int n) {
             if (r == res && n == layers) return;
+            color = make_texture({.target = GL_TEXTURE_2D_ARRAY, .format = GL_R32F, .width = r, .height = r, .layers = n});
+            depth = make_texture({.format = GL_DEPTH_COMPONENT32F, .width = r, .height = r});
             GLuint id = 0;
-            glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &id);
-            color = Texture(id);
-            glTextureStorage3D(id, 1, GL_R32F, r, r, n);
-            glTextureParameteri(id, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-            glTextureParameteri(id, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-            glCreateTextures(GL_TEXTURE_2D, 1, &id);
-            depth = Texture(id);
-            glTextureStorage2D(id, 1, GL_DEPTH_COMPONENT32F, r, r);
             glCreateFramebuffers(1, &id);
             fbo = Framebuffer(id);
             glNamedFramebufferTexture(id, GL_DEPTH_ATTACHMENT, depth.get(), 0);

@@ -18,11 +18,11 @@ void expect_agree(std::initializer_list<std::pair<const char*, const char*>> set
     for (const auto& [k, v] : sets) apply_set(s, k, v);
     const auto [cpu, gpu] = test::render_cpu_and_gpu(wb, s, 160, 120);
     if (s.camera.get_float("distance") > s.objects[0].material.get_float("detail_distance") + 1.0) {
-        test::expect_frames_agree(cpu, gpu, {"radiance", "normal"}, tight, loose, frac_tight, frac_loose);
+        test::expect_frames_agree(cpu, gpu, {"radiance", "normal"}, {.tight = tight, .frac_tight = frac_tight, .loose = loose, .frac_loose = frac_loose, .interior_max = loose});
         test::expect_all_zero(cpu, "octaves");
         test::expect_all_zero(gpu, "octaves");
     } else {
-        test::expect_frames_agree(cpu, gpu, {"radiance", "normal", "octaves"}, tight, loose, frac_tight, frac_loose);
+        test::expect_frames_agree(cpu, gpu, {"radiance", "normal", "octaves"}, {.tight = tight, .frac_tight = frac_tight, .loose = loose, .frac_loose = frac_loose, .interior_max = loose});
     }
 }
 }  // namespace

@@ -48,6 +48,7 @@ inline DeviceRenders render_on_both_devices(std::initializer_list<const char*> s
     Workbench wb;
     RenderRequest req;
     req.backend = backend;
+    req.coverage = true;
     DeviceRenders r;
     r.cpu = wb.render(s, req);
     apply_set(s, "microgeom.device=gpu");

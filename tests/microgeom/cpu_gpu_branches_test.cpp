@@ -58,9 +58,9 @@ std::pair<Frame, Frame> expect_agreement(Workbench& wb, const std::string& what,
     const double tight = texture_space ? kTextureTol : kOrbitTight, loose = texture_space ? kTextureTol : kOrbitLoose;
     const double frac_tight = texture_space ? 1.0 : kOrbitFracTight, frac_loose = texture_space ? 1.0 : kOrbitFracLoose;
     print_figures(what, cpu, gpu, tight, loose);
-    expect_frames_agree(cpu, gpu, kAovs, tight, loose, frac_tight, frac_loose);
+    expect_frames_agree(cpu, gpu, kAovs, {.tight = tight, .frac_tight = frac_tight, .loose = loose, .frac_loose = frac_loose, .interior_max = loose});
     if (folds == Folds::Yes) {
-        expect_frames_agree(cpu, gpu, {"folded"}, tight, loose, frac_tight, frac_loose);
+        expect_frames_agree(cpu, gpu, {"folded"}, {.tight = tight, .frac_tight = frac_tight, .loose = loose, .frac_loose = frac_loose, .interior_max = loose});
     } else {
         expect_all_zero(cpu, "folded");
         expect_all_zero(gpu, "folded");

@@ -256,5 +256,5 @@ TEST(LightsGpu, EveryPrecomputeRunsOnTheGpuThroughTheStages) {
         {"microgeom.resolution=48", "microgeom.curvature_u=40", "microgeom.curvature_v=-20", "microgeom.shadows=ellipse"}, Backend::Cpu);
     test::expect_ran_on_the_gpu(r.gpu, {"microgeom.visibility", "microgeom.importance", "microgeom.ellipses_curved", "microgeom.ellipses",
                                         "microgeom.scatter", "microgeom.scatter_env"});
-    test::expect_frames_agree(r.cpu.frame, r.gpu.frame, {"radiance", "direct", "indirect", "shadow"}, 1e-3, 2e-2, 0.99, 0.999);
+    test::expect_frames_agree(r.cpu.frame, r.gpu.frame, {"radiance", "direct", "indirect", "shadow"}, {.tight = 1e-3, .frac_tight = 0.99, .loose = 2e-2, .frac_loose = 0.999, .interior_max = 2e-2});
 }

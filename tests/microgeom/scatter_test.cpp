@@ -266,7 +266,7 @@ TEST(CpuGpu, AgreeOnEveryAov) {
         SCOPED_TRACE(c.preset);
         Scene s = load_preset(source_path(c.preset));
         const auto [cpu, gpu] = render_cpu_and_gpu(wb, s, 160, 120);
-        expect_frames_agree(cpu, gpu, {"radiance", "normal", "direct", "indirect", "shadow"}, c.tight, c.loose, c.frac_tight, c.frac_loose);
+        expect_frames_agree(cpu, gpu, {"radiance", "normal", "direct", "indirect", "shadow"}, {.tight = c.tight, .frac_tight = c.frac_tight, .loose = c.loose, .frac_loose = c.frac_loose, .interior_max = c.loose});
     }
 }
 
@@ -301,7 +301,7 @@ TEST(CpuGpu, EveryLightIsScattered) {
         EXPECT_LT(max_err, 1e-5) << (backend == Backend::Cpu ? "cpu" : "gpu");
     }
     const auto [cpu, gpu] = render_cpu_and_gpu(wb, scene_from_json(two, "test", "."));
-    expect_frames_agree(cpu, gpu, {"radiance", "direct", "indirect", "shadow"}, 1e-4, 1e-4, 1.0, 1.0);
+    expect_frames_agree(cpu, gpu, {"radiance", "direct", "indirect", "shadow"}, {.tight = 1e-4, .frac_tight = 1.0, .loose = 1e-4, .frac_loose = 1.0, .interior_max = 1e-4});
 }
 
 // Curved base (§5).

@@ -136,7 +136,7 @@ TEST(RenderPass, EveryTechniqueAndEveryAovStaysWithinTheDrawBuffers) {
         EXPECT_GT(sum_cpu, 0.0) << a;
         EXPECT_GT(sum_gpu, 0.0) << a;
     }
-    expect_frames_agree(cpu, gpu, {"radiance", "normal"}, 1e-3, 0.05, 0.97, 0.99);
+    expect_frames_agree(cpu, gpu, {"radiance", "normal"}, {.tight = 1e-3, .frac_tight = 0.97, .loose = 0.05, .frac_loose = 0.99, .interior_max = 0.05});
 
     // Forced into batches of two attachments, the GPU frame is the same, byte for byte.
     wb.gpu().set_max_attachments(2);
@@ -171,7 +171,7 @@ TEST(FrameSteps, RunBeforeTheFrameOnBothPathsAndAgree) {
     }
     ASSERT_GT(covered, 1000u);
     EXPECT_GE(double(same_texel), 0.98 * double(covered));
-    expect_frames_agree(cpu, gpu, {"radiance"}, 1e-4, 0.02, 0.97, 0.995);
+    expect_frames_agree(cpu, gpu, {"radiance"}, {.tight = 1e-4, .frac_tight = 0.97, .loose = 0.02, .frac_loose = 0.995, .interior_max = 0.02});
 }
 
 TEST(FrameSteps, AreReusedWhileTheirInputsHold) {

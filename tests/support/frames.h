@@ -1,10 +1,13 @@
 #pragma once
 // The same scene rendered by both backends, for CPU vs GPU agreement tests.
 #include "app/workbench.h"
+#include "core/technique.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <initializer_list>
 #include <string>
 #include <utility>
@@ -13,10 +16,11 @@
 namespace mesolab::test {
 
 // {CPU frame, GPU frame} of `s` at width x height (0 x 0: the request's default size), holding
-// radiance and `aovs` (empty: every AOV of the scene).
+// radiance and `aovs` (empty: every AOV of the scene), each with its coverage (Frame::coverage).
 inline std::pair<Frame, Frame> render_cpu_and_gpu(Workbench& wb, const Scene& s, int width = 0, int height = 0, const std::vector<std::string>& aovs = {}) {
     RenderRequest req;
     req.aovs = aovs;
+    req.coverage = true;
     if (width > 0) req.width = width;
     if (height > 0) req.height = height;
     req.backend = Backend::Cpu;
@@ -26,31 +30,82 @@ inline std::pair<Frame, Frame> render_cpu_and_gpu(Workbench& wb, const Scene& s,
     return {std::move(cpu), std::move(gpu)};
 }
 
-// For each AOV, at least `frac_tight` of all values within `tight` and `frac_loose` within `loose`
-// (absolute). Fails when an AOV is missing, empty, or zero everywhere in both frames: two black
-// frames agree about nothing.
-inline void expect_frames_agree(const Frame& cpu, const Frame& gpu, std::initializer_list<const char*> aovs, double tight, double loose,
-                                double frac_tight, double frac_loose) {
+// What one AOV's comparison found, over the pixels the objects cover (the CPU frame's coverage).
+struct AgreementFigures {
+    size_t values = 0, interior_values = 0;  // covered values (pixels x channels), those off edges
+    size_t within_tight = 0, within_loose = 0;
+    size_t interior_beyond_max = 0;
+    double worst_interior = 0, worst = 0;
+    int worst_interior_x = -1, worst_interior_y = -1;
+    size_t nonzero_cpu = 0, nonzero_gpu = 0;  // covered values that are not 0
+};
+
+// The comparison of one AOV, over covered pixels only; `tol` for a pixel is tolerance(object).
+template <class Tolerance>
+AgreementFigures compare_aov(const Frame& cpu, const Frame& gpu, const char* aov, Tolerance&& tolerance) {
+    AgreementFigures f;
+    const Coverage& cov = cpu.coverage;
+    const Image &a = cpu.aov(aov), &b = gpu.aov(aov);
+    for (int y = 0; y < a.height; ++y)
+        for (int x = 0; x < a.width; ++x) {
+            const size_t p = size_t(y) * size_t(a.width) + size_t(x);
+            if (!cov.covered(p)) continue;
+            const FrameAgreement& tol = tolerance(cov.object[p]);
+            for (int c = 0; c < a.channels; ++c) {
+                const float va = a.at(x, y)[c], vb = b.at(x, y)[c];
+                const double d = std::isfinite(va) && std::isfinite(vb) ? std::fabs(double(va) - double(vb)) : INFINITY;
+                ++f.values;
+                f.nonzero_cpu += va != 0.f;
+                f.nonzero_gpu += vb != 0.f;
+                f.within_tight += d <= tol.tight;
+                f.within_loose += d <= tol.loose;
+                f.worst = std::max(f.worst, d);
+                if (cov.edge[p]) continue;
+                ++f.interior_values;
+                f.interior_beyond_max += d > tol.interior_max;
+                if (d > f.worst_interior || f.worst_interior_x < 0) f.worst_interior = d, f.worst_interior_x = x, f.worst_interior_y = y;
+            }
+        }
+    return f;
+}
+
+inline void print_figures(const char* what, const char* aov, const AgreementFigures& f) {
+    const double n = double(std::max<size_t>(f.values, 1));
+    std::printf("[ cpu/gpu ] %-40s %-11s covered %7zu (interior %7zu): within tight %.5f, loose %.5f; worst %.2e, interior %.2e at (%d,%d), %zu over max\n",
+                what, aov, f.values, f.interior_values, double(f.within_tight) / n, double(f.within_loose) / n, f.worst, f.worst_interior,
+                f.worst_interior_x, f.worst_interior_y, f.interior_beyond_max);
+}
+
+// Checks one AOV's figures against the tolerances: content in both frames, the fractions within
+// `tight` and `loose`, and every value off edges within `interior_max`.
+inline void expect_figures_agree(const char* aov, const AgreementFigures& f, double frac_tight, double frac_loose) {
+    EXPECT_GT(f.values, 0u) << aov << ": no pixel shows an object (nothing is compared)";
+    EXPECT_GT(f.nonzero_cpu, 0u) << aov << ": the CPU frame is 0 on every object pixel";
+    EXPECT_GT(f.nonzero_gpu, 0u) << aov << ": the GPU frame is 0 on every object pixel";
+    const double n = double(f.values);
+    EXPECT_GE(double(f.within_tight), frac_tight * n) << aov << ": " << n - double(f.within_tight) << " of " << n << " covered values beyond tight";
+    EXPECT_GE(double(f.within_loose), frac_loose * n) << aov << ": " << n - double(f.within_loose) << " of " << n << " covered values beyond loose";
+    EXPECT_EQ(f.interior_beyond_max, 0u) << aov << ": " << f.interior_beyond_max << " values off silhouettes and triangle edges beyond interior_max; worst "
+                                         << f.worst_interior << " at pixel (" << f.worst_interior_x << ", " << f.worst_interior_y << ")";
+}
+
+// For each AOV, over the pixels the objects cover (the CPU frame's coverage, which must be filled:
+// render_cpu_and_gpu does), the CPU and GPU frames agree to `tol` (core/technique.h,
+// FrameAgreement): fractions within tight and loose, every value off edges within interior_max,
+// and content (a value other than 0) in both frames: two black frames agree about nothing.
+inline void expect_frames_agree(const Frame& cpu, const Frame& gpu, std::initializer_list<const char*> aovs, const FrameAgreement& tol) {
+    ASSERT_FALSE(cpu.coverage.empty()) << "the CPU frame has no coverage (render it with RenderRequest::coverage)";
+    ASSERT_EQ(cpu.coverage.width, cpu.width);
+    ASSERT_EQ(cpu.coverage.height, cpu.height);
     for (const char* aov : aovs) {
         ASSERT_TRUE(cpu.has(aov)) << "the CPU frame has no AOV " << aov;
         ASSERT_TRUE(gpu.has(aov)) << "the GPU frame has no AOV " << aov;
-        const Image &a = cpu.aov(aov), &b = gpu.aov(aov);
-        ASSERT_EQ(a.data.size(), b.data.size()) << aov;
-        ASSERT_FALSE(a.data.empty()) << aov << ": empty frames";
-        size_t nonzero = 0;
-        for (size_t i = 0; i < a.data.size(); ++i) nonzero += a.data[i] != 0.f || b.data[i] != 0.f;
-        EXPECT_GT(nonzero, 0u) << aov << ": zero everywhere in both frames (nothing was drawn, so nothing is compared)";
-        size_t n_tight = 0, n_loose = 0;
-        for (size_t i = 0; i < a.data.size(); ++i) {
-            const double d = std::fabs(double(a.data[i]) - double(b.data[i]));
-            n_tight += d <= tight;
-            n_loose += d <= loose;
-        }
-        const double n = double(a.data.size());
-        EXPECT_GE(double(n_tight), frac_tight * n) << aov << ": " << n - double(n_tight) << " of " << n << " values differ by more than " << tight;
-        EXPECT_GE(double(n_loose), frac_loose * n) << aov << ": " << n - double(n_loose) << " of " << n << " values differ by more than " << loose;
+        ASSERT_EQ(cpu.aov(aov).data.size(), gpu.aov(aov).data.size()) << aov;
+        const AgreementFigures f = compare_aov(cpu, gpu, aov, [&](int) -> const FrameAgreement& { return tol; });
+        expect_figures_agree(aov, f, tol.frac_tight, tol.frac_loose);
     }
 }
+
 // Every value of an AOV is 0 (e.g. no octaves of noise beyond the detail distance).
 inline void expect_all_zero(const Frame& f, const char* aov) {
     ASSERT_TRUE(f.has(aov)) << aov;

@@ -1,0 +1,93 @@
+// Every preset in presets/ as a user captures it: the CPU reference and the GPU pass agree on the
+// pixels the objects cover, to each technique's own tolerances (Technique::agreement), with
+// content in both frames; and the gallery in screenshots/ is what a fresh capture gives, so a
+// regression cannot hide behind a stale screenshot. One process renders every preset once per
+// backend at the gallery's size, so each preset's stages are computed once for both checks.
+#include "app/workbench.h"
+#include "core/image.h"
+#include "core/scene.h"
+#include "core/technique.h"
+#include "support/cli.h"
+#include "support/frames.h"
+
+#include <gtest/gtest.h>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+using namespace mesolab;
+namespace fs = std::filesystem;
+
+namespace {
+
+std::vector<std::string> preset_files() {
+    std::vector<std::string> files;
+    for (const auto& e : fs::recursive_directory_iterator(test::source_path("presets")))
+        if (e.is_regular_file() && e.path().extension() == ".json") files.push_back(e.path().string());
+    std::sort(files.begin(), files.end());
+    return files;
+}
+
+// How far a fresh capture may be from the committed screenshot, in 8-bit sRGB steps over every
+// value of the image (background included).
+struct GalleryDifference {
+    double mean = 0, p99 = 0, max = 0;
+};
+
+GalleryDifference difference_to_png(const Image& radiance, const std::string& png) {
+    const Image committed = read_image(png, false);
+    GalleryDifference d;
+    if (committed.width != radiance.width || committed.height != radiance.height) return {INFINITY, INFINITY, INFINITY};
+    std::vector<double> diff;
+    diff.reserve(size_t(radiance.width) * size_t(radiance.height) * 3);
+    for (int y = 0; y < radiance.height; ++y)
+        for (int x = 0; x < radiance.width; ++x)
+            for (int c = 0; c < 3; ++c) {
+                const double fresh = linear_to_srgb8(radiance.at(x, y)[c]);
+                const double old = std::round(double(committed.at(x, y)[std::min(c, committed.channels - 1)]) * 255.0);
+                diff.push_back(std::fabs(fresh - old));
+            }
+    for (double v : diff) d.mean += v;
+    d.mean /= double(diff.size());
+    std::sort(diff.begin(), diff.end());
+    d.p99 = diff[size_t(0.99 * double(diff.size() - 1))];
+    d.max = diff.back();
+    return d;
+}
+}  // namespace
+
+TEST(Gallery, EveryPresetAgreesOnBothBackendsAndMatchesItsScreenshot) {
+    Workbench wb;
+    int screenshots = 0;
+    for (const std::string& file : preset_files()) {
+        SCOPED_TRACE(file);
+        const Scene s = load_preset(file);
+        RenderRequest req;  // as `mesolab capture` renders (512 x 512, or the texture's own size)
+        req.aovs = {"radiance", "normal"};
+        req.coverage = true;
+        req.backend = Backend::Cpu;
+        const RenderResult cpu = wb.render(s, req);
+        req.backend = Backend::Gpu;
+        const RenderResult gpu = wb.render(s, req);
+        // Each pixel is held to the tolerances of the technique of the object it shows.
+        std::vector<FrameAgreement> tol;
+        for (const SceneObject& o : s.objects) tol.push_back(Registry::instance().technique(o.technique)->agreement());
+        double frac_tight = 1, frac_loose = 1;
+        for (const FrameAgreement& t : tol) frac_tight = std::min(frac_tight, t.frac_tight), frac_loose = std::min(frac_loose, t.frac_loose);
+        for (const char* aov : {"radiance", "normal"}) {
+            const test::AgreementFigures f = test::compare_aov(cpu.frame, gpu.frame, aov, [&](int o) -> const FrameAgreement& { return tol[size_t(o)]; });
+            test::print_figures(s.name.c_str(), aov, f);
+            test::expect_figures_agree(aov, f, frac_tight, frac_loose);
+        }
+
+        const std::string png = test::source_path("screenshots/" + s.name + ".png");
+        if (!fs::exists(png)) continue;
+        ++screenshots;
+        const GalleryDifference d = difference_to_png(gpu.frame.aov("radiance"), png);
+        std::printf("[ gallery ] %-40s mean %.3f, p99 %.0f, max %.0f (8-bit steps)\n", s.name.c_str(), d.mean, d.p99, d.max);
+    }
+    EXPECT_GT(screenshots, 30);
+}
