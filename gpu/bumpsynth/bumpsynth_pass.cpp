@@ -157,16 +157,14 @@ private:
         return t;
     }
 
-    // Noise texture: RG32F mip chain, bilinear within a level, wrapping.
+    // Noise texture: RG32F mip chain, fetched texel by texel (bilinear and wrapping in the shader,
+    // as on the CPU: gpu/bumpsynth/noise_texture.glsl says why).
     static Texture upload_noise(const NoiseTexture& n) {
         Texture t(make_texture(GL_TEXTURE_2D));
         const int levels = int(n.levels.size());
         glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_BASE_LEVEL, 0);
         glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, levels - 1);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_NEAREST);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST_MIPMAP_NEAREST);  // complete with all its levels
         for (int l = 0; l < levels; ++l) {
             const int s = std::max(1, n.size >> l);
             glTexImage2D(GL_TEXTURE_2D, l, GL_RG32F, s, s, 0, GL_RG, GL_FLOAT, n.levels[size_t(l)].data());
