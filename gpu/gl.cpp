@@ -330,9 +330,9 @@ Program Program::graphics(const std::string& vert, const std::string& frag, cons
     return p;
 }
 
-Program Program::compute(const std::string& comp, const std::vector<std::string>& defines) {
+Program Program::compute(const std::string& comp, const std::vector<std::string>& defines, const std::string& prelude) {
     Program p;
-    p.id_ = link({compile(GL_COMPUTE_SHADER, comp, defines)}, comp);
+    p.id_ = link({compile(GL_COMPUTE_SHADER, comp, defines, prelude)}, comp);
     return p;
 }
 

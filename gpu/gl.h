@@ -79,14 +79,15 @@ void upload_texture(const Texture& t, const TextureSpec& spec, int level, const 
 // A linked program. Sources are looked up by embedded name (e.g. "basic/basic.frag"); a line
 // `#include "common.glsl"` is replaced by the embedded file of that name (recursively, once).
 // `defines` lines ("NAME VALUE") are inserted after #version, then the fragment shader's
-// `frag_prelude` (generated declarations, e.g. fragment_outputs()). Compile/link errors throw
+// `frag_prelude` (generated declarations, e.g. fragment_outputs()) or the compute shader's
+// `prelude` (GLSL of the caller's own, ahead of the file's). Compile/link errors throw
 // std::runtime_error with the file name and the driver's log.
 class Program {
 public:
     Program() = default;
     static Program graphics(const std::string& vert, const std::string& frag, const std::vector<std::string>& defines = {},
                             const std::string& frag_prelude = "");
-    static Program compute(const std::string& comp, const std::vector<std::string>& defines = {});
+    static Program compute(const std::string& comp, const std::vector<std::string>& defines = {}, const std::string& prelude = "");
     GLuint id() const { return id_.get(); }
     void use() const { glUseProgram(id_.get()); }
     GLint uniform(const char* name) const { return glGetUniformLocation(id_.get(), name); }

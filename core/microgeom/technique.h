@@ -32,6 +32,13 @@ public:
     void shade_cpu(const ShadeContext& ctx) const override;
     std::vector<ExportDecl> exports() const override;
     std::vector<BenchTable> bench_tables() const override;
+    // Continuous parts (interpolated directions, ellipse filtering, scattered light) agree to
+    // about 1e-3 of the radiance; the visibility bits S_i and the direction triangle a view falls in
+    // are discrete choices that can flip on the terminator of a shadow and on a triangle's edge.
+    FrameAgreement agreement() const override {
+        return {.tight = 1e-3, .frac_tight = 0.95, .loose = 2e-2, .frac_loose = 0.998, .interior_max = 5e-3, .interior_outliers = 2e-4,
+                .why = "float evaluation order; S_i bits and direction triangles flip on shadow terminators"};
+    }
 };
 
 // The scattering settings of a material (microgeom.depth, sampling, paths, scatter_seed, shadows).

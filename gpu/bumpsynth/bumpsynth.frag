@@ -6,6 +6,7 @@
 #include "common.glsl"
 #include "camera.glsl"
 #include "lighting.glsl"
+#include "noise_texture.glsl"
 
 in vec3 v_position;
 in vec3 v_normal;
@@ -25,7 +26,7 @@ uniform uint u_octave_seed[32];
 uniform vec2 u_octave_offset[32];
 uniform float u_octave_gain[16];     // gain^o
 uniform int u_noise_texture;         // 1: noise = texture
-uniform sampler2D u_noise;           // RG: uniformised inputs, level l = K - l octaves
+uniform sampler2D u_noise;           // RG: uniformised inputs, level l = K - l octaves (noise_texture.glsl)
 uniform int u_noise_levels;
 uniform int u_index_map;             // 1: §7 index texture (core/bumpsynth/bump_map.h)
 uniform sampler2D u_index;           // W x H: RG = look-up-table inputs, row 0 at the top (v = 1)
@@ -143,8 +144,8 @@ void inputs(vec2 uv, int k, bool fine, inout vec2 coarse, out vec2 finer) {
         return;
     }
     if (u_noise_texture != 0) {
-        if (k > 0) coarse = textureLod(u_noise, uv, float(clamp(u_octaves_max - k, 0, u_noise_levels - 1))).rg;
-        if (fine) finer = textureLod(u_noise, uv, float(clamp(u_octaves_max - k - 1, 0, u_noise_levels - 1))).rg;
+        if (k > 0) coarse = noise_texture_bilinear(u_noise, clamp(u_octaves_max - k, 0, u_noise_levels - 1), uv);
+        if (fine) finer = noise_texture_bilinear(u_noise, clamp(u_octaves_max - k - 1, 0, u_noise_levels - 1), uv);
         return;
     }
     uv -= floor(uv);  // the periodic square (noise.cpp wrap_uv)

@@ -142,10 +142,12 @@ private:
         return make_texture({.target = GL_TEXTURE_2D_ARRAY, .format = GL_RGBA32F, .width = S, .height = S, .layers = 3}, {GL_RGBA, GL_FLOAT, rgba.data()});
     }
 
-    // Noise texture: RG32F mip chain, bilinear within a level, wrapping.
+    // Noise texture: RG32F mip chain, fetched texel by texel (bilinear and wrapping in the shader,
+    // as on the CPU: gpu/bumpsynth/noise_texture.glsl says why).
     static Texture upload_noise(const NoiseTexture& n) {
+        // Complete with all its levels (texelFetch reads any level; the filters are never used).
         const TextureSpec spec{.format = GL_RG32F, .width = n.size, .height = n.size, .levels = int(n.levels.size()),
-                               .min_filter = GL_LINEAR_MIPMAP_NEAREST, .mag_filter = GL_LINEAR, .wrap_s = GL_REPEAT, .wrap_t = GL_REPEAT};
+                               .min_filter = GL_NEAREST_MIPMAP_NEAREST, .mag_filter = GL_NEAREST};
         Texture t = make_texture(spec);
         for (int l = 0; l < spec.levels; ++l) upload_texture(t, spec, l, {GL_RG, GL_FLOAT, n.levels[size_t(l)].data()});
         return t;

@@ -12,6 +12,8 @@
 // The gather takes S_i and the bent weights in chunks of directions [u_j0, u_j1)
 // (gpu/microgeom/chunks.h): one dispatch per chunk accumulates (sum, wsum) in E, the last divides.
 // The exact shadow test sums, chunk by chunk too, the light's three directions held by each.
+// Lit or not (n_p . l > 0) is decided in the CPU's float arithmetic (n_dot_l below), so that a facet
+// lying exactly along the light is unlit on both.
 layout(local_size_x = 8, local_size_y = 8) in;
 
 struct Texel {
@@ -57,12 +59,25 @@ float ellipse_vis(Texel t, vec3 w) {
     return clamp(0.5 - (q - 1.0) / (max(g, 1e-6) * u_edge), 0.0, 1.0);
 }
 
+// n . l exactly as the CPU's float glm::dot computes it, (n_x l_x + n_y l_y) + n_z l_z with every
+// product rounded: `precise` keeps the compiler from fusing the multiply-adds. Where a facet lies
+// exactly along the light (n . l = 0 in float, e.g. a 45 degree facet of the triangles field under
+// a light 45 degrees up facing it) a fused sum is instead the rounding error of one product
+// (+-1e-8), and its sign would decide lit or not: the shadow would jump by the whole visibility
+// of the texel (0.59 there) where the CPU has 0. NVIDIA's compiler fuses; llvmpipe does not.
+float n_dot_l(vec3 n, vec3 l) {
+    precise float xy = n.x * l.x + n.y * l.y;
+    precise float xyz = xy + n.z * l.z;
+    return xyz;
+}
+
 void direct_kernel(int b, int p, int T) {
     Texel t = texels[p];
     vec3 l = u_light[b].xyz;
+    float nl = n_dot_l(t.n.xyz, l);
     // This chunk's part of the exact test: the barycentric mix of the 3 directions' visibility.
     float v = 0.0;
-    if (u_shadows != 0 && u_ellipses == 0 && dot(t.n.xyz, l) > 0.0) {
+    if (u_shadows != 0 && u_ellipses == 0 && nl > 0.0) {
         ivec4 tri = u_tri[b];
         vec4 bary = u_bary[b];
         for (int k = 0; k < 3; ++k) {
@@ -75,8 +90,8 @@ void direct_kernel(int b, int p, int T) {
         direct[b * T + p] = vec4(0.0, 0.0, 0.0, v);
         return;
     }
-    float shadow = u_shadows == 0 ? 1.0 : u_ellipses == 0 ? v : (dot(t.n.xyz, l) > 0.0 ? ellipse_vis(t, l) : 0.0);
-    float cos_l = max(0.0, dot(t.n.xyz, l));
+    float shadow = u_shadows == 0 ? 1.0 : u_ellipses == 0 ? v : (nl > 0.0 ? ellipse_vis(t, l) : 0.0);
+    float cos_l = max(0.0, nl);
     if (cos_l <= 0.0) shadow = 0.0;
     direct[b * T + p] = vec4(t.albedo.rgb * INV_PI * cos_l * shadow, shadow);
 }

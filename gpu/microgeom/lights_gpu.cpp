@@ -22,9 +22,16 @@ struct TexelGpu {
 class GpuLightSolver final : public LightSolver {
 public:
     // [SECTION] Upload what every light reads
-    GpuLightSolver(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, const ScatterSettings& s, size_t max_chunk_bytes) : dirs_(&dirs), s_(s) {
-        static const Program* compiled = new Program(Program::compute("microgeom/lights.comp"));
-        program_ = compiled;
+    GpuLightSolver(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, const ScatterSettings& s, size_t max_chunk_bytes,
+                   const std::string& prelude)
+        : dirs_(&dirs), s_(s) {
+        if (prelude.empty()) {
+            static const Program* compiled = new Program(Program::compute("microgeom/lights.comp"));
+            program_ = compiled;
+        } else {
+            own_program_ = Program::compute("microgeom/lights.comp", {}, prelude);
+            program_ = &own_program_;
+        }
         W_ = hf.width;
         H_ = hf.height;
         N_ = dirs.size();
@@ -154,6 +161,7 @@ private:
     }
 
     ComputeScope scope_;  // first: current before the buffers exist, released after they are gone
+    Program own_program_;  // with a prelude; else program_ is the shared one
     const Program* program_ = nullptr;
     const DirectionSet* dirs_;
     ScatterSettings s_;
@@ -167,7 +175,7 @@ private:
 }  // namespace
 
 std::unique_ptr<LightSolver> make_gpu_light_solver(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, const ScatterSettings& s,
-                                                   size_t max_chunk_bytes) {
-    return std::make_unique<GpuLightSolver>(hf, dirs, vis, s, max_chunk_bytes);
+                                                   size_t max_chunk_bytes, const std::string& shader_prelude) {
+    return std::make_unique<GpuLightSolver>(hf, dirs, vis, s, max_chunk_bytes, shader_prelude);
 }
 }  // namespace mesolab::gpu

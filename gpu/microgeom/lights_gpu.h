@@ -8,6 +8,7 @@
 #include "core/microgeom/scatter.h"
 #include <cstddef>
 #include <memory>
+#include <string>
 
 namespace mesolab::gpu {
 
@@ -17,7 +18,10 @@ namespace mesolab::gpu {
 // solves happen and drop it after. S_i and the weights go up in chunks of directions of at most
 // max_chunk_bytes (0: GL_MAX_SHADER_STORAGE_BLOCK_SIZE; gpu/microgeom/chunks.h). Throws
 // std::runtime_error without OpenGL, or when one direction's texture alone exceeds that limit.
+// shader_prelude: GLSL compiled in ahead of lights.comp's own (after its #version line) into a
+// program of this solver's; empty: the shared program. The tests use it to make one driver do
+// what another conformant one may, e.g. fuse multiply-adds as NVIDIA's compiler does.
 std::unique_ptr<microgeom::LightSolver> make_gpu_light_solver(const Heightfield& hf, const microgeom::DirectionSet& dirs,
                                                               const microgeom::Visibility& vis, const microgeom::ScatterSettings& s,
-                                                              size_t max_chunk_bytes = 0);
+                                                              size_t max_chunk_bytes = 0, const std::string& shader_prelude = "");
 }  // namespace mesolab::gpu

@@ -312,18 +312,18 @@ TEST(BumpsynthBumpMap, CpuAndGpuAgreeWithAnIndexMapAndDetail) {
         apply_set(t, "bumpsynth.octaves_max", "2");
         const auto [cpu, gpu] = test::render_cpu_and_gpu(wb, t);
         ASSERT_EQ(cpu.aov("normal").width, 512);
-        test::expect_frames_agree(cpu, gpu, {"radiance", "normal", "octaves"}, {.tight = 1e-3, .frac_tight = 0.99, .loose = 2e-2, .frac_loose = 0.995, .interior_max = 2e-2});
+        test::expect_frames_agree(cpu, gpu, {"radiance", "normal", "octaves"}, test::agreement_of("bumpsynth"));
     }
     for (const char* d : {"40", "3", "0.3"}) {
         SCOPED_TRACE(d);
         apply_set(s, "camera.distance", d);
         const auto [cpu, gpu] = test::render_cpu_and_gpu(wb, s, 160, 120);
         if (std::string(d) == "40") {  // beyond the detail distance: no octaves on either
-            test::expect_frames_agree(cpu, gpu, {"radiance", "normal"}, {.tight = 1e-3, .frac_tight = 0.97, .loose = 2e-2, .frac_loose = 0.995, .interior_max = 2e-2});
+            test::expect_frames_agree(cpu, gpu, {"radiance", "normal"}, test::agreement_of("bumpsynth"));
             test::expect_all_zero(cpu, "octaves");
             test::expect_all_zero(gpu, "octaves");
         } else {
-            test::expect_frames_agree(cpu, gpu, {"radiance", "normal", "octaves"}, {.tight = 1e-3, .frac_tight = 0.97, .loose = 2e-2, .frac_loose = 0.995, .interior_max = 2e-2});
+            test::expect_frames_agree(cpu, gpu, {"radiance", "normal", "octaves"}, test::agreement_of("bumpsynth"));
         }
     }
 }

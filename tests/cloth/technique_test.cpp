@@ -64,7 +64,7 @@ TEST(ClothCpuGpu, AgreeOnEveryAovOfAGarment) {
         apply_set(s, "cloth.mip", mip);
         const auto [cpu, gpu] = test::render_cpu_and_gpu(wb, s, 200, 140);
         ASSERT_TRUE(all_finite(cpu) && all_finite(gpu)) << mip;
-        test::expect_frames_agree(cpu, gpu, {"radiance", "normal", "alpha"}, {.tight = 2e-3, .frac_tight = 0.97, .loose = 3e-2, .frac_loose = 0.99, .interior_max = 3e-2});
+        test::expect_frames_agree(cpu, gpu, {"radiance", "normal", "alpha"}, test::agreement_of("cloth"));
         test::expect_frames_agree(cpu, gpu, {"brdf_index"}, {.tight = 0.05, .frac_tight = 0.95, .loose = 1.0, .frac_loose = 0.97, .interior_max = 1.0});
         if (std::string(mip) == "blend") test::expect_frames_agree(cpu, gpu, {"mip_level"}, {.tight = 0.05, .frac_tight = 0.95, .loose = 0.5, .frac_loose = 0.99, .interior_max = 0.5});
     }
@@ -77,7 +77,7 @@ TEST(ClothCpuGpu, AgreeInTextureModeOnASleeve) {
     apply_set(s, "camera.mode", "texture");
     apply_set(s, "camera.orbit", "20,-90");
     const auto [cpu, gpu] = test::render_cpu_and_gpu(wb, s, 128, 128);
-    test::expect_frames_agree(cpu, gpu, {"radiance", "alpha"}, {.tight = 2e-3, .frac_tight = 0.97, .loose = 3e-2, .frac_loose = 0.99, .interior_max = 3e-2});
+    test::expect_frames_agree(cpu, gpu, {"radiance", "alpha"}, test::agreement_of("cloth"));
 }
 
 // [SECTION] What a change reruns

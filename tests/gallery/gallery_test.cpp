@@ -73,15 +73,7 @@ TEST(Gallery, EveryPresetAgreesOnBothBackendsAndMatchesItsScreenshot) {
         req.backend = Backend::Gpu;
         const RenderResult gpu = wb.render(s, req);
         // Each pixel is held to the tolerances of the technique of the object it shows.
-        std::vector<FrameAgreement> tol;
-        for (const SceneObject& o : s.objects) tol.push_back(Registry::instance().technique(o.technique)->agreement());
-        double frac_tight = 1, frac_loose = 1;
-        for (const FrameAgreement& t : tol) frac_tight = std::min(frac_tight, t.frac_tight), frac_loose = std::min(frac_loose, t.frac_loose);
-        for (const char* aov : {"radiance", "normal"}) {
-            const test::AgreementFigures f = test::compare_aov(cpu.frame, gpu.frame, aov, [&](int o) -> const FrameAgreement& { return tol[size_t(o)]; });
-            test::print_figures(s.name.c_str(), aov, f);
-            test::expect_figures_agree(aov, f, frac_tight, frac_loose);
-        }
+        test::expect_frames_agree(s, cpu.frame, gpu.frame, {"radiance", "normal"});
 
         const std::string png = test::source_path("screenshots/" + s.name + ".png");
         if (!fs::exists(png)) continue;

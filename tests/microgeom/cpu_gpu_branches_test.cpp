@@ -25,42 +25,23 @@ using namespace mesolab::test;
 
 namespace {
 
-constexpr double kTextureTol = 1e-4;                                               // texture space: every value
-constexpr double kOrbitTight = 1e-3, kOrbitLoose = 2e-2, kOrbitFracTight = 0.98, kOrbitFracLoose = 0.995;  // orbit views
+// Texture space (one pixel per texel): every value to 1e-4. Orbit views: the technique's own
+// tolerances (MicrogeomTechnique::agreement).
+const FrameAgreement kTexture{.tight = 1e-4, .frac_tight = 1.0, .loose = 1e-4, .frac_loose = 1.0, .interior_max = 1e-4};
 const std::initializer_list<const char*> kAovs = {"radiance", "normal", "direct", "indirect", "shadow"};
 
 enum class Folds { No, Yes };
-
-// Prints, per AOV, the fraction of values within `tight` and `loose` and the worst difference.
-void print_figures(const std::string& what, const Frame& cpu, const Frame& gpu, double tight, double loose) {
-    for (const char* aov : {"radiance", "normal", "direct", "indirect", "shadow", "folded"}) {
-        const Image &a = cpu.aov(aov), &b = gpu.aov(aov);
-        if (a.data.size() != b.data.size() || a.data.empty()) continue;
-        size_t n_tight = 0, n_loose = 0;
-        double worst = 0;
-        for (size_t i = 0; i < a.data.size(); ++i) {
-            const double d = std::fabs(double(a.data[i]) - double(b.data[i]));
-            n_tight += d <= tight;
-            n_loose += d <= loose;
-            worst = std::max(worst, d);
-        }
-        const double n = double(a.data.size());
-        std::printf("[ cpu/gpu ] %-34s %-9s within %.0e: %.5f, within %.0e: %.5f, worst %.2e\n", what.c_str(), aov, tight, double(n_tight) / n, loose,
-                    double(n_loose) / n, worst);
-    }
-}
 
 // `s` rendered on both backends (width x height; texture mode: the heightfield's size), figures
 // printed, every AOV checked: `folded` compared where the scene folds, else 0 on both.
 std::pair<Frame, Frame> expect_agreement(Workbench& wb, const std::string& what, const Scene& s, bool texture_space, Folds folds = Folds::No) {
     auto frames = render_cpu_and_gpu(wb, s, 160, 120);
     const auto& [cpu, gpu] = frames;
-    const double tight = texture_space ? kTextureTol : kOrbitTight, loose = texture_space ? kTextureTol : kOrbitLoose;
-    const double frac_tight = texture_space ? 1.0 : kOrbitFracTight, frac_loose = texture_space ? 1.0 : kOrbitFracLoose;
-    print_figures(what, cpu, gpu, tight, loose);
-    expect_frames_agree(cpu, gpu, kAovs, {.tight = tight, .frac_tight = frac_tight, .loose = loose, .frac_loose = frac_loose, .interior_max = loose});
+    SCOPED_TRACE(what);
+    const FrameAgreement tol = texture_space ? kTexture : agreement_of("microgeom");
+    expect_frames_agree(cpu, gpu, kAovs, tol);
     if (folds == Folds::Yes) {
-        expect_frames_agree(cpu, gpu, {"folded"}, {.tight = tight, .frac_tight = frac_tight, .loose = loose, .frac_loose = frac_loose, .interior_max = loose});
+        expect_frames_agree(cpu, gpu, {"folded"}, tol);
     } else {
         expect_all_zero(cpu, "folded");
         expect_all_zero(gpu, "folded");

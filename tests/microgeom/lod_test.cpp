@@ -202,7 +202,7 @@ TEST(Lod, CpuAndGpuAgreeOnGeometryAndBrdf) {
     Workbench wb;
     Scene s = load_preset(source_path("presets/microgeom/fig9-geometry-vs-brdf.json"));
     const auto [cpu, gpu] = render_cpu_and_gpu(wb, s, 160, 160);
-    expect_frames_agree(cpu, gpu, {"radiance", "normal", "direct", "indirect", "shadow"}, {.tight = 1e-3, .frac_tight = 0.98, .loose = 2e-2, .frac_loose = 0.995, .interior_max = 2e-2});
+    expect_frames_agree(cpu, gpu, {"radiance", "normal", "direct", "indirect", "shadow"}, agreement_of("microgeom"));
 }
 
 // Physical scale and albedo images: an image heightfield's values are heights in the unit of

@@ -233,7 +233,7 @@ TEST(ScatterDirections, CpuAndGpuAgreeOnASphere) {
         SCOPED_TRACE(preset);
         const Scene s = load_preset(source_path(preset));
         const auto [cpu, gpu] = render_cpu_and_gpu(wb, s, 160, 120);
-        expect_frames_agree(cpu, gpu, {"radiance", "normal", "direct", "indirect", "shadow"}, {.tight = 1e-3, .frac_tight = 0.98, .loose = 2e-2, .frac_loose = 0.995, .interior_max = 2e-2});
+        expect_frames_agree(cpu, gpu, {"radiance", "normal", "direct", "indirect", "shadow"}, agreement_of("microgeom"));
         for (const Frame* f : {&cpu, &gpu}) {
             const std::vector<float>& ind = f->aov("indirect").data;
             EXPECT_GT(*std::max_element(ind.begin(), ind.end()), 1e-3f) << "no scattered light";

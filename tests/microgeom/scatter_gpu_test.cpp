@@ -125,5 +125,5 @@ TEST(ScatterGpu, DeviceGpuThroughTheStagesMatchesDeviceCpu) {
     if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     const test::DeviceRenders r = test::render_on_both_devices({"microgeom.resolution=64"}, Backend::Gpu);
     test::expect_ran_on_the_gpu(r.gpu, {"microgeom.visibility", "microgeom.scatter", "microgeom.scatter_env"});
-    test::expect_frames_agree(r.cpu.frame, r.gpu.frame, {"radiance", "direct", "indirect", "shadow"}, {.tight = 1e-3, .frac_tight = 0.99, .loose = 2e-2, .frac_loose = 0.999, .interior_max = 2e-2});
+    test::expect_frames_agree(r.cpu.frame, r.gpu.frame, {"radiance", "direct", "indirect", "shadow"}, test::agreement_of("microgeom"));
 }

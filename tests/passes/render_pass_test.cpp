@@ -136,7 +136,7 @@ TEST(RenderPass, EveryTechniqueAndEveryAovStaysWithinTheDrawBuffers) {
         EXPECT_GT(sum_cpu, 0.0) << a;
         EXPECT_GT(sum_gpu, 0.0) << a;
     }
-    expect_frames_agree(cpu, gpu, {"radiance", "normal"}, {.tight = 1e-3, .frac_tight = 0.97, .loose = 0.05, .frac_loose = 0.99, .interior_max = 0.05});
+    expect_frames_agree(s, cpu, gpu, {"radiance", "normal"});
 
     // Forced into batches of two attachments, the GPU frame is the same, byte for byte.
     wb.gpu().set_max_attachments(2);

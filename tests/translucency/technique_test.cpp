@@ -85,7 +85,7 @@ TEST(TranslucencyCpuGpu, AgreeOnEveryAovSeenFromTheCamera) {
     apply_set(s, "translucency.compare", "true");
     const auto [cpu, gpu] = test::render_cpu_and_gpu(wb, s, 160, 120);
     EXPECT_GT(max_value(cpu.aov("radiance")), 0.05);
-    test::expect_frames_agree(cpu, gpu, {"radiance", "normal", "irradiance", "radiosity", "local", "global", "reference", "error"}, {.tight = 2e-3, .frac_tight = 0.98, .loose = 3e-2, .frac_loose = 0.995, .interior_max = 3e-2});
+    test::expect_frames_agree(cpu, gpu, {"radiance", "normal", "irradiance", "radiosity", "local", "global", "reference", "error"}, test::agreement_of("translucency"));
 }
 
 TEST(TranslucencyCpuGpu, AgreeTexelForTexelInTextureModeWithBlendingOffAndAPointLight) {
@@ -98,7 +98,7 @@ TEST(TranslucencyCpuGpu, AgreeTexelForTexelInTextureModeWithBlendingOffAndAPoint
     apply_set(s, "light.intensity", "8");
     const auto [cpu, gpu] = test::render_cpu_and_gpu(wb, s, 128, 128);
     ASSERT_EQ(cpu.width, 128);  // one pixel per texel
-    test::expect_frames_agree(cpu, gpu, {"radiance", "irradiance", "radiosity", "local", "global"}, {.tight = 2e-3, .frac_tight = 0.98, .loose = 3e-2, .frac_loose = 0.995, .interior_max = 3e-2});
+    test::expect_frames_agree(cpu, gpu, {"radiance", "irradiance", "radiosity", "local", "global"}, test::agreement_of("translucency"));
 }
 
 // Above 65,536 vertices a factor's column takes 2 more bytes: the GPU's wide-column variant
@@ -122,7 +122,7 @@ TEST(TranslucencyCpuGpu, AgreeAboveSixtyFiveThousandVertices) {
     ASSERT_EQ(F->col_hi.size(), F->pairs());
     req.backend = Backend::Gpu;
     const Frame gpu = wb.render(s, req).frame;
-    test::expect_frames_agree(cpu.frame, gpu, {"radiance", "global"}, {.tight = 2e-3, .frac_tight = 0.98, .loose = 3e-2, .frac_loose = 0.995, .interior_max = 3e-2});
+    test::expect_frames_agree(cpu.frame, gpu, {"radiance", "global"}, test::agreement_of("translucency"));
 }
 
 // The GPU writes the irradiance, local and global maps only for frames that show them: a frame
@@ -143,7 +143,7 @@ TEST(TranslucencyCpuGpu, PartsShownAfterRadianceOnlyFramesAreCurrent) {
     for (const auto& st : gpu.frame.steps) EXPECT_EQ(st.status, StageStatus::Cached) << st.name;
     req.backend = Backend::Cpu;
     const Frame cpu = wb.render(s, req).frame;
-    test::expect_frames_agree(cpu, gpu.frame, {"radiance", "irradiance", "local", "global"}, {.tight = 2e-3, .frac_tight = 0.98, .loose = 3e-2, .frac_loose = 0.995, .interior_max = 3e-2});
+    test::expect_frames_agree(cpu, gpu.frame, {"radiance", "irradiance", "local", "global"}, test::agreement_of("translucency"));
 }
 
 // [SECTION] What a change reruns
