@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # mesolab main job. Installs missing Debian packages, builds, then opens the GUI when a display
-# is available; otherwise runs the headless showcase (about a minute on 2 cores once built): the GL
-# context, a capture of every preset in presets/ into screenshots/ and three short timing tables.
+# is available; otherwise runs the headless showcase (a few minutes on 2 cores once built): the GL
+# context, a capture of every preset in presets/ into build/showcase/ and three short timing tables.
+# The clone's tracked files stay as they are (the gallery in screenshots/ is refreshed on purpose,
+# with `build/mesolab capture presets -o screenshots`).
 # The full timing tables live in the technique pages (core/*/README.md); regenerate them with
 # `build/mesolab bench --update-pages`. Arguments go to `mesolab gui` (e.g. a preset).
 # MESOLAB_HEADLESS=1 runs the showcase even when a display is available.
@@ -19,7 +21,8 @@ if [ -n "${DISPLAY:-}${WAYLAND_DISPLAY:-}" ] && [ -z "${MESOLAB_HEADLESS:-}" ]; 
 fi
 echo "== no display: headless showcase"
 ./build/mesolab info
-./build/mesolab capture presets -o screenshots
+./build/mesolab capture presets -o build/showcase
+echo "== captures (PNG and a JSON sidecar each): build/showcase/"
 echo "== short bench: three fast tables, median of 3 runs per cell"
 ./build/mesolab bench basic microgeom-geometry bumpsynth-frame --repeat 3
 echo "== full timing tables: core/basic/README.md, core/microgeom/README.md, core/bumpsynth/README.md, core/translucency/README.md, core/cloth/README.md"

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # mesolab test suite. Installs missing Debian packages, builds, runs every test (GoogleTest
 # under CTest; the GUI smoke test under xvfb-run), then builds and runs the whole suite again
-# with AddressSanitizer + UndefinedBehaviorSanitizer. `./test.sh --quick` skips the sanitizer pass.
+# with AddressSanitizer + UndefinedBehaviorSanitizer, but for the tests labelled `slow` (every preset
+# rendered on both backends and checked against the gallery: minutes in Release, an hour under the
+# sanitizers). `./test.sh --quick` skips the sanitizer pass.
 set -euo pipefail
 cd "$(dirname "$0")"
 source .ci/setup.sh
@@ -20,6 +22,6 @@ if [ "${1:-}" != "--quick" ]; then
   # still winding down. A real failure fails twice and is reported.
   ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1" \
   UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1" \
-    ctest --test-dir build-sanitize --output-on-failure -j "$jobs" --timeout 900 --repeat until-pass:2
+    ctest --test-dir build-sanitize --output-on-failure -j "$jobs" --timeout 900 --repeat until-pass:2 --label-exclude slow
 fi
 echo "== all tests passed"

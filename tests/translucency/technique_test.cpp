@@ -88,6 +88,34 @@ TEST(TranslucencyCpuGpu, AgreeOnEveryAovSeenFromTheCamera) {
     test::expect_frames_agree(cpu, gpu, {"radiance", "normal", "irradiance", "radiosity", "local", "global", "reference", "error"}, test::agreement_of("translucency"));
 }
 
+// The surface texture rho (procedural veins, and an albedo map) on the first frame the GPU draws:
+// the texture made from the rho stage while the pass binds its maps must not unbind any of them
+// (the whole object was once drawn black), and veins darken the frame as much on both paths.
+TEST(TranslucencyCpuGpu, AgreeWithTheSurfaceTextureRho) {
+    for (const char* rho : {"veins", "albedo_map"}) {
+        SCOPED_TRACE(rho);
+        Workbench wb;
+        Scene s = small_sphere();
+        if (std::string(rho) == "veins") {
+            apply_set(s, "translucency.veins", "0.85");
+            apply_set(s, "translucency.vein_scale", "4");
+        } else {
+            apply_set(s, "translucency.albedo_map", test::source_path("presets/basic/maps/sky.exr"));
+        }
+        const auto [cpu, gpu] = test::render_cpu_and_gpu(wb, s, 160, 120, {"radiance", "radiosity"});
+        test::expect_frames_agree(cpu, gpu, {"radiance", "radiosity"}, test::agreement_of("translucency"));
+        // rho is in the radiance, not in the radiosity: the textured radiance is darker than rho = 1 would give.
+        double textured = 0, plain = 0;
+        for (size_t p = 0; p < cpu.coverage.object.size(); ++p)
+            if (cpu.coverage.covered(p)) {
+                textured += gpu.aov("radiance").data[p * 3 + 1];
+                plain += gpu.aov("radiosity").data[p * 3 + 1];
+            }
+        EXPECT_GT(textured, 0.0);
+        EXPECT_LT(textured, plain);
+    }
+}
+
 TEST(TranslucencyCpuGpu, AgreeTexelForTexelInTextureModeWithBlendingOffAndAPointLight) {
     Workbench wb;
     Scene s = small_sphere();
