@@ -159,12 +159,12 @@ int run_bench(const BenchOptions& o) {
     if (const char* t = std::getenv("GLIBC_TUNABLES"); t && std::string(t).find("glibc.malloc.hugetlb=1") != std::string::npos)
         machine += "; malloc on huge pages";
     // A stage's time in an evaluation: the sum over the objects it ran for.
-    const auto stage_ms = [](const Evaluation& ev, const std::string& stage) {
+    const auto stage_ms = [](const Evaluation& ev, const StageName& stage) {
         double ms = 0;
         for (const StageRun* r : ev.runs_of(stage)) ms += r->ms;
         return ms;
     };
-    const auto stage_warning = [](const Evaluation& ev, const std::string& stage) -> std::string {
+    const auto stage_warning = [](const Evaluation& ev, const StageName& stage) -> std::string {
         for (const StageRun* r : ev.runs_of(stage))
             if (!r->warnings.empty()) return r->warnings.front();
         return {};

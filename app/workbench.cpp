@@ -30,7 +30,7 @@ gpu::Renderer& Workbench::gpu() {
 }
 
 void Workbench::forget_frame_steps() {
-    cpu_steps_.entries.clear();
+    cpu_steps_.forget();
     if (renderer_) renderer_->forget_frame_steps();
 }
 

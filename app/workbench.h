@@ -51,13 +51,13 @@ public:
     Session& session() { return session_; }
     // The next frame runs every frame step again (bench times them from scratch).
     void forget_frame_steps();
-    Evaluation evaluate(const Scene& s, const std::vector<std::string>& targets, const ProgressFn& progress = {}) {
+    Evaluation evaluate(const Scene& s, const std::vector<StageName>& targets, const ProgressFn& progress = {}) {
         return session_.evaluate(s, targets, progress);
     }
 
 private:
     Session session_;
-    FrameStepCache cpu_steps_;
+    FrameStepScheduler cpu_steps_;
     std::unique_ptr<gpu::HeadlessContext> context_;
     std::unique_ptr<gpu::Renderer> renderer_;
 };

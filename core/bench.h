@@ -16,7 +16,7 @@ namespace mesolab {
 
 struct BenchColumn {
     std::string name;        // as in the paper ("S_i precompute")
-    std::string stage;       // time this stage (cold cache) ...
+    StageName stage;         // time this stage (cold cache) ...
     int frame_width = 0;     // ... or, when stage is empty, a whole frame of this size
     int frame_height = 0;
     bool cpu = true, gpu = false;  // devices measured (stages are CPU unless they say otherwise)
@@ -32,7 +32,7 @@ struct BenchRow {
     std::string name;                               // as in the paper ("Bricks 128x128")
     std::function<Scene()> scene;                   // the scene this row measures
     std::vector<std::optional<double>> paper_ms;    // one per column, empty where the paper has none
-    std::map<std::string, double> paper_step_ms;    // the paper's figure for a frame step's row, by step name
+    std::map<std::string, double> paper_step_ms;    // the paper's figure for a frame step's row, by step name (FrameStepName::str)
 };
 
 struct BenchTable {

@@ -128,7 +128,21 @@ ParamTable::ParamTable(const ParamGroup* g) : group_(g) {
     for (const auto& d : g->decls()) values_.push_back(d.def);
 }
 
+namespace {
+thread_local ParamReadWatch* t_read_watch = nullptr;
+}
+
+ParamReadScope::ParamReadScope(ParamReadWatch* watch) : previous_(t_read_watch) { t_read_watch = watch; }
+ParamReadScope::~ParamReadScope() { t_read_watch = previous_; }
+
+void ParamGroup::set_cost(std::string_view name, Cost c) {
+    const int i = index_of(name);
+    if (i < 0) throw std::logic_error("no parameter " + name_ + "." + std::string(name));
+    decls_[size_t(i)].cost = c;
+}
+
 const Value& ParamTable::get(std::string_view n) const {
+    if (t_read_watch) t_read_watch->read(*this, n);
     const int i = group_ ? group_->index_of(n) : -1;
     if (i < 0) throw std::logic_error("no parameter " + (group_ ? group_->name() : std::string("?")) + "." + std::string(n));
     return values_[size_t(i)];

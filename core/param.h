@@ -24,8 +24,9 @@ using json = nlohmann::ordered_json;
 enum class ParamType { Bool, Int, Float, Vec2, Vec3, Color, Enum, Path, Text };
 // What a change costs: only a redraw of the frame, or a recompute of the stages that read it. The
 // GUI redraws after any edit and the stage graph's cache keys decide what recomputes; the cost is
-// what the widgets' tooltips and `preset schema` tell, and tests/params checks it against the
-// parameters the stages read.
+// what the widgets' tooltips and `preset schema` tell. It is derived from the stage graph, never
+// written by hand: a key that a stage declares (StageDecl::params, exactly or as "group.*"), or an
+// effect that a stage needs, costs a recompute (Registry).
 enum class Cost { Redraw, Recompute };
 // Which way of a knob is more accurate (used by `sweep` to pick its reference).
 enum class Accuracy { None, Higher, Lower };
@@ -45,7 +46,7 @@ struct ParamDecl {
     double max = std::numeric_limits<double>::infinity();
     std::string unit;
     std::string help;
-    Cost cost = Cost::Redraw;
+    Cost cost = Cost::Redraw;          // derived from the stage graph by the registry
     std::vector<std::string> choices;  // Enum values; for Path: built-in names accepted instead of a file
     Accuracy accuracy = Accuracy::None;
     std::optional<Value> reference;    // the converged setting of this knob, for sweeps
@@ -62,7 +63,6 @@ struct ParamDecl {
     ParamDecl& range(double lo, double hi) { min = lo; max = hi; return *this; }
     ParamDecl& in(std::string u) { unit = std::move(u); return *this; }
     ParamDecl& doc(std::string h) { help = std::move(h); return *this; }
-    ParamDecl& costs(Cost c) { cost = c; return *this; }
     ParamDecl& log() { log_scale = true; return *this; }
     ParamDecl& more_accurate(Accuracy a, std::optional<Value> ref = std::nullopt) { accuracy = a; reference = std::move(ref); return *this; }
     ParamDecl& builtins(std::vector<std::string> names) { choices = std::move(names); return *this; }
@@ -98,6 +98,8 @@ public:
 
     // A table holding every default.
     ParamTable defaults() const;
+    // The derived cost of a change of `name` (the registry sets it once every stage is declared).
+    void set_cost(std::string_view name, Cost c);
 
 private:
     ParamDecl& add(ParamDecl d);
@@ -133,6 +135,28 @@ public:
 private:
     const ParamGroup* group_ = nullptr;
     std::vector<Value> values_;
+};
+
+// [SECTION] Watching reads
+// While a ParamReadScope is alive on a thread, every value read through a ParamTable on that
+// thread (get and the typed getters) is reported to its watch. A session uses it to check that a
+// stage reads only the keys it declares (core/session.h): a key read but not declared would not
+// be part of the stage's cache key, and its cached result would go stale when the key changes.
+class ParamReadWatch {
+public:
+    virtual ~ParamReadWatch() = default;
+    virtual void read(const ParamTable& table, std::string_view key) = 0;
+};
+
+class ParamReadScope {
+public:
+    explicit ParamReadScope(ParamReadWatch* watch);  // null: no watch on this thread meanwhile
+    ~ParamReadScope();
+    ParamReadScope(const ParamReadScope&) = delete;
+    ParamReadScope& operator=(const ParamReadScope&) = delete;
+
+private:
+    ParamReadWatch* previous_;
 };
 
 // [SECTION] Conversions, each naming `where` (file and key) in its InputError.

@@ -84,8 +84,8 @@ Lighting make_lighting(const Scene& s, const Evaluation& ev) {
     }
     L.env.color = s.env.get_vec3("color");
     L.env.intensity = float(s.env.get_float("intensity"));
-    L.env.map = ev.get<Image>("env.map");
-    L.sh = ev.get<SH9>("env.irradiance");
+    L.env.map = ev.get(stages::env_map);
+    L.sh = ev.get(stages::env_irradiance);
     L.env_lighting = s.effect("environment");
     return L;
 }
@@ -180,9 +180,42 @@ int AovWriter::index(std::string_view name) const {
 std::string frame_step_fingerprint(const Scene& s, const Evaluation& ev, const FrameStepDecl& d) {
     std::string fp = d.name;
     for (const auto& p : d.params) fp += param_fingerprint(s, p);
-    for (const auto& st : d.stages)
-        for (const StageRun* r : ev.runs_of(st)) fp += "<" + st + "#" + std::to_string(r->object) + ":" + std::to_string(r->key) + ">";
+    for (const StageName& st : d.stages)
+        for (const StageRun* r : ev.runs_of(st)) fp += "<" + st.str() + "#" + std::to_string(r->object) + ":" + std::to_string(r->key) + ">";
     return fp;
+}
+
+std::vector<FrameStepRun> FrameStepScheduler::run(const Scene& s, const Evaluation& ev, const Runner& work) {
+    std::vector<FrameStepRun> runs;
+    for (const Technique* t : Registry::instance().techniques()) {
+        std::vector<int> objects;
+        for (size_t i = 0; i < s.objects.size(); ++i)
+            if (s.objects[i].technique == t->name()) objects.push_back(int(i));
+        if (objects.empty()) continue;
+        for (const FrameStepDecl& d : t->frame_steps()) {
+            FrameStepRun run{d.name};
+            const std::string fp = frame_step_fingerprint(s, ev, d);
+            std::string& last = fingerprints_[d.name];
+            if (last == fp) {
+                run.status = StageStatus::Cached;
+                runs.push_back(run);
+                continue;
+            }
+            last.clear();  // a failure must not leave a stale "done" behind
+            outputs_.erase(d.name);
+            Work w = work(*t, d, objects);
+            run.ms = w.ms;
+            outputs_[d.name] = std::move(w.output);
+            last = fp;
+            runs.push_back(run);
+        }
+    }
+    return runs;
+}
+
+void FrameStepScheduler::forget() {
+    fingerprints_.clear();
+    outputs_.clear();
 }
 
 bool ShadeContext::mine(size_t pixel) const {
@@ -194,7 +227,7 @@ std::shared_ptr<const TriMesh> drawn_mesh(const Scene& s, const Evaluation& ev, 
     const Technique* t = Registry::instance().technique(s.objects.at(size_t(object)).technique);
     if (t)
         if (auto m = t->object_mesh(s, ev, object)) return m;
-    return ev.get<TriMesh>("scene.geometry", object);
+    return ev.get(stages::geometry, object);
 }
 
 std::vector<Bounds> world_bounds(const Scene& s, const Evaluation& ev) {
@@ -224,7 +257,7 @@ ivec2 frame_size(const Scene& s, const Evaluation& ev, ivec2 requested) {
     return requested;
 }
 
-Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height, const std::vector<std::string>& aovs, FrameStepCache* cache) {
+Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height, const std::vector<std::string>& aovs, FrameStepScheduler* scheduler) {
     PROFILE_SCOPE("frame.cpu");
     if (width < 1 || height < 1 || width > 16384 || height > 16384)
         throw InputError("frame size " + std::to_string(width) + "x" + std::to_string(height) + " is out of range (1..16384 per side)");
@@ -240,30 +273,17 @@ Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height, co
     };
 
     // Frame steps: offscreen work before shading, reused while their inputs are unchanged.
-    std::map<std::string, std::any> step_out;
-    for (const Technique* t : reg.techniques()) {
-        const std::vector<int> objs = objects_of(*t);
-        if (objs.empty()) continue;
-        for (const FrameStepDecl& d : t->frame_steps()) {
-            FrameStepRun run{d.name};
-            const std::string fp = frame_step_fingerprint(s, ev, d);
-            if (cache)
-                if (auto it = cache->entries.find(d.name); it != cache->entries.end() && it->second.fingerprint == fp) {
-                    run.status = StageStatus::Cached;
-                    step_out[d.name] = it->second.output;
-                    f.steps.push_back(run);
-                    continue;
-                }
-            const auto t0 = std::chrono::steady_clock::now();
-            {
-                PROFILE_SCOPE("step." + d.name);
-                step_out[d.name] = t->run_step_cpu(d.name, FrameStepContext{s, ev, cam, lighting, objs, step_out});
-            }
-            run.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-            if (cache) cache->entries[d.name] = {fp, step_out[d.name]};
-            f.steps.push_back(run);
-        }
-    }
+    FrameStepScheduler local;
+    FrameStepScheduler& steps = scheduler ? *scheduler : local;
+    f.steps = steps.run(s, ev, [&](const Technique&, const FrameStepDecl& d, const std::vector<int>& objs) {
+        PROFILE_SCOPE("step." + d.name);
+        const auto t0 = std::chrono::steady_clock::now();
+        FrameStepScheduler::Work w;
+        w.output = d.run_cpu(FrameStepContext{s, ev, cam, lighting, objs, steps.outputs()});
+        w.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        return w;
+    });
+    const FrameStepOutputs& step_out = steps.outputs();
 
     // The G-buffer is reused between frames of a thread: first-touch of ~50 bytes per pixel
     // costs more than the rasterisation of a simple scene.

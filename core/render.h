@@ -11,6 +11,7 @@
 #include "core/stage.h"
 #include "core/technique.h"
 #include <any>
+#include <functional>
 #include <map>
 #include <stdexcept>
 #include <string_view>
@@ -121,41 +122,57 @@ private:
     std::vector<Image*> images_;
 };
 
-// A frame step's output, returned by Technique::run_step_cpu as std::shared_ptr<const T> in a
-// std::any (std::logic_error when the step has none).
+// The outputs of a frame's steps, by step name (each a std::shared_ptr<const T> in a std::any).
+using FrameStepOutputs = std::map<std::string, std::any>;
+
+// A frame step's output through its handle (std::logic_error when the step has none this frame).
 template <class T>
-const T& step_output(const std::map<std::string, std::any>& steps, const std::string& name) {
-    auto it = steps.find(name);
-    if (it == steps.end() || !it->second.has_value()) throw std::logic_error("frame step " + name + " has no output");
+const T& step_output(const FrameStepOutputs& steps, const FrameStep<T>& step) {
+    auto it = steps.find(std::string(step.name));
+    if (it == steps.end() || !it->second.has_value()) throw std::logic_error("frame step " + std::string(step.name) + " has no output");
     return *std::any_cast<std::shared_ptr<const T>>(it->second);
 }
 
-// Everything a technique's frame step needs (Technique::run_step_cpu).
+// Everything a technique's frame step needs (FrameStepDecl::run_cpu).
 struct FrameStepContext {
     const Scene& scene;
     const Evaluation& eval;
     const FrameCamera& camera;
     const Lighting& lighting;
-    std::vector<int> objects;  // indices of the scene objects that use this technique
-    const std::map<std::string, std::any>& steps;  // outputs of the steps that ran before, by name
+    std::vector<int> objects;        // indices of the scene objects that use this technique
+    const FrameStepOutputs& steps;   // outputs of the steps that ran before
     // An earlier step's output (std::logic_error when it has none).
     template <class T>
-    const T& step(const std::string& name) const { return step_output<T>(steps, name); }
-};
-
-// Outputs of frame steps kept between frames, reused while their declared inputs are unchanged.
-// Owned by whoever renders frames one after another (a Workbench, the window).
-class FrameStepCache {
-public:
-    struct Entry {
-        std::string fingerprint;
-        std::any output;
-    };
-    std::map<std::string, Entry> entries;
+    const T& step(const FrameStep<T>& s) const { return step_output(steps, s); }
 };
 
 // The fingerprint of a frame step's declared inputs for a scene and an evaluation.
 std::string frame_step_fingerprint(const Scene& s, const Evaluation& ev, const FrameStepDecl& d);
+
+// The one scheduler of frame steps, for both backends: it walks the scene's techniques' steps in
+// their declared order and runs each, or reuses its output while the fingerprint of its declared
+// inputs (frame_step_fingerprint) is the one of the last frame that ran it. The work itself is the
+// caller's (`Runner`): the CPU path calls FrameStepDecl::run_cpu and keeps the output here; the
+// GPU path dispatches its pass's step, whose output stays in GL objects. Owned by whoever renders
+// frames one after another (a Workbench, the window, a GPU renderer).
+class FrameStepScheduler {
+public:
+    struct Work {
+        std::any output;  // kept for later steps and frames (empty where the output lives elsewhere)
+        double ms = 0;    // the step's time (CPU: wall; GPU: its timer query, NaN without a valid answer)
+    };
+    // Does one step for `objects` (the objects of its technique); outputs() holds the earlier steps'.
+    using Runner = std::function<Work(const Technique&, const FrameStepDecl&, const std::vector<int>& objects)>;
+    // Runs or reuses every step of the scene's techniques; returns their runs, in order.
+    std::vector<FrameStepRun> run(const Scene& s, const Evaluation& ev, const Runner& work);
+    const FrameStepOutputs& outputs() const { return outputs_; }
+    // The next frame runs every step again, whatever its inputs.
+    void forget();
+
+private:
+    std::map<std::string, std::string> fingerprints_;  // step -> inputs of the last frame that ran it
+    FrameStepOutputs outputs_;
+};
 
 // Everything a technique's shade_cpu needs.
 struct ShadeContext {
@@ -167,12 +184,12 @@ struct ShadeContext {
     std::vector<int> objects;  // indices of the scene objects that use this technique
     Frame& frame;
     const AovWriter& out;      // the technique's outputs into `frame`
-    const std::map<std::string, std::any>& steps;  // this frame's step outputs, by step name
+    const FrameStepOutputs& steps;  // this frame's step outputs, by step name
     // Whether a pixel shows one of `objects`.
     bool mine(size_t pixel) const;
     // A frame step's output (std::logic_error when the step did not run).
     template <class T>
-    const T& step(const std::string& name) const { return step_output<T>(steps, name); }
+    const T& step(const FrameStep<T>& s) const { return step_output(steps, s); }
 };
 
 // The shading frame at a pixel: N the interpolated normal turned towards the viewer (surfaces are
@@ -188,10 +205,11 @@ TangentFrame tangent_frame(vec3 normal, vec3 tangent, vec3 wo);
 ivec2 frame_size(const Scene& s, const Evaluation& ev, ivec2 requested);
 
 // The CPU render path: the techniques' frame steps, the G-buffer, the background, then each
-// technique's shade_cpu. `aovs`: see frame_layout. `steps`: outputs of frame steps kept from the
-// previous frame (null: every step runs). Times itself under "frame.cpu/..." in the profiler.
+// technique's shade_cpu. `aovs`: see frame_layout. `steps`: the scheduler that keeps frame steps'
+// outputs from the previous frame (null: every step runs). Times itself under "frame.cpu/..." in
+// the profiler.
 Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height, const std::vector<std::string>& aovs = {},
-                 FrameStepCache* steps = nullptr);
+                 FrameStepScheduler* steps = nullptr);
 
 // The mesh drawn for an object (object space): its technique's object_mesh() if any, else the
 // scene.geometry tessellation. Both render paths and the camera bounds use this.

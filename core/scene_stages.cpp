@@ -13,7 +13,7 @@ mat4 object_to_world(const SceneObject& o) {
 
 void declare_scene_stages(StageGraph& g) {
     // Tessellation / mesh files: one mesh per object, object space.
-    g.add({.name = "scene.geometry",
+    g.add(stages::geometry, {
            .help = "Tessellate procedural shapes and read mesh files (OpenMesh)",
            .scope = StageScope::Object,
            .params = {"geometry.type", "geometry.path", "geometry.resolution", "geometry.minor_ratio"},
@@ -36,12 +36,12 @@ void declare_scene_stages(StageGraph& g) {
                if (type == "mesh") {
                    const std::string path = ctx.scene.resolve(g.get_string("path"));
                    if (path.empty()) throw InputError("objects[" + std::to_string(ctx.object) + "].geometry.path: geometry.type is 'mesh' but no mesh file is given");
-                   return stage_result(load_mesh(path));
+                   return stage_result(stages::geometry, load_mesh(path));
                }
-               return stage_result(make_primitive(primitive_named(type), int(g.get_int("resolution")), float(g.get_float("minor_ratio"))));
+               return stage_result(stages::geometry, make_primitive(primitive_named(type), int(g.get_int("resolution")), float(g.get_float("minor_ratio"))));
            }});
     // Environment map: absent when env.map is empty.
-    g.add({.name = "env.map",
+    g.add(stages::env_map, {
            .help = "Read the lat-long environment map (EXR)",
            .params = {"env.map"},
            .run = [](StageContext& ctx) -> std::any {
@@ -55,19 +55,19 @@ void declare_scene_stages(StageGraph& g) {
                        for (int c = 0; c < 3; ++c) rgb.data[i * 3 + size_t(c)] = img.data[i * size_t(img.channels)];
                    img = std::move(rgb);
                }
-               return stage_result(std::move(img));
+               return stage_result(stages::env_map, std::move(img));
            }});
     // Irradiance of the environment map in SH9, only when surfaces are lit by the environment.
-    g.add({.name = "env.irradiance",
+    g.add(stages::env_irradiance, {
            .help = "Project the environment map onto order-2 spherical harmonics (diffuse irradiance)",
-           .inputs = {"env.map"},
+           .inputs = {stages::env_map},
            .effects = {"environment"},
            .run = [](StageContext& ctx) -> std::any {
-               auto map = ctx.input<Image>("env.map");
+               auto map = ctx.input(stages::env_map);
                if (!map) return {};
                Environment env;
                env.map = map;
-               return stage_result(project_sh9(env));
+               return stage_result(stages::env_irradiance, project_sh9(env));
            }});
 }
 }  // namespace mesolab

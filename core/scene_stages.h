@@ -11,6 +11,13 @@
 
 namespace mesolab {
 
+// The scene-wide stages' handles (core/stage.h).
+namespace stages {
+inline constexpr Stage<TriMesh> geometry{"scene.geometry"};
+inline constexpr Stage<Image> env_map{"env.map"};
+inline constexpr Stage<SH9> env_irradiance{"env.irradiance"};
+}  // namespace stages
+
 void declare_scene_stages(StageGraph& g);
 // The object -> world matrix of an object (geometry.scale, geometry.position).
 mat4 object_to_world(const SceneObject& o);

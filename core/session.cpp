@@ -6,6 +6,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <optional>
 #include <fstream>
 #include <set>
 
@@ -95,6 +97,51 @@ size_t StageCache::entries() const {
     return n;
 }
 
+// [SECTION] The cache contract
+namespace {
+// Whether `key` ("group.name") is one of a stage's declared parameter patterns, or of a stage
+// upstream of it: their fingerprints are part of its own, so its cached result follows them too.
+bool declares(const StageGraph& g, const StageDecl& d, const std::string& group, std::string_view name) {
+    for (const StageName& in : d.inputs)
+        if (declares(g, g.at(in), group, name)) return true;
+    for (const std::string& p : d.params) {
+        if (p.size() == group.size() + 2 && p.compare(0, group.size(), group) == 0 && p.compare(group.size(), 2, ".*") == 0) return true;
+        if (p.size() == group.size() + 1 + name.size() && p.compare(0, group.size(), group) == 0 && p[group.size()] == '.' &&
+            p.compare(group.size() + 1, name.size(), name) == 0)
+            return true;
+    }
+    return false;
+}
+
+class DeclaredReads final : public ParamReadWatch {
+public:
+    DeclaredReads(const StageGraph& g, const Scene& s, const StageDecl& d, int object) : graph_(g), scene_(s), decl_(d), object_(object) {}
+    void read(const ParamTable& t, std::string_view name) override {
+        const std::string& group = t.group().name();
+        if (decl_.scope == StageScope::Object)
+            for (size_t j = 0; j < scene_.objects.size(); ++j)
+                if (int(j) != object_ && (&t == &scene_.objects[j].material || &t == &scene_.objects[j].geometry))
+                    throw std::logic_error("stage " + decl_.name + " read " + group + "." + std::string(name) + " of object " + std::to_string(j) +
+                                           ", not its own: an object stage's result may depend only on its own object");
+        if (!declares(graph_, decl_, group, name))
+            throw std::logic_error("stage " + decl_.name + " read " + group + "." + std::string(name) +
+                                   ", which neither it nor a stage upstream declares: its cached result would not follow that key (declare it in the "
+                                   "stage's params)");
+    }
+
+private:
+    const StageGraph& graph_;
+    const Scene& scene_;
+    const StageDecl& decl_;
+    int object_;
+};
+}  // namespace
+
+bool Session::default_check_stage_reads() {
+    const char* v = std::getenv("MESOLAB_CHECK_STAGE_READS");
+    return v && std::string(v) == "1";
+}
+
 // [SECTION] Session
 Session::Session() : Session(Registry::instance().stages()) {}
 Session::Session(const StageGraph& graph, StageCache::HashFn hash) : graph_(graph), cache_(std::move(hash)) {}
@@ -116,12 +163,12 @@ Evaluation Session::evaluate_frame(const Scene& scene, const ProgressFn& progres
 
 StageKeys Session::frame_keys(const Scene& scene) const { return keys(scene, Registry::instance().frame_stages(scene)); }
 
-uint64_t Session::key(const Scene& scene, const std::string& stage, int object) const {
+uint64_t Session::key(const Scene& scene, const StageName& stage, int object) const {
     const std::string fp = graph_.fingerprint(scene, stage, object);
     return fp.empty() ? 0 : cache_.key(fp);
 }
 
-StageKeys Session::keys(const Scene& scene, const std::vector<std::string>& targets) const {
+StageKeys Session::keys(const Scene& scene, const std::vector<StageName>& targets) const {
     StageKeys out;
     StageGraph::Memo memo;
     std::set<std::pair<std::string, int>> visited;
@@ -142,7 +189,7 @@ StageKeys Session::keys(const Scene& scene, const std::vector<std::string>& targ
     return out;
 }
 
-Evaluation Session::evaluate(const Scene& scene, const std::vector<std::string>& targets, const ProgressFn& progress, const std::atomic<bool>* cancel) {
+Evaluation Session::evaluate(const Scene& scene, const std::vector<StageName>& targets, const ProgressFn& progress, const std::atomic<bool>* cancel) {
     ProfilerBinding bind(profiler_);
     Evaluation ev;
     StageGraph::Memo memo;
@@ -190,6 +237,9 @@ Evaluation Session::evaluate(const Scene& scene, const std::vector<std::string>&
             if (cancel && cancel->load()) throw Cancelled();
             if (d.memory) check_memory("stage " + run.label(scene), d.memory(ctx));
             ProfileScope scope("stage/" + d.name);
+            std::optional<DeclaredReads> watch;
+            if (check_stage_reads) watch.emplace(graph_, scene, d, object);
+            ParamReadScope reads(watch ? &*watch : nullptr);
             result = d.run(ctx);
         } catch (const Cancelled&) {
             run.status = StageStatus::Cancelled;

@@ -84,21 +84,31 @@ public:
 
     // Evaluate `targets` and what they need. Stage errors propagate (InputError for bad input
     // files or a stage above the memory budget, Cancelled on cancellation).
-    Evaluation evaluate(const Scene& scene, const std::vector<std::string>& targets, const ProgressFn& progress = {},
+    Evaluation evaluate(const Scene& scene, const std::vector<StageName>& targets, const ProgressFn& progress = {},
                         const std::atomic<bool>* cancel = nullptr);
     // The stages a frame of the scene needs (Registry::frame_stages).
     Evaluation evaluate_frame(const Scene& scene, const ProgressFn& progress = {}, const std::atomic<bool>* cancel = nullptr);
 
     // Keys of `targets` and everything upstream (skipped stages have key 0); frame_keys: of a frame.
-    StageKeys keys(const Scene& scene, const std::vector<std::string>& targets) const;
+    StageKeys keys(const Scene& scene, const std::vector<StageName>& targets) const;
     StageKeys frame_keys(const Scene& scene) const;
-    uint64_t key(const Scene& scene, const std::string& stage, int object = -1) const;
+    uint64_t key(const Scene& scene, const StageName& stage, int object = -1) const;
 
     StageCache& cache() { return cache_; }
     size_t cache_capacity_per_stage = 4;  // plus one per further object of the scene
 
     // Timings of this session's work (stages, frames, GUI), bound to the evaluating thread.
     Profiler& profiler() { return profiler_; }
+
+    // The cache contract, checked: while on, a stage's run() may read only the parameters it or a
+    // stage upstream of it declares (StageDecl::params: those are in its cache key; an object
+    // stage: only its own object's material and geometry),
+    // and a read of any other key is a std::logic_error naming the stage and the key, instead of a
+    // cached result that would silently go stale when that key changes. Reads are watched on the
+    // thread that runs the stage (core/param.h, ParamReadWatch). Off by default; on where the
+    // environment has MESOLAB_CHECK_STAGE_READS=1 (every test run sets it).
+    bool check_stage_reads = default_check_stage_reads();
+    static bool default_check_stage_reads();
 
     // Memory budget for one stage's allocation: 0 = the machine's available memory.
     void set_memory_limit(uint64_t bytes) { memory_limit_ = bytes; }

@@ -42,16 +42,22 @@ const std::any* Evaluation::find(const std::string& stage, int object) const {
     return &it->second.objects[size_t(object)];
 }
 
-const StageRun* Evaluation::run(const std::string& stage, int object) const {
+StageName StageName::of(const StageDecl& d) {
+    StageName n;
+    n.name_ = d.name;
+    return n;
+}
+
+const StageRun* Evaluation::run(const StageName& stage, int object) const {
     for (const auto& r : runs)
-        if (r.name == stage && (object < 0 || r.object == object)) return &r;
+        if (r.name == stage.str() && (object < 0 || r.object == object)) return &r;
     return nullptr;
 }
 
-std::vector<const StageRun*> Evaluation::runs_of(const std::string& stage) const {
+std::vector<const StageRun*> Evaluation::runs_of(const StageName& stage) const {
     std::vector<const StageRun*> r;
     for (const auto& x : runs)
-        if (x.name == stage) r.push_back(&x);
+        if (x.name == stage.str()) r.push_back(&x);
     return r;
 }
 
@@ -95,16 +101,16 @@ std::string param_fingerprint(const Scene& s, const std::string& pattern, int ob
 }
 
 // [SECTION] Declarations
-void StageGraph::add(StageDecl d) {
+void StageGraph::add_decl(StageDecl d) {
     if (find(d.name)) throw std::logic_error("stage declared twice: " + d.name);
     for (const auto& in : d.inputs)
-        if (!find(in)) throw std::logic_error("stage " + d.name + " reads unknown stage " + in + " (declare upstream stages first)");
+        if (!find(in)) throw std::logic_error("stage " + d.name + " reads unknown stage " + in.str() + " (declare upstream stages first)");
     if (d.scope == StageScope::Scene && d.applies) throw std::logic_error("stage " + d.name + ": `applies` is for object stages (use `when`)");
     if (d.scope == StageScope::Object && d.when) throw std::logic_error("stage " + d.name + ": `when` is for scene stages (use `applies`)");
     if (d.scope == StageScope::Object)
         for (const auto& in : d.inputs)
             if (find(in)->scope == StageScope::Object && !find(in)->technique.empty() && find(in)->technique != d.technique)
-                throw std::logic_error("stage " + d.name + " reads " + in + ", an object stage of another technique");
+                throw std::logic_error("stage " + d.name + " reads " + in.str() + ", an object stage of another technique");
     stages_.push_back(std::move(d));
 }
 

@@ -23,7 +23,9 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <ostream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace mesolab {
@@ -44,17 +46,74 @@ struct MemoryEstimate {
 };
 
 class StageContext;
+struct StageDecl;
+
+// [SECTION] Typed handles
+// A stage's name and the type of its result, declared once, in the stages.h of the technique
+// that computes it (scene-wide stages: core/scene_stages.h). The producer is registered under
+// its handle (StageGraph::add) and returns its result through it (stage_result); consumers read
+// results through it (StageContext::input, Evaluation::get). A misspelt stage is an unknown
+// identifier and a wrong result type does not compile: no stage's name is written twice.
+template <class T>
+struct Stage {
+    std::string_view name;
+    using Result = T;
+    operator std::string() const { return std::string(name); }  // NOLINT: where a name is only shown
+};
+
+// The name of a declared stage, for the untyped places that only name it (a stage's inputs, a
+// frame step's stages, a bench column): made from a handle, or from a declaration (generic code
+// walking the graph), never from text.
+class StageName {
+public:
+    StageName() = default;  // no stage
+    template <class T>
+    StageName(const Stage<T>& s) : name_(s.name) {}  // NOLINT: implicit, so that handles can be listed
+    static StageName of(const StageDecl& d);
+    const std::string& str() const { return name_; }
+    operator const std::string&() const { return name_; }  // NOLINT
+    bool empty() const { return name_.empty(); }
+    bool operator==(const StageName& o) const { return name_ == o.name_; }
+    bool operator<(const StageName& o) const { return name_ < o.name_; }
+
+private:
+    std::string name_;
+};
+inline std::ostream& operator<<(std::ostream& os, const StageName& n) { return os << n.str(); }
+
+// A frame step's name and the type of its CPU output (core/technique.h, FrameStepDecl), declared
+// once like a stage's.
+template <class T>
+struct FrameStep {
+    std::string_view name;  // "<technique>.<step>", e.g. "translucency.illumination"
+    using Output = T;
+};
+
+// The name of a declared frame step, made from its handle only.
+class FrameStepName {
+public:
+    FrameStepName() = default;
+    template <class T>
+    FrameStepName(const FrameStep<T>& s) : name_(s.name) {}  // NOLINT: implicit, so that handles can be listed
+    const std::string& str() const { return name_; }
+    operator const std::string&() const { return name_; }  // NOLINT
+    bool operator==(const FrameStepName& o) const { return name_ == o.name_; }
+    bool operator<(const FrameStepName& o) const { return name_ < o.name_; }
+
+private:
+    std::string name_;
+};
 
 enum class StageScope { Scene, Object };
 
 struct StageDecl {
-    std::string name;
+    std::string name;  // set by StageGraph::add from the stage's handle
     std::string help;
     StageScope scope = StageScope::Scene;
     // Object stages: the technique whose objects it computes for ("" = every object).
     std::string technique;
     std::vector<std::string> params;   // public keys or "group.*"
-    std::vector<std::string> inputs;   // upstream stage names
+    std::vector<StageName> inputs;     // upstream stages
     std::vector<std::string> effects;  // empty: needed whenever downstream needs it
     // Scene stages: also needed only when this holds. Object stages: computed only for the objects
     // for which `applies` holds (the others are reported skipped). `when_text` says when.
@@ -66,7 +125,7 @@ struct StageDecl {
     // estimated from its context (the scene, the object, its inputs' results, which are ready) and
     // checked against the session's budget before it runs (core/session.h).
     std::function<MemoryEstimate(const StageContext&)> memory;
-    // Returns the result as std::shared_ptr<const T> wrapped in std::any (or an empty any).
+    // Returns the result through the stage's handle: stage_result(handle, value) (or an empty any).
     std::function<std::any(StageContext&)> run;
 };
 
@@ -96,20 +155,16 @@ struct Evaluation {
     std::map<std::string, Results> results;
     std::vector<StageRun> runs;  // in execution order, skipped stages included
 
-    // A scene stage's result (null when it did not run).
+    // A stage's result: a scene stage's (object -1), or an object stage's for `object` (null
+    // when it did not run for it).
     template <class T>
-    std::shared_ptr<const T> get(const std::string& stage) const {
-        return cast<T>(find(stage, -1));
-    }
-    // An object stage's result for `object` (null when it did not run for that object).
-    template <class T>
-    std::shared_ptr<const T> get(const std::string& stage, int object) const {
-        return cast<T>(find(stage, object));
+    std::shared_ptr<const T> get(const Stage<T>& stage, int object = -1) const {
+        return cast<T>(find(std::string(stage.name), object));
     }
     // The run of a stage (object stages: for `object`; -1 = the first object it ran for).
-    const StageRun* run(const std::string& stage, int object = -1) const;
+    const StageRun* run(const StageName& stage, int object = -1) const;
     // Every run of a stage (one per object for object stages).
-    std::vector<const StageRun*> runs_of(const std::string& stage) const;
+    std::vector<const StageRun*> runs_of(const StageName& stage) const;
     // The raw result (an empty any when absent).
     const std::any* find(const std::string& stage, int object) const;
 
@@ -132,10 +187,10 @@ public:
     const ParamTable& material() const { return obj().material; }
     // An upstream result: a scene stage's, or an object stage's for this stage's object.
     template <class T>
-    std::shared_ptr<const T> input(const std::string& stage) const { return eval_.get<T>(stage, object); }
+    std::shared_ptr<const T> input(const Stage<T>& stage) const { return eval_.get(stage, object); }
     // An upstream object stage's result for another object (scene stages reading object stages).
     template <class T>
-    std::shared_ptr<const T> input(const std::string& stage, int other_object) const { return eval_.get<T>(stage, other_object); }
+    std::shared_ptr<const T> input(const Stage<T>& stage, int other_object) const { return eval_.get(stage, other_object); }
     // Report progress in [0,1]; throws Cancelled when cancellation was requested.
     void progress(double fraction) const;
     bool cancelled() const { return cancel_ && cancel_->load(std::memory_order_relaxed); }
@@ -155,16 +210,23 @@ private:
     const std::atomic<bool>* cancel_;
 };
 
-template <class T>
-std::any stage_result(T value) { return std::any(std::shared_ptr<const T>(std::make_shared<T>(std::move(value)))); }
+// A stage's result, returned from its run() through its handle.
+template <class T, class V>
+std::any stage_result(const Stage<T>&, V&& value) {
+    return std::any(std::shared_ptr<const T>(std::make_shared<T>(std::forward<V>(value))));
+}
 
 // The declarations: immutable once the registry is built (tests build graphs of their own).
 class StageGraph {
 public:
-    // Registers a stage; throws std::logic_error on a duplicate name or an unknown input. Object
-    // stages read scene stages and their own object's object stages; scene stages may read every
-    // object's results of an object stage (StageContext::input(stage, object)).
-    void add(StageDecl d);
+    // Registers a stage under its handle; throws std::logic_error on a duplicate name or an
+    // unknown input. Object stages read scene stages and their own object's object stages; scene
+    // stages may read every object's results of an object stage (StageContext::input(stage, object)).
+    template <class T>
+    void add(const Stage<T>& stage, StageDecl d) {
+        d.name = std::string(stage.name);
+        add_decl(std::move(d));
+    }
     const StageDecl* find(const std::string& name) const;
     const StageDecl& at(const std::string& name) const;  // std::logic_error when unknown
     const std::vector<StageDecl>& stages() const { return stages_; }
@@ -195,6 +257,7 @@ public:
     const std::string& fingerprint(const Scene& scene, const StageDecl& d, int object, Memo& memo) const;
 
 private:
+    void add_decl(StageDecl d);
     std::vector<StageDecl> stages_;
 };
 

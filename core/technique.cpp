@@ -41,18 +41,18 @@ Registry::Registry()
     light_.add_color("color", {1.0, 1.0, 1.0}).doc("Light colour (linear RGB), multiplies the intensity");
 
     env_.add_color("color", {0.05, 0.05, 0.06}).doc("Constant environment radiance (linear RGB), used where there is no env.map");
-    env_.add_path("map", "").costs(Cost::Recompute).doc("Lat-long environment map (EXR, linear radiance); relative paths are relative to the preset's folder");
+    env_.add_path("map", "").doc("Lat-long environment map (EXR, linear radiance); relative paths are relative to the preset's folder");
     env_.add_float("intensity", 1.0).range(0.0, 1e6).log().doc("Scale of the environment radiance");
 
-    geometry_.add_enum("type", {"sphere", "plane", "torus", "cylinder", "teapot", "mesh"}, "sphere").costs(Cost::Recompute)
+    geometry_.add_enum("type", {"sphere", "plane", "torus", "cylinder", "teapot", "mesh"}, "sphere")
         .doc("Procedural shape (teapot: the Utah teapot, Newell's 32 Bezier patches) or a mesh file (geometry.path)");
-    geometry_.add_path("path", "").costs(Cost::Recompute).used_when("type", {"mesh"})
+    geometry_.add_path("path", "").used_when("type", {"mesh"})
         .doc("Mesh file read with OpenMesh (OBJ, OFF, PLY, STL, OM); relative to the preset's folder");
-    geometry_.add_int("resolution", 64).range(3, 4096).costs(Cost::Recompute).used_when("type", {"sphere", "plane", "torus", "cylinder", "teapot"})
+    geometry_.add_int("resolution", 64).range(3, 4096).used_when("type", {"sphere", "plane", "torus", "cylinder", "teapot"})
         .more_accurate(Accuracy::Higher, int64_t(1024)).doc("Tessellation: segments around u (teapot: resolution/8 per side of each of its 32 patches)");
-    geometry_.add_float("minor_ratio", 0.35).range(0.01, 0.99).costs(Cost::Recompute).used_when("type", {"torus"})
+    geometry_.add_float("minor_ratio", 0.35).range(0.01, 0.99).used_when("type", {"torus"})
         .doc("Torus tube radius relative to the major radius");
-    geometry_.add_float("scale", 1.0).range(1e-6, 1e6).log().costs(Cost::Recompute)
+    geometry_.add_float("scale", 1.0).range(1e-6, 1e6).log()
         .doc("Uniform scale (object -> world); translucency reads it: an object's size in mm changes how light travels inside");
     geometry_.add_vec3("position", {0.0, 0.0, 0.0}).range(-1e6, 1e6).in("scene units").doc("Translation (object -> world)");
 
@@ -87,7 +87,23 @@ void Registry::finish() {
     for (const auto& t : techniques_)
         for (const auto& e : t->effects())
             if (std::none_of(all.begin(), all.end(), [&](const EffectDecl& x) { return x.name == e.name; })) all.push_back(e);
-    for (const auto& e : all) effects_.add_bool(e.name, e.def).costs(Cost::Recompute).doc(e.help);
+    for (const auto& e : all) effects_.add_bool(e.name, e.def).doc(e.help);
+    derive_costs();
+}
+
+// A key costs a recompute when a stage declares it (exactly or as "group.*"), an effect when a
+// stage needs it; every other key only a redraw.
+void Registry::derive_costs() {
+    std::set<std::string> read;
+    for (const StageDecl& d : stages_.stages()) {
+        for (const std::string& p : d.params) read.insert(p);
+        for (const std::string& e : d.effects) read.insert("effects." + e);
+    }
+    std::vector<ParamGroup*> groups{&camera_, &light_, &env_, &geometry_, &effects_};
+    for (const auto& t : techniques_) groups.push_back(&t->params_);
+    for (ParamGroup* g : groups)
+        for (const std::string& name : g->names())
+            g->set_cost(name, read.count(g->name() + "." + name) || read.count(g->name() + ".*") ? Cost::Recompute : Cost::Redraw);
 }
 
 // [SECTION] Look-ups
@@ -117,8 +133,8 @@ std::vector<const ParamGroup*> Registry::groups() const {
     return r;
 }
 
-std::vector<std::string> Registry::frame_stages(const Scene& s) const {
-    std::vector<std::string> r{"scene.geometry", "env.map", "env.irradiance"};
+std::vector<StageName> Registry::frame_stages(const Scene& s) const {
+    std::vector<StageName> r{stages::geometry, stages::env_map, stages::env_irradiance};
     for (const auto& t : techniques_)
         if (s.uses_technique(t->name()))
             for (auto& st : t->frame_stages()) r.push_back(st);

@@ -42,20 +42,36 @@ struct AovDecl {
 // (the Timings panel, `mesolab bench`, the capture sidecar) on the CPU and the GPU alike. Its
 // declared inputs decide when its result can be reused from the previous frame: the public keys
 // it reads ("light.*", "camera.*", "env.*", a technique's keys) and the stages whose results it
-// reads; a frame whose inputs have the same fingerprint reuses the step's output (reported cached).
+// reads; a frame whose inputs have the same fingerprint reuses the step's output (reported
+// cached). One scheduler runs them for both backends (FrameStepScheduler, core/render.h).
+//
+// A step is declared once, like a stage, by a typed handle (FrameStep, core/stage.h: its name and
+// the type of its CPU output) in its technique's stages.h; the CPU work (FrameStepDecl::run_cpu) and the GPU pass's
+// (TechniquePass::frame_steps, gpu/renderer.h) are bound to the handle, and later steps and the
+// shading read an output through it (FrameStepContext::step, ShadeContext::step).
 struct FrameStepDecl {
-    std::string name;                  // "<technique>.<step>", e.g. "translucency.illumination"
+    std::string name;                  // from the handle
     std::string help;
     std::vector<std::string> params;   // public keys or "group.*" (scene-wide: every object's)
-    std::vector<std::string> stages;   // stage results it reads (every object's, for object stages)
+    std::vector<StageName> stages;     // stage results it reads (every object's, for object stages)
+    // The CPU side: reads ctx's inputs, returns the output (std::shared_ptr<const T> in a std::any).
+    std::function<std::any(const FrameStepContext&)> run_cpu;
 };
+
+// A frame step's declaration, its CPU work returning the handle's output type.
+template <class T, class F>
+FrameStepDecl frame_step(const FrameStep<T>& step, std::string help, std::vector<std::string> params, std::vector<StageName> stages, F run_cpu) {
+    return {std::string(step.name), std::move(help), std::move(params), std::move(stages), [run_cpu](const FrameStepContext& ctx) -> std::any {
+                return std::any(std::shared_ptr<const T>(std::make_shared<T>(run_cpu(ctx))));
+            }};
+}
 
 // A data export of a technique (`mesolab export NAME PRESET -o FILE`), e.g. microgeom's BTF.
 struct ExportDecl {
     std::string name;
     std::string help;
     std::string options_help;           // "KEY=VALUE ...": what --option accepts
-    std::vector<std::string> stages;    // evaluated before run
+    std::vector<StageName> stages;      // evaluated before run
     // Writes `path` (atomically) for scene object `object`; unknown or bad options are
     // InputErrors naming them. Returns a one-paragraph summary for the terminal.
     std::function<std::string(const Scene&, const Evaluation&, int object, const std::map<std::string, std::string>& options,
@@ -149,15 +165,12 @@ public:
 
     virtual void declare_stages(StageGraph&) const {}
     // Stages a frame of this technique needs (their results reach shade_cpu and the GPU pass).
-    virtual std::vector<std::string> frame_stages() const { return {}; }
+    virtual std::vector<StageName> frame_stages() const { return {}; }
     // CPU shading of the pixels covered by this technique's objects.
     virtual void shade_cpu(const ShadeContext& ctx) const = 0;
-    // Offscreen work before the frame (see FrameStepDecl), in order; the GPU pass implements
-    // each step too (gpu/renderer.h TechniquePass::run_step).
+    // Offscreen work before the frame (see FrameStepDecl), in order, with its CPU side; the GPU
+    // pass implements each step too (gpu/renderer.h TechniquePass::frame_steps).
     virtual std::vector<FrameStepDecl> frame_steps() const { return {}; }
-    // The CPU side of a frame step: reads ctx's inputs, returns its output (read by shade_cpu
-    // through ShadeContext::step).
-    virtual std::any run_step_cpu(const std::string& /*step*/, const FrameStepContext& /*ctx*/) const { return {}; }
     // Texture-space resolution for camera.mode=texture when the technique has a native one.
     virtual std::optional<ivec2> texture_size(const Scene&, const Evaluation&) const { return std::nullopt; }
     // Geometry drawn for `object` instead of scene.geometry's tessellation (a displaced level of
@@ -175,6 +188,7 @@ public:
     virtual FrameAgreement agreement() const { return {}; }
 
 protected:
+    friend class Registry;  // derives the parameters' costs from the stage graph
     ParamGroup params_;
     std::vector<EffectDecl> effects_;
     std::vector<AovDecl> aovs_;
@@ -201,7 +215,7 @@ public:
     // The stage declarations (immutable; sessions evaluate them, core/session.h).
     const StageGraph& stages() const { return stages_; }
     // Stages every frame needs (scene.geometry, env.*) plus those of the scene's techniques.
-    std::vector<std::string> frame_stages(const Scene& s) const;
+    std::vector<StageName> frame_stages(const Scene& s) const;
     // AOVs of a scene: radiance, normal, then the techniques' own, without duplicates.
     std::vector<AovDecl> aovs(const Scene& s) const;
 
@@ -211,6 +225,7 @@ public:
 private:
     Registry();
     void finish();
+    void derive_costs();
     ParamGroup camera_, light_, env_, geometry_, effects_;
     std::vector<EffectDecl> scene_effects_;
     std::vector<std::unique_ptr<Technique>> techniques_;

@@ -13,7 +13,8 @@ namespace mesolab::gpu {
 struct Renderer::Impl {
     Program background;
     std::map<std::string, std::unique_ptr<TechniquePass>> passes;
-    std::map<std::string, std::string> step_fingerprints;  // frame steps' inputs in the last frame that ran them
+    std::map<std::string, std::function<void(DrawContext&)>> steps;  // each frame step's GPU work, by step name
+    FrameStepScheduler scheduler;
     GpuTimer timer, step_timer;
     VertexArray empty_vao;  // attribute-less draws (the full-screen triangle)
 
@@ -52,6 +53,16 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
         auto f = factories.find(t->name());
         if (f == factories.end()) throw std::logic_error("technique " + t->name() + " has no GPU pass");
         impl_->passes[t->name()] = f->second(*t);
+        // The pass implements exactly the technique's frame steps, in their order.
+        const std::vector<FrameStepDecl> declared = t->frame_steps();
+        const std::vector<GpuFrameStep> bound = impl_->passes[t->name()]->frame_steps();
+        for (size_t i = 0; i < std::max(declared.size(), bound.size()); ++i) {
+            if (i >= bound.size() || i >= declared.size() || bound[i].step.str() != declared[i].name)
+                throw std::logic_error("technique " + t->name() + ": its GPU pass implements frame step " +
+                                       (i < bound.size() ? bound[i].step.str() : std::string("none")) + " where it declares " +
+                                       (i < declared.size() ? declared[i].name : std::string("none")));
+            impl_->steps[declared[i].name] = bound[i].run;
+        }
     }
     GLuint vao = 0;
     glGenVertexArrays(1, &vao);
@@ -68,7 +79,7 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
 
 Renderer::~Renderer() = default;
 
-void Renderer::forget_frame_steps() { impl_->step_fingerprints.clear(); }
+void Renderer::forget_frame_steps() { impl_->scheduler.forget(); }
 
 int Renderer::max_attachments() const {
     GLint draw = 0, color = 0;
@@ -231,41 +242,26 @@ void Renderer::render(const Scene& s, const Evaluation& ev, int width, int heigh
     };
 
     // Frame steps: offscreen work before the frame, each timed on its own, reused while its inputs hold.
-    last_steps_.clear();
-    for (const Technique* t : Registry::instance().techniques()) {
-        DrawContext ctx = context_for(*t);
-        if (ctx.objects.empty()) continue;
-        for (const FrameStepDecl& d : t->frame_steps()) {
-            FrameStepRun run{d.name};
-            const std::string fp = frame_step_fingerprint(s, ev, d);
-            auto& last = impl_->step_fingerprints[d.name];
-            if (last == fp) {
-                run.status = StageStatus::Cached;
-                last_steps_.push_back(run);
-                continue;
-            }
-            last.clear();  // a failure must not leave a stale "done" behind
-            {
-                PROFILE_SCOPE("step." + d.name);
-                // The step's GL timer query, checked against its finished wall time: llvmpipe's
-                // queries do not see compute dispatches (they answer ~0), so where a query reports
-                // under 5% of the wall time, the wall time (the work itself, on a CPU driver) is kept.
-                glFinish();
-                const auto wall0 = std::chrono::steady_clock::now();
-                impl_->step_timer.begin();
-                impl_->passes.at(t->name())->run_step(d.name, ctx);
-                impl_->step_timer.end();
-                run.ms = impl_->step_timer.elapsed_ms();
-                glFinish();
-                const double wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - wall0).count();
-                if (!(run.ms >= 0.05 * wall_ms)) run.ms = wall_ms;
-            }
-            if (std::isfinite(run.ms)) Profiler::current().record("frame.gpu/step." + d.name + "/gpu", run.ms, Device::Gpu);
-            check_gl(("frame step " + d.name).c_str());
-            last = fp;
-            last_steps_.push_back(run);
-        }
-    }
+    last_steps_ = impl_->scheduler.run(s, ev, [&](const Technique& t, const FrameStepDecl& d, const std::vector<int>&) {
+        PROFILE_SCOPE("step." + d.name);
+        DrawContext ctx = context_for(t);
+        // The step's GL timer query, checked against its finished wall time: llvmpipe's queries
+        // do not see compute dispatches (they answer ~0), so where a query reports under 5% of the
+        // wall time, the wall time (the work itself, on a CPU driver) is kept.
+        glFinish();
+        const auto wall0 = std::chrono::steady_clock::now();
+        impl_->step_timer.begin();
+        impl_->steps.at(d.name)(ctx);
+        impl_->step_timer.end();
+        FrameStepScheduler::Work w;
+        w.ms = impl_->step_timer.elapsed_ms();
+        glFinish();
+        const double wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - wall0).count();
+        if (!(w.ms >= 0.05 * wall_ms)) w.ms = wall_ms;
+        if (std::isfinite(w.ms)) Profiler::current().record("frame.gpu/step." + d.name + "/gpu", w.ms, Device::Gpu);
+        check_gl(("frame step " + d.name).c_str());
+        return w;
+    });
 
     impl_->timer.begin();
     for (size_t b = 0; b < batches_.size(); ++b) {

@@ -47,12 +47,19 @@ struct DrawContext {
     mat4 view_proj{1.f};
 };
 
+// A frame step's GPU work, bound to the step's handle.
+struct GpuFrameStep {
+    FrameStepName step;
+    std::function<void(DrawContext&)> run;
+};
+
 class TechniquePass {
 public:
     virtual ~TechniquePass() = default;
-    // Offscreen work before the frame: one call per step the technique declares
-    // (Technique::frame_steps), in order, with GL state of its own (restored by the renderer).
-    virtual void run_step(const std::string& /*step*/, DrawContext& /*ctx*/) {}
+    // Offscreen work before the frame: the GPU side of every step the technique declares
+    // (Technique::frame_steps), in the same order (the renderer checks it when it is made), each
+    // with GL state of its own (restored by the renderer).
+    virtual std::vector<GpuFrameStep> frame_steps() { return {}; }
     // Draw the technique's objects. The draw buffers are bound for its outputs.
     virtual void draw(DrawContext& ctx) = 0;
 };

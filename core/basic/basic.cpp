@@ -1,4 +1,6 @@
 #include "core/basic/basic.h"
+#include "core/basic/stages.h"
+#include "core/scene_stages.h"
 #include "core/error.h"
 #include "core/render.h"
 #include "core/technique.h"
@@ -61,24 +63,24 @@ public:
         params_.add_color("kd", {0.8, 0.8, 0.8}).doc("Diffuse albedo (linear RGB)");
         params_.add_color("ks", {0.04, 0.04, 0.04}).doc("Specular albedo (linear RGB) of the normalised Blinn-Phong lobe");
         params_.add_float("shininess", 64.0).range(1.0, 10000.0).log().doc("Blinn-Phong exponent s");
-        params_.add_path("albedo_map", "").costs(Cost::Recompute)
+        params_.add_path("albedo_map", "")
             .doc("Image multiplying kd, looked up at the surface's (u,v) (8-bit images are sRGB); relative to the preset's folder");
     }
 
     void declare_stages(StageGraph& g) const override {
         // Albedo textures: read once, reused until the file or the path changes.
-        g.add({.name = "basic.albedo",
+        g.add(stages::albedo, {
                .help = "Read the object's albedo map",
                .scope = StageScope::Object,
                .technique = "basic",
                .params = {"basic.albedo_map"},
                .run = [](StageContext& ctx) -> std::any {
                    auto img = read_albedo_map(ctx.scene, ctx.material());
-                   return img ? stage_result(std::move(*img)) : std::any();
+                   return img ? stage_result(stages::albedo, std::move(*img)) : std::any();
                }});
     }
 
-    std::vector<std::string> frame_stages() const override { return {"basic.albedo"}; }
+    std::vector<StageName> frame_stages() const override { return {stages::albedo}; }
 
     // Our own table (no paper behind this technique): tessellation and frame times.
     std::vector<BenchTable> bench_tables() const override {
@@ -94,9 +96,9 @@ public:
         BenchTable t;
         t.name = "basic";
         t.title = "basic: tessellation and frame time (no paper figures: this technique carries the pipeline)";
-        t.columns = {{"tessellate", "scene.geometry"},
-                     {"frame 512x512", "", 512, 512, true, true},
-                     {"frame 1280x720", "", 1280, 720, true, true}};
+        t.columns = {{"tessellate", mesolab::stages::geometry},
+                     {"frame 512x512", {}, 512, 512, true, true},
+                     {"frame 1280x720", {}, 1280, 720, true, true}};
         t.rows = {{"sphere 64", scene("sphere", 64), {}},
                   {"sphere 512", scene("sphere", 512), {}},
                   {"torus 256", scene("torus", 256), {}}};
@@ -109,7 +111,7 @@ public:
         std::map<int, std::pair<Material, std::shared_ptr<const Image>>> mats;
         for (int i : ctx.objects) {
             const auto& o = ctx.scene.objects[size_t(i)];
-            mats[i] = {Material::from(o.material, ctx.scene.resolve(o.material.get_string("albedo_map"))), ctx.eval.get<Image>("basic.albedo", i)};
+            mats[i] = {Material::from(o.material, ctx.scene.resolve(o.material.get_string("albedo_map"))), ctx.eval.get(stages::albedo, i)};
         }
         tbb::parallel_for(0, gb.height, [&](int y) {
             for (int x = 0; x < gb.width; ++x) {

@@ -1,5 +1,6 @@
 // Technique bumpsynth: declarations, stages, CPU shading and the timing table (see bumpsynth.h).
 #include "core/bumpsynth/bumpsynth.h"
+#include "core/bumpsynth/stages.h"
 #include "core/bumpsynth/sweep_metric.h"
 #include "core/error.h"
 #include "core/heightfield/params.h"
@@ -120,22 +121,22 @@ ShadingModel shading_from_material(const ParamTable& m) {
 
 Synthesis synthesis_for(const Scene& s, const Evaluation& ev, int object) {
     Synthesis syn;
-    syn.ndf = ev.get<Ndf>("bumpsynth.ndf", object).get();
-    syn.lut = ev.get<Lut>("bumpsynth.lut", object).get();
+    syn.ndf = ev.get(stages::ndf, object).get();
+    syn.lut = ev.get(stages::lut, object).get();
     const SceneObject& o = s.objects[size_t(object)];
     const ParamTable& m = o.material;
     syn.octaves_max = int(m.get_int("octaves_max"));
     syn.detail_distance = float(m.get_float("detail_distance"));
     if (index_mode(o)) {
-        syn.index_map = ev.get<IndexMap>("bumpsynth.index_map", object).get();
+        syn.index_map = ev.get(stages::index_map, object).get();
         if (syn.index_map) syn.index_detail = index_detail(*syn.index_map, noise_from_material(m), float(m.get_float("index_noise")));
     } else {
-        syn.cdfs = ev.get<NoiseCdfs>("bumpsynth.noise_cdf", object).get();
-        if (texture_noise(o)) syn.noise_texture = ev.get<NoiseTexture>("bumpsynth.noise_texture", object).get();
+        syn.cdfs = ev.get(stages::noise_cdf, object).get();
+        if (texture_noise(o)) syn.noise_texture = ev.get(stages::noise_texture, object).get();
     }
     syn.model = shading_from_material(m);
-    if (syn.model.masking) syn.smith = ev.get<SmithTable>("bumpsynth.masking", object).get();
-    syn.albedo = ev.get<Image>("bumpsynth.albedo", object).get();
+    if (syn.model.masking) syn.smith = ev.get(stages::masking, object).get();
+    syn.albedo = ev.get(stages::albedo, object).get();
     return syn;
 }
 
@@ -151,59 +152,59 @@ public:
     BumpsynthTechnique() : Technique("bumpsynth", "Bump map synthesis (Kautz et al. 2001)") {
         auto& p = params_;
         const std::vector<std::string> lobed{"beckmann", "ggx", "ward"};
-        p.add_enum("ndf", {"phong", "beckmann", "ggx", "ward", "lobes", "image", "normal_map", "heightfield"}, "beckmann").costs(Cost::Recompute)
+        p.add_enum("ndf", {"phong", "beckmann", "ggx", "ward", "lobes", "image", "normal_map", "heightfield"}, "beckmann")
             .doc("Normal density function: an analytic lobe, a weighted sum of lobes (bumpsynth.lobes), an image of D over the normal's (x, y) disk, or the "
                  "histogram of an existing bump map's normals (a normal map, or a heightfield as in microgeom; §7)");
-        p.add_float("alpha_x", 0.3).range(1e-4, 1.0).log().costs(Cost::Recompute).used_when("ndf", lobed)
+        p.add_float("alpha_x", 0.3).range(1e-4, 1.0).log().used_when("ndf", lobed)
             .doc("Roughness along the lobe's x axis (RMS slope for Beckmann)");
-        p.add_float("alpha_y", 0.3).range(1e-4, 1.0).log().costs(Cost::Recompute).used_when("ndf", lobed)
+        p.add_float("alpha_y", 0.3).range(1e-4, 1.0).log().used_when("ndf", lobed)
             .doc("Roughness along the lobe's y axis (alpha_x != alpha_y: anisotropic)");
-        p.add_float("rotation", 0.0).range(-360.0, 360.0).in("degrees").costs(Cost::Recompute).used_when("ndf", lobed)
+        p.add_float("rotation", 0.0).range(-360.0, 360.0).in("degrees").used_when("ndf", lobed)
             .doc("Rotation of the lobe's x axis from the surface tangent towards the bitangent");
-        p.add_float("exponent", 50.0).range(0.0, 2e8).log().costs(Cost::Recompute).used_when("ndf", {"phong"})
+        p.add_float("exponent", 50.0).range(0.0, 2e8).log().used_when("ndf", {"phong"})
             .doc("Blinn-Phong exponent e: D = (e + 2)/(2 pi) cos^e");
-        p.add_text("lobes", "beckmann(0.3) + 0.5 * ggx(0.05, 0.5, 45)").checked(lobes_syntax_error).costs(Cost::Recompute).used_when("ndf", {"lobes"})
+        p.add_text("lobes", "beckmann(0.3) + 0.5 * ggx(0.05, 0.5, 45)").checked(lobes_syntax_error).used_when("ndf", {"lobes"})
             .doc("A weighted sum of any number of lobes, e.g. 'beckmann(0.08, 0.3) + 0.5 * ggx(0.3, 0.05, 45)': phong(exponent), "
                  "beckmann | ggx | ward(alpha) or (alpha_x, alpha_y) or (alpha_x, alpha_y, rotation in degrees), each optionally "
                  "times a weight (default 1; the sum is normalised)");
-        p.add_path("ndf_image", "").costs(Cost::Recompute).used_when("ndf", {"image"})
+        p.add_path("ndf_image", "").used_when("ndf", {"image"})
             .doc("Image of D over [-1, 1]^2 (x right, y up; any positive scale; channels averaged; pixels outside the disk ignored)");
-        p.add_path("normal_map", "").costs(Cost::Recompute).used_when("ndf", {"normal_map"})
+        p.add_path("normal_map", "").used_when("ndf", {"normal_map"})
             .doc("Tangent-space normal map (RGB = x along u, y along v, z out of the surface; row 0 at v = 1); relative to the preset's folder");
-        p.add_enum("normal_map_encoding", {"unsigned", "signed"}, "unsigned").costs(Cost::Recompute).used_when("ndf", {"normal_map"})
+        p.add_enum("normal_map_encoding", {"unsigned", "signed"}, "unsigned").used_when("ndf", {"normal_map"})
             .doc("unsigned: components stored as (v + 1)/2 in [0, 1] (8/16-bit maps); signed: stored as they are (float maps)");
-        p.add_enum("normal_map_y", {"up", "down"}, "up").costs(Cost::Recompute).used_when("ndf", {"normal_map"})
+        p.add_enum("normal_map_y", {"up", "down"}, "up").used_when("ndf", {"normal_map"})
             .doc("Green channel convention: up (OpenGL, Blender) or down (DirectX, Unreal: y negated)");
         declare_heightfield_params(p, [](ParamDecl& d) {
             d.used_when("ndf", {"heightfield"});
             d.help += " (the same surface as microgeom." + d.name + ")";
         });
-        p.add_bool("index_map", false).costs(Cost::Recompute).used_when("ndf", {"normal_map", "heightfield"})
+        p.add_bool("index_map", false).used_when("ndf", {"normal_map", "heightfield"})
             .doc("§7: render the bump map's own normals through an index texture into the look-up table (instead of noise), "
                  "adding index_noise detail when zooming in past its texels");
         p.add_float("index_noise", 0.03).range(0.0, 0.5).used_when("index_map", {"true"})
             .doc("Amplitude of the detail noise added to the index texture's inputs (uniform units) per octave beyond the bump map");
-        p.add_int("ndf_resolution", 128).range(64, 512).in("cells").costs(Cost::Recompute).more_accurate(Accuracy::Higher, int64_t(512))
+        p.add_int("ndf_resolution", 128).range(64, 512).in("cells").more_accurate(Accuracy::Higher, int64_t(512))
             .doc("Cells per side of the tabulated NDF");
-        p.add_int("lut_size", 256).range(16, 4096).in("entries").costs(Cost::Recompute).more_accurate(Accuracy::Higher, int64_t(4096))
+        p.add_int("lut_size", 256).range(16, 4096).in("entries").more_accurate(Accuracy::Higher, int64_t(4096))
             .doc("Entries per side of the normal look-up table L(r1, r2) (the paper: 256)");
-        p.add_int("octaves_max", 8).range(1, 16).costs(Cost::Recompute)
+        p.add_int("octaves_max", 8).range(1, 16)
             .doc("Octaves of noise at full detail (K); one more octave fades in at every halving of the eye distance");
         p.add_float("detail_distance", 4.0).range(1e-6, 1e6).log().in("scene units")
             .doc("Eye distance beyond which there are no bumps (shading with the NDF alone)");
-        p.add_enum("noise", {"procedural", "texture"}, "procedural").costs(Cost::Recompute)
+        p.add_enum("noise", {"procedural", "texture"}, "procedural")
             .doc("Perlin noise evaluated per pixel, or the paper's mip-mapped noise texture (one octave less per level)");
-        p.add_int("noise_frequency", 8).range(1, 4096).in("cells per uv unit").costs(Cost::Recompute)
+        p.add_int("noise_frequency", 8).range(1, 4096).in("cells per uv unit")
             .doc("Lattice cells of the first octave across the uv square (an integer, so the noise tiles uv)");
-        p.add_float("noise_gain", 0.5).range(0.01, 1.0).costs(Cost::Recompute).doc("Amplitude ratio between successive octaves");
-        p.add_int("noise_seed", 1).range(0, 1 << 30).costs(Cost::Recompute).doc("Seed of the noise (both channels)");
-        p.add_int("noise_texture_size", 1024).range(16, 4096).in("texels").costs(Cost::Recompute).used_when("noise", {"texture"})
+        p.add_float("noise_gain", 0.5).range(0.01, 1.0).doc("Amplitude ratio between successive octaves");
+        p.add_int("noise_seed", 1).range(0, 1 << 30).doc("Seed of the noise (both channels)");
+        p.add_int("noise_texture_size", 1024).range(16, 4096).in("texels").used_when("noise", {"texture"})
             .doc("Size of the finest level of the noise texture (a power of two)");
         p.add_color("ks", {0.9, 0.9, 0.9}).doc("Specular colour (F0 with fresnel on)");
         p.add_color("kd", {0.1, 0.1, 0.1}).doc("Separate diffuse albedo, bump-mapped with the synthesised normal (0: NDF only, as in the paper)");
         p.add_bool("fresnel", false).doc("Schlick's Fresnel with F0 = ks");
-        p.add_bool("masking", false).costs(Cost::Recompute).doc("Smith masking-shadowing of the same NDF (off: the paper's implicit term)");
-        p.add_path("albedo_map", "").costs(Cost::Recompute)
+        p.add_bool("masking", false).doc("Smith masking-shadowing of the same NDF (off: the paper's implicit term)");
+        p.add_path("albedo_map", "")
             .doc("Image multiplying kd at the surface's (u, v) (8-bit images are sRGB); relative to the preset's folder");
         aovs_ = {{"octaves", 1, "Octaves of noise at the pixel (0: NDF alone; fractional while an octave fades in)"}};
     }
@@ -216,22 +217,20 @@ public:
             return d;
         };
         const auto when = [](bool (*f)(const SceneObject&)) { return [f](const Scene&, const SceneObject& o) { return f(o); }; };
-        g.add(object({.name = "bumpsynth.bump_normals",
-                      .help = "Read the bump map (a normal map, or a heightfield's normals) whose histogram is the NDF (§7)",
+        g.add(stages::bump_normals, object({.help = "Read the bump map (a normal map, or a heightfield's normals) whose histogram is the NDF (§7)",
                       .params = keys(kSourceKeys),
                       .applies = when(from_bump_map),
                       .when_text = "bumpsynth.ndf is normal_map or heightfield",
-                      .run = [](StageContext& ctx) { return stage_result(bump_normals_from_material(ctx.scene, ctx.material())); }}));
-        g.add(object({.name = "bumpsynth.ndf",
-                      .help = "Tabulate the normal density function over the normal's (x, y) disk",
+                      .run = [](StageContext& ctx) { return stage_result(stages::bump_normals, bump_normals_from_material(ctx.scene, ctx.material())); }}));
+        g.add(stages::ndf, object({.help = "Tabulate the normal density function over the normal's (x, y) disk",
                       .params = keys(kNdfKeys),
-                      .inputs = {"bumpsynth.bump_normals"},
+                      .inputs = {stages::bump_normals},
                       .memory = [](const StageContext& ctx) {
                           const double R = double(ctx.material().get_int("ndf_resolution"));
                           return MemoryEstimate{R * R * 2.0 * sizeof(double), "NDF: " + std::to_string(int(R)) + "^2 cells", {"bumpsynth.ndf_resolution"}};
                       },
                       .run = [](StageContext& ctx) {
-                          const auto n = ctx.input<BumpNormals>("bumpsynth.bump_normals");
+                          const auto n = ctx.input(stages::bump_normals);
                           const ParamTable& m = ctx.material();
                           if (n) {
                               // A histogram with fewer normals than cells is spiky: highlights sparkle.
@@ -247,39 +246,35 @@ public:
                                   ctx.warn(msg);
                               }
                           }
-                          return stage_result(ndf_from_material(ctx.scene, m, n.get()));
+                          return stage_result(stages::ndf, ndf_from_material(ctx.scene, m, n.get()));
                       }}));
-        g.add(object({.name = "bumpsynth.lut",
-                      .help = "Invert the NDF's marginal and conditional CDFs into the normal look-up table L(r1, r2) with tangent frames (§4)",
+        g.add(stages::lut, object({.help = "Invert the NDF's marginal and conditional CDFs into the normal look-up table L(r1, r2) with tangent frames (§4)",
                       .params = keys({"lut_size"}),
-                      .inputs = {"bumpsynth.ndf"},
+                      .inputs = {stages::ndf},
                       .memory = [](const StageContext& ctx) {
                           const double n = double(ctx.material().get_int("lut_size"));
                           return MemoryEstimate{n * n * double(sizeof(LutEntry)), "look-up table: " + std::to_string(int(n)) + "^2 entries",
                                                 {"bumpsynth.lut_size"}};
                       },
                       .run = [](StageContext& ctx) {
-                          return stage_result(build_lut(*ctx.input<Ndf>("bumpsynth.ndf"), int(ctx.material().get_int("lut_size"))));
+                          return stage_result(stages::lut, build_lut(*ctx.input(stages::ndf), int(ctx.material().get_int("lut_size"))));
                       }}));
-        g.add(object({.name = "bumpsynth.index_map",
-                      .help = "Turn the bump map's normals into an index texture of look-up-table inputs (§7)",
+        g.add(stages::index_map, object({.help = "Turn the bump map's normals into an index texture of look-up-table inputs (§7)",
                       .params = keys({"index_map"}),
-                      .inputs = {"bumpsynth.bump_normals", "bumpsynth.lut"},
+                      .inputs = {stages::bump_normals, stages::lut},
                       .applies = when(index_mode),
                       .when_text = "bumpsynth.index_map is on",
                       .run = [](StageContext& ctx) {
-                          return stage_result(make_index_map(*ctx.input<BumpNormals>("bumpsynth.bump_normals"), *ctx.input<Lut>("bumpsynth.lut")));
+                          return stage_result(stages::index_map, make_index_map(*ctx.input(stages::bump_normals), *ctx.input(stages::lut)));
                       }}));
-        g.add(object({.name = "bumpsynth.noise_cdf",
-                      .help = "Measure the CDF G_k of the fractal noise for every octave count k (§4)",
+        g.add(stages::noise_cdf, object({.help = "Measure the CDF G_k of the fractal noise for every octave count k (§4)",
                       .params = keys(kNoiseKeys),
                       .applies = when(noise_inputs_needed),
                       .when_text = "an object synthesises its bumps from noise (bumpsynth.index_map off)",
-                      .run = [](StageContext& ctx) { return stage_result(measure_noise_cdfs(noise_from_material(ctx.material()))); }}));
-        g.add(object({.name = "bumpsynth.noise_texture",
-                      .help = "Bake the mip-mapped noise texture: each coarser level one octave less (§5.2.2)",
+                      .run = [](StageContext& ctx) { return stage_result(stages::noise_cdf, measure_noise_cdfs(noise_from_material(ctx.material()))); }}));
+        g.add(stages::noise_texture, object({.help = "Bake the mip-mapped noise texture: each coarser level one octave less (§5.2.2)",
                       .params = keys({"noise", "noise_texture_size"}),
-                      .inputs = {"bumpsynth.noise_cdf"},
+                      .inputs = {stages::noise_cdf},
                       .applies = when(texture_noise),
                       .when_text = "bumpsynth.noise is texture",
                       .memory = [](const StageContext& ctx) {
@@ -289,26 +284,24 @@ public:
                                                 {"bumpsynth.noise_texture_size"}};
                       },
                       .run = [](StageContext& ctx) {
-                          return stage_result(make_noise_texture(*ctx.input<NoiseCdfs>("bumpsynth.noise_cdf"), int(ctx.material().get_int("noise_texture_size"))));
+                          return stage_result(stages::noise_texture, make_noise_texture(*ctx.input(stages::noise_cdf), int(ctx.material().get_int("noise_texture_size"))));
                       }}));
-        g.add(object({.name = "bumpsynth.masking",
-                      .help = "Tabulate the Smith masking function G1 of the NDF",
+        g.add(stages::masking, object({.help = "Tabulate the Smith masking function G1 of the NDF",
                       .params = keys({"masking"}),
-                      .inputs = {"bumpsynth.ndf"},
+                      .inputs = {stages::ndf},
                       .applies = when(masking),
                       .when_text = "bumpsynth.masking is on",
-                      .run = [](StageContext& ctx) { return stage_result(SmithTable::build(*ctx.input<Ndf>("bumpsynth.ndf"))); }}));
-        g.add(object({.name = "bumpsynth.albedo",
-                      .help = "Read the object's albedo map",
+                      .run = [](StageContext& ctx) { return stage_result(stages::masking, SmithTable::build(*ctx.input(stages::ndf))); }}));
+        g.add(stages::albedo, object({.help = "Read the object's albedo map",
                       .params = {"bumpsynth.albedo_map"},
                       .run = [](StageContext& ctx) -> std::any {
                           auto img = basic::read_albedo_map(ctx.scene, ctx.material());
-                          return img ? stage_result(std::move(*img)) : std::any();
+                          return img ? stage_result(stages::albedo, std::move(*img)) : std::any();
                       }}));
     }
 
-    std::vector<std::string> frame_stages() const override {
-        return {"bumpsynth.ndf", "bumpsynth.lut", "bumpsynth.index_map", "bumpsynth.noise_cdf", "bumpsynth.noise_texture", "bumpsynth.masking", "bumpsynth.albedo"};
+    std::vector<StageName> frame_stages() const override {
+        return {stages::ndf, stages::lut, stages::index_map, stages::noise_cdf, stages::noise_texture, stages::masking, stages::albedo};
     }
 
     // Texture mode: the uv square at one pixel per cell of the finest octave (at least 512, at most 4096).
@@ -319,7 +312,7 @@ public:
             if (o.technique != "bumpsynth") continue;
             const ParamTable& m = o.material;
             if (index_mode(o)) {
-                const auto map = ev.get<IndexMap>("bumpsynth.index_map", int(i));
+                const auto map = ev.get(stages::index_map, int(i));
                 if (!map) return std::nullopt;
                 const int K = int(m.get_int("octaves_max"));
                 const auto side = [&](int n) { return int(std::min<int64_t>(4096, int64_t(n) << (K - 1))); };
@@ -406,8 +399,8 @@ std::vector<BenchTable> BumpsynthTechnique::bench_tables() const {
     pre.name = "bumpsynth";
     pre.title = "Kautz et al. 2001: NDF tabulation, look-up table and noise CDFs (anisotropic Beckmann 0.1 x 0.4, 30 degrees)";
     pre.paper_machine = "the paper gives no precomputation times (\"done once for every NDF in a preprocessing step\")";
-    pre.columns = {{"NDF", "bumpsynth.ndf"}, {"LUT L(r1, r2)", "bumpsynth.lut"}, {"noise CDFs G_1..G_8", "bumpsynth.noise_cdf"},
-                   {"Smith table", "bumpsynth.masking"}};
+    pre.columns = {{"NDF", stages::ndf}, {"LUT L(r1, r2)", stages::lut}, {"noise CDFs G_1..G_8", stages::noise_cdf},
+                   {"Smith table", stages::masking}};
     for (const char* size : {"64", "128", "256", "512", "1024"})
         pre.rows.push_back({std::string("LUT ") + size + "^2, NDF 128^2", scene("sphere", {{"bumpsynth.lut_size", size}, {"bumpsynth.masking", "true"}}), {}});
     pre.rows.push_back({"LUT 256^2, NDF 512^2", scene("sphere", {{"bumpsynth.ndf_resolution", "512"}, {"bumpsynth.masking", "true"}}), {}});
@@ -416,7 +409,7 @@ std::vector<BenchTable> BumpsynthTechnique::bench_tables() const {
     frame.name = "bumpsynth-frame";
     frame.title = "Kautz et al. 2001, §6 / Fig. 5: frame time at 1280x720 (teapot: ~17,000 triangles in the paper)";
     frame.paper_machine = "AMD Athlon 1 GHz + NVIDIA GeForce 3 (about 30 Hz = " + std::to_string(int(kPaperFrameMs)) + " ms)";
-    frame.columns = {{"frame 1280x720", "", 1280, 720, true, true}};
+    frame.columns = {{"frame 1280x720", {}, 1280, 720, true, true}};
     // The teapot at 16,384 triangles (the paper's ~17,000) filling the frame; detail_distance puts
     // the camera at full detail (8 octaves) or beyond it (NDF only).
     const auto teapot = [&](std::vector<std::pair<const char*, const char*>> extra) {

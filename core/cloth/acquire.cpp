@@ -1,4 +1,5 @@
 // Virtual acquisition of a stitch with Embree (see acquire.h).
+#include "core/cloth/stages.h"
 #include "core/cloth/acquire.h"
 #include "core/error.h"
 
@@ -129,7 +130,7 @@ SampleGrid acquire(const StitchMesh& st, const AcquireParams& p, const ProgressF
     auto report = [&](double f) {
         if (!progress) return;
         std::lock_guard<std::mutex> lock(progress_mutex);
-        progress("cloth.acquire", f);
+        progress(std::string(stages::acquire.name), f);
     };
     auto check_cancel = [&] {
         if (cancel && cancel->load(std::memory_order_relaxed)) throw Cancelled();

@@ -1,4 +1,5 @@
 // The mip levels of a fabric's BRDF array (see pyramid.h).
+#include "core/cloth/stages.h"
 #include "core/cloth/pyramid.h"
 #include "core/error.h"
 
@@ -127,7 +128,7 @@ BrdfPyramid fit_pyramid(const SampleGrid& g, const FitOptions& o, const Progress
             const size_t d = ++done;
             if (progress && (d % 16 == 0 || d == total)) {
                 std::lock_guard<std::mutex> lock(progress_mutex);
-                progress("cloth.fit", double(d) / double(total));
+                progress(std::string(stages::fit.name), double(d) / double(total));
             }
         });
     }

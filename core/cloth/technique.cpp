@@ -1,5 +1,6 @@
 // Technique cloth: parameters, stages, CPU shading, the samples export, the fit/eval commands,
 // the timing table and the fit-error sweep metric (see technique.h).
+#include "core/cloth/stages.h"
 #include "core/cloth/technique.h"
 #include "core/cloth/garment.h"
 #include "core/cloth/samples.h"
@@ -20,26 +21,34 @@
 namespace mesolab::cloth {
 
 // [SECTION] Settings
-Settings Settings::from(const Scene& sc, const SceneObject& o) {
+Settings Settings::from(const Scene& sc, const SceneObject& o, unsigned parts) {
     const ParamTable& t = o.material;
     Settings s;
-    s.stitch.stitch = t.get_string("stitch");
-    s.stitch.yarn_radius = float(t.get_float("yarn_radius"));
-    s.stitch.loop_height = float(t.get_float("loop_height"));
-    s.stitch.color_a = t.get_vec3("color_a");
-    s.stitch.color_b = t.get_vec3("color_b");
-    s.stitch_resolution = int(t.get_int("stitch_resolution"));
-    s.acquire.spatial = int(t.get_int("spatial"));
-    s.acquire.directions = int(t.get_int("directions"));
-    s.acquire.visibility_rays = int(t.get_int("visibility_rays"));
-    s.samples = sc.resolve(t.get_string("samples"));
-    s.fit.lobes = int(t.get_int("lobes"));
-    s.fit.lookup_table = t.get_bool("lookup_table");
-    s.fit.tolerance = t.get_float("tolerance");
-    s.repeat = t.get_float("repeat");
-    s.mip = mip_mode_named(t.get_string("mip"));
-    s.mip_bias = t.get_float("mip_bias");
-    s.garment = t.get_string("garment");
+    if (parts & Stitch) {
+        s.stitch.stitch = t.get_string("stitch");
+        s.stitch.yarn_radius = float(t.get_float("yarn_radius"));
+        s.stitch.loop_height = float(t.get_float("loop_height"));
+        s.stitch.color_a = t.get_vec3("color_a");
+        s.stitch.color_b = t.get_vec3("color_b");
+        s.stitch_resolution = int(t.get_int("stitch_resolution"));
+    }
+    if (parts & Acquire) {
+        s.acquire.spatial = int(t.get_int("spatial"));
+        s.acquire.directions = int(t.get_int("directions"));
+        s.acquire.visibility_rays = int(t.get_int("visibility_rays"));
+        s.samples = sc.resolve(t.get_string("samples"));
+    }
+    if (parts & Fit) {
+        s.fit.lobes = int(t.get_int("lobes"));
+        s.fit.lookup_table = t.get_bool("lookup_table");
+        s.fit.tolerance = t.get_float("tolerance");
+    }
+    if (parts & Shading) {
+        s.repeat = t.get_float("repeat");
+        s.mip = mip_mode_named(t.get_string("mip"));
+        s.mip_bias = t.get_float("mip_bias");
+        s.garment = t.get_string("garment");
+    }
     return s;
 }
 
@@ -158,30 +167,30 @@ class ClothTechnique final : public Technique {
 public:
     ClothTechnique() : Technique("cloth", "Cloth (Daubert et al. 2001)") {
         auto& p = params_;
-        p.add_enum("stitch", stitch_names(), "knit").costs(Cost::Recompute)
+        p.add_enum("stitch", stitch_names(), "knit")
             .doc("Stitch pattern: plain knit, purl loops, knit loops in two colours, plain weave, 2/1 twill");
-        p.add_float("yarn_radius", 0.12).range(0.02, 0.45).in("yarn spacings").costs(Cost::Recompute).doc("Radius of the yarn's tube around its skeleton");
-        p.add_float("loop_height", 1.0).range(0.5, 3.0).in("yarn spacings").costs(Cost::Recompute)
+        p.add_float("yarn_radius", 0.12).range(0.02, 0.45).in("yarn spacings").doc("Radius of the yarn's tube around its skeleton");
+        p.add_float("loop_height", 1.0).range(0.5, 3.0).in("yarn spacings")
             .used_when("stitch", {"knit", "purl", "loops2"}).doc("Course height of knitted loops");
-        p.add_color("color_a", {0.75, 0.12, 0.10}).costs(Cost::Recompute).doc("Yarn colour (the weave's warp; loops2: every other course)");
-        p.add_color("color_b", {0.90, 0.85, 0.70}).costs(Cost::Recompute).doc("Second yarn colour (the weave's weft; loops2: the other courses)");
-        p.add_int("stitch_resolution", 48).range(8, 256).costs(Cost::Recompute).more_accurate(Accuracy::Higher, int64_t(128))
+        p.add_color("color_a", {0.75, 0.12, 0.10}).doc("Yarn colour (the weave's warp; loops2: every other course)");
+        p.add_color("color_b", {0.90, 0.85, 0.70}).doc("Second yarn colour (the weave's weft; loops2: the other courses)");
+        p.add_int("stitch_resolution", 48).range(8, 256).more_accurate(Accuracy::Higher, int64_t(128))
             .doc("Marching-cubes cells per tile side of the stitch mesh");
-        p.add_int("spatial", 32).range(1, 256).costs(Cost::Recompute).more_accurate(Accuracy::Higher, int64_t(64))
+        p.add_int("spatial", 32).range(1, 256).more_accurate(Accuracy::Higher, int64_t(64))
             .doc("Sample points per side of the pattern (a power of two): 32 gives 6 mip levels and 1365 BRDFs");
-        p.add_int("directions", 32).range(4, 128).costs(Cost::Recompute).more_accurate(Accuracy::Higher, int64_t(64))
+        p.add_int("directions", 32).range(4, 128).more_accurate(Accuracy::Higher, int64_t(64))
             .doc("Light directions, and as many view directions, over the hemisphere (32: the paper's 32 x 32 pairs)");
-        p.add_int("visibility_rays", 64).range(0, 1024).costs(Cost::Recompute).more_accurate(Accuracy::Higher, int64_t(256))
+        p.add_int("visibility_rays", 64).range(0, 1024).more_accurate(Accuracy::Higher, int64_t(256))
             .doc("Rays per vertex of the precomputed visibility for the indirect bounce (0: direct light only)");
-        p.add_path("samples", "").costs(Cost::Recompute)
+        p.add_path("samples", "")
             .doc("Acquired samples to fit instead of acquiring (mesolab export cloth-samples writes them); relative to the preset's folder");
-        p.add_int("lobes", 2).range(1, 3).costs(Cost::Recompute).more_accurate(Accuracy::Higher, int64_t(3)).doc("Lafortune lobes per channel");
-        p.add_bool("lookup_table", true).costs(Cost::Recompute).doc("Fit the view-dependent table T(v) (colour and alpha); off: the lobes alone (Fig. 5)");
-        p.add_float("tolerance", 0.1).range(1e-4, 10.0).log().costs(Cost::Recompute).more_accurate(Accuracy::Lower, 0.01)
+        p.add_int("lobes", 2).range(1, 3).more_accurate(Accuracy::Higher, int64_t(3)).doc("Lafortune lobes per channel");
+        p.add_bool("lookup_table", true).doc("Fit the view-dependent table T(v) (colour and alpha); off: the lobes alone (Fig. 5)");
+        p.add_float("tolerance", 0.1).range(1e-4, 10.0).log().more_accurate(Accuracy::Lower, 0.01)
             .used_when("lookup_table", {"true"}).doc("Stop alternating when the table changes less than this on average");
-        p.add_enum("garment", {"curtain", "sleeve", "geometry"}, "curtain").costs(Cost::Recompute)
+        p.add_enum("garment", {"curtain", "sleeve", "geometry"}, "curtain")
             .doc("What wears the fabric: a folded curtain, a bent sleeve, or the object's own mesh (geometry.*, with uv)");
-        p.add_int("garment_resolution", 64).range(4, 2048).costs(Cost::Recompute).used_when("garment", {"curtain", "sleeve"})
+        p.add_int("garment_resolution", 64).range(4, 2048).used_when("garment", {"curtain", "sleeve"})
             .doc("Quads along each side of the procedural garment");
         p.add_float("repeat", 8.0).range(0.01, 1e4).log().in("tiles").doc("Pattern tiles across the garment's uv square");
         p.add_enum("mip", {"off", "nearest", "blend"}, "blend")
@@ -193,10 +202,10 @@ public:
     }
 
     void declare_stages(StageGraph& g) const override;
-    std::vector<std::string> frame_stages() const override { return {"cloth.fit", "cloth.garment"}; }
+    std::vector<StageName> frame_stages() const override { return {stages::fit, stages::garment}; }
     void shade_cpu(const ShadeContext& ctx) const override;
     std::shared_ptr<const TriMesh> object_mesh(const Scene&, const Evaluation& ev, int object) const override {
-        return ev.get<TriMesh>("cloth.garment", object);
+        return ev.get(stages::garment, object);
     }
     std::vector<ExportDecl> exports() const override;
     std::vector<CommandDecl> commands() const override;
@@ -216,8 +225,7 @@ const std::vector<std::string> kStitchKeys = {"cloth.stitch", "cloth.yarn_radius
                                               "cloth.stitch_resolution"};
 
 void ClothTechnique::declare_stages(StageGraph& g) const {
-    g.add({.name = "cloth.stitch",
-           .help = "Stitch micro-geometry: yarn tubes around Bezier skeletons over 3 x 3 tiles, marching cubes",
+    g.add(stages::stitch, {.help = "Stitch micro-geometry: yarn tubes around Bezier skeletons over 3 x 3 tiles, marching cubes",
            .scope = StageScope::Object,
            .technique = "cloth",
            .params = kStitchKeys,
@@ -229,17 +237,16 @@ void ClothTechnique::declare_stages(StageGraph& g) const {
                                      {"cloth.stitch_resolution"}};
            },
            .run = [](StageContext& ctx) -> std::any {
-               const Settings s = Settings::from(ctx.scene, ctx.obj());
-               return stage_result(build_stitch_mesh(make_stitch(s.stitch), s.stitch_resolution));
+               const Settings s = Settings::from(ctx.scene, ctx.obj(), Settings::Stitch);
+               return stage_result(stages::stitch, build_stitch_mesh(make_stitch(s.stitch), s.stitch_resolution));
            }});
     std::vector<std::string> acquire_keys = kStitchKeys;
     acquire_keys.insert(acquire_keys.end(), {"cloth.spatial", "cloth.directions", "cloth.visibility_rays", "cloth.samples"});
-    g.add({.name = "cloth.acquire",
-           .help = "Virtual acquisition (Embree): lighting by precomputed visibility, parallax samples per light x view pair, alpha per view",
+    g.add(stages::acquire, {.help = "Virtual acquisition (Embree): lighting by precomputed visibility, parallax samples per light x view pair, alpha per view",
            .scope = StageScope::Object,
            .technique = "cloth",
            .params = acquire_keys,
-           .inputs = {"cloth.stitch"},
+           .inputs = {stages::stitch},
            .paper = PaperFigure{45.0 * 60e3, "Daubert 2001, §4: acquisition 15-45 min (Athlon 1 GHz)"},
            .memory = [](const StageContext& ctx) {
                const double n = double(ctx.material().get_int("spatial")), d = double(ctx.material().get_int("directions"));
@@ -247,45 +254,43 @@ void ClothTechnique::declare_stages(StageGraph& g) const {
                                      {"cloth.spatial", "cloth.directions"}};
            },
            .run = [](StageContext& ctx) -> std::any {
-               const Settings s = Settings::from(ctx.scene, ctx.obj());
+               const Settings s = Settings::from(ctx.scene, ctx.obj(), Settings::Acquire);
                if (!s.samples.empty()) {
                    SampleGrid g = read_sample_grid(s.samples);
-                   return stage_result(std::move(g));
+                   return stage_result(stages::acquire, std::move(g));
                }
                const ProgressFn progress = [&](const std::string&, double f) {
                    if (!ctx.cancelled()) ctx.progress(f);
                };
-               return stage_result(acquire(*ctx.input<StitchMesh>("cloth.stitch"), s.acquire, progress, ctx.cancel_flag()));
+               return stage_result(stages::acquire, acquire(*ctx.input(stages::stitch), s.acquire, progress, ctx.cancel_flag()));
            }});
-    g.add({.name = "cloth.fit",
-           .help = "Lafortune x view-table fits (Ceres) of every mip level's entries, coarse to fine",
+    g.add(stages::fit, {.help = "Lafortune x view-table fits (Ceres) of every mip level's entries, coarse to fine",
            .scope = StageScope::Object,
            .technique = "cloth",
            .params = {"cloth.lobes", "cloth.lookup_table", "cloth.tolerance"},
-           .inputs = {"cloth.acquire"},
+           .inputs = {stages::acquire},
            .paper = PaperFigure{2.5 * 3600e3, "Daubert 2001, §5: fitting ~2.5 h (Athlon 1 GHz)"},
            .run = [](StageContext& ctx) -> std::any {
-               const Settings s = Settings::from(ctx.scene, ctx.obj());
+               const Settings s = Settings::from(ctx.scene, ctx.obj(), Settings::Fit);
                const ProgressFn progress = [&](const std::string&, double f) {
                    if (!ctx.cancelled()) ctx.progress(f);
                };
-               BrdfPyramid p = fit_pyramid(*ctx.input<SampleGrid>("cloth.acquire"), s.fit, progress, ctx.cancel_flag());
+               BrdfPyramid p = fit_pyramid(*ctx.input(stages::acquire), s.fit, progress, ctx.cancel_flag());
                size_t unconverged = 0;
                for (const auto& level : p.report)
                    for (const FitReport& r : level) unconverged += r.converged ? 0 : 1;
                if (unconverged)
                    ctx.warn(std::to_string(unconverged) + " of " + std::to_string(p.count()) + " BRDFs stopped before the table met cloth.tolerance");
-               return stage_result(std::move(p));
+               return stage_result(stages::fit, std::move(p));
            }});
-    g.add({.name = "cloth.garment",
-           .help = "The procedural garment (folded curtain, bent sleeve) drawn instead of the object's geometry",
+    g.add(stages::garment, {.help = "The procedural garment (folded curtain, bent sleeve) drawn instead of the object's geometry",
            .scope = StageScope::Object,
            .technique = "cloth",
            .params = {"cloth.garment", "cloth.garment_resolution"},
            .applies = [](const Scene&, const SceneObject& o) { return o.material.get_string("garment") != "geometry"; },
            .when_text = "cloth.garment is curtain or sleeve",
            .run = [](StageContext& ctx) -> std::any {
-               return stage_result(make_garment(ctx.material().get_string("garment"), int(ctx.material().get_int("garment_resolution"))));
+               return stage_result(stages::garment, make_garment(ctx.material().get_string("garment"), int(ctx.material().get_int("garment_resolution"))));
            }});
 }
 
@@ -297,7 +302,7 @@ void ClothTechnique::shade_cpu(const ShadeContext& ctx) const {
     };
     std::vector<Obj> objs(ctx.scene.objects.size());
     for (int o : ctx.objects) {
-        objs[size_t(o)] = {Settings::from(ctx.scene, ctx.scene.objects[size_t(o)]), ctx.eval.get<BrdfPyramid>("cloth.fit", o)};
+        objs[size_t(o)] = {Settings::from(ctx.scene, ctx.scene.objects[size_t(o)]), ctx.eval.get(stages::fit, o)};
         if (!objs[size_t(o)].pyr) throw std::logic_error("cloth: the evaluation lacks cloth.fit for object " + std::to_string(o));
     }
     const int out_alpha = ctx.out.index("alpha"), out_level = ctx.out.index("mip_level"), out_index = ctx.out.index("brdf_index");
@@ -350,11 +355,11 @@ std::vector<ExportDecl> ClothTechnique::exports() const {
     e.name = "cloth-samples";
     e.help = "The acquired samples of a fabric (binary, read back by cloth.samples): acquire once, fit and render many times";
     e.options_help = "(none)";
-    e.stages = {"cloth.stitch", "cloth.acquire"};
+    e.stages = {stages::stitch, stages::acquire};
     e.run = [](const Scene&, const Evaluation& ev, int object, const std::map<std::string, std::string>& options, const std::string& path,
                const ProgressFn&) {
         for (const auto& kv : options) throw InputError("--option " + kv.first + ": export cloth-samples takes no options");
-        const auto g = ev.get<SampleGrid>("cloth.acquire", object);
+        const auto g = ev.get(stages::acquire, object);
         if (!g) throw std::logic_error("cloth-samples: cloth.acquire did not run");
         write_sample_grid(path, *g);
         return std::to_string(g->res) + " x " + std::to_string(g->res) + " points, " + std::to_string(g->l.size()) + " light x view pairs, " +
@@ -395,7 +400,7 @@ std::vector<CommandDecl> ClothTechnique::commands() const {
             const size_t d = ++done;
             if (progress) {
                 std::lock_guard<std::mutex> lock(progress_mutex);
-                progress("cloth.fit", double(d) / double(set.points.size()));
+                progress(std::string(stages::fit.name), double(d) / double(set.points.size()));
             }
         });
         write_model(a.at("output"), m);
@@ -442,15 +447,15 @@ std::vector<BenchTable> ClothTechnique::bench_tables() const {
     t.paper_machine = "Athlon 1 GHz / GeForce 2 GTS";
     BenchColumn brdfs{"BRDFs"}, memory{"memory (fitted)"}, error{"fit rel. RMS (level 0, median)"};
     brdfs.info = [](const Scene&, const Evaluation& ev) {
-        const auto p = ev.get<BrdfPyramid>("cloth.fit", 0);
+        const auto p = ev.get(stages::fit, 0);
         return p ? std::to_string(p->count()) + " in " + std::to_string(p->level.size()) + " levels" : std::string("—");
     };
     memory.info = [](const Scene&, const Evaluation& ev) {
-        const auto p = ev.get<BrdfPyramid>("cloth.fit", 0);
+        const auto p = ev.get(stages::fit, 0);
         return p ? fmt("%.2f MB (paper 4 MB)", double(p->bytes()) / 1048576.0) : std::string("—");
     };
     error.info = [](const Scene&, const Evaluation& ev) {
-        const auto p = ev.get<BrdfPyramid>("cloth.fit", 0);
+        const auto p = ev.get(stages::fit, 0);
         if (!p || p->report.empty()) return std::string("—");
         std::vector<double> r;
         for (const FitReport& f : p->report[0]) r.push_back(f.rel_rms);
@@ -460,11 +465,11 @@ std::vector<BenchTable> ClothTechnique::bench_tables() const {
     t.columns = {brdfs,
                  memory,
                  error,
-                 {"stitch mesh", "cloth.stitch"},
-                 {"acquisition", "cloth.acquire"},
-                 {"fitting", "cloth.fit"},
-                 {"frame 730x400", "", 730, 400, true, true},
-                 {"frame 1920x1080", "", 1920, 1080, true, true}};
+                 {"stitch mesh", stages::stitch},
+                 {"acquisition", stages::acquire},
+                 {"fitting", stages::fit},
+                 {"frame 730x400", {}, 730, 400, true, true},
+                 {"frame 1920x1080", {}, 1920, 1080, true, true}};
     auto row = [](const std::string& stitch) {
         BenchRow r;
         r.name = stitch + " curtain";
@@ -502,11 +507,11 @@ std::vector<SweepMetricDecl> ClothTechnique::sweep_metrics() const {
     m.help = "RMS of f_r cos(theta_l) of the fitted level-0 BRDFs against the reference setting's acquired samples, over their RMS";
     m.check = [first](const Scene& s) { first(s); };
     m.prepare = [first](const Scene& ref, const Evaluation& ref_eval) {
-        const auto g = ref_eval.get<SampleGrid>("cloth.acquire", first(ref));
+        const auto g = ref_eval.get(stages::acquire, first(ref));
         if (!g) throw std::logic_error("cloth.fit metric: the reference has no cloth.acquire");
         SweepMeasure out;
         out.error = [first, g](const Scene& s, const Evaluation& ev) {
-            const auto p = ev.get<BrdfPyramid>("cloth.fit", first(s));
+            const auto p = ev.get(stages::fit, first(s));
             if (!p) throw std::logic_error("cloth.fit metric: the setting has no cloth.fit");
             double se = 0.0, sr = 0.0;
             for (int y = 0; y < g->res; ++y)

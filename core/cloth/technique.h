@@ -30,7 +30,16 @@ struct Settings {
     MipMode mip = MipMode::Blend;
     double mip_bias = 0.0;
     std::string garment = "curtain";  // curtain, sleeve or geometry (the object's own mesh)
-    static Settings from(const Scene& s, const SceneObject& o);
+    // The keys are read by part, so that a stage reads only those it declares (the session checks
+    // it, core/session.h); the fields of the parts not read keep their defaults.
+    enum Part : unsigned {
+        Stitch = 1,    // stitch, yarn_radius, loop_height, color_a, color_b, stitch_resolution
+        Acquire = 2,   // spatial, directions, visibility_rays, samples
+        Fit = 4,       // lobes, lookup_table, tolerance
+        Shading = 8,   // repeat, mip, mip_bias, garment
+        All = 15,
+    };
+    static Settings from(const Scene& s, const SceneObject& o, unsigned parts = All);
 };
 
 // The pyramid as the GPU reads it: one record of `stride` vec4s per entry, entries level by

@@ -14,19 +14,19 @@ void declare_heightfield_params(ParamGroup& p, const std::function<void(ParamDec
     const auto add = [&](ParamDecl& d) {
         if (each) each(d);
     };
-    add(p.add_path("heightfield", "bricks").builtins(procedural_names()).costs(Cost::Recompute)
+    add(p.add_path("heightfield", "bricks").builtins(procedural_names())
             .doc("Procedural heightfield (triangles: the paper's Fig. 2 ridge, bricks, bumps, vgrooves, gaussian, flat) or an image "
                  "(8/16-bit, float EXR/TIFF; first channel = height in texels before height_scale)"));
-    add(p.add_int("resolution", 128).range(8, 4096).costs(Cost::Recompute).in("texels").doc("Size of a procedural heightfield (texels per side)"));
-    add(p.add_float("height_scale", 1.0).range(0.0, 1e4).costs(Cost::Recompute).doc("Multiplies the heights (procedural heights are in texels)"));
-    add(p.add_float("texel_size", 1.0).range(1e-6, 1e6).log().costs(Cost::Recompute)
+    add(p.add_int("resolution", 128).range(8, 4096).in("texels").doc("Size of a procedural heightfield (texels per side)"));
+    add(p.add_float("height_scale", 1.0).range(0.0, 1e4).doc("Multiplies the heights (procedural heights are in texels)"));
+    add(p.add_float("texel_size", 1.0).range(1e-6, 1e6).log()
             .doc("Image heightfields: the grid spacing in the unit of the image's heights (e.g. 0.1 for heights in mm sampled every 0.1 mm); "
                  "height in texels = value * height_scale / texel_size. Procedural heights are already in texels"));
-    add(p.add_bool("periodic", true).costs(Cost::Recompute).doc("Wrap-around visibility across the borders (tileable fields)"));
-    add(p.add_float("vgroove_angle", 90.0).range(1.0, 179.0).in("degrees").costs(Cost::Recompute).doc("vgrooves: opening angle of the V"));
-    add(p.add_float("rms_slope", 0.5).range(0.0, 10.0).costs(Cost::Recompute).doc("gaussian: RMS slope"));
-    add(p.add_float("correlation", 4.0).range(0.5, 64.0).in("texels").costs(Cost::Recompute).doc("gaussian: correlation length"));
-    add(p.add_int("seed", 1).range(0, 2147483647).costs(Cost::Recompute).doc("gaussian: random seed"));
+    add(p.add_bool("periodic", true).doc("Wrap-around visibility across the borders (tileable fields)"));
+    add(p.add_float("vgroove_angle", 90.0).range(1.0, 179.0).in("degrees").doc("vgrooves: opening angle of the V"));
+    add(p.add_float("rms_slope", 0.5).range(0.0, 10.0).doc("gaussian: RMS slope"));
+    add(p.add_float("correlation", 4.0).range(0.5, 64.0).in("texels").doc("gaussian: correlation length"));
+    add(p.add_int("seed", 1).range(0, 2147483647).doc("gaussian: random seed"));
 }
 
 // [SECTION] Heightfields from materials

@@ -1,4 +1,5 @@
 // Technique microgeom: the timing tables (mesolab bench microgeom, microgeom-brdf, ...).
+#include "core/microgeom/stages.h"
 #include "core/microgeom/goniometer.h"
 #include "core/microgeom/paper.h"
 #include "core/microgeom/technique.h"
@@ -45,10 +46,10 @@ std::vector<BenchTable> MicrogeomTechnique::bench_tables() const {
     BenchColumn memory;
     memory.name = "memory: S_i / ellipses / scattered light";
     memory.info = [mb](const Scene& s, const Evaluation& ev) {
-        auto vis = ev.get<Visibility>("microgeom.visibility", 0);
-        auto ell = ev.get<EllipseMap>("microgeom.ellipses", 0);
-        auto sc = ev.get<LightsScatter>("microgeom.scatter", 0);
-        auto table = ev.get<DirectionalScatter>("microgeom.scatter_directions", 0);
+        auto vis = ev.get(microgeom::stages::visibility, 0);
+        auto ell = ev.get(microgeom::stages::ellipses, 0);
+        auto sc = ev.get(microgeom::stages::scatter, 0);
+        auto table = ev.get(microgeom::stages::scatter_directions, 0);
         (void)s;
         const size_t v = vis ? vis->bytes() : 0, e = ell ? ell->bytes() : 0;
         size_t l = 0;
@@ -57,16 +58,16 @@ std::vector<BenchTable> MicrogeomTechnique::bench_tables() const {
         if (table) l += table->bytes();
         return mb(v) + " / " + mb(e) + " / " + mb(l);
     };
-    BenchColumn vis_col{"S_i precompute", "microgeom.visibility"};
+    BenchColumn vis_col{"S_i precompute", stages::visibility};
     vis_col.gpu_set = "microgeom.device=gpu";
-    BenchColumn scatter_col{"software render (scattering, depth 2, all 100 directions)", "microgeom.scatter"};
+    BenchColumn scatter_col{"software render (scattering, depth 2, all 100 directions)", stages::scatter};
     scatter_col.gpu_set = "microgeom.device=gpu";
-    BenchColumn ellipse_col{"shadow (ellipse) precompute", "microgeom.ellipses"};
+    BenchColumn ellipse_col{"shadow (ellipse) precompute", stages::ellipses};
     ellipse_col.gpu_set = "microgeom.device=gpu";
     t.columns = {vis_col,
                  ellipse_col,
                  scatter_col,
-                 {"frame (texture space, 1 pixel per texel; GPU = hardware render)", "", 0, 0, true, true},
+                 {"frame (texture space, 1 pixel per texel; GPU = hardware render)", {}, 0, 0, true, true},
                  memory};
     t.rows = {{"Triangles 32x32", scene("triangles", 32), table1_ms(paper::kTriangles32)},
               {"Bricks 128x128", scene("bricks", 128), table1_ms(paper::kBricks128)},
@@ -81,13 +82,13 @@ std::vector<BenchTable> MicrogeomTechnique::bench_tables() const {
     BenchColumn brdf_mem;
     brdf_mem.name = "memory";
     brdf_mem.info = [mb](const Scene&, const Evaluation& ev) {
-        auto b = ev.get<SimulatedBrdf>("microgeom.brdf", 0);
-        auto d = ev.get<TriMesh>("microgeom.displaced", 0);
+        auto b = ev.get(microgeom::stages::brdf, 0);
+        auto d = ev.get(microgeom::stages::displaced, 0);
         if (b) return mb(b->bytes()) + " (" + std::to_string(b->images) + " images)";
         if (d) return mb(d->vertex_count() * (3 * sizeof(vec3) + sizeof(vec2)) + d->index.size() * 4) + " (" + std::to_string(d->triangle_count()) + " triangles)";
         return std::string("—");
     };
-    BenchColumn brdf_col{"precompute", "microgeom.brdf"};
+    BenchColumn brdf_col{"precompute", stages::brdf};
     brdf_col.gpu_set = "microgeom.device=gpu";
     lod.columns = {brdf_col, brdf_mem};
     lod.rows = {{"BRDF table 8^4", scene("bricks", 128, {{"microgeom.lod", "brdf"}, {"microgeom.brdf_resolution", "8"}, {"microgeom.shadows", "exact"}}), {}},
@@ -96,7 +97,7 @@ std::vector<BenchTable> MicrogeomTechnique::bench_tables() const {
     BenchTable geo;
     geo.name = "microgeom-geometry";
     geo.title = "Displaced geometry level of detail: Bricks 128x128 tiled 4x4 on a sphere (one vertex per texel), 512x512 frame";
-    geo.columns = {{"displace (re-tessellate + displace)", "microgeom.displaced"}, {"frame 512x512", "", 512, 512, true, true}, brdf_mem};
+    geo.columns = {{"displace (re-tessellate + displace)", stages::displaced}, {"frame 512x512", {}, 512, 512, true, true}, brdf_mem};
     geo.rows = {{"Bricks 128x128 on a sphere", [scene] {
                      Scene s = scene("bricks", 128, {{"microgeom.lod", "geometry"}, {"microgeom.shadows", "exact"}})();
                      apply_set(s, "camera.mode", "orbit");
@@ -106,16 +107,16 @@ std::vector<BenchTable> MicrogeomTechnique::bench_tables() const {
     BenchTable curved_t;
     curved_t.name = "microgeom-curved";
     curved_t.title = "Scattering on a non-planar base: Bricks 128x128 on a sphere, 100 directions (50 above the horizon), depth 2";
-    BenchColumn table_col{"scattering for 50 light directions", "microgeom.scatter_directions"};
+    BenchColumn table_col{"scattering for 50 light directions", stages::scatter_directions};
     table_col.gpu_set = "microgeom.device=gpu";
     BenchColumn table_mem;
     table_mem.name = "memory: scattered light";
     table_mem.info = [mb](const Scene&, const Evaluation& ev) {
-        auto table = ev.get<DirectionalScatter>("microgeom.scatter_directions", 0);
+        auto table = ev.get(microgeom::stages::scatter_directions, 0);
         if (!table) return std::string("—");
         return mb(table->bytes()) + " (" + std::to_string(table->count) + " directions)";
     };
-    curved_t.columns = {table_col, {"frame 512x512", "", 512, 512, true, true}, table_mem};
+    curved_t.columns = {table_col, {"frame 512x512", {}, 512, 512, true, true}, table_mem};
     curved_t.rows = {{"Bricks 128x128 on a sphere", [scene] {
                           Scene s = scene("bricks", 128, {{"microgeom.shadows", "exact"}})();
                           apply_set(s, "camera.mode", "orbit");

@@ -1,6 +1,7 @@
 // Technique microgeom: the BTF export (mesolab export btf; see btf.h).
 #include "core/error.h"
 #include "core/image.h"
+#include "core/microgeom/stages.h"
 #include "core/microgeom/btf.h"
 #include "core/microgeom/goniometer.h"
 #include "core/microgeom/technique.h"
@@ -29,7 +30,7 @@ std::vector<ExportDecl> MicrogeomTechnique::exports() const {
     btf.name = "btf";
     btf.help = "Light field / BTF: a view x light grid of texture-space heightfield images (shadows, scattering, masking) as one EXR mosaic";
     btf.options_help = "grid=THETAxPHI (default 4x8; both lights and views), lights=THETAxPHI, views=THETAxPHI";
-    btf.stages = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "microgeom.ellipses_curved", "microgeom.ellipses"};
+    btf.stages = {stages::heightfield, stages::directions, stages::visibility, stages::importance, stages::ellipses_curved, stages::ellipses};
     btf.run = [](const Scene& s, const Evaluation& ev, int object, const std::map<std::string, std::string>& options, const std::string& path,
                  const ProgressFn& progress) {
         ivec2 lg(4, 8), vg(4, 8);

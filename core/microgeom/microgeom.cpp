@@ -1,6 +1,7 @@
 // Technique microgeom: its parameters, effect and AOVs, the stages a frame needs, and registration
 // (see microgeom.h; the stages, shading, export and timing tables are in the files technique.h lists).
 #include "core/heightfield/params.h"
+#include "core/microgeom/stages.h"
 #include "core/microgeom/technique.h"
 
 namespace mesolab::microgeom {
@@ -9,49 +10,49 @@ namespace mesolab::microgeom {
 MicrogeomTechnique::MicrogeomTechnique() : Technique("microgeom", "Micro-geometry (Heidrich et al. 2000)") {
     auto& p = params_;
     declare_heightfield_params(p);
-    p.add_color("albedo", {0.8, 0.8, 0.8}).costs(Cost::Recompute)
+    p.add_color("albedo", {0.8, 0.8, 0.8})
         .doc("Albedo of the micro-surface (Lambert); procedural fields modulate it (triangles: red/white faces, bricks: brick and mortar)");
-    p.add_path("albedo_map", "").costs(Cost::Recompute)
+    p.add_path("albedo_map", "")
         .doc("Per-texel albedo image (8/16-bit sRGB or float linear), resampled bilinearly (wrapping) onto the heightfield's texels and "
              "multiplied by albedo; empty: the procedural rule");
-    p.add_int("directions", 100).range(16, 1024).costs(Cost::Recompute).more_accurate(Accuracy::Higher, int64_t(1024))
+    p.add_int("directions", 100).range(16, 1024).more_accurate(Accuracy::Higher, int64_t(1024))
         .doc("N: directions over the whole sphere for the visibility textures S_i (and their triangulation)");
-    p.add_int("depth", 2).range(0, 8).costs(Cost::Recompute).more_accurate(Accuracy::Higher, int64_t(8))
+    p.add_int("depth", 2).range(0, 8).more_accurate(Accuracy::Higher, int64_t(8))
         .doc("K: bounces of light scattered inside the heightfield (direct light is added at every scattering point)");
-    p.add_enum("sampling", {"all", "random"}, "all").costs(Cost::Recompute)
+    p.add_enum("sampling", {"all", "random"}, "all")
         .doc("Directions gathered per bounce: all N (deterministic quadrature) or a random subset (dependent tests)");
-    p.add_int("paths", 64).range(1, 4096).costs(Cost::Recompute).used_when("sampling", {"random"}).doc("Random directions per bounce");
-    p.add_int("scatter_seed", 1).range(0, 2147483647).costs(Cost::Recompute).used_when("sampling", {"random"}).doc("Seed of the random subsets");
-    p.add_float("curvature_u", 0.0).range(-360.0, 360.0).in("degrees").costs(Cost::Recompute)
+    p.add_int("paths", 64).range(1, 4096).used_when("sampling", {"random"}).doc("Random directions per bounce");
+    p.add_int("scatter_seed", 1).range(0, 2147483647).used_when("sampling", {"random"}).doc("Seed of the random subsets");
+    p.add_float("curvature_u", 0.0).range(-360.0, 360.0).in("degrees")
         .doc("Curvature of the base geometry along u, as the total bend across the field (+ convex, - concave): bends the "
              "scattering directions and reweights paths by the triangle-fan area importance (§5); S_i are not recomputed");
-    p.add_float("curvature_v", 0.0).range(-360.0, 360.0).in("degrees").costs(Cost::Recompute).doc("Curvature along v (see curvature_u)");
-    p.add_enum("device", {"cpu", "gpu"}, "cpu").costs(Cost::Recompute)
+    p.add_float("curvature_v", 0.0).range(-360.0, 360.0).in("degrees").doc("Curvature along v (see curvature_u)");
+    p.add_enum("device", {"cpu", "gpu"}, "cpu")
         .doc("Where the precomputations run: cpu (all cores) or gpu (OpenGL compute shaders on a context of their own): S_i, the scattering "
              "bounces, the curvature importance, the ellipse fits and the goniometer's and BTF's light images; without OpenGL a stage runs on "
              "the CPU and says so. Both agree to float rounding (tests/microgeom/*_gpu_test.cpp)");
-    p.add_enum("shadows", {"none", "exact", "ellipse"}, "exact").costs(Cost::Recompute)
+    p.add_enum("shadows", {"none", "exact", "ellipse"}, "exact")
         .doc("none; exact: the visibility of the 3 directions of the spherical triangle containing the light, interpolated; "
              "ellipse: the paper's per-texel ellipse fitted to the unshadowed directions (§4)");
-    p.add_float("ellipse_bend", 90.0).range(1.0, 360.0).in("degrees").costs(Cost::Recompute).used_when("shadows", {"ellipse"})
+    p.add_float("ellipse_bend", 90.0).range(1.0, 360.0).in("degrees").used_when("shadows", {"ellipse"})
         .doc("Curved bases with ellipse shadows (§5): ellipses are fitted once at 5 curvatures (flat, +-this bend along u, +-along v) and "
              "interpolated linearly for the current curvature, so moving the curvature sliders never refits; curvatures beyond it are clamped");
-    p.add_enum("brdf", {"lambert", "blinn-phong"}, "lambert").costs(Cost::Recompute).doc("Micro-BRDF seen by the viewer for direct light (recomputes only the simulated BRDF of lod = brdf)");
-    p.add_color("ks", {0.04, 0.04, 0.04}).costs(Cost::Recompute).used_when("brdf", {"blinn-phong"}).doc("Specular albedo of the normalised Blinn-Phong lobe");
-    p.add_float("shininess", 32.0).range(1.0, 10000.0).log().costs(Cost::Recompute).used_when("brdf", {"blinn-phong"}).doc("Blinn-Phong exponent");
-    p.add_float("tiling", 4.0).range(0.01, 1e4).log().costs(Cost::Recompute).doc("Repeats of the heightfield across the object's (u,v) (texture mode: always 1:1); recomputes only the displaced geometry of lod = geometry");
-    p.add_enum("lod", {"geometry", "bump", "brdf"}, "bump").costs(Cost::Recompute)
+    p.add_enum("brdf", {"lambert", "blinn-phong"}, "lambert").doc("Micro-BRDF seen by the viewer for direct light (recomputes only the simulated BRDF of lod = brdf)");
+    p.add_color("ks", {0.04, 0.04, 0.04}).used_when("brdf", {"blinn-phong"}).doc("Specular albedo of the normalised Blinn-Phong lobe");
+    p.add_float("shininess", 32.0).range(1.0, 10000.0).log().used_when("brdf", {"blinn-phong"}).doc("Blinn-Phong exponent");
+    p.add_float("tiling", 4.0).range(0.01, 1e4).log().doc("Repeats of the heightfield across the object's (u,v) (texture mode: always 1:1); recomputes only the displaced geometry of lod = geometry");
+    p.add_enum("lod", {"geometry", "bump", "brdf"}, "bump")
         .doc("Level of detail: geometry (the base re-tessellated at one vertex per texel and displaced by the heights; parallax and "
              "silhouettes), bump (bump map with precomputed visibility), brdf (smooth surface with the heightfield's simulated BRDF "
              "from the virtual goniometer, §6)");
-    p.add_enum("brdf_fit", {"table", "sh"}, "table").costs(Cost::Recompute).used_when("lod", {"brdf"})
+    p.add_enum("brdf_fit", {"table", "sh"}, "table").used_when("lod", {"brdf"})
         .doc("Simulated BRDF: a dense table of goniometer images (resolution^4), or a few hundred random images projected into "
              "spherical harmonics (the paper's suggestion), tabulated for rendering");
-    p.add_int("brdf_resolution", 8).range(2, 32).costs(Cost::Recompute).used_when("lod", {"brdf"}).more_accurate(Accuracy::Higher, int64_t(16))
+    p.add_int("brdf_resolution", 8).range(2, 32).used_when("lod", {"brdf"}).more_accurate(Accuracy::Higher, int64_t(16))
         .doc("Table nodes per angle (theta 0..90 degrees, phi 0..360) for the light and the view: the paper's 16^4 is 16");
-    p.add_int("brdf_samples", 300).range(1, 100000).costs(Cost::Recompute).used_when("brdf_fit", {"sh"}).more_accurate(Accuracy::Higher, int64_t(4000))
+    p.add_int("brdf_samples", 300).range(1, 100000).used_when("brdf_fit", {"sh"}).more_accurate(Accuracy::Higher, int64_t(4000))
         .doc("SH fit: random (light, view) goniometer images");
-    p.add_int("sh_bands", 3).range(1, 8).costs(Cost::Recompute).used_when("brdf_fit", {"sh"})
+    p.add_int("sh_bands", 3).range(1, 8).used_when("brdf_fit", {"sh"})
         .doc("SH fit: bands per direction (bands^2 coefficients for the light times bands^2 for the view)");
 
     effects_.push_back({"indirect", true, "Light scattered inside micro-geometry (microgeom.depth bounces)"});
@@ -62,18 +63,18 @@ MicrogeomTechnique::MicrogeomTechnique() : Technique("microgeom", "Micro-geometr
 }
 
 // [SECTION] What a frame needs
-std::vector<std::string> MicrogeomTechnique::frame_stages() const {
-    return {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "microgeom.ellipses_curved", "microgeom.ellipses",
-            "microgeom.scatter_env", "microgeom.scatter", "microgeom.scatter_directions", "microgeom.displaced", "microgeom.brdf"};
+std::vector<StageName> MicrogeomTechnique::frame_stages() const {
+    return {stages::heightfield, stages::directions, stages::visibility, stages::importance, stages::ellipses_curved, stages::ellipses,
+            stages::scatter_env, stages::scatter, stages::scatter_directions, stages::displaced, stages::brdf};
 }
 
 std::shared_ptr<const TriMesh> MicrogeomTechnique::object_mesh(const Scene&, const Evaluation& ev, int object) const {
-    return ev.get<TriMesh>("microgeom.displaced", object);
+    return ev.get(microgeom::stages::displaced, object);
 }
 
 std::optional<ivec2> MicrogeomTechnique::texture_size(const Scene& s, const Evaluation& ev) const {
     for (size_t i = 0; i < s.objects.size(); ++i)
-        if (const auto h = ev.get<Heightfield>("microgeom.heightfield", int(i))) return ivec2(h->width, h->height);
+        if (const auto h = ev.get(microgeom::stages::heightfield, int(i))) return ivec2(h->width, h->height);
     return std::nullopt;
 }
 }  // namespace mesolab::microgeom

@@ -1,4 +1,5 @@
 // Technique microgeom: CPU shading of every level of detail (see microgeom.h).
+#include "core/microgeom/stages.h"
 #include "core/microgeom/goniometer.h"
 #include "core/microgeom/technique.h"
 #include "core/render.h"
@@ -26,15 +27,15 @@ Material Material::from(const ParamTable& m) {
 ObjectFrame ObjectFrame::from(const Scene& s, const Evaluation& ev, int object) {
     ObjectFrame f;
     f.material = Material::from(s.objects.at(size_t(object)).material);
-    f.hf = ev.get<Heightfield>("microgeom.heightfield", object);
-    f.dirs = ev.get<DirectionSet>("microgeom.directions", object);
-    f.vis = ev.get<Visibility>("microgeom.visibility", object);
-    f.env = ev.get<LightScatter>("microgeom.scatter_env", object);
-    f.lights = ev.get<LightsScatter>("microgeom.scatter", object);
-    f.table = ev.get<DirectionalScatter>("microgeom.scatter_directions", object);
-    f.imp = ev.get<Importance>("microgeom.importance", object);
-    f.ell = ev.get<EllipseMap>("microgeom.ellipses", object);
-    f.brdf = ev.get<SimulatedBrdf>("microgeom.brdf", object);
+    f.hf = ev.get(microgeom::stages::heightfield, object);
+    f.dirs = ev.get(microgeom::stages::directions, object);
+    f.vis = ev.get(microgeom::stages::visibility, object);
+    f.env = ev.get(microgeom::stages::scatter_env, object);
+    f.lights = ev.get(microgeom::stages::scatter, object);
+    f.table = ev.get(microgeom::stages::scatter_directions, object);
+    f.imp = ev.get(microgeom::stages::importance, object);
+    f.ell = ev.get(microgeom::stages::ellipses, object);
+    f.brdf = ev.get(microgeom::stages::brdf, object);
     if (!f.hf || !f.dirs || !f.vis) throw std::logic_error("microgeom: the frame's stages were not evaluated for object " + std::to_string(object));
     return f;
 }

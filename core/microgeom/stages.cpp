@@ -5,6 +5,7 @@
 #include "core/microgeom/goniometer.h"
 #include "core/microgeom/lod.h"
 #include "core/microgeom/paper.h"
+#include "core/microgeom/stages.h"
 #include "core/microgeom/technique.h"
 #include "core/scene_stages.h"
 
@@ -66,9 +67,9 @@ bool wants_light_scatter(const SceneObject& o) { return o.material.get_int("dept
 // The results of the object's upstream stages most stages read (null where one did not run).
 struct FieldInputs {
     explicit FieldInputs(const StageContext& ctx)
-        : hf(ctx.input<Heightfield>("microgeom.heightfield")), dirs(ctx.input<DirectionSet>("microgeom.directions")),
-          vis(ctx.input<Visibility>("microgeom.visibility")), imp(ctx.input<Importance>("microgeom.importance")),
-          ell(ctx.input<EllipseMap>("microgeom.ellipses")) {}
+        : hf(ctx.input(stages::heightfield)), dirs(ctx.input(stages::directions)),
+          vis(ctx.input(stages::visibility)), imp(ctx.input(stages::importance)),
+          ell(ctx.input(stages::ellipses)) {}
     std::shared_ptr<const Heightfield> hf;
     std::shared_ptr<const DirectionSet> dirs;
     std::shared_ptr<const Visibility> vis;
@@ -123,7 +124,7 @@ LightScatter scatter_env(StageContext& ctx) {
     Environment env;
     env.color = ctx.scene.env.get_vec3("color");
     env.intensity = float(ctx.scene.env.get_float("intensity"));
-    env.map = ctx.input<Image>("env.map");
+    env.map = ctx.input(mesolab::stages::env_map);
     LightScatter ls;
     ScatterSettings st = scatter_settings(ctx.material());
     st.importance = in.imp.get();
@@ -175,8 +176,7 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
         d.technique = "microgeom";
         return d;
     };
-    g.add(object({.name = "microgeom.heightfield",
-                  .help = "Build or read the heightfield",
+    g.add(stages::heightfield, object({.help = "Build or read the heightfield",
                   .params = keys(kFieldKeys),
                   .memory = [](const StageContext& ctx) {
                       const ParamTable& m = ctx.material();
@@ -190,16 +190,14 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
                       Heightfield hf = heightfield_from_material(ctx.scene, m);
                       const std::string albedo_map = m.get_string("albedo_map");
                       if (!albedo_map.empty()) apply_albedo_map(hf, ctx.scene.resolve(albedo_map), m.get_vec3("albedo"), "microgeom.albedo_map");
-                      return stage_result(std::move(hf));
+                      return stage_result(stages::heightfield, std::move(hf));
                   }}));
-    g.add(object({.name = "microgeom.directions",
-                  .help = "N directions over the sphere and their spherical triangulation",
+    g.add(stages::directions, object({.help = "N directions over the sphere and their spherical triangulation",
                   .params = {"microgeom.directions"},
-                  .run = [](StageContext& ctx) { return stage_result(make_direction_set(int(ctx.material().get_int("directions")))); }}));
-    g.add(object({.name = "microgeom.visibility",
-                  .help = "Visibility textures S_i: first hit for every direction and texel (on microgeom.device)",
+                  .run = [](StageContext& ctx) { return stage_result(stages::directions, make_direction_set(int(ctx.material().get_int("directions")))); }}));
+    g.add(stages::visibility, object({.help = "Visibility textures S_i: first hit for every direction and texel (on microgeom.device)",
                   .params = keys({"device"}),
-                  .inputs = {"microgeom.heightfield", "microgeom.directions"},
+                  .inputs = {stages::heightfield, stages::directions},
                   .paper = paper::kBricks128.visibility,
                   .memory = [](const StageContext& ctx) {
                       const FieldInputs in(ctx);
@@ -209,7 +207,7 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
                   },
                   .run = [](StageContext& ctx) {
                       const FieldInputs in(ctx);
-                      return stage_result(gpu_or_cpu(
+                      return stage_result(stages::visibility, gpu_or_cpu(
                           ctx, want_gpu(ctx), "S_i",
                           [&] {
                               require_gpu(bool(gpu_compute()));
@@ -218,10 +216,9 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
                           [&] { return compute_visibility(*in.hf, *in.dirs, [&](double f) { ctx.progress(f); }); }));
                   }}));
     // Curved base: fan-area importance of the bent directions (never recomputes S_i).
-    g.add(object({.name = "microgeom.importance",
-                  .help = "Bend the directions by the base curvature and weight them by the relative triangle-fan area (§5)",
+    g.add(stages::importance, object({.help = "Bend the directions by the base curvature and weight them by the relative triangle-fan area (§5)",
                   .params = with(keys(kCurvatureKeys), {"microgeom.device"}),
-                  .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility"},
+                  .inputs = {stages::heightfield, stages::directions, stages::visibility},
                   .applies = [](const Scene&, const SceneObject& o) { return curved(o); },
                   .when_text = "microgeom.curvature_u or curvature_v is not 0",
                   .memory = [](const StageContext& ctx) {
@@ -250,21 +247,20 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
                                         imp.folded_count, in.texels(), 100.0 * double(imp.folded_count) / double(in.texels()));
                           ctx.warn(msg);
                       }
-                      return stage_result(std::move(imp));
+                      return stage_result(stages::importance, std::move(imp));
                   }}));
     // Per-texel ellipses (§4), only when they are the selected shadow method; on a curved base
     // fitted once at 5 curvatures (§5) and interpolated for the current one.
-    g.add(object({.name = "microgeom.ellipses_curved",
-                  .help = "Fit the per-texel ellipses at 5 base curvatures: flat, +-microgeom.ellipse_bend along u and along v (§5)",
+    g.add(stages::ellipses_curved, object({.help = "Fit the per-texel ellipses at 5 base curvatures: flat, +-microgeom.ellipse_bend along u and along v (§5)",
                   .params = {"microgeom.ellipse_bend", "microgeom.shadows", "microgeom.device"},
-                  .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility"},
+                  .inputs = {stages::heightfield, stages::directions, stages::visibility},
                   .applies = [](const Scene&, const SceneObject& o) { return ellipse_shadows(o) && curved(o); },
                   .when_text = "microgeom.shadows is ellipse on a curved base",
                   .run = [](StageContext& ctx) {
                       const FieldInputs in(ctx);
                       const float bend = float(ctx.material().get_float("ellipse_bend"));
                       const auto progress = [&](double f) { ctx.progress(f); };
-                      return stage_result(gpu_or_cpu(
+                      return stage_result(stages::ellipses_curved, gpu_or_cpu(
                           ctx, want_gpu(ctx), "the ellipses",
                           [&] {
                               require_gpu(bool(gpu_compute().ellipses));
@@ -274,26 +270,25 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
                           },
                           [&] { return fit_curved_ellipses(*in.hf, *in.dirs, *in.vis, bend, progress); }));
                   }}));
-    g.add(object({.name = "microgeom.ellipses",
-                  .help = "Fit a per-texel ellipse to the projections of the unshadowed directions (covariance start, optimised); on a curved base "
+    g.add(stages::ellipses, object({.help = "Fit a per-texel ellipse to the projections of the unshadowed directions (covariance start, optimised); on a curved base "
                           "interpolate the 5 fits of microgeom.ellipses_curved",
                   .params = with(keys(kCurvatureKeys), {"microgeom.device"}),
-                  .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.ellipses_curved"},
+                  .inputs = {stages::heightfield, stages::directions, stages::visibility, stages::ellipses_curved},
                   .applies = [](const Scene&, const SceneObject& o) { return ellipse_shadows(o); },
                   .when_text = "microgeom.shadows is ellipse",
                   .paper = paper::kBricks128.shadows,
                   .run = [](StageContext& ctx) {
                       const FieldInputs in(ctx);
                       const ParamTable& m = ctx.material();
-                      if (const auto c = ctx.input<CurvedEllipses>("microgeom.ellipses_curved")) {
+                      if (const auto c = ctx.input(stages::ellipses_curved)) {
                           const float cu = float(m.get_float("curvature_u")), cv = float(m.get_float("curvature_v"));
                           if (std::fabs(cu) > c->bend_deg || std::fabs(cv) > c->bend_deg)
                               ctx.warn("the curvature exceeds microgeom.ellipse_bend (" + std::to_string(int(c->bend_deg)) +
                                        " degrees): the ellipses are those of the largest fitted bend; raise ellipse_bend");
-                          return stage_result(interpolate_ellipses(*c, Bending::from_degrees(cu, cv, in.hf->width, in.hf->height)));
+                          return stage_result(stages::ellipses, interpolate_ellipses(*c, Bending::from_degrees(cu, cv, in.hf->width, in.hf->height)));
                       }
                       const auto progress = [&](double f) { ctx.progress(f); };
-                      return stage_result(gpu_or_cpu(
+                      return stage_result(stages::ellipses, gpu_or_cpu(
                           ctx, want_gpu(ctx), "the ellipses",
                           [&] {
                               require_gpu(bool(gpu_compute().ellipses));
@@ -302,15 +297,14 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
                           [&] { return fit_ellipses(*in.hf, *in.dirs, *in.vis, progress); }));
                   }}));
     // Geometry level of detail: the base re-tessellated at the texel rate and displaced.
-    g.add(object({.name = "microgeom.displaced",
-                  .help = "Re-tessellate the base surface at one vertex per texel and displace it by the heights (lod = geometry)",
+    g.add(stages::displaced, object({.help = "Re-tessellate the base surface at one vertex per texel and displace it by the heights (lod = geometry)",
                   .params = {"microgeom.lod", "microgeom.tiling", "geometry.type", "geometry.resolution", "geometry.minor_ratio"},
-                  .inputs = {"microgeom.heightfield"},
+                  .inputs = {stages::heightfield},
                   .applies = [](const Scene&, const SceneObject& o) { return lod(o) == "geometry"; },
                   .when_text = "microgeom.lod is geometry",
                   .memory = [](const StageContext& ctx) {
                       const SceneObject& o = ctx.obj();
-                      const auto hf = ctx.input<Heightfield>("microgeom.heightfield");
+                      const auto hf = ctx.input(stages::heightfield);
                       const std::string type = o.geometry.get_string("type");
                       if (type == "mesh") return MemoryEstimate{};
                       const double n = double(displacement_resolution(type, int(o.geometry.get_int("resolution")), hf->width, hf->height,
@@ -321,7 +315,7 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
                   },
                   .run = [](StageContext& ctx) -> std::any {
                       const SceneObject& o = ctx.obj();
-                      const auto h = ctx.input<Heightfield>("microgeom.heightfield");
+                      const auto h = ctx.input(stages::heightfield);
                       const std::string type = o.geometry.get_string("type");
                       if (type == "mesh") {
                           ctx.warn("microgeom.lod = geometry needs a procedural base (plane, sphere, cylinder, torus, teapot); the mesh is drawn undisplaced (bump level)");
@@ -335,13 +329,12 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
                                    " segments, fewer than one vertex per texel: lower microgeom.tiling or the heightfield resolution");
                       if (type == "teapot")
                           ctx.warn("the teapot's 32 patches are displaced independently (each has its own cell of the uv atlas), so cracks can open along the patch borders");
-                      return stage_result(displace(make_primitive(primitive_named(type), res, float(o.geometry.get_float("minor_ratio"))), *h, tiling));
+                      return stage_result(stages::displaced, displace(make_primitive(primitive_named(type), res, float(o.geometry.get_float("minor_ratio"))), *h, tiling));
                   }}));
     // BRDF level of detail: the virtual goniometer (§6).
-    g.add(object({.name = "microgeom.brdf",
-                  .help = "Simulate the heightfield's BRDF with the virtual goniometer: average radiance of texture-space images with masking (lod = brdf)",
+    g.add(stages::brdf, object({.help = "Simulate the heightfield's BRDF with the virtual goniometer: average radiance of texture-space images with masking (lod = brdf)",
                   .params = with(with(keys(kScatterKeys), keys(kBrdfKeys)), {"microgeom.device", "effects.indirect", "effects.environment"}),
-                  .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "microgeom.ellipses"},
+                  .inputs = {stages::heightfield, stages::directions, stages::visibility, stages::importance, stages::ellipses},
                   .applies = [](const Scene&, const SceneObject& o) { return lod(o) == "brdf"; },
                   .when_text = "microgeom.lod is brdf",
                   .paper = paper::kBrdf16,
@@ -369,29 +362,27 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
                       gs.samples = int(m.get_int("brdf_samples"));
                       gs.sh_bands = int(m.get_int("sh_bands"));
                       gs.seed = uint32_t(m.get_int("scatter_seed"));
-                      return stage_result(with_light_solver([&](std::string w) { ctx.warn(std::move(w)); }, ctx.obj(), *in.hf, *in.dirs, *in.vis, gs.scatter,
+                      return stage_result(stages::brdf, with_light_solver([&](std::string w) { ctx.warn(std::move(w)); }, ctx.obj(), *in.hf, *in.dirs, *in.vis, gs.scatter,
                                                             [&](LightSolver* solver) {
                                                                 gs.lights = solver;
                                                                 return simulate_brdf(*in.hf, *in.dirs, *in.vis, gs, [&](double f) { ctx.progress(f); });
                                                             }));
                   }}));
     // Environment light scattered: independent of the light.
-    g.add(object({.name = "microgeom.scatter_env",
-                  .help = "Environment light gathered where S_i has no hit, scattered microgeom.depth times",
+    g.add(stages::scatter_env, object({.help = "Environment light gathered where S_i has no hit, scattered microgeom.depth times",
                   .params = with(with(keys(kScatterKeys), keys({"device"})), {"env.*"}),
-                  .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "env.map"},
+                  .inputs = {stages::heightfield, stages::directions, stages::visibility, stages::importance, mesolab::stages::env_map},
                   .effects = {"environment"},
                   .applies = [](const Scene&, const SceneObject& o) { return lod(o) != "brdf"; },
                   .when_text = "microgeom.lod is geometry or bump",
                   .memory = [](const StageContext& ctx) {
                       return memory_of(scatter_working_bytes(FieldInputs(ctx)), "one scattering solution", {"microgeom.resolution"});
                   },
-                  .run = [](StageContext& ctx) { return stage_result(scatter_env(ctx)); }}));
+                  .run = [](StageContext& ctx) { return stage_result(stages::scatter_env, scatter_env(ctx)); }}));
     // Every light scattered (their direct part is shaded per pixel): planar bases.
-    g.add(object({.name = "microgeom.scatter",
-                  .help = "Each light scattered inside the heightfield (dependent tests), one solution per light (planar bases)",
+    g.add(stages::scatter, object({.help = "Each light scattered inside the heightfield (dependent tests), one solution per light (planar bases)",
                   .params = with(with(keys(kScatterKeys), keys({"device"})), {"light.*", "geometry.type"}),
-                  .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "microgeom.ellipses"},
+                  .inputs = {stages::heightfield, stages::directions, stages::visibility, stages::importance, stages::ellipses},
                   .effects = {"indirect"},
                   .applies = [](const Scene& s, const SceneObject& o) { return !s.lights.empty() && wants_light_scatter(o) && !direction_table(s, o); },
                   .when_text = "the scene has a light, microgeom.depth > 0, microgeom.lod is not brdf, the base is a plane and every light is directional",
@@ -400,14 +391,13 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
                       return memory_of(scatter_working_bytes(FieldInputs(ctx)) * double(std::max<size_t>(1, ctx.scene.lights.size())),
                                        "one scattering solution per light", {"microgeom.resolution"});
                   },
-                  .run = [](StageContext& ctx) { return stage_result(scatter_lights(ctx)); }}));
+                  .run = [](StageContext& ctx) { return stage_result(stages::scatter, scatter_lights(ctx)); }}));
     // Non-planar bases: the light-driven scattering for every set direction above the horizon,
     // blended per pixel for each light's tangent-space direction; never depends on the light.
-    g.add(object({.name = "microgeom.scatter_directions",
-                  .help = "Light scattered inside the heightfield for each of the ~N/2 set directions above the horizon, at unit irradiance (non-planar "
+    g.add(stages::scatter_directions, object({.help = "Light scattered inside the heightfield for each of the ~N/2 set directions above the horizon, at unit irradiance (non-planar "
                           "bases; blended per pixel over the light's spherical triangle)",
                   .params = with(with(keys(kScatterKeys), keys({"device"})), {"geometry.type"}),
-                  .inputs = {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility", "microgeom.importance", "microgeom.ellipses"},
+                  .inputs = {stages::heightfield, stages::directions, stages::visibility, stages::importance, stages::ellipses},
                   .effects = {"indirect"},
                   // Reads the lights' types only (directional or point), through direction_table.
                   .applies = [](const Scene& s, const SceneObject& o) { return !s.lights.empty() && wants_light_scatter(o) && direction_table(s, o); },
@@ -419,6 +409,6 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
                                        texels_text(*in.hf) + " x ~" + std::to_string(int(M)) + " directions above the horizon x 12 bytes",
                                        {"microgeom.resolution", "microgeom.directions"});
                   },
-                  .run = [](StageContext& ctx) { return stage_result(scatter_directions_stage(ctx)); }}));
+                  .run = [](StageContext& ctx) { return stage_result(stages::scatter_directions, scatter_directions_stage(ctx)); }}));
 }
 }  // namespace mesolab::microgeom

@@ -26,7 +26,7 @@ class MicrogeomTechnique final : public Technique {
 public:
     MicrogeomTechnique();
     void declare_stages(StageGraph& g) const override;
-    std::vector<std::string> frame_stages() const override;
+    std::vector<StageName> frame_stages() const override;
     std::shared_ptr<const TriMesh> object_mesh(const Scene&, const Evaluation& ev, int object) const override;
     std::optional<ivec2> texture_size(const Scene& s, const Evaluation& ev) const override;
     void shade_cpu(const ShadeContext& ctx) const override;

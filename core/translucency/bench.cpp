@@ -42,17 +42,17 @@ std::vector<BenchTable> translucency_bench_tables() {
     t.paper_machine = paper::kMachine;
     BenchColumn vertices{"vertices"}, factors{"form factors"}, memory{"memory: factors / kernels / atlas fill"};
     vertices.info = [](const Scene&, const Evaluation& ev) {
-        const auto m = ev.get<PreparedMesh>("translucency.mesh", 0);
+        const auto m = ev.get(stages::mesh, 0);
         return m ? std::to_string(m->vertex_count()) : std::string("—");
     };
     factors.info = [](const Scene&, const Evaluation& ev) {
-        const auto F = ev.get<VertexFactors>("translucency.factors", 0);
+        const auto F = ev.get(stages::factors, 0);
         return F ? std::to_string(F->count()) : std::string("—");
     };
     memory.info = [](const Scene&, const Evaluation& ev) {
-        const auto F = ev.get<VertexFactors>("translucency.factors", 0);
-        const auto K = ev.get<LocalKernels>("translucency.kernels", 0);
-        const auto A = ev.get<AtlasStage>("translucency.atlas", 0);
+        const auto F = ev.get(stages::factors, 0);
+        const auto K = ev.get(stages::kernels, 0);
+        const auto A = ev.get(stages::atlas, 0);
         char fill[32];
         std::snprintf(fill, sizeof fill, "%.1f%%", A ? 100.0 * A->atlas.fill_ratio : 0.0);
         return mb(F ? double(F->bytes()) : 0.0) + " / " + mb(K ? double(K->bytes()) : 0.0) + " / " + fill;
@@ -60,12 +60,12 @@ std::vector<BenchTable> translucency_bench_tables() {
     t.columns = {vertices,
                  factors,
                  memory,
-                 {"simplify (decimater)", "translucency.mesh"},
-                 {"atlas", "translucency.atlas"},
-                 {"kernels", "translucency.kernels"},
-                 {"form factors (precompute)", "translucency.factors"},
-                 {"blending fit", "translucency.blend"},
-                 {"frame 512x512", "", 512, 512, true, true}};
+                 {"simplify (decimater)", stages::mesh},
+                 {"atlas", stages::atlas},
+                 {"kernels", stages::kernels},
+                 {"form factors (precompute)", stages::factors},
+                 {"blending fit", stages::blend},
+                 {"frame 512x512", {}, 512, 512, true, true}};
     // Columns with a paper figure: kernels (1-2 min: the upper end), factors (2-8 min), the frame.
     auto row = [&](const paper::Table1Row& p, const char* ours) {
         BenchRow r;
@@ -74,7 +74,7 @@ std::vector<BenchTable> translucency_bench_tables() {
         const int n = p.vertices;
         r.scene = [=] { return table_scene(mesh, n, r.name); };
         r.paper_ms = {std::nullopt, std::nullopt, std::nullopt, std::nullopt, std::nullopt, paper::kKernelsMaxMs, paper::kFactorsMaxMs, std::nullopt, p.total_ms};
-        r.paper_step_ms = {{"translucency.illumination", p.illumination_ms}, {"translucency.local", p.local_ms}, {"translucency.global", p.global_ms}};
+        r.paper_step_ms = {{std::string(steps::illumination.name), p.illumination_ms}, {std::string(steps::local.name), p.local_ms}, {std::string(steps::global.name), p.global_ms}};
         return r;
     };
     t.rows = {row(paper::kTable1[0], "bunny"), row(paper::kTable1[2], "bunny"), row(paper::kTable1[3], "bunny")};

@@ -17,33 +17,43 @@
 namespace mesolab::translucency {
 
 // [SECTION] Settings
-Settings Settings::from(const SceneObject& o) {
+Settings Settings::from(const SceneObject& o, unsigned parts) {
     const ParamTable& t = o.material;
     Settings s;
-    s.material = t.get_string("material");
-    if (s.material == "custom") {
-        const vec3 ss = t.get_vec3("sigma_s"), sa = t.get_vec3("sigma_a");
-        s.medium = Medium{dvec3(ss), dvec3(sa), t.get_float("eta")};
-    } else {
-        s.medium = measured_material(s.material).medium;
+    if (parts & Medium_) {
+        s.material = t.get_string("material");
+        if (s.material == "custom") {
+            const vec3 ss = t.get_vec3("sigma_s"), sa = t.get_vec3("sigma_a");
+            s.medium = Medium{dvec3(ss), dvec3(sa), t.get_float("eta")};
+        } else {
+            s.medium = measured_material(s.material).medium;
+        }
+        validate(s.medium);
     }
-    validate(s.medium);
-    s.mm_per_unit = t.get_float("mm_per_unit") * o.geometry.get_float("scale");
-    s.vertices = int(t.get_int("vertices"));
-    s.atlas_size = int(t.get_int("atlas_size"));
-    s.kernel = int(t.get_int("kernel"));
-    s.chunk_angle = float(t.get_float("chunk_angle"));
-    s.threshold = float(t.get_float("threshold"));
-    s.blend = t.get_bool("blend");
-    s.shadows = t.get_bool("shadows");
-    s.shadow_map = int(t.get_int("shadow_map"));
-    s.compare = t.get_bool("compare");
-    const std::string& r = t.get_string("response");
-    s.response = r == "local" ? Response::Local : r == "global" ? Response::Global : r == "reference" ? Response::Reference : Response::Both;
-    s.albedo_map = t.get_string("albedo_map");
-    s.veins = float(t.get_float("veins"));
-    s.vein_color = t.get_vec3("vein_color");
-    s.vein_scale = t.get_float("vein_scale");
+    if (parts & Scale) s.mm_per_unit = t.get_float("mm_per_unit") * o.geometry.get_float("scale");
+    if (parts & Mesh) s.vertices = int(t.get_int("vertices"));
+    if (parts & AtlasPart) {
+        s.atlas_size = int(t.get_int("atlas_size"));
+        s.kernel = int(t.get_int("kernel"));
+        s.chunk_angle = float(t.get_float("chunk_angle"));
+    }
+    if (parts & Factors) {
+        s.threshold = float(t.get_float("threshold"));
+        s.blend = t.get_bool("blend");
+    }
+    if (parts & Frame) {
+        s.shadows = t.get_bool("shadows");
+        s.shadow_map = int(t.get_int("shadow_map"));
+        s.compare = t.get_bool("compare");
+        const std::string& r = t.get_string("response");
+        s.response = r == "local" ? Response::Local : r == "global" ? Response::Global : r == "reference" ? Response::Reference : Response::Both;
+    }
+    if (parts & Rho) {
+        s.albedo_map = t.get_string("albedo_map");
+        s.veins = float(t.get_float("veins"));
+        s.vein_color = t.get_vec3("vein_color");
+        s.vein_scale = t.get_float("vein_scale");
+    }
     return s;
 }
 
@@ -96,37 +106,35 @@ public:
         names.push_back("custom");
         const MeasuredMaterial& marble = measured_material("marble");
         auto& p = params_;
-        p.add_enum("material", names, "marble").costs(Cost::Recompute)
+        p.add_enum("material", names, "marble")
             .doc("One of Jensen et al. 2001's measured materials, or custom (sigma_s, sigma_a, eta)");
-        p.add_vec3("sigma_s", {marble.medium.sigma_s.x, marble.medium.sigma_s.y, marble.medium.sigma_s.z}).range(0.0, 1e4).in("1/mm")
-            .costs(Cost::Recompute).used_when("material", {"custom"}).doc("Reduced scattering coefficient sigma'_s, RGB");
-        p.add_vec3("sigma_a", {marble.medium.sigma_a.x, marble.medium.sigma_a.y, marble.medium.sigma_a.z}).range(0.0, 1e4).in("1/mm")
-            .costs(Cost::Recompute).used_when("material", {"custom"}).doc("Absorption coefficient sigma_a, RGB");
-        p.add_float("eta", 1.5).range(1.0, 3.0).costs(Cost::Recompute).used_when("material", {"custom"}).doc("Relative index of refraction");
-        p.add_float("mm_per_unit", 20.0).range(1e-4, 1e7).log().in("mm").costs(Cost::Recompute)
+        p.add_vec3("sigma_s", {marble.medium.sigma_s.x, marble.medium.sigma_s.y, marble.medium.sigma_s.z}).range(0.0, 1e4).in("1/mm").used_when("material", {"custom"}).doc("Reduced scattering coefficient sigma'_s, RGB");
+        p.add_vec3("sigma_a", {marble.medium.sigma_a.x, marble.medium.sigma_a.y, marble.medium.sigma_a.z}).range(0.0, 1e4).in("1/mm").used_when("material", {"custom"}).doc("Absorption coefficient sigma_a, RGB");
+        p.add_float("eta", 1.5).range(1.0, 3.0).used_when("material", {"custom"}).doc("Relative index of refraction");
+        p.add_float("mm_per_unit", 20.0).range(1e-4, 1e7).log().in("mm")
             .doc("Millimetres per scene unit: the object's size decides how translucent it looks");
-        p.add_int("vertices", 10000).range(0, 2000000).costs(Cost::Recompute).more_accurate(Accuracy::Higher)
+        p.add_int("vertices", 10000).range(0, 2000000).more_accurate(Accuracy::Higher)
             .doc("Vertices after simplification (OpenMesh's decimater; 0 keeps every vertex): one hat basis function per vertex");
-        p.add_int("atlas_size", 512).range(128, 2048).costs(Cost::Recompute).more_accurate(Accuracy::Higher, int64_t(2048))
+        p.add_int("atlas_size", 512).range(128, 2048).more_accurate(Accuracy::Higher, int64_t(2048))
             .doc("Texels per side of the texture atlas (local response, illumination map)");
-        p.add_float("chunk_angle", 30.0).range(1.0, 89.0).in("degrees").costs(Cost::Recompute)
+        p.add_float("chunk_angle", 30.0).range(1.0, 89.0).in("degrees")
             .doc("Largest deviation of a triangle's normal from its chunk's average normal");
-        p.add_int("kernel", 7).range(3, 15).costs(Cost::Recompute).more_accurate(Accuracy::Higher, int64_t(15))
+        p.add_int("kernel", 7).range(3, 15).more_accurate(Accuracy::Higher, int64_t(15))
             .doc("Local kernel size K (odd): K x K texels around each texel");
-        p.add_float("threshold", 3e-5).range(0.0, 1.0).costs(Cost::Recompute).more_accurate(Accuracy::Lower, 0.0)
+        p.add_float("threshold", 3e-5).range(0.0, 1.0).more_accurate(Accuracy::Lower, 0.0)
             .doc("Smallest vertex-to-vertex factor kept (largest channel); fewer factors, faster global response");
-        p.add_bool("blend", true).costs(Cost::Recompute).doc("Blend local and global responses (§5.4); off shows the double counting of Fig. 6");
+        p.add_bool("blend", true).doc("Blend local and global responses (§5.4); off shows the double counting of Fig. 6");
         p.add_enum("response", {"both", "local", "global", "reference"}, "both")
             .doc("What the image shows: local + global, one of them, or the brute-force reference");
         p.add_bool("compare", false)
             .doc("Also compute the brute-force reference each frame (the reference and error AOVs): seconds per light move on large meshes");
         p.add_bool("shadows", true).doc("Self-shadowing of the illumination map (a shadow map per light)");
         p.add_int("shadow_map", 512).range(64, 8192).used_when("shadows", {"true"}).doc("Shadow map texels per side");
-        p.add_path("albedo_map", "").costs(Cost::Recompute)
+        p.add_path("albedo_map", "")
             .doc("Surface texture rho multiplying the outgoing radiosity, at the mesh's (u,v); relative to the preset's folder");
-        p.add_float("veins", 0.0).range(0.0, 1.0).costs(Cost::Recompute).doc("Strength of procedural fractal veins in rho (0 = none)");
-        p.add_float("vein_scale", 10.0).range(0.01, 1e5).log().in("mm").costs(Cost::Recompute).doc("Vein period (used when veins > 0)");
-        p.add_color("vein_color", {0.35, 0.3, 0.28}).costs(Cost::Recompute).doc("rho inside a vein");
+        p.add_float("veins", 0.0).range(0.0, 1.0).doc("Strength of procedural fractal veins in rho (0 = none)");
+        p.add_float("vein_scale", 10.0).range(0.01, 1e5).log().in("mm").doc("Vein period (used when veins > 0)");
+        p.add_color("vein_color", {0.35, 0.3, 0.28}).doc("rho inside a vein");
         aovs_ = {{"irradiance", 3, "Power per unit area entering the medium: incident irradiance x Fresnel transmittance"},
                  {"radiosity", 3, "B: power per unit area leaving through subsurface transport, before the outgoing Fresnel term (local + global)"},
                  {"local", 3, "The local (kernel) part of B"},
@@ -136,20 +144,18 @@ public:
     }
 
     void declare_stages(StageGraph& g) const override;
-    std::vector<std::string> frame_stages() const override {
-        return {"translucency.mesh", "translucency.atlas", "translucency.kernels", "translucency.factors", "translucency.blend",
-                "translucency.gather", "translucency.albedo"};
+    std::vector<StageName> frame_stages() const override {
+        return {stages::mesh, stages::atlas, stages::kernels, stages::factors, stages::blend, stages::gather, stages::albedo};
     }
     std::vector<FrameStepDecl> frame_steps() const override;
-    std::any run_step_cpu(const std::string& step, const FrameStepContext& ctx) const override;
     void shade_cpu(const ShadeContext& ctx) const override;
     std::optional<ivec2> texture_size(const Scene& s, const Evaluation& ev) const override {
         for (size_t i = 0; i < s.objects.size(); ++i)
-            if (const auto a = ev.get<AtlasStage>("translucency.atlas", int(i))) return ivec2(a->atlas.size);
+            if (const auto a = ev.get(stages::atlas, int(i))) return ivec2(a->atlas.size);
         return std::nullopt;
     }
     std::shared_ptr<const TriMesh> object_mesh(const Scene&, const Evaluation& ev, int object) const override {
-        const auto a = ev.get<AtlasStage>("translucency.atlas", object);
+        const auto a = ev.get(stages::atlas, object);
         return a ? a->display : nullptr;
     }
     std::vector<BenchTable> bench_tables() const override { return translucency_bench_tables(); }
@@ -172,130 +178,123 @@ std::vector<std::string> with_material(std::vector<std::string> keys) {
 }
 
 void TranslucencyTechnique::declare_stages(StageGraph& g) const {
-    g.add({.name = "translucency.mesh",
-           .help = "Weld, clean and simplify the object's mesh (OpenMesh decimater) to translucency.vertices",
+    g.add(stages::mesh, {.help = "Weld, clean and simplify the object's mesh (OpenMesh decimater) to translucency.vertices",
            .scope = StageScope::Object,
            .technique = "translucency",
            .params = {"translucency.vertices"},
-           .inputs = {"scene.geometry"},
+           .inputs = {mesolab::stages::geometry},
            .memory = [](const StageContext& ctx) {
-               const auto m = ctx.input<TriMesh>("scene.geometry");
+               const auto m = ctx.input(mesolab::stages::geometry);
                return MemoryEstimate{double(m ? m->vertex_count() : 0) * 400.0, "mesh preparation: about 400 bytes per input vertex", {}};
            },
            .run = [](StageContext& ctx) -> std::any {
-               const auto m = ctx.input<TriMesh>("scene.geometry");
+               const auto m = ctx.input(mesolab::stages::geometry);
                PreparedMesh p = prepare_mesh(m->position, m->index, int(ctx.material().get_int("vertices")), m->has_uv ? &m->uv : nullptr);
                for (const auto& w : p.warnings) ctx.warn(w);
-               return stage_result(std::move(p));
+               return stage_result(stages::mesh, std::move(p));
            }});
-    g.add({.name = "translucency.atlas",
-           .help = "Texture atlas (§5.1): chunks, projection, minimum-area rectangles, packing, borders",
+    g.add(stages::atlas, {.help = "Texture atlas (§5.1): chunks, projection, minimum-area rectangles, packing, borders",
            .scope = StageScope::Object,
            .technique = "translucency",
            .params = {"translucency.atlas_size", "translucency.chunk_angle", "translucency.kernel"},
-           .inputs = {"translucency.mesh"},
+           .inputs = {stages::mesh},
            .memory = [](const StageContext& ctx) {
                const double n = double(ctx.material().get_int("atlas_size"));
                return MemoryEstimate{n * n * 70.0, "atlas: " + std::to_string(int(n)) + "² texels x about 70 bytes", {"translucency.atlas_size"}};
            },
            .run = [](StageContext& ctx) -> std::any {
-               const Settings s = Settings::from(ctx.obj());
-               AtlasStage a = make_atlas_stage(*ctx.input<PreparedMesh>("translucency.mesh"), atlas_params(s));
+               const Settings s = Settings::from(ctx.obj(), Settings::AtlasPart);
+               AtlasStage a = make_atlas_stage(*ctx.input(stages::mesh), atlas_params(s));
                for (const auto& w : a.atlas.warnings) ctx.warn(w);
-               return stage_result(std::move(a));
+               return stage_result(stages::atlas, std::move(a));
            }});
-    g.add({.name = "translucency.kernels",
-           .help = "Local K x K kernels per texel from R_d (§5.3)",
+    g.add(stages::kernels, {.help = "Local K x K kernels per texel from R_d (§5.3)",
            .scope = StageScope::Object,
            .technique = "translucency",
            .params = with_material({"translucency.kernel"}),
-           .inputs = {"translucency.mesh", "translucency.atlas"},
+           .inputs = {stages::mesh, stages::atlas},
            .paper = PaperFigure{paper::kKernelsMaxMs, "Lensch 2002, §6: kernels 1-2 min (dual Xeon 1.7 GHz)"},
            .memory = [](const StageContext& ctx) {
-               const auto a = ctx.input<AtlasStage>("translucency.atlas");
+               const auto a = ctx.input(stages::atlas);
                const double K = double(ctx.material().get_int("kernel"));
                const double inner = a ? a->atlas.fill_ratio * double(a->atlas.size) * double(a->atlas.size) : 0.0;
                return MemoryEstimate{inner * K * K * 12.0, "kernels: " + std::to_string(int64_t(inner)) + " texels x K² x 3 channels x 4 bytes",
                                      {"translucency.kernel", "translucency.atlas_size"}};
            },
            .run = [](StageContext& ctx) -> std::any {
-               const Settings s = Settings::from(ctx.obj());
-               const auto m = ctx.input<PreparedMesh>("translucency.mesh");
-               const auto a = ctx.input<AtlasStage>("translucency.atlas");
-               return stage_result(build_local_kernels(a->atlas, m->position, m->index, Dipole(s.medium), s.mm_per_unit, s.kernel));
+               const Settings s = Settings::from(ctx.obj(), Settings::Medium_ | Settings::Scale | Settings::AtlasPart);
+               const auto m = ctx.input(stages::mesh);
+               const auto a = ctx.input(stages::atlas);
+               return stage_result(stages::kernels, build_local_kernels(a->atlas, m->position, m->index, Dipole(s.medium), s.mm_per_unit, s.kernel));
            }});
-    g.add({.name = "translucency.factors",
-           .help = "Vertex-to-vertex throughput factors above translucency.threshold (§5.2)",
+    g.add(stages::factors, {.help = "Vertex-to-vertex throughput factors above translucency.threshold (§5.2)",
            .scope = StageScope::Object,
            .technique = "translucency",
            .params = with_material({"translucency.threshold", "translucency.blend"}),
-           .inputs = {"translucency.mesh"},
+           .inputs = {stages::mesh},
            .paper = PaperFigure{paper::kFactorsMaxMs, "Lensch 2002, §6: form factors 2-8 min (dual Xeon 1.7 GHz)"},
            .memory = [](const StageContext& ctx) {
-               return factor_memory(*ctx.input<PreparedMesh>("translucency.mesh"), Settings::from(ctx.obj()));
+               return factor_memory(*ctx.input(stages::mesh), Settings::from(ctx.obj()));
            },
            .run = [](StageContext& ctx) -> std::any {
-               const Settings s = Settings::from(ctx.obj());
-               const auto m = ctx.input<PreparedMesh>("translucency.mesh");
+               const Settings s = Settings::from(ctx.obj(), Settings::Medium_ | Settings::Scale | Settings::Factors);
+               const auto m = ctx.input(stages::mesh);
                VertexFactors F = build_vertex_factors(m->position, m->index, Dipole(s.medium), {s.mm_per_unit, s.threshold, s.blend});
                if (F.count() == 0 && m->vertex_count() > 1)
                    ctx.warn("translucency.threshold = " + std::to_string(s.threshold) + " drops every factor: the global response is zero");
-               return stage_result(std::move(F));
+               return stage_result(stages::factors, std::move(F));
            }});
-    g.add({.name = "translucency.blend",
-           .help = "Blending (§5.4): direct weights fitted by least squares, kernels corrected",
+    g.add(stages::blend, {.help = "Blending (§5.4): direct weights fitted by least squares, kernels corrected",
            .scope = StageScope::Object,
            .technique = "translucency",
            .params = {"translucency.blend"},
-           .inputs = {"translucency.mesh", "translucency.atlas", "translucency.kernels", "translucency.factors"},
+           .inputs = {stages::mesh, stages::atlas, stages::kernels, stages::factors},
            .applies = [](const Scene&, const SceneObject& o) { return o.material.get_bool("blend"); },
            .when_text = "translucency.blend is on",
            .memory = [](const StageContext& ctx) {
-               const auto k = ctx.input<LocalKernels>("translucency.kernels");
+               const auto k = ctx.input(stages::kernels);
                return MemoryEstimate{double(k ? k->bytes() + k->texel.size() * 36 : 0), "a corrected copy of the kernels and 9 weights per texel",
                                      {"translucency.kernel", "translucency.atlas_size"}};
            },
            .run = [](StageContext& ctx) -> std::any {
-               const Settings s = Settings::from(ctx.obj());
-               const auto m = ctx.input<PreparedMesh>("translucency.mesh");
-               Blended b{*ctx.input<LocalKernels>("translucency.kernels"), {}};
-               b.weights = fit_blending(ctx.input<AtlasStage>("translucency.atlas")->atlas, m->position, m->index, Dipole(s.medium), s.mm_per_unit,
-                                        *ctx.input<VertexFactors>("translucency.factors"), b.kernels);
-               return stage_result(std::move(b));
+               const Settings s = Settings::from(ctx.obj(), Settings::Medium_ | Settings::Scale);
+               const auto m = ctx.input(stages::mesh);
+               Blended b{*ctx.input(stages::kernels), {}};
+               b.weights = fit_blending(ctx.input(stages::atlas)->atlas, m->position, m->index, Dipole(s.medium), s.mm_per_unit,
+                                        *ctx.input(stages::factors), b.kernels);
+               return stage_result(stages::blend, std::move(b));
            }});
-    g.add({.name = "translucency.gather",
-           .help = "Per vertex, the texels its irradiance (hat-weighted) and its direct radiosity (blending) come from",
+    g.add(stages::gather, {.help = "Per vertex, the texels its irradiance (hat-weighted) and its direct radiosity (blending) come from",
            .scope = StageScope::Object,
            .technique = "translucency",
            .params = {"translucency.blend"},
-           .inputs = {"translucency.mesh", "translucency.atlas", "translucency.factors", "translucency.blend"},
+           .inputs = {stages::mesh, stages::atlas, stages::factors, stages::blend},
            .memory = [](const StageContext& ctx) {
-               const auto a = ctx.input<AtlasStage>("translucency.atlas");
+               const auto a = ctx.input(stages::atlas);
                const double inner = a ? a->atlas.fill_ratio * double(a->atlas.size) * double(a->atlas.size) : 0.0;
                return MemoryEstimate{inner * 3.0 * 20.0, "3 entries of 20 bytes per texel", {"translucency.atlas_size"}};
            },
            .run = [](StageContext& ctx) -> std::any {
-               const Settings s = Settings::from(ctx.obj());
-               const auto m = ctx.input<PreparedMesh>("translucency.mesh");
-               const auto b = ctx.input<Blended>("translucency.blend");
-               return stage_result(make_gather(ctx.input<AtlasStage>("translucency.atlas")->atlas, m->index,
-                                               ctx.input<VertexFactors>("translucency.factors")->vertex_area, s.mm_per_unit,
+               const Settings s = Settings::from(ctx.obj(), Settings::Scale);
+               const auto m = ctx.input(stages::mesh);
+               const auto b = ctx.input(stages::blend);
+               return stage_result(stages::gather, make_gather(ctx.input(stages::atlas)->atlas, m->index,
+                                               ctx.input(stages::factors)->vertex_area, s.mm_per_unit,
                                                b ? &b->weights : nullptr, b ? &b->kernels : nullptr));
            }});
-    g.add({.name = "translucency.albedo",
-           .help = "rho per texel: translucency.albedo_map and the procedural veins",
+    g.add(stages::albedo, {.help = "rho per texel: translucency.albedo_map and the procedural veins",
            .scope = StageScope::Object,
            .technique = "translucency",
            .params = {"translucency.albedo_map", "translucency.veins", "translucency.vein_scale", "translucency.vein_color", "translucency.mm_per_unit",
                       "geometry.scale"},
-           .inputs = {"translucency.mesh", "translucency.atlas"},
+           .inputs = {stages::mesh, stages::atlas},
            .applies = [](const Scene&, const SceneObject& o) {
                return !o.material.get_string("albedo_map").empty() || o.material.get_float("veins") > 0.0;
            },
            .when_text = "translucency.albedo_map is set or translucency.veins > 0",
            .run = [](StageContext& ctx) -> std::any {
-               const Settings s = Settings::from(ctx.obj());
-               return stage_result(texel_albedo(ctx.scene, s, *ctx.input<PreparedMesh>("translucency.mesh"), *ctx.input<AtlasStage>("translucency.atlas")));
+               const Settings s = Settings::from(ctx.obj(), Settings::Rho | Settings::Scale);
+               return stage_result(stages::albedo, texel_albedo(ctx.scene, s, *ctx.input(stages::mesh), *ctx.input(stages::atlas)));
            }});
 }
 
@@ -308,87 +307,83 @@ std::vector<std::string> step_keys(std::vector<std::string> extra) {
 }
 
 std::vector<FrameStepDecl> TranslucencyTechnique::frame_steps() const {
-    const std::vector<std::string> all = {"translucency.mesh", "translucency.atlas", "translucency.kernels", "translucency.factors",
-                                          "translucency.blend", "translucency.gather"};
-    return {{"translucency.illumination", "Irradiance entering the medium per texel (lights x Fresnel, shadow maps, environment)",
-             step_keys({}), {"translucency.atlas"}},
-            {"translucency.vertices", "Irradiance per vertex (hat-weighted) and the direct radiosity of blending", step_keys({}), all},
-            {"translucency.local", "Local response: K x K kernels over the illumination map", step_keys({}), all},
-            {"translucency.global", "Global response per vertex: the factors times the vertex irradiance, plus the direct part", step_keys({}), all},
-            {"translucency.combine", "The global response interpolated to the texels, radiosity = local + global, texels outside the triangles filled",
-             step_keys({}), all},
-            {"translucency.reference", "Brute-force radiosity (translucency.compare or response = reference)",
-             step_keys({"translucency.compare", "translucency.response"}), all}};
-}
-
-std::any TranslucencyTechnique::run_step_cpu(const std::string& step, const FrameStepContext& ctx) const {
-    auto atlas = [&](int o) { return ctx.eval.get<AtlasStage>("translucency.atlas", o); };
-    if (step == "translucency.illumination") {
-        PerObject<std::vector<vec3>> out;
-        for (int o : ctx.objects) {
-            const SceneObject& obj = ctx.scene.objects[size_t(o)];
-            const Settings s = Settings::from(obj);
-            const auto a = atlas(o);
-            const mat4 model = object_to_world(obj);
-            std::vector<ShadowMap> shadows;
-            if (s.shadows) {
-                PROFILE_SCOPE("translucency.shadow_maps");
-                for (size_t i = 0; i < ctx.lighting.lights.size() && i < size_t(kMaxShadowMaps); ++i)
-                    shadows.push_back(make_shadow_map(*a->display, model, ctx.lighting.lights[i], s.shadow_map));
-            }
-            PROFILE_SCOPE("translucency.texels");
-            out[o] = illuminate(*a, model, ctx.lighting, s.medium.eta, shadows);
-        }
-        return std::any(std::make_shared<const PerObject<std::vector<vec3>>>(std::move(out)));
-    }
-    const auto& E = ctx.step<PerObject<std::vector<vec3>>>("translucency.illumination");
-    if (step == "translucency.vertices") {
-        PerObject<VertexValues> out;
-        for (int o : ctx.objects) out[o] = gather_vertices(*ctx.eval.get<Gather>("translucency.gather", o), E.at(o));
-        return std::any(std::make_shared<const PerObject<VertexValues>>(std::move(out)));
-    }
-    if (step == "translucency.local") {
-        PerObject<std::vector<vec3>> out;
-        for (int o : ctx.objects) {
-            const auto b = ctx.eval.get<Blended>("translucency.blend", o);
-            out[o] = convolve_local(b ? b->kernels : *ctx.eval.get<LocalKernels>("translucency.kernels", o), E.at(o));
-        }
-        return std::any(std::make_shared<const PerObject<std::vector<vec3>>>(std::move(out)));
-    }
-    if (step == "translucency.global") {
-        const auto& V = ctx.step<PerObject<VertexValues>>("translucency.vertices");
-        PerObject<std::vector<vec3>> out;
-        for (int o : ctx.objects) {
-            const VertexValues& v = V.at(o);
-            std::vector<vec3> B = ctx.eval.get<VertexFactors>("translucency.factors", o)->multiply(v.E);
-            for (size_t i = 0; i < B.size(); ++i) B[i] += v.direct[i];
-            out[o] = std::move(B);
-        }
-        return std::any(std::make_shared<const PerObject<std::vector<vec3>>>(std::move(out)));
-    }
-    if (step == "translucency.combine") {
-        const auto& Lo = ctx.step<PerObject<std::vector<vec3>>>("translucency.local");
-        const auto& Bv = ctx.step<PerObject<std::vector<vec3>>>("translucency.global");
-        PerObject<Maps> out;
-        for (int o : ctx.objects) {
-            const auto a = atlas(o);
-            out[o] = combine(*a, ctx.eval.get<PreparedMesh>("translucency.mesh", o)->index, E.at(o), Lo.at(o), Bv.at(o));
-        }
-        return std::any(std::make_shared<const PerObject<Maps>>(std::move(out)));
-    }
-    if (step == "translucency.reference") {
-        PerObject<std::vector<vec3>> out;
-        for (int o : ctx.objects) {
-            const Settings s = Settings::from(ctx.scene.objects[size_t(o)]);
-            if (!s.needs_reference()) continue;
-            const auto a = atlas(o);
-            const auto m = ctx.eval.get<PreparedMesh>("translucency.mesh", o);
-            out[o] = fill_texels(*a, reference_radiosity(a->atlas, texel_positions_mm(a->atlas, m->position, m->index, s.mm_per_unit),
-                                                         Dipole(s.medium), s.mm_per_unit, E.at(o)));
-        }
-        return std::any(std::make_shared<const PerObject<std::vector<vec3>>>(std::move(out)));
-    }
-    return {};
+    const std::vector<StageName> all = {stages::mesh, stages::atlas, stages::kernels, stages::factors, stages::blend, stages::gather};
+    auto atlas = [](const FrameStepContext& ctx, int o) { return ctx.eval.get(stages::atlas, o); };
+    return {
+        frame_step(steps::illumination, "Irradiance entering the medium per texel (lights x Fresnel, shadow maps, environment)", step_keys({}),
+                   {stages::atlas},
+                   [atlas](const FrameStepContext& ctx) {
+                       PerObject<std::vector<vec3>> out;
+                       for (int o : ctx.objects) {
+                           const SceneObject& obj = ctx.scene.objects[size_t(o)];
+                           const Settings s = Settings::from(obj);
+                           const auto a = atlas(ctx, o);
+                           const mat4 model = object_to_world(obj);
+                           std::vector<ShadowMap> shadows;
+                           if (s.shadows) {
+                               PROFILE_SCOPE("translucency.shadow_maps");
+                               for (size_t i = 0; i < ctx.lighting.lights.size() && i < size_t(kMaxShadowMaps); ++i)
+                                   shadows.push_back(make_shadow_map(*a->display, model, ctx.lighting.lights[i], s.shadow_map));
+                           }
+                           PROFILE_SCOPE("translucency.texels");
+                           out[o] = illuminate(*a, model, ctx.lighting, s.medium.eta, shadows);
+                       }
+                       return out;
+                   }),
+        frame_step(steps::vertices, "Irradiance per vertex (hat-weighted) and the direct radiosity of blending", step_keys({}), all,
+                   [](const FrameStepContext& ctx) {
+                       const auto& E = ctx.step(steps::illumination);
+                       PerObject<VertexValues> out;
+                       for (int o : ctx.objects) out[o] = gather_vertices(*ctx.eval.get(stages::gather, o), E.at(o));
+                       return out;
+                   }),
+        frame_step(steps::local, "Local response: K x K kernels over the illumination map", step_keys({}), all,
+                   [](const FrameStepContext& ctx) {
+                       const auto& E = ctx.step(steps::illumination);
+                       PerObject<std::vector<vec3>> out;
+                       for (int o : ctx.objects) {
+                           const auto b = ctx.eval.get(stages::blend, o);
+                           out[o] = convolve_local(b ? b->kernels : *ctx.eval.get(stages::kernels, o), E.at(o));
+                       }
+                       return out;
+                   }),
+        frame_step(steps::global, "Global response per vertex: the factors times the vertex irradiance, plus the direct part", step_keys({}), all,
+                   [](const FrameStepContext& ctx) {
+                       const auto& V = ctx.step(steps::vertices);
+                       PerObject<std::vector<vec3>> out;
+                       for (int o : ctx.objects) {
+                           const VertexValues& v = V.at(o);
+                           std::vector<vec3> B = ctx.eval.get(stages::factors, o)->multiply(v.E);
+                           for (size_t i = 0; i < B.size(); ++i) B[i] += v.direct[i];
+                           out[o] = std::move(B);
+                       }
+                       return out;
+                   }),
+        frame_step(steps::combine, "The global response interpolated to the texels, radiosity = local + global, texels outside the triangles filled",
+                   step_keys({}), all,
+                   [atlas](const FrameStepContext& ctx) {
+                       const auto& E = ctx.step(steps::illumination);
+                       const auto& Lo = ctx.step(steps::local);
+                       const auto& Bv = ctx.step(steps::global);
+                       PerObject<Maps> out;
+                       for (int o : ctx.objects) out[o] = combine(*atlas(ctx, o), ctx.eval.get(stages::mesh, o)->index, E.at(o), Lo.at(o), Bv.at(o));
+                       return out;
+                   }),
+        frame_step(steps::reference, "Brute-force radiosity (translucency.compare or response = reference)",
+                   step_keys({"translucency.compare", "translucency.response"}), all,
+                   [atlas](const FrameStepContext& ctx) {
+                       const auto& E = ctx.step(steps::illumination);
+                       PerObject<std::vector<vec3>> out;
+                       for (int o : ctx.objects) {
+                           const Settings s = Settings::from(ctx.scene.objects[size_t(o)]);
+                           if (!s.needs_reference()) continue;
+                           const auto a = atlas(ctx, o);
+                           const auto m = ctx.eval.get(stages::mesh, o);
+                           out[o] = fill_texels(*a, reference_radiosity(a->atlas, texel_positions_mm(a->atlas, m->position, m->index, s.mm_per_unit),
+                                                                        Dipole(s.medium), s.mm_per_unit, E.at(o)));
+                       }
+                       return out;
+                   })};
 }
 
 }  // namespace
@@ -397,12 +392,12 @@ std::any TranslucencyTechnique::run_step_cpu(const std::string& step, const Fram
 double radiosity_error(const Scene& s, const Evaluation& ev, int o) {
     const SceneObject& obj = s.objects.at(size_t(o));
     const Settings st = Settings::from(obj);
-    const auto a = ev.get<AtlasStage>("translucency.atlas", o);
-    const auto m = ev.get<PreparedMesh>("translucency.mesh", o);
-    const auto g = ev.get<Gather>("translucency.gather", o);
-    const auto F = ev.get<VertexFactors>("translucency.factors", o);
-    const auto b = ev.get<Blended>("translucency.blend", o);
-    const auto K = ev.get<LocalKernels>("translucency.kernels", o);
+    const auto a = ev.get(stages::atlas, o);
+    const auto m = ev.get(stages::mesh, o);
+    const auto g = ev.get(stages::gather, o);
+    const auto F = ev.get(stages::factors, o);
+    const auto b = ev.get(stages::blend, o);
+    const auto K = ev.get(stages::kernels, o);
     if (!a || !m || !g || !F || !K) throw std::logic_error("translucency: the evaluation lacks the object's translucency stages");
     const Lighting L = make_lighting(s, ev);
     const mat4 model = object_to_world(obj);
@@ -466,16 +461,16 @@ void TranslucencyTechnique::shade_cpu(const ShadeContext& ctx) const {
         std::shared_ptr<const std::vector<vec3>> rho;
         int size = 0;
     };
-    const auto& maps = ctx.step<PerObject<Maps>>("translucency.combine");
-    const auto& refs = ctx.step<PerObject<std::vector<vec3>>>("translucency.reference");
+    const auto& maps = ctx.step(steps::combine);
+    const auto& refs = ctx.step(steps::reference);
     std::vector<Obj> objs(ctx.scene.objects.size());  // by object id
     for (int o : ctx.objects) {
         Obj& b = objs[size_t(o)];
         b.s = Settings::from(ctx.scene.objects[size_t(o)]);
         b.maps = &maps.at(o);
         if (auto it = refs.find(o); it != refs.end()) b.reference = &it->second;
-        b.rho = ctx.eval.get<std::vector<vec3>>("translucency.albedo", o);
-        b.size = ctx.eval.get<AtlasStage>("translucency.atlas", o)->atlas.size;
+        b.rho = ctx.eval.get(stages::albedo, o);
+        b.size = ctx.eval.get(stages::atlas, o)->atlas.size;
     }
     const int out_irr = ctx.out.index("irradiance"), out_rad = ctx.out.index("radiosity"), out_loc = ctx.out.index("local"),
               out_glo = ctx.out.index("global"), out_ref = ctx.out.index("reference"), out_err = ctx.out.index("error");

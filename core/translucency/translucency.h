@@ -38,6 +38,7 @@
 #include "core/translucency/global.h"
 #include "core/translucency/local.h"
 #include "core/translucency/mesh_prep.h"
+#include "core/translucency/stages.h"
 
 #include <map>
 #include <memory>
@@ -61,7 +62,19 @@ struct Settings {
     float veins = 0.f;          // 0 = none
     vec3 vein_color{0.3f};
     double vein_scale = 10.0;   // mm per vein period
-    static Settings from(const SceneObject& o);  // InputError naming a bad material key
+    // The keys are read by part, so that a stage reads only those it declares (the session checks
+    // it, core/session.h); the fields of the parts not read keep their defaults.
+    enum Part : unsigned {
+        Medium_ = 1,    // material, sigma_s, sigma_a, eta
+        Scale = 2,      // mm_per_unit x geometry.scale
+        Mesh = 4,       // vertices
+        AtlasPart = 8,  // atlas_size, kernel, chunk_angle
+        Factors = 16,   // threshold, blend
+        Frame = 32,     // shadows, shadow_map, compare, response
+        Rho = 64,       // albedo_map, veins, vein_color, vein_scale
+        All = 127,
+    };
+    static Settings from(const SceneObject& o, unsigned parts = All);  // InputError naming a bad material key
     bool needs_reference() const { return compare || response == Response::Reference; }
 };
 
@@ -179,8 +192,4 @@ struct TexelTap {
 // the reference's mean. CPU; seconds on large meshes (the reference is O(texels²)). Needs the
 // object's stages in `ev`. The sweep metric translucency.reference and the panel use it.
 double radiosity_error(const Scene& s, const Evaluation& ev, int object);
-
-// Per-object outputs of the frame steps.
-template <class T>
-using PerObject = std::map<int, T>;
 }  // namespace mesolab::translucency

@@ -1,5 +1,6 @@
 // GPU pass of technique basic: one draw per object with shaders/mesh.vert + basic/basic.frag.
 #include "core/basic/basic.h"
+#include "core/basic/stages.h"
 #include "core/profile.h"
 #include "core/scene_stages.h"
 #include "gpu/renderer.h"
@@ -24,7 +25,7 @@ public:
             glUniform3fv(program_.uniform("u_kd"), 1, glm::value_ptr(m.kd));
             glUniform3fv(program_.uniform("u_ks"), 1, glm::value_ptr(m.ks));
             glUniform1f(program_.uniform("u_shininess"), m.shininess);
-            const auto map = ctx.eval.get<Image>("basic.albedo", i);
+            const auto map = ctx.eval.get(basic::stages::albedo, i);
             glUniform1i(program_.uniform("u_has_albedo"), map ? 1 : 0);
             program_.bind_texture(1, GL_TEXTURE_2D, map ? ctx.renderer.texture(map) : 0, "u_albedo");
             ctx.renderer.draw_object(ctx.scene, ctx.eval, i);

@@ -2,6 +2,7 @@
 // noise texture and the Smith table (each once per stage result), draws a depth pre-pass and shades
 // with bumpsynth.frag.
 #include "core/bumpsynth/bumpsynth.h"
+#include "core/bumpsynth/stages.h"
 #include "core/profile.h"
 #include "core/scene_stages.h"
 #include "gpu/renderer.h"
@@ -29,18 +30,18 @@ public:
         for (int i : ctx.objects) {
             const Evaluation& ev = ctx.eval;
             Bound b{};
-            b.ndf = res.get<Texture>(ev.get<Ndf>("bumpsynth.ndf", i), "bumpsynth.ndf", [&] { return upload_ndf(*ev.get<Ndf>("bumpsynth.ndf", i)); }).get();
-            b.lut = res.get<Texture>(ev.get<Lut>("bumpsynth.lut", i), "bumpsynth.lut", [&] { return upload_lut(*ev.get<Lut>("bumpsynth.lut", i)); }).get();
-            if (auto index = ev.get<IndexMap>("bumpsynth.index_map", i)) {
+            b.ndf = res.get<Texture>(ev.get(bumpsynth::stages::ndf, i), "bumpsynth.ndf", [&] { return upload_ndf(*ev.get(bumpsynth::stages::ndf, i)); }).get();
+            b.lut = res.get<Texture>(ev.get(bumpsynth::stages::lut, i), "bumpsynth.lut", [&] { return upload_lut(*ev.get(bumpsynth::stages::lut, i)); }).get();
+            if (auto index = ev.get(bumpsynth::stages::index_map, i)) {
                 b.index = res.get<Texture>(index, "bumpsynth.index_map", [&] { return upload_index(*index); }).get();
-            } else if (auto cdfs = ev.get<NoiseCdfs>("bumpsynth.noise_cdf", i)) {
+            } else if (auto cdfs = ev.get(bumpsynth::stages::noise_cdf, i)) {
                 b.cdf = res.get<Buffer>(cdfs, "bumpsynth.cdf", [&] { return make_storage_buffer(cdfs->table.data(), cdfs->table.size() * sizeof(float)); }).get();
             }
-            if (auto tex = ev.get<NoiseTexture>("bumpsynth.noise_texture", i))
+            if (auto tex = ev.get(bumpsynth::stages::noise_texture, i))
                 b.noise = res.get<Texture>(tex, "bumpsynth.noise_texture", [&] { return upload_noise(*tex); }).get();
-            if (auto smith = ev.get<SmithTable>("bumpsynth.masking", i))
+            if (auto smith = ev.get(bumpsynth::stages::masking, i))
                 b.smith = res.get<Texture>(smith, "bumpsynth.masking", [&] { return upload_smith(*smith); }).get();
-            if (auto albedo = ev.get<Image>("bumpsynth.albedo", i)) b.albedo = ctx.renderer.texture(albedo);
+            if (auto albedo = ev.get(bumpsynth::stages::albedo, i)) b.albedo = ctx.renderer.texture(albedo);
             bound[i] = b;
         }
         // Depth pre-pass: the shading pass (noise, look-ups, BRDF) then runs once per visible pixel,

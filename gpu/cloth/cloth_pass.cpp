@@ -1,5 +1,6 @@
 // GPU pass of technique cloth: one draw per garment with shaders/mesh.vert + cloth/cloth.frag,
 // the object's BRDF pyramid packed into a shader storage buffer (core/cloth/technique.h).
+#include "core/cloth/stages.h"
 #include "core/cloth/technique.h"
 #include "core/profile.h"
 #include "core/scene_stages.h"
@@ -27,7 +28,7 @@ public:
         for (int i : ctx.objects) {
             const SceneObject& o = ctx.scene.objects[size_t(i)];
             const cloth::Settings s = cloth::Settings::from(ctx.scene, o);
-            const auto pyr = ctx.eval.get<cloth::BrdfPyramid>("cloth.fit", i);
+            const auto pyr = ctx.eval.get(cloth::stages::fit, i);
             if (!pyr) continue;
             GpuPyramid& g = ctx.renderer.resources().get<GpuPyramid>(pyr, "packed", [&] {
                 GpuPyramid out;

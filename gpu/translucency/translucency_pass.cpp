@@ -1,6 +1,7 @@
 // GPU pass of technique translucency: the per-frame passes as compute shaders over storage
 // buffers made once from the stage results (core/translucency/translucency.h), then one draw per
 // object sampling the radiosity maps at the atlas coordinates.
+#include "core/translucency/stages.h"
 #include "core/profile.h"
 #include "core/scene_stages.h"
 #include "core/translucency/reference.h"
@@ -68,19 +69,25 @@ public:
           shadow_(Program::graphics("translucency/shadow.vert", "translucency/shadow.frag")),
           outputs_(fragment_outputs(t)) {}
 
-    void run_step(const std::string& step, DrawContext& ctx) override {
-        for (int o : ctx.objects) {
-            In in(ctx, o);
-            PerObject& w = work(o, in);
-            if (step == "translucency.illumination") illuminate_step(ctx, o, in, w);
-            else if (step == "translucency.vertices") vertices_step(ctx, in, w);
-            else if (step == "translucency.local") local_step(ctx, in, w);
-            else if (step == "translucency.global") global_step(ctx, in, w);
-            else if (step == "translucency.combine") combine_step(ctx, in, w);
-            else if (step == "translucency.reference") reference_step(ctx, in, w);
-            barrier();
-        }
-        unbind_step_inputs();
+    std::vector<GpuFrameStep> frame_steps() override {
+        // Each step runs object by object, with a barrier between objects.
+        const auto per_object = [this](auto step) {
+            return [this, step](DrawContext& ctx) {
+                for (int o : ctx.objects) {
+                    In in(ctx, o);
+                    PerObject& w = work(o, in);
+                    (this->*step)(ctx, o, in, w);
+                    barrier();
+                }
+                unbind_step_inputs();
+            };
+        };
+        return {{steps::illumination, per_object(&TranslucencyPass::illuminate_step)},
+                {steps::vertices, per_object(&TranslucencyPass::vertices_step)},
+                {steps::local, per_object(&TranslucencyPass::local_step)},
+                {steps::global, per_object(&TranslucencyPass::global_step)},
+                {steps::combine, per_object(&TranslucencyPass::combine_step)},
+                {steps::reference, per_object(&TranslucencyPass::reference_step)}};
     }
 
     static void unbind_step_inputs() {
@@ -102,7 +109,7 @@ public:
             const SceneObject& obj = ctx.scene.objects[size_t(o)];
             const Settings s = Settings::from(obj);
             PerObject& w = objects_.at(o);
-            const auto rho = ctx.eval.get<std::vector<vec3>>("translucency.albedo", o);
+            const auto rho = ctx.eval.get(translucency::stages::albedo, o);
             if (shows_parts(ctx, s) && !w.parts_written) {
                 // Steps reused from a frame that did not show them: the parts from the step's buffers.
                 PROFILE_SCOPE("translucency.combine_parts");
@@ -158,12 +165,12 @@ private:
         std::shared_ptr<const Gather> gather;
         In(const DrawContext& ctx, int o)
             : s(Settings::from(ctx.scene.objects[size_t(o)])),
-              mesh(ctx.eval.get<PreparedMesh>("translucency.mesh", o)),
-              atlas(ctx.eval.get<AtlasStage>("translucency.atlas", o)),
-              kernels(ctx.eval.get<LocalKernels>("translucency.kernels", o)),
-              blended(ctx.eval.get<Blended>("translucency.blend", o)),
-              factors(ctx.eval.get<VertexFactors>("translucency.factors", o)),
-              gather(ctx.eval.get<Gather>("translucency.gather", o)) {}
+              mesh(ctx.eval.get(translucency::stages::mesh, o)),
+              atlas(ctx.eval.get(translucency::stages::atlas, o)),
+              kernels(ctx.eval.get(translucency::stages::kernels, o)),
+              blended(ctx.eval.get(translucency::stages::blend, o)),
+              factors(ctx.eval.get(translucency::stages::factors, o)),
+              gather(ctx.eval.get(translucency::stages::gather, o)) {}
         const LocalKernels& K() const { return blended ? blended->kernels : *kernels; }
     };
     // One shadow map per light as the layers of one texture (a single fetch in the shader, whatever
@@ -346,7 +353,7 @@ private:
     }
 
     // [SECTION] translucency.vertices
-    void vertices_step(DrawContext& ctx, const In& in, PerObject& w) {
+    void vertices_step(DrawContext& ctx, int /*o*/, const In& in, PerObject& w) {
         const Gather& g = *in.gather;
         vertices_.use();
         glUniform1i(vertices_.uniform("u_count"), g.n);
@@ -361,7 +368,7 @@ private:
     }
 
     // [SECTION] translucency.local
-    void local_step(DrawContext& ctx, const In& in, PerObject& w) {
+    void local_step(DrawContext& ctx, int /*o*/, const In& in, PerObject& w) {
         const LocalKernels& K = in.K();
         local_.use();
         glUniform1i(local_.uniform("u_count"), int(K.texel.size()));
@@ -466,7 +473,7 @@ private:
         });
     }
 
-    void global_step(DrawContext& ctx, const In& in, PerObject& w) {
+    void global_step(DrawContext& ctx, int /*o*/, const In& in, PerObject& w) {
         const GpuFactors& F = factors(ctx, in);
         Program& prog = F.wide ? global_wide_ : global_;
         prog.use();
@@ -493,7 +500,7 @@ private:
         return aov || s.response == Response::Local || s.response == Response::Global;
     }
 
-    void combine_step(DrawContext& ctx, const In& in, PerObject& w) {
+    void combine_step(DrawContext& ctx, int /*o*/, const In& in, PerObject& w) {
         combine(ctx, in, w, shows_parts(ctx, in.s));
     }
 
@@ -546,7 +553,7 @@ private:
     }
 
     // [SECTION] translucency.reference: every lit inner texel to every inner texel (O(n²))
-    void reference_step(DrawContext& ctx, const In& in, PerObject& w) {
+    void reference_step(DrawContext& ctx, int /*o*/, const In& in, PerObject& w) {
         w.has_reference = false;
         if (!in.s.needs_reference()) return;
         const Atlas& a = in.atlas->atlas;

@@ -1,6 +1,7 @@
 // NDF editor: the ImGui side (the view over the disk with its handles and brush, the controls).
 // Everything is drawn with ImDrawList primitives, so it needs no GL texture and runs headless.
 #include "core/bumpsynth/bumpsynth.h"
+#include "core/bumpsynth/stages.h"
 #include "core/error.h"
 #include "panels/bumpsynth/ndf_editor.h"
 
@@ -84,7 +85,7 @@ void NdfEditor::draw(PanelContext& ctx, int object) {
     // The last evaluation's NDF of this object (it may lag behind the parameters while one runs).
     std::shared_ptr<const bumpsynth::Ndf> ndf;
     if (ctx.eval)
-        ndf = ctx.eval->get<bumpsynth::Ndf>("bumpsynth.ndf", object);
+        ndf = ctx.eval->get(bumpsynth::stages::ndf, object);
     if (ndf != shown_) {
         shown_ = ndf;
         shown_image_ = ndf ? image_from_ndf(*ndf) : NdfImage{};

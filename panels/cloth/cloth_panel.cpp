@@ -1,6 +1,7 @@
 // Panel of technique cloth: the stitch with a 3D preview, the acquisition and the fit with their
 // times, fitted against acquired BRDF slices with the fit's error, and the garment's mip blending
 // with one-click views of the mip level, the BRDF index and alpha.
+#include "core/cloth/stages.h"
 #include "core/cloth/technique.h"
 #include "core/technique.h"
 #include "panels/panel.h"
@@ -18,11 +19,11 @@ namespace {
 
 using namespace mesolab::cloth;
 
-void stage_line(const Evaluation* ev, const char* stage, int object) {
+void stage_line(const Evaluation* ev, const StageName& stage, int object) {
     if (!ev) return;
     for (const StageRun* r : ev->runs_of(stage))
         if (r->object == object) {
-            ImGui::TextDisabled("%s: %s, %.0f ms", stage, to_string(r->status), r->ms);
+            ImGui::TextDisabled("%s: %s, %.0f ms", stage.str().c_str(), to_string(r->status), r->ms);
             for (const auto& w : r->warnings) ImGui::TextColored(ImVec4(1.f, 0.8f, 0.4f, 1.f), "%s", w.c_str());
             if (r->status == StageStatus::Failed) ImGui::TextColored(ImVec4(1.f, 0.45f, 0.4f, 1.f), "%s", r->reason.c_str());
         }
@@ -146,21 +147,21 @@ void register_cloth_panel(PanelRegistry& r) {
         if (ImGui::TreeNodeEx("Stitch", ImGuiTreeNodeFlags_DefaultOpen)) {
             param_widgets(m, ctx.dirty, {"stitch", "yarn_radius", "loop_height", "color_a", "color_b", "stitch_resolution"}, "##cloth");
             if (ctx.eval)
-                if (const auto s = ctx.eval->get<StitchMesh>("cloth.stitch", i)) stitch_preview(*s);
-            stage_line(ctx.eval, "cloth.stitch", i);
+                if (const auto s = ctx.eval->get(cloth::stages::stitch, i)) stitch_preview(*s);
+            stage_line(ctx.eval, cloth::stages::stitch, i);
             ImGui::TreePop();
         }
         if (ImGui::TreeNodeEx("Acquisition", ImGuiTreeNodeFlags_DefaultOpen)) {
             param_widgets(m, ctx.dirty, {"spatial", "directions", "visibility_rays", "samples"}, "##cloth");
-            stage_line(ctx.eval, "cloth.acquire", i);
+            stage_line(ctx.eval, cloth::stages::acquire, i);
             ImGui::TreePop();
         }
         if (ImGui::TreeNodeEx("Fit", ImGuiTreeNodeFlags_DefaultOpen)) {
             param_widgets(m, ctx.dirty, {"lobes", "lookup_table", "tolerance"}, "##cloth");
-            stage_line(ctx.eval, "cloth.fit", i);
+            stage_line(ctx.eval, cloth::stages::fit, i);
             if (ctx.eval) {
-                const auto g = ctx.eval->get<SampleGrid>("cloth.acquire", i);
-                const auto p = ctx.eval->get<BrdfPyramid>("cloth.fit", i);
+                const auto g = ctx.eval->get(cloth::stages::acquire, i);
+                const auto p = ctx.eval->get(cloth::stages::fit, i);
                 if (p) ImGui::Text("%zu BRDFs in %zu levels, %.2f MB", p->count(), p->level.size(), double(p->bytes()) / 1048576.0);
                 if (g && p && g->res == p->res) brdf_slice(*g, *p);
             }

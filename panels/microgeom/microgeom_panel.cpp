@@ -2,6 +2,7 @@
 // set, curvature, scattering, shading and level of detail, the light and view directions as
 // hemisphere discs, a Fig. 9-style side-by-side of the three levels of detail, and what the
 // stages hold (sizes, fold-over warnings).
+#include "core/microgeom/stages.h"
 #include "core/microgeom/goniometer.h"
 #include "core/microgeom/microgeom.h"
 #include "core/technique.h"
@@ -107,11 +108,11 @@ void register_microgeom_panel(PanelRegistry& r) {
             help_marker("Like the paper's Fig. 9: replaces the scene's objects by three spheres with this material as displaced geometry, "
                         "bump map and simulated BRDF, left to right (a button at the top of this panel goes back).");
             if (ctx.eval) {
-                if (const auto v = ctx.eval->get<microgeom::Visibility>("microgeom.visibility", int(i)))
+                if (const auto v = ctx.eval->get(microgeom::stages::visibility, int(i)))
                     ImGui::TextDisabled("S_i: %d directions x %dx%d texels, %.1f MB", v->count, v->width, v->height, double(v->bytes()) / (1 << 20));
-                if (const auto f = ctx.eval->get<microgeom::SimulatedBrdf>("microgeom.brdf", int(i)))
+                if (const auto f = ctx.eval->get(microgeom::stages::brdf, int(i)))
                     ImGui::TextDisabled("BRDF: %d^4 table from %d goniometer images, %.2f MB", f->n_theta, f->images, double(f->bytes()) / (1 << 20));
-                if (const auto m = ctx.eval->get<TriMesh>("microgeom.displaced", int(i))) ImGui::TextDisabled("displaced: %zu triangles", m->triangle_count());
+                if (const auto m = ctx.eval->get(microgeom::stages::displaced, int(i))) ImGui::TextDisabled("displaced: %zu triangles", m->triangle_count());
             }
             ImGui::PopID();
         }

@@ -2,6 +2,7 @@
 // Fig. 2), accuracy settings with the live factor count and memory, blending and response, and
 // one-click views of the atlas, the illumination map, the local and global parts, the reference
 // and the error.
+#include "core/translucency/stages.h"
 #include "core/technique.h"
 #include "core/translucency/translucency.h"
 #include "panels/panel.h"
@@ -98,17 +99,17 @@ void register_translucency_panel(PanelRegistry& r) {
         // What the stages hold for this object.
         if (ctx.eval && ImGui::TreeNodeEx("Precomputed", ImGuiTreeNodeFlags_DefaultOpen)) {
             const int i = ctx.object;
-            const auto mesh = ctx.eval->get<PreparedMesh>("translucency.mesh", i);
-            const auto atlas = ctx.eval->get<AtlasStage>("translucency.atlas", i);
-            const auto F = ctx.eval->get<VertexFactors>("translucency.factors", i);
-            const auto K = ctx.eval->get<LocalKernels>("translucency.kernels", i);
+            const auto mesh = ctx.eval->get(translucency::stages::mesh, i);
+            const auto atlas = ctx.eval->get(translucency::stages::atlas, i);
+            const auto F = ctx.eval->get(translucency::stages::factors, i);
+            const auto K = ctx.eval->get(translucency::stages::kernels, i);
             if (mesh) ImGui::Text("mesh: %zu vertices, %zu triangles (from %d)", mesh->vertex_count(), mesh->triangle_count(), mesh->input_vertices);
             if (atlas)
                 ImGui::Text("atlas: %d chunks, fill %.1f%%, texel %.3g mm", int(atlas->atlas.chunks.size()), 100.0 * atlas->atlas.fill_ratio,
                             atlas->atlas.scale > 0.f ? Settings::from(ctx.scene.objects[size_t(i)]).mm_per_unit / double(atlas->atlas.scale) : 0.0);
             if (F) ImGui::Text("form factors: %zu (%.1f MB)", F->count(), mb(double(F->bytes())));
             if (K) ImGui::Text("kernels: %zu texels x %d² (%.1f MB)", K->texel.size(), K->K, mb(double(K->bytes())));
-            for (const char* st : {"translucency.mesh", "translucency.atlas", "translucency.factors"})
+            for (const StageName& st : {StageName(translucency::stages::mesh), StageName(translucency::stages::atlas), StageName(translucency::stages::factors)})
                 for (const StageRun* run : ctx.eval->runs_of(st))
                     if (run->object == i)
                         for (const auto& w : run->warnings) ImGui::TextColored(ImVec4(1.f, 0.8f, 0.4f, 1.f), "%s", w.c_str());

@@ -3,6 +3,7 @@
 // injected: a fake that records the scenes it is given and, for some scene names, waits for the
 // cancel flag or for a gate the test opens.
 #include "app/gui/evaluator.h"
+#include "core/microgeom/stages.h"
 #include "core/error.h"
 #include "core/scene.h"
 

@@ -1,6 +1,8 @@
 // Headless capture of the basic technique: deterministic bytes, CPU and GPU agree, AOV EXRs
 // hold the analytic values, the sidecar says what ran, and --backend cpu works without GL.
 #include "app/workbench.h"
+#include "core/scene_stages.h"
+#include "core/basic/stages.h"
 #include "core/image.h"
 #include "core/scene.h"
 #include "support/cli.h"
@@ -156,7 +158,7 @@ TEST(Capture, SidecarSaysWhatRanWithWhichRenderer) {
     // Object stages: once per object, named; scene stages: once, without an object.
     expect_object_stage(j, "scene.geometry", "ran");
     expect_object_stage(j, "basic.albedo", "ran");
-    const std::vector<nlohmann::json> irradiance = stage_entries(j, "env.irradiance");
+    const std::vector<nlohmann::json> irradiance = stage_entries(j, mesolab::stages::env_irradiance);
     ASSERT_EQ(irradiance.size(), 1u);
     EXPECT_EQ(irradiance[0].value("status", ""), "ran");
     EXPECT_FALSE(irradiance[0].contains("object"));
@@ -171,7 +173,7 @@ TEST(Capture, SidecarSaysWhatRanWithWhichRenderer) {
     const CliResult r2 = run_mesolab("capture --backend cpu --size 32x32 -o '" + dir.path.string() + "' '" + preset + "' --set effects.environment=false");
     ASSERT_EQ(r2.status, 0) << r2.err;
     const auto j2 = nlohmann::json::parse(slurp(dir / "basic-sphere.json"));
-    const std::vector<nlohmann::json> skipped = stage_entries(j2, "env.irradiance");
+    const std::vector<nlohmann::json> skipped = stage_entries(j2, mesolab::stages::env_irradiance);
     ASSERT_EQ(skipped.size(), 1u) << "a skipped stage is still listed";
     EXPECT_EQ(skipped[0].value("status", ""), "skipped");
     EXPECT_NE(skipped[0].value("reason", "").find("effects.environment is off"), std::string::npos) << skipped[0].dump();
@@ -185,12 +187,12 @@ TEST(Capture, SecondRenderReusesEveryStage) {
     req.backend = Backend::Cpu;
     req.width = req.height = 32;
     const RenderResult first = wb.render(s, req);
-    ASSERT_NE(first.eval.run("scene.geometry"), nullptr);
-    EXPECT_EQ(first.eval.run("scene.geometry")->status, StageStatus::Ran);
+    ASSERT_NE(first.eval.run(mesolab::stages::geometry), nullptr);
+    EXPECT_EQ(first.eval.run(mesolab::stages::geometry)->status, StageStatus::Ran);
     apply_set(s, "light.direction=70,200");
     const RenderResult r = wb.render(s, req);
     ASSERT_EQ(r.eval.runs.size(), first.eval.runs.size());
-    for (const char* stage : {"scene.geometry", "basic.albedo", "env.irradiance"}) {
+    for (const StageName& stage : std::vector<StageName>{mesolab::stages::geometry, basic::stages::albedo, mesolab::stages::env_irradiance}) {
         ASSERT_NE(r.eval.run(stage), nullptr) << stage;
         EXPECT_EQ(r.eval.run(stage)->status, StageStatus::Cached) << stage;
     }

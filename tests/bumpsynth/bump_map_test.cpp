@@ -2,6 +2,7 @@
 // the same heightfield as microgeom, the index texture (round trip, texel centres, wrapping), detail
 // noise when zooming in, the stages that run, rendering the map's own normals, CPU vs GPU, bad maps.
 #include "app/workbench.h"
+#include "core/bumpsynth/stages.h"
 #include "core/bumpsynth/bump_map.h"
 #include "core/bumpsynth/bumpsynth.h"
 #include "core/heightfield/params.h"
@@ -242,22 +243,22 @@ TEST(BumpsynthBumpMap, StagesRunOnlyWhenTheBumpMapIsUsed) {
     Scene plain = default_scene("bumpsynth");
     apply_set(plain, "geometry.type", "plane");
     const RenderResult a = wb.render(plain, req);
-    EXPECT_EQ(a.eval.run("bumpsynth.bump_normals")->status, StageStatus::Skipped);
-    EXPECT_EQ(a.eval.run("bumpsynth.index_map")->status, StageStatus::Skipped);
-    EXPECT_EQ(a.eval.run("bumpsynth.noise_cdf")->status, StageStatus::Ran);
+    EXPECT_EQ(a.eval.run(bumpsynth::stages::bump_normals)->status, StageStatus::Skipped);
+    EXPECT_EQ(a.eval.run(bumpsynth::stages::index_map)->status, StageStatus::Skipped);
+    EXPECT_EQ(a.eval.run(bumpsynth::stages::noise_cdf)->status, StageStatus::Ran);
     const RenderResult b = wb.render(heightfield_scene("bumps", false, false), req);
-    EXPECT_EQ(b.eval.run("bumpsynth.bump_normals")->status, StageStatus::Ran);
-    EXPECT_EQ(b.eval.run("bumpsynth.index_map")->status, StageStatus::Skipped);
-    EXPECT_EQ(b.eval.run("bumpsynth.noise_cdf")->status, StageStatus::Cached);
+    EXPECT_EQ(b.eval.run(bumpsynth::stages::bump_normals)->status, StageStatus::Ran);
+    EXPECT_EQ(b.eval.run(bumpsynth::stages::index_map)->status, StageStatus::Skipped);
+    EXPECT_EQ(b.eval.run(bumpsynth::stages::noise_cdf)->status, StageStatus::Cached);
     // 64² normals over 128² cells: the user is told the histogram is spiky and what to do.
-    const auto& warnings = b.eval.run("bumpsynth.ndf")->warnings;
+    const auto& warnings = b.eval.run(bumpsynth::stages::ndf)->warnings;
     ASSERT_EQ(warnings.size(), 1u);
     EXPECT_NE(warnings[0].find("bumpsynth.ndf_resolution"), std::string::npos) << warnings[0];
-    EXPECT_TRUE(a.eval.run("bumpsynth.ndf")->warnings.empty());
+    EXPECT_TRUE(a.eval.run(bumpsynth::stages::ndf)->warnings.empty());
     const RenderResult c = wb.render(heightfield_scene("bumps", true, false), req);
-    EXPECT_EQ(c.eval.run("bumpsynth.bump_normals")->status, StageStatus::Cached);
-    EXPECT_EQ(c.eval.run("bumpsynth.index_map")->status, StageStatus::Ran);
-    EXPECT_EQ(c.eval.run("bumpsynth.noise_cdf")->status, StageStatus::Skipped);
+    EXPECT_EQ(c.eval.run(bumpsynth::stages::bump_normals)->status, StageStatus::Cached);
+    EXPECT_EQ(c.eval.run(bumpsynth::stages::index_map)->status, StageStatus::Ran);
+    EXPECT_EQ(c.eval.run(bumpsynth::stages::noise_cdf)->status, StageStatus::Skipped);
 }
 
 // Texture mode with one octave renders the bump map's own normals, one pixel per texel: the
@@ -274,8 +275,8 @@ TEST(BumpsynthBumpMap, TextureModeRendersTheMapsOwnNormals) {
     ASSERT_EQ(nrm.width, 64);
     ASSERT_EQ(nrm.height, 64);
     const BumpNormals n = bump_normals_from_material(s, s.objects[0].material);
-    const auto lut = r.eval.get<Lut>("bumpsynth.lut", 0);
-    const auto map = r.eval.get<IndexMap>("bumpsynth.index_map", 0);
+    const auto lut = r.eval.get(bumpsynth::stages::lut, 0);
+    const auto map = r.eval.get(bumpsynth::stages::index_map, 0);
     std::vector<double> err;
     for (int y = 0; y < 64; ++y)
         for (int x = 0; x < 64; ++x) {

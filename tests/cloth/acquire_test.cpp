@@ -1,6 +1,7 @@
 // Virtual acquisition (core/cloth/acquire.h): a Lambertian slab gives ρ/π everywhere; alpha
 // follows a weave's holes; stitches give finite samples that the pyramid fits.
 #include "core/cloth/acquire.h"
+#include "core/cloth/stages.h"
 #include "core/error.h"
 
 #include <gtest/gtest.h>

@@ -1,6 +1,7 @@
 // Procedural garments (core/cloth/garment.h): uv over [0, 1]², unit normals facing the way the
 // triangles wind, tangents along +u, and the curtain's u following arc length.
 #include "core/cloth/garment.h"
+#include "core/cloth/stages.h"
 #include "core/error.h"
 
 #include <gtest/gtest.h>

@@ -1,6 +1,7 @@
 // The mip levels of a BRDF array (core/cloth/pyramid.h): level counts, entries that reproduce
 // uniform and two-material grids, frames, cancellation.
 #include "core/cloth/pyramid.h"
+#include "core/cloth/stages.h"
 #include "core/cloth/acquire.h"
 #include "core/error.h"
 

@@ -3,6 +3,7 @@
 // without acquiring again; exported samples read back fit as well as the acquisition; holes show the
 // background; the fit and eval commands work on measured samples and name bad input.
 #include "app/workbench.h"
+#include "core/cloth/stages.h"
 #include "core/cloth/samples.h"
 #include "core/cloth/technique.h"
 #include "core/error.h"
@@ -85,17 +86,17 @@ TEST(ClothStages, LightAndMipChangesRecomputeNothingAndAFitSettingDoesNotAcquire
     Workbench wb;
     Scene s = small_curtain();
     const RenderResult first = wb.render(s, cpu_request(64, 48));
-    for (const char* st : {"cloth.stitch", "cloth.acquire", "cloth.fit", "cloth.garment"}) ASSERT_EQ(first.eval.run(st)->status, StageStatus::Ran) << st;
+    for (const StageName& st : std::vector<StageName>{cloth::stages::stitch, cloth::stages::acquire, cloth::stages::fit, cloth::stages::garment}) ASSERT_EQ(first.eval.run(st)->status, StageStatus::Ran) << st;
     apply_set(s, "light.direction", "30,-120");
     apply_set(s, "cloth.mip", "nearest");
     apply_set(s, "cloth.mip_bias", "1");
     apply_set(s, "cloth.repeat", "9");
     const RenderResult moved = wb.render(s, cpu_request(64, 48));
-    for (const char* st : {"cloth.stitch", "cloth.acquire", "cloth.fit", "cloth.garment"}) EXPECT_EQ(moved.eval.run(st)->status, StageStatus::Cached) << st;
+    for (const StageName& st : std::vector<StageName>{cloth::stages::stitch, cloth::stages::acquire, cloth::stages::fit, cloth::stages::garment}) EXPECT_EQ(moved.eval.run(st)->status, StageStatus::Cached) << st;
     apply_set(s, "cloth.lobes", "1");
     const RenderResult refit = wb.render(s, cpu_request(64, 48));
-    EXPECT_EQ(refit.eval.run("cloth.acquire")->status, StageStatus::Cached);
-    EXPECT_EQ(refit.eval.run("cloth.fit")->status, StageStatus::Ran);
+    EXPECT_EQ(refit.eval.run(cloth::stages::acquire)->status, StageStatus::Cached);
+    EXPECT_EQ(refit.eval.run(cloth::stages::fit)->status, StageStatus::Ran);
 }
 
 // Acquire once: the exported samples, read back through cloth.samples, skip the stitch and the
@@ -105,14 +106,14 @@ TEST(ClothStages, ExportedSamplesReadBackSkipTheAcquisitionAndFitAsWell) {
     Workbench wb;
     Scene s = small_curtain("weave");
     const Evaluation a = wb.evaluate(s, Registry::instance().frame_stages(s));
-    const auto grid = a.get<cloth::SampleGrid>("cloth.acquire", 0);
+    const auto grid = a.get(cloth::stages::acquire, 0);
     ASSERT_TRUE(grid);
     cloth::write_sample_grid(dir / "weave.samples", *grid);
     apply_set(s, "cloth.samples", dir / "weave.samples");
     apply_set(s, "cloth.stitch", "knit");  // ignored: the samples are read
     const Evaluation b = wb.evaluate(s, Registry::instance().frame_stages(s));
-    EXPECT_EQ(b.run("cloth.stitch")->status, StageStatus::Skipped);
-    const auto pa = a.get<cloth::BrdfPyramid>("cloth.fit", 0), pb = b.get<cloth::BrdfPyramid>("cloth.fit", 0);
+    EXPECT_EQ(b.run(cloth::stages::stitch)->status, StageStatus::Skipped);
+    const auto pa = a.get(cloth::stages::fit, 0), pb = b.get(cloth::stages::fit, 0);
     ASSERT_TRUE(pa && pb);
     ASSERT_EQ(pa->count(), pb->count());
     // The file holds f_r in float: the fits start from values rounded to 7 digits, so an entry may
@@ -222,8 +223,8 @@ TEST(ClothPacking, ThePyramidsTablesShareTheAcquisitionsViews) {
     Workbench wb;
     const Scene s = small_curtain("weave");
     const Evaluation ev = wb.evaluate(s, Registry::instance().frame_stages(s));
-    const auto g = ev.get<cloth::SampleGrid>("cloth.acquire", 0);
-    const auto p = ev.get<cloth::BrdfPyramid>("cloth.fit", 0);
+    const auto g = ev.get(cloth::stages::acquire, 0);
+    const auto p = ev.get(cloth::stages::fit, 0);
     ASSERT_TRUE(g && p);
     const cloth::PackedPyramid packed = cloth::pack_pyramid(*p);
     ASSERT_EQ(packed.shared_views.size(), g->views.size());
@@ -240,8 +241,8 @@ TEST(ClothHardCases, SparseDirectionsStayBoundedBetweenSamples) {
     Scene s = small_curtain("weave");
     apply_set(s, "cloth.directions", "6");
     const Evaluation ev = wb.evaluate(s, Registry::instance().frame_stages(s));
-    const auto g = ev.get<cloth::SampleGrid>("cloth.acquire", 0);
-    const auto p = ev.get<cloth::BrdfPyramid>("cloth.fit", 0);
+    const auto g = ev.get(cloth::stages::acquire, 0);
+    const auto p = ev.get(cloth::stages::fit, 0);
     ASSERT_TRUE(g && p);
     const auto dense = cloth::hemisphere_directions(40, 0.0);
     size_t checked = 0;

@@ -1,5 +1,6 @@
 // Heightfields (core/heightfield): the procedural fields, the queries and float images.
 #include "core/error.h"
+#include "core/microgeom/stages.h"
 #include "core/heightfield/heightfield.h"
 #include "core/image.h"
 #include "support/threads.h"
@@ -303,7 +304,7 @@ TEST(Heightfield, GaussianHasTheRequestedRmsSlopeAndIsIndependentOfTheThreadCoun
 TEST(Heightfield, BadParametersAreInputErrors) {
     expect_input_error([] { make_procedural(params("bricks", 7)); }, "microgeom.resolution");
     expect_input_error([] { make_procedural(params("bricks", 4097)); }, "microgeom.resolution");
-    expect_input_error([] { make_procedural(params("brick", 32)); }, "microgeom.heightfield");
+    expect_input_error([] { make_procedural(params("brick", 32)); }, microgeom::stages::heightfield);
     expect_input_error([] { make_procedural(params("brick", 32)); }, "did you mean 'bricks'");
     ProceduralParams p = params("bumps", 32);
     p.texel_size = 0.f;

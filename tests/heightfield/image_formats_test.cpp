@@ -4,6 +4,7 @@
 // texel_size, and through microgeom's stage graph as value * height_scale / texel_size texels
 // (microgeom.texel_size, heightfield_from_material).
 #include "app/workbench.h"
+#include "core/microgeom/stages.h"
 #include "core/heightfield/heightfield.h"
 #include "core/scene.h"
 #include "support/cli.h"
@@ -101,7 +102,7 @@ TEST(Heightfield, A16BitTiffThroughTheStagesUsesHeightScaleOverTexelSize) {
     req.backend = Backend::Cpu;
     const RenderResult r = wb.render(s, req);
     EXPECT_EQ(r.frame.width, kW);
-    const auto field = r.eval.get<Heightfield>("microgeom.heightfield", 0);
+    const auto field = r.eval.get(microgeom::stages::heightfield, 0);
     ASSERT_TRUE(field);
     const Heightfield& f = *field;
     ASSERT_EQ(f.width, kW);

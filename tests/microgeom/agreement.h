@@ -57,8 +57,8 @@ inline DeviceRenders render_on_both_devices(std::initializer_list<const char*> s
 }
 
 // Each stage ran in `r` and none fell back to the CPU ("... computed on the CPU ..." warnings).
-inline void expect_ran_on_the_gpu(const RenderResult& r, std::initializer_list<const char*> stages) {
-    for (const char* stage : stages) {
+inline void expect_ran_on_the_gpu(const RenderResult& r, const std::vector<StageName>& stages) {
+    for (const StageName& stage : stages) {
         const StageRun* run = r.eval.run(stage);
         ASSERT_NE(run, nullptr) << stage;
         EXPECT_EQ(run->status, StageStatus::Ran) << stage;

@@ -1,6 +1,7 @@
 // Direction sets (microgeom): Fibonacci lattice, convex-hull triangulation, solid-angle shares,
 // locate / nearest queries.
 #include "core/microgeom/directions.h"
+#include "core/microgeom/stages.h"
 #include "support/errors.h"
 
 #include <gtest/gtest.h>
@@ -23,7 +24,7 @@ double det3(vec3 a, vec3 b, vec3 c) {
 
 // [SECTION] Direction sets
 TEST(Directions, BadCountsAreInputErrors) {
-    for (int n : {-1, 0, 3, 65537}) test::expect_input_error([n] { make_direction_set(n); }, {"microgeom.directions"});
+    for (int n : {-1, 0, 3, 65537}) test::expect_input_error([n] { make_direction_set(n); }, {microgeom::stages::directions});
 }
 
 TEST(Directions, SphericalTriangleArea) {

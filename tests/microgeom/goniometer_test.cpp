@@ -2,6 +2,7 @@
 // field is Lambert, a white furnace stays white, the table look-up, the fast tabulation against
 // single goniometer images, reciprocity, the spherical-harmonics fit, BTF slices, bad settings.
 #include "core/error.h"
+#include "core/microgeom/stages.h"
 #include "core/microgeom/ellipse.h"
 #include "core/microgeom/goniometer.h"
 #include "core/microgeom/scatter.h"

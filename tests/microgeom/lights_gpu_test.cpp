@@ -6,6 +6,7 @@
 // multiply-adds (FMA), so images, tables and mosaics agree to 1e-4 relative (of max(1, |x|)) and
 // the shadow fractions to 1e-5 absolute. Measured on llvmpipe: printed by each test.
 #include "app/workbench.h"
+#include "core/microgeom/stages.h"
 #include "core/microgeom/btf.h"
 #include "core/microgeom/curvature.h"
 #include "core/microgeom/ellipse.h"
@@ -233,9 +234,9 @@ TEST(LightsGpu, BrdfLevelOfDetailOnDeviceGpuMatchesDeviceCpu) {
     const test::DeviceRenders r = test::render_on_both_devices(
         {"microgeom.resolution=32", "microgeom.lod=brdf", "microgeom.brdf_resolution=5", "camera.mode=orbit", "geometry.type=sphere"}, Backend::Cpu);
     const RenderResult &cpu = r.cpu, &gpu = r.gpu;
-    test::expect_ran_on_the_gpu(gpu, {"microgeom.brdf"});
-    const SimulatedBrdf* bc = cpu.eval.get<SimulatedBrdf>("microgeom.brdf", 0).get();
-    const SimulatedBrdf* bg = gpu.eval.get<SimulatedBrdf>("microgeom.brdf", 0).get();
+    test::expect_ran_on_the_gpu(gpu, {microgeom::stages::brdf});
+    const SimulatedBrdf* bc = cpu.eval.get(microgeom::stages::brdf, 0).get();
+    const SimulatedBrdf* bg = gpu.eval.get(microgeom::stages::brdf, 0).get();
     ASSERT_TRUE(bc && bg);
     const double worst_table = worst_rel(bc->table, bg->table);
     expect_worst_below("brdf table, device gpu vs cpu", worst_table, 2e-2);
@@ -297,7 +298,7 @@ TEST(LightsGpu, EveryPrecomputeRunsOnTheGpuThroughTheStages) {
     if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     const test::DeviceRenders r = test::render_on_both_devices(
         {"microgeom.resolution=48", "microgeom.curvature_u=40", "microgeom.curvature_v=-20", "microgeom.shadows=ellipse"}, Backend::Cpu);
-    test::expect_ran_on_the_gpu(r.gpu, {"microgeom.visibility", "microgeom.importance", "microgeom.ellipses_curved", "microgeom.ellipses",
-                                        "microgeom.scatter", "microgeom.scatter_env"});
+    test::expect_ran_on_the_gpu(r.gpu, {microgeom::stages::visibility, microgeom::stages::importance, microgeom::stages::ellipses_curved, microgeom::stages::ellipses,
+                                        microgeom::stages::scatter, microgeom::stages::scatter_env});
     test::expect_frames_agree(r.cpu.frame, r.gpu.frame, {"radiance", "direct", "indirect", "shadow"}, test::agreement_of("microgeom"));
 }

@@ -2,6 +2,7 @@
 // BRDF of one heightfield agree; the BTF export's tiles are the goniometer's images; both render
 // paths agree on the new levels.
 #include "app/workbench.h"
+#include "core/microgeom/stages.h"
 #include "core/error.h"
 #include "core/image.h"
 #include "core/microgeom/btf.h"
@@ -224,8 +225,8 @@ TEST(Lod, TexelSizeAndAlbedoMap) {
         apply_set(s, "microgeom.albedo", "1,1,1");
         apply_set(s, "microgeom.albedo_map", albedo_map);
         Session session(g);
-        const Evaluation ev = session.evaluate(s, {"microgeom.heightfield"});
-        return *ev.get<Heightfield>("microgeom.heightfield", 0);
+        const Evaluation ev = session.evaluate(s, {microgeom::stages::heightfield});
+        return *ev.get(microgeom::stages::heightfield, 0);
     };
     const Heightfield h1 = field("1", ""), h05 = field("0.5", dir / "a.exr");
     EXPECT_FLOAT_EQ(h1.max_height() / h1.texel_size, 1.f);

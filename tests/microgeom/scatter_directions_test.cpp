@@ -16,6 +16,7 @@
 //  - CPU vs GPU frames: the tolerances of CpuGpu.AgreeOnEveryAov's orbit presets (scatter_test.cpp);
 //  - device = gpu table vs the CPU table: 1e-4 relative (as ScatterGpu, scatter_gpu_test.cpp).
 #include "app/workbench.h"
+#include "core/microgeom/stages.h"
 #include "core/microgeom/microgeom.h"
 #include "core/scene.h"
 #include "gpu/microgeom/scatter_gpu.h"
@@ -61,8 +62,8 @@ struct Solved {
     std::shared_ptr<const DirectionalScatter> table;
 };
 Solved solved(const RenderResult& r) {
-    return {r.eval.get<Heightfield>("microgeom.heightfield", 0), r.eval.get<DirectionSet>("microgeom.directions", 0),
-            r.eval.get<Visibility>("microgeom.visibility", 0), r.eval.get<DirectionalScatter>("microgeom.scatter_directions", 0)};
+    return {r.eval.get(microgeom::stages::heightfield, 0), r.eval.get(microgeom::stages::directions, 0),
+            r.eval.get(microgeom::stages::visibility, 0), r.eval.get(microgeom::stages::scatter_directions, 0)};
 }
 
 ScatterResult direct_solve(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, vec3 l) {
@@ -170,23 +171,23 @@ TEST(ScatterDirections, MovingTheLightOnASphereReusesTheTableAndChangesTheImage)
     Scene s = small_sphere();
     apply_set(s, "microgeom.resolution=30");  // not cached by another test
     const RenderResult first = render(wb, s);
-    ASSERT_NE(first.eval.run("microgeom.scatter_directions"), nullptr);
-    EXPECT_EQ(first.eval.run("microgeom.scatter_directions")->status, StageStatus::Ran);
-    EXPECT_EQ(first.eval.run("microgeom.scatter")->status, StageStatus::Skipped) << "a sphere has no per-light solve";
-    const uint64_t key = Registry::instance().stages().key(s, "microgeom.scatter_directions");
+    ASSERT_NE(first.eval.run(microgeom::stages::scatter_directions), nullptr);
+    EXPECT_EQ(first.eval.run(microgeom::stages::scatter_directions)->status, StageStatus::Ran);
+    EXPECT_EQ(first.eval.run(microgeom::stages::scatter)->status, StageStatus::Skipped) << "a sphere has no per-light solve";
+    const uint64_t key = Registry::instance().stages().key(s, microgeom::stages::scatter_directions);
     std::vector<float> prev = first.frame.aov("indirect").data;
     for (const char* set : {"light.direction=70,120", "light.direction=20,-60", "light.intensity=2"}) {
         SCOPED_TRACE(set);
         apply_set(s, set);
-        EXPECT_EQ(Registry::instance().stages().key(s, "microgeom.scatter_directions"), key);
+        EXPECT_EQ(Registry::instance().stages().key(s, microgeom::stages::scatter_directions), key);
         const RenderResult r = render(wb, s);
-        EXPECT_EQ(r.eval.run("microgeom.scatter_directions")->status, StageStatus::Cached);
+        EXPECT_EQ(r.eval.run(microgeom::stages::scatter_directions)->status, StageStatus::Cached);
         const std::vector<float>& now = r.frame.aov("indirect").data;
         EXPECT_NE(now, prev) << "the light change did not reach the scattered light";
         prev = now;
     }
     apply_set(s, "microgeom.depth=3");
-    EXPECT_NE(Registry::instance().stages().key(s, "microgeom.scatter_directions"), key) << "the depth must recompute the table";
+    EXPECT_NE(Registry::instance().stages().key(s, microgeom::stages::scatter_directions), key) << "the depth must recompute the table";
 }
 
 TEST(ScatterDirections, PlanarBasesKeepTheirPerLightSolve) {
@@ -195,8 +196,8 @@ TEST(ScatterDirections, PlanarBasesKeepTheirPerLightSolve) {
     apply_set(s, "geometry.type=plane");
     apply_set(s, "camera.mode=texture");
     const RenderResult r = render(wb, s);
-    EXPECT_EQ(r.eval.run("microgeom.scatter")->status, StageStatus::Ran);
-    EXPECT_EQ(r.eval.run("microgeom.scatter_directions")->status, StageStatus::Skipped);
+    EXPECT_EQ(r.eval.run(microgeom::stages::scatter)->status, StageStatus::Ran);
+    EXPECT_EQ(r.eval.run(microgeom::stages::scatter_directions)->status, StageStatus::Skipped);
 }
 
 // A point light's direction varies over the plane: the plane then takes the table too, so each
@@ -210,8 +211,8 @@ TEST(ScatterDirections, PointLightsOnAPlaneUseTheTable) {
     apply_set(s, "light.type=point");
     apply_set(s, "light.position=0,0,0.6");
     const RenderResult r = render(wb, s);
-    EXPECT_EQ(r.eval.run("microgeom.scatter")->status, StageStatus::Skipped);
-    EXPECT_EQ(r.eval.run("microgeom.scatter_directions")->status, StageStatus::Ran);
+    EXPECT_EQ(r.eval.run(microgeom::stages::scatter)->status, StageStatus::Skipped);
+    EXPECT_EQ(r.eval.run(microgeom::stages::scatter_directions)->status, StageStatus::Ran);
     const Image& ind = r.frame.aov("indirect");
     double sum = 0.0;
     for (float v : ind.data) {
@@ -222,7 +223,7 @@ TEST(ScatterDirections, PointLightsOnAPlaneUseTheTable) {
     // Moving the point light reuses the table.
     apply_set(s, "light.position=0.3,0.2,0.5");
     const RenderResult moved = render(wb, s);
-    EXPECT_EQ(moved.eval.run("microgeom.scatter_directions")->status, StageStatus::Cached);
+    EXPECT_EQ(moved.eval.run(microgeom::stages::scatter_directions)->status, StageStatus::Cached);
     EXPECT_NE(moved.frame.aov("indirect").data, ind.data);
 }
 

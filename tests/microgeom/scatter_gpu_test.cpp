@@ -7,6 +7,7 @@
 // Through the stage graph, S_i also come from the GPU, where a few grazing rays classify
 // differently (visibility_gpu_test.cpp); frames then agree for >= 99% of values to 1e-3.
 #include "app/workbench.h"
+#include "core/microgeom/stages.h"
 #include "core/microgeom/curvature.h"
 #include "core/microgeom/microgeom.h"
 #include "core/scene.h"
@@ -124,6 +125,6 @@ TEST(ScatterGpu, RunsFromAWorkerThreadBesideARenderingThread) {
 TEST(ScatterGpu, DeviceGpuThroughTheStagesMatchesDeviceCpu) {
     if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     const test::DeviceRenders r = test::render_on_both_devices({"microgeom.resolution=64"}, Backend::Gpu);
-    test::expect_ran_on_the_gpu(r.gpu, {"microgeom.visibility", "microgeom.scatter", "microgeom.scatter_env"});
+    test::expect_ran_on_the_gpu(r.gpu, {microgeom::stages::visibility, microgeom::stages::scatter, microgeom::stages::scatter_env});
     test::expect_frames_agree(r.cpu.frame, r.gpu.frame, {"radiance", "direct", "indirect", "shadow"}, test::agreement_of("microgeom"));
 }

@@ -1,6 +1,7 @@
 // Scattering in micro-geometry: furnace tests (energy conservation), the flat-field analytic
 // case, and hard cases that must stay finite.
 #include "app/workbench.h"
+#include "core/microgeom/stages.h"
 #include "core/error.h"
 #include "core/image.h"
 #include "core/microgeom/microgeom.h"
@@ -207,15 +208,15 @@ TEST(Stages, MovingTheLightNeverRecomputesVisibility) {
     Scene s = default_scene("microgeom");
     apply_set(s, "microgeom.resolution=24");
     const StageGraph& g = Registry::instance().stages();
-    const uint64_t vis = g.key(s, "microgeom.visibility"), env = g.key(s, "microgeom.scatter_env");
+    const uint64_t vis = g.key(s, microgeom::stages::visibility), env = g.key(s, microgeom::stages::scatter_env);
     apply_set(s, "light.direction=10,300");
     apply_set(s, "microgeom.tiling=2");
     apply_set(s, "camera.orbit=30,30");
-    EXPECT_EQ(g.key(s, "microgeom.visibility"), vis);
-    EXPECT_EQ(g.key(s, "microgeom.scatter_env"), env);
+    EXPECT_EQ(g.key(s, microgeom::stages::visibility), vis);
+    EXPECT_EQ(g.key(s, microgeom::stages::scatter_env), env);
     apply_set(s, "microgeom.depth=0");
-    EXPECT_EQ(g.key(s, "microgeom.scatter"), 0u) << "depth 0: the light's scattering stage is skipped";
-    EXPECT_EQ(g.key(s, "microgeom.visibility"), vis);
+    EXPECT_EQ(g.key(s, microgeom::stages::scatter), 0u) << "depth 0: the light's scattering stage is skipped";
+    EXPECT_EQ(g.key(s, microgeom::stages::visibility), vis);
 }
 
 // "Changing the light or curvature never recomputes S_i", for the curvature: through
@@ -228,7 +229,7 @@ TEST(Stages, ChangingTheCurvatureNeverRecomputesVisibility) {
     for (const char* set : {"camera.mode=texture", "geometry.type=plane", "microgeom.resolution=24", "microgeom.shadows=ellipse", "microgeom.curvature_u=17"})
         apply_set(s, set);
     const StageGraph& g = Registry::instance().stages();
-    const uint64_t vis = g.key(s, "microgeom.visibility"), fits = g.key(s, "microgeom.ellipses_curved");
+    const uint64_t vis = g.key(s, microgeom::stages::visibility), fits = g.key(s, microgeom::stages::ellipses_curved);
     Workbench wb;
     RenderRequest req;
     req.backend = Backend::Cpu;
@@ -236,14 +237,14 @@ TEST(Stages, ChangingTheCurvatureNeverRecomputesVisibility) {
     for (const char* set : {"microgeom.curvature_u=-43", "microgeom.curvature_v=29", "microgeom.curvature_u=0", "microgeom.curvature_v=-11"}) {
         SCOPED_TRACE(set);
         apply_set(s, set);
-        EXPECT_EQ(g.key(s, "microgeom.visibility"), vis);
-        EXPECT_EQ(g.key(s, "microgeom.ellipses_curved"), fits);
+        EXPECT_EQ(g.key(s, microgeom::stages::visibility), vis);
+        EXPECT_EQ(g.key(s, microgeom::stages::ellipses_curved), fits);
         const RenderResult r = wb.render(s, req);
-        ASSERT_NE(r.eval.run("microgeom.visibility"), nullptr);
-        EXPECT_EQ(r.eval.run("microgeom.visibility")->status, StageStatus::Cached);
-        EXPECT_EQ(r.eval.run("microgeom.ellipses_curved")->status, StageStatus::Cached);
-        EXPECT_EQ(r.eval.run("microgeom.importance")->status, StageStatus::Ran);
-        EXPECT_EQ(r.eval.run("microgeom.ellipses")->status, StageStatus::Ran);
+        ASSERT_NE(r.eval.run(microgeom::stages::visibility), nullptr);
+        EXPECT_EQ(r.eval.run(microgeom::stages::visibility)->status, StageStatus::Cached);
+        EXPECT_EQ(r.eval.run(microgeom::stages::ellipses_curved)->status, StageStatus::Cached);
+        EXPECT_EQ(r.eval.run(microgeom::stages::importance)->status, StageStatus::Ran);
+        EXPECT_EQ(r.eval.run(microgeom::stages::ellipses)->status, StageStatus::Ran);
         const std::vector<float>& now = r.frame.aov("radiance").data;
         EXPECT_NE(now, prev) << "the curvature change did not reach the picture";
         prev = now;
@@ -388,15 +389,15 @@ TEST(Curvature, ZeroReproducesTheFlatResultExactly) {
     RenderRequest req;
     req.backend = Backend::Cpu;
     const RenderResult flat = wb.render(s, req);
-    ASSERT_NE(flat.eval.run("microgeom.importance"), nullptr);
-    EXPECT_EQ(flat.eval.run("microgeom.importance")->status, StageStatus::Skipped);
+    ASSERT_NE(flat.eval.run(microgeom::stages::importance), nullptr);
+    EXPECT_EQ(flat.eval.run(microgeom::stages::importance)->status, StageStatus::Skipped);
     apply_set(s, "microgeom.curvature_u=40");
     const RenderResult bent = wb.render(s, req);
-    EXPECT_EQ(bent.eval.run("microgeom.importance")->status, StageStatus::Ran);
+    EXPECT_EQ(bent.eval.run(microgeom::stages::importance)->status, StageStatus::Ran);
     EXPECT_NE(bent.frame.aov("radiance").data, flat.frame.aov("radiance").data) << "the bend must change the frame";
     apply_set(s, "microgeom.curvature_u=0");
     const RenderResult back = wb.render(s, req);
-    EXPECT_EQ(back.eval.run("microgeom.importance")->status, StageStatus::Skipped);
+    EXPECT_EQ(back.eval.run(microgeom::stages::importance)->status, StageStatus::Skipped);
     EXPECT_EQ(back.frame.aov("radiance").data, flat.frame.aov("radiance").data);
 }
 
@@ -518,7 +519,7 @@ TEST(Curvature, FoldOverIsWarnedAndMaskedThroughTheStages) {
             const RenderResult r = render(wb, backend, calm.set);
             const std::vector<std::string> none = fold_warnings(r.eval);
             EXPECT_TRUE(none.empty()) << none.front();
-            const StageStatus st = r.eval.run("microgeom.importance")->status;
+            const StageStatus st = r.eval.run(microgeom::stages::importance)->status;
             if (calm.importance_runs) {
                 EXPECT_TRUE(st == StageStatus::Ran || st == StageStatus::Cached) << to_string(st);
             } else {

@@ -4,6 +4,7 @@
 // the add / remove lobe buttons edit the material, bad files are reported and change nothing, and
 // the ImGui editor does all of it from simulated mouse and keyboard input in a headless context.
 #include "core/bumpsynth/bumpsynth.h"
+#include "core/bumpsynth/stages.h"
 #include "core/image.h"
 #include "core/scene.h"
 #include "core/session.h"
@@ -258,15 +259,15 @@ TEST(NdfEditorFiles, AStrokeSavesAnExrWithTheMassWherePainted) {
 
     // The stage reads it too; a second stroke re-saves the same file and the stage follows.
     Session session;
-    const Evaluation e0 = session.evaluate(s, {"bumpsynth.ndf"});
-    EXPECT_NEAR(moments(*e0.get<bumpsynth::Ndf>("bumpsynth.ndf", 0)).x, 0.5, 0.02);
+    const Evaluation e0 = session.evaluate(s, {bumpsynth::stages::ndf});
+    EXPECT_NEAR(moments(*e0.get(bumpsynth::stages::ndf, 0)).x, 0.5, 0.02);
     p.begin_stroke(b);
     p.stroke_to({-0.5f, 0.f});
     ASSERT_TRUE(p.end_stroke());
     EXPECT_EQ(apply_painted(s, 0, p.image(), dirty), path);
-    const Evaluation e1 = session.evaluate(s, {"bumpsynth.ndf"});
-    EXPECT_EQ(e1.run("bumpsynth.ndf")->status, StageStatus::Ran) << "the re-saved file is a new input";
-    const bumpsynth::Ndf& d1 = *e1.get<bumpsynth::Ndf>("bumpsynth.ndf", 0);
+    const Evaluation e1 = session.evaluate(s, {bumpsynth::stages::ndf});
+    EXPECT_EQ(e1.run(bumpsynth::stages::ndf)->status, StageStatus::Ran) << "the re-saved file is a new input";
+    const bumpsynth::Ndf& d1 = *e1.get(bumpsynth::stages::ndf, 0);
     EXPECT_NEAR(moments(d1).x, 0.0, 0.02);
     EXPECT_NEAR(moments_in_half(d1, false).mass, 0.5, 0.02);
 }
@@ -445,7 +446,7 @@ namespace {
 // One evaluation of the NDF stage for the scene.
 Evaluation evaluate_ndf(const Scene& s) {
     Session session;
-    return session.evaluate(s, {"bumpsynth.ndf"});
+    return session.evaluate(s, {bumpsynth::stages::ndf});
 }
 
 void mouse_to(HeadlessImGui& ui, const std::function<void()>& draw, std::array<float, 2> p) {

@@ -20,12 +20,16 @@ struct Maps {
 
 int atlas_size(const Scene& s, int object) { return int(s.objects[size_t(object)].material.get_int("atlas_size")); }
 
+// The frame steps' handles.
+constexpr FrameStep<Maps> kIllumination{"probe.illumination"};
+constexpr FrameStep<Maps> kBlur{"probe.blur"};
+
 // [SECTION] Core side
 class ProbeTechnique final : public Technique {
 public:
     ProbeTechnique() : Technique("probe", "Probe (tests the frame-step contract)") {
         params_.add_color("kd", {0.8, 0.8, 0.8}).doc("Diffuse albedo");
-        params_.add_int("atlas_size", 64).range(4, 1024).costs(Cost::Recompute).doc("Texels per side of the illumination map");
+        params_.add_int("atlas_size", 64).range(4, 1024).doc("Texels per side of the illumination map");
         params_.add_int("blur", 1).range(0, 8).doc("Box filter radius in texels");
         aovs_ = {{"texel", 3, "The illumination map's texel at the pixel (x, y)"}};
     }
@@ -34,65 +38,68 @@ public:
         BenchTable t;
         t.name = "probe";
         t.title = "probe: frame with two frame steps";
-        t.columns = {{"frame 64x64", "", 64, 64, true, true}};
+        t.columns = {{"frame 64x64", {}, 64, 64, true, true}};
         t.rows = {{"sphere", [] { return default_scene("probe"); }, {}}};
         return {t};
     }
     std::vector<FrameStepDecl> frame_steps() const override {
-        return {{"probe.illumination", "Irradiance per texel of the (u,v) square", {"light.*", "probe.atlas_size"}, {"scene.geometry"}},
-                {"probe.blur", "Box filter of the illumination map", {"light.*", "probe.atlas_size", "probe.blur"}, {"scene.geometry"}}};
-    }
-
-    std::any run_step_cpu(const std::string& step, const FrameStepContext& ctx) const override {
-        Maps out;
-        for (int obj : ctx.objects) {
-            const int N = atlas_size(ctx.scene, obj);
-            if (step == "probe.illumination") {
-                RasterCamera cam;
-                cam.width = cam.height = N;
-                cam.texture_space = true;
-                const auto mesh = drawn_mesh(ctx.scene, ctx.eval, obj);
-                GBuffer gb;
-                rasterize({{mesh.get(), object_to_world(ctx.scene.objects[size_t(obj)]), obj}}, cam, gb);
-                Image img(N, N, 3, 0.f);
-                for (int y = 0; y < N; ++y)
-                    for (int x = 0; x < N; ++x) {
-                        const size_t px = gb.index(x, y);
-                        if (gb.object[px] < 0) continue;
-                        vec3 E(0.f);
-                        for (const Light& l : ctx.lighting.lights) {
-                            vec3 wi, El;
-                            l.sample(gb.position[px], wi, El);
-                            E += El * std::max(0.f, glm::dot(gb.normal[px], wi));
-                        }
-                        float* p = img.at(x, y);
-                        p[0] = E.x, p[1] = E.y, p[2] = E.z;
-                    }
-                out.by_object.emplace(obj, std::move(img));
-            } else {
-                const Image& in = ctx.step<Maps>("probe.illumination").by_object.at(obj);
-                const int r = int(ctx.scene.objects[size_t(obj)].material.get_int("blur"));
-                Image img(N, N, 3, 0.f);
-                for (int y = 0; y < N; ++y)
-                    for (int x = 0; x < N; ++x) {
-                        vec3 sum(0.f);
-                        for (int dy = -r; dy <= r; ++dy)
-                            for (int dx = -r; dx <= r; ++dx) {
-                                const float* q = in.at(std::clamp(x + dx, 0, N - 1), std::clamp(y + dy, 0, N - 1));
-                                sum += vec3(q[0], q[1], q[2]);
-                            }
-                        const vec3 v = sum / float((2 * r + 1) * (2 * r + 1));
-                        float* p = img.at(x, y);
-                        p[0] = v.x, p[1] = v.y, p[2] = v.z;
-                    }
-                out.by_object.emplace(obj, std::move(img));
-            }
-        }
-        return std::any(std::shared_ptr<const Maps>(std::make_shared<Maps>(std::move(out))));
+        return {frame_step(kIllumination, "Irradiance per texel of the (u,v) square", {"light.*", "probe.atlas_size"}, {mesolab::stages::geometry},
+                           [](const FrameStepContext& ctx) {
+                               Maps out;
+                               for (int obj : ctx.objects) {
+                                   const int N = atlas_size(ctx.scene, obj);
+                                   RasterCamera cam;
+                                   cam.width = cam.height = N;
+                                   cam.texture_space = true;
+                                   const auto mesh = drawn_mesh(ctx.scene, ctx.eval, obj);
+                                   GBuffer gb;
+                                   rasterize({{mesh.get(), object_to_world(ctx.scene.objects[size_t(obj)]), obj}}, cam, gb);
+                                   Image img(N, N, 3, 0.f);
+                                   for (int y = 0; y < N; ++y)
+                                       for (int x = 0; x < N; ++x) {
+                                           const size_t px = gb.index(x, y);
+                                           if (gb.object[px] < 0) continue;
+                                           vec3 E(0.f);
+                                           for (const Light& l : ctx.lighting.lights) {
+                                               vec3 wi, El;
+                                               l.sample(gb.position[px], wi, El);
+                                               E += El * std::max(0.f, glm::dot(gb.normal[px], wi));
+                                           }
+                                           float* p = img.at(x, y);
+                                           p[0] = E.x, p[1] = E.y, p[2] = E.z;
+                                       }
+                                   out.by_object.emplace(obj, std::move(img));
+                               }
+                               return out;
+                           }),
+                frame_step(kBlur, "Box filter of the illumination map", {"light.*", "probe.atlas_size", "probe.blur"}, {mesolab::stages::geometry},
+                           [](const FrameStepContext& ctx) {
+                               Maps out;
+                               for (int obj : ctx.objects) {
+                                   const int N = atlas_size(ctx.scene, obj);
+                                   const Image& in = ctx.step(kIllumination).by_object.at(obj);
+                                   const int r = int(ctx.scene.objects[size_t(obj)].material.get_int("blur"));
+                                   Image img(N, N, 3, 0.f);
+                                   for (int y = 0; y < N; ++y)
+                                       for (int x = 0; x < N; ++x) {
+                                           vec3 sum(0.f);
+                                           for (int dy = -r; dy <= r; ++dy)
+                                               for (int dx = -r; dx <= r; ++dx) {
+                                                   const float* q = in.at(std::clamp(x + dx, 0, N - 1), std::clamp(y + dy, 0, N - 1));
+                                                   sum += vec3(q[0], q[1], q[2]);
+                                               }
+                                           const vec3 v = sum / float((2 * r + 1) * (2 * r + 1));
+                                           float* p = img.at(x, y);
+                                           p[0] = v.x, p[1] = v.y, p[2] = v.z;
+                                       }
+                                   out.by_object.emplace(obj, std::move(img));
+                               }
+                               return out;
+                           })};
     }
 
     void shade_cpu(const ShadeContext& ctx) const override {
-        const Maps& maps = ctx.step<Maps>("probe.blur");
+        const Maps& maps = ctx.step(kBlur);
         const int texel_out = ctx.out.index("texel");
         std::map<int, vec3> kd;  // the material, read once per frame
         for (int obj : ctx.objects) kd[obj] = ctx.scene.objects[size_t(obj)].material.get_vec3("kd");
@@ -125,44 +132,46 @@ public:
           blur_(gpu::Program::compute("shaders/test/probe_blur.comp")),
           shade_(gpu::Program::graphics("shaders/mesh.vert", "shaders/test/probe.frag", {}, gpu::fragment_outputs(t))) {}
 
-    void run_step(const std::string& step, gpu::DrawContext& ctx) override {
+    std::vector<gpu::GpuFrameStep> frame_steps() override {
+        return {{kIllumination, [this](gpu::DrawContext& ctx) { illuminate(ctx); }}, {kBlur, [this](gpu::DrawContext& ctx) { blur(ctx); }}};
+    }
+
+    void illuminate(gpu::DrawContext& ctx) {
         for (int obj : ctx.objects) {
             const int N = atlas_size(ctx.scene, obj);
             PerObject& o = objects_[obj];
-            if (step == "probe.illumination") {
-                o.illumination.resize(N, N, 1);
-                o.illumination.bind();
-                glClearColor(0.f, 0.f, 0.f, 0.f);
-                glClearDepth(1.0);
-                glDepthMask(GL_TRUE);
-                glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-                glEnable(GL_DEPTH_TEST);  // as the CPU rasteriser: at equal depth the first triangle drawn stays
-                glDepthFunc(GL_LESS);
-                FrameCamera texture_space;
-                texture_space.texture_mode = true;
-                illumination_.use();
-                ctx.renderer.set_camera_uniforms(illumination_, texture_space, object_to_world(ctx.scene.objects[size_t(obj)]));
-                ctx.renderer.set_lighting_uniforms(illumination_, ctx.lighting, 0);
-                ctx.renderer.draw_object(ctx.scene, ctx.eval, obj);
-                glBindVertexArray(0);
-            } else {
-                if (o.size != N) {
-                    GLuint id = 0;
-                    glGenTextures(1, &id);
-                    o.blurred = gpu::Texture(id);
-                    glBindTexture(GL_TEXTURE_2D, id);
-                    glTexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA32F, N, N);
-                    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-                    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-                    o.size = N;
-                }
-                blur_.use();
-                glUniform1i(blur_.uniform("u_radius"), int(ctx.scene.objects[size_t(obj)].material.get_int("blur")));
-                glBindImageTexture(0, o.illumination.color(0), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
-                glBindImageTexture(1, o.blurred.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-                glDispatchCompute(GLuint((N + 7) / 8), GLuint((N + 7) / 8), 1);
-                glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
+            o.illumination.resize(N, N, 1);
+            o.illumination.bind();
+            glClearColor(0.f, 0.f, 0.f, 0.f);
+            glClearDepth(1.0);
+            glDepthMask(GL_TRUE);
+            glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+            glEnable(GL_DEPTH_TEST);  // as the CPU rasteriser: at equal depth the first triangle drawn stays
+            glDepthFunc(GL_LESS);
+            FrameCamera texture_space;
+            texture_space.texture_mode = true;
+            illumination_.use();
+            ctx.renderer.set_camera_uniforms(illumination_, texture_space, object_to_world(ctx.scene.objects[size_t(obj)]));
+            ctx.renderer.set_lighting_uniforms(illumination_, ctx.lighting, 0);
+            ctx.renderer.draw_object(ctx.scene, ctx.eval, obj);
+            glBindVertexArray(0);
+        }
+    }
+
+    void blur(gpu::DrawContext& ctx) {
+        for (int obj : ctx.objects) {
+            const int N = atlas_size(ctx.scene, obj);
+            PerObject& o = objects_[obj];
+            if (o.size != N) {
+                o.blurred = gpu::make_texture({.format = GL_RGBA32F, .width = N, .height = N});
+                o.size = N;
             }
+            blur_.use();
+            glUniform1i(blur_.uniform("u_radius"), int(ctx.scene.objects[size_t(obj)].material.get_int("blur")));
+            glBindImageTexture(0, o.illumination.color(0), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+            glBindImageTexture(1, o.blurred.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+            glDispatchCompute(GLuint((N + 7) / 8), GLuint((N + 7) / 8), 1);
+            glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT);
         }
     }
 

@@ -2,6 +2,10 @@
 // stages are keyed by their own object only; the cache never trusts a 64-bit key alone; a stage
 // above the memory budget stops before it allocates.
 #include "app/workbench.h"
+#include "core/microgeom/stages.h"
+#include "core/scene_stages.h"
+#include "core/bumpsynth/stages.h"
+#include "core/basic/stages.h"
 #include "core/bumpsynth/lut.h"
 #include "core/error.h"
 #include "core/mesh.h"
@@ -20,7 +24,7 @@ using namespace mesolab::test;
 
 namespace {
 
-StageStatus status(const Evaluation& e, const std::string& stage, int object) {
+StageStatus status(const Evaluation& e, const StageName& stage, int object) {
     const StageRun* r = e.run(stage, object);
     EXPECT_NE(r, nullptr) << stage << " for object " << object;
     return r ? r->status : StageStatus::Failed;
@@ -63,7 +67,7 @@ TEST(Sessions, TwoSessionsOnTwoThreadsGiveTheSameBytesAsEachAlone) {
         alone_b = wb.render(b, req).frame;
         // Each session's cache holds its own scene's stages only.
         EXPECT_NE(wa.session().cache().entries(), 0u);
-        EXPECT_EQ(wa.evaluate(b, {"bumpsynth.lut"}).run("bumpsynth.lut")->status, StageStatus::Ran) << "session a must not see session b's results";
+        EXPECT_EQ(wa.evaluate(b, {bumpsynth::stages::lut}).run(bumpsynth::stages::lut)->status, StageStatus::Ran) << "session a must not see session b's results";
     }
     Frame par_a, par_b;
     Workbench wa, wb;
@@ -121,21 +125,21 @@ TEST(ObjectStages, ChangingOneObjectsMaterialNeverRecomputesTheOther) {
     Scene s = two_objects("bumpsynth");
     apply_set(s, "objects.1.material.lut_size=128");
     Evaluation e = session.evaluate_frame(s);
-    EXPECT_EQ(status(e, "bumpsynth.lut", 0), StageStatus::Ran);
-    EXPECT_EQ(status(e, "bumpsynth.lut", 1), StageStatus::Ran);
+    EXPECT_EQ(status(e, bumpsynth::stages::lut, 0), StageStatus::Ran);
+    EXPECT_EQ(status(e, bumpsynth::stages::lut, 1), StageStatus::Ran);
     apply_set(s, "objects.1.material.lut_size=64");
     e = session.evaluate_frame(s);
-    EXPECT_EQ(status(e, "bumpsynth.ndf", 0), StageStatus::Cached);
-    EXPECT_EQ(status(e, "bumpsynth.lut", 0), StageStatus::Cached);
-    EXPECT_EQ(status(e, "bumpsynth.ndf", 1), StageStatus::Cached) << "the NDF does not read lut_size";
-    EXPECT_EQ(status(e, "bumpsynth.lut", 1), StageStatus::Ran);
-    EXPECT_EQ(e.get<bumpsynth::Lut>("bumpsynth.lut", 0)->size(), 256);
-    EXPECT_EQ(e.get<bumpsynth::Lut>("bumpsynth.lut", 1)->size(), 64);
+    EXPECT_EQ(status(e, bumpsynth::stages::ndf, 0), StageStatus::Cached);
+    EXPECT_EQ(status(e, bumpsynth::stages::lut, 0), StageStatus::Cached);
+    EXPECT_EQ(status(e, bumpsynth::stages::ndf, 1), StageStatus::Cached) << "the NDF does not read lut_size";
+    EXPECT_EQ(status(e, bumpsynth::stages::lut, 1), StageStatus::Ran);
+    EXPECT_EQ(e.get(bumpsynth::stages::lut, 0)->size(), 256);
+    EXPECT_EQ(e.get(bumpsynth::stages::lut, 1)->size(), 64);
     // Moving object 1 (a scene-level change of its geometry's position) recomputes nothing.
     apply_set(s, "objects.1.geometry.position=3,0,0");
     e = session.evaluate_frame(s);
-    EXPECT_EQ(status(e, "bumpsynth.lut", 0), StageStatus::Cached);
-    EXPECT_EQ(status(e, "bumpsynth.lut", 1), StageStatus::Cached);
+    EXPECT_EQ(status(e, bumpsynth::stages::lut, 0), StageStatus::Cached);
+    EXPECT_EQ(status(e, bumpsynth::stages::lut, 1), StageStatus::Cached);
     for (const auto& r : e.runs) EXPECT_NE(r.status, StageStatus::Ran) << r.label(s);
 }
 
@@ -148,15 +152,15 @@ TEST(ObjectStages, TwoMicrogeomObjectsWithDifferentHeightfields) {
     apply_set(s, "microgeom.directions=32");
     apply_set(s, "objects.1.material.heightfield=bumps");
     Evaluation e = session.evaluate_frame(s);
-    EXPECT_EQ(status(e, "microgeom.visibility", 0), StageStatus::Ran);
-    EXPECT_EQ(status(e, "microgeom.visibility", 1), StageStatus::Ran);
+    EXPECT_EQ(status(e, microgeom::stages::visibility, 0), StageStatus::Ran);
+    EXPECT_EQ(status(e, microgeom::stages::visibility, 1), StageStatus::Ran);
     apply_set(s, "objects.1.material.heightfield=triangles");
     e = session.evaluate_frame(s);
-    for (const char* st : {"microgeom.heightfield", "microgeom.directions", "microgeom.visibility"})
+    for (const StageName& st : std::vector<StageName>{microgeom::stages::heightfield, microgeom::stages::directions, microgeom::stages::visibility})
         EXPECT_EQ(status(e, st, 0), StageStatus::Cached) << st << ": object 0 did not change";
-    EXPECT_EQ(status(e, "microgeom.heightfield", 1), StageStatus::Ran);
-    EXPECT_EQ(status(e, "microgeom.visibility", 1), StageStatus::Ran);
-    EXPECT_EQ(status(e, "microgeom.directions", 1), StageStatus::Cached) << "the direction set reads microgeom.directions only";
+    EXPECT_EQ(status(e, microgeom::stages::heightfield, 1), StageStatus::Ran);
+    EXPECT_EQ(status(e, microgeom::stages::visibility, 1), StageStatus::Ran);
+    EXPECT_EQ(status(e, microgeom::stages::directions, 1), StageStatus::Cached) << "the direction set reads microgeom.directions only";
 }
 
 TEST(ObjectStages, LoadingOneMeshNeverReloadsTheOthers) {
@@ -170,23 +174,23 @@ TEST(ObjectStages, LoadingOneMeshNeverReloadsTheOthers) {
     Scene s = load_preset(dir / "p.json");
     Session session;
     Evaluation e = session.evaluate_frame(s);
-    EXPECT_EQ(status(e, "scene.geometry", 0), StageStatus::Ran);
-    EXPECT_EQ(status(e, "scene.geometry", 1), StageStatus::Ran);
+    EXPECT_EQ(status(e, mesolab::stages::geometry, 0), StageStatus::Ran);
+    EXPECT_EQ(status(e, mesolab::stages::geometry, 1), StageStatus::Ran);
     apply_set(s, "objects.1.geometry.path=" + (dir / "c.obj"));
     e = session.evaluate_frame(s);
-    EXPECT_EQ(status(e, "scene.geometry", 0), StageStatus::Cached);
-    EXPECT_EQ(status(e, "scene.geometry", 1), StageStatus::Ran);
-    EXPECT_EQ(e.get<TriMesh>("scene.geometry", 1)->triangle_count(), 2u);
-    EXPECT_EQ(e.get<TriMesh>("scene.geometry", 0)->triangle_count(), 1u);
+    EXPECT_EQ(status(e, mesolab::stages::geometry, 0), StageStatus::Cached);
+    EXPECT_EQ(status(e, mesolab::stages::geometry, 1), StageStatus::Ran);
+    EXPECT_EQ(e.get(mesolab::stages::geometry, 1)->triangle_count(), 2u);
+    EXPECT_EQ(e.get(mesolab::stages::geometry, 0)->triangle_count(), 1u);
 }
 
 TEST(ObjectStages, ObjectsWithEqualSettingsShareOneResult) {
     Session session;
     const Scene s = two_objects("bumpsynth");
     const Evaluation e = session.evaluate_frame(s);
-    EXPECT_EQ(status(e, "bumpsynth.lut", 0), StageStatus::Ran);
-    EXPECT_EQ(status(e, "bumpsynth.lut", 1), StageStatus::Cached);
-    EXPECT_EQ(e.get<bumpsynth::Lut>("bumpsynth.lut", 0).get(), e.get<bumpsynth::Lut>("bumpsynth.lut", 1).get());
+    EXPECT_EQ(status(e, bumpsynth::stages::lut, 0), StageStatus::Ran);
+    EXPECT_EQ(status(e, bumpsynth::stages::lut, 1), StageStatus::Cached);
+    EXPECT_EQ(e.get(bumpsynth::stages::lut, 0).get(), e.get(bumpsynth::stages::lut, 1).get());
 }
 
 TEST(ObjectStages, AnotherTechniquesObjectsAreNotComputedFor) {
@@ -194,35 +198,36 @@ TEST(ObjectStages, AnotherTechniquesObjectsAreNotComputedFor) {
     Scene s = two_objects("bumpsynth");
     s.objects[1] = default_scene("basic").objects[0];
     const Evaluation e = session.evaluate_frame(s);
-    EXPECT_NE(e.run("bumpsynth.ndf", 0), nullptr);
-    EXPECT_EQ(e.run("bumpsynth.ndf", 1), nullptr);
-    EXPECT_EQ(e.get<bumpsynth::Ndf>("bumpsynth.ndf", 1), nullptr);
-    EXPECT_EQ(status(e, "basic.albedo", 1), StageStatus::Ran);
-    EXPECT_EQ(e.get<Image>("basic.albedo", 1), nullptr) << "no albedo map: no image, and no error";
-    EXPECT_EQ(e.run("basic.albedo", 0), nullptr);
+    EXPECT_NE(e.run(bumpsynth::stages::ndf, 0), nullptr);
+    EXPECT_EQ(e.run(bumpsynth::stages::ndf, 1), nullptr);
+    EXPECT_EQ(e.get(bumpsynth::stages::ndf, 1), nullptr);
+    EXPECT_EQ(status(e, basic::stages::albedo, 1), StageStatus::Ran);
+    EXPECT_EQ(e.get(basic::stages::albedo, 1), nullptr) << "no albedo map: no image, and no error";
+    EXPECT_EQ(e.run(basic::stages::albedo, 0), nullptr);
 }
 
 // [SECTION] The cache never trusts the key alone
 TEST(StageCache, AForcedHashCollisionNeverReturnsAnotherInputsResult) {
     StageGraph g;
     int runs = 0;
-    g.add({.name = "t.value", .params = {"camera.distance"}, .run = [&](StageContext& ctx) {
-               ++runs;
-               return stage_result(ctx.scene.camera.get_float("distance"));
-           }});
+    static constexpr Stage<double> kValue{"t.value"};
+    g.add(kValue, {.params = {"camera.distance"}, .run = [&](StageContext& ctx) {
+                       ++runs;
+                       return stage_result(kValue, ctx.scene.camera.get_float("distance"));
+                   }});
     // Every fingerprint hashes to the same key.
     Session session(g, [](std::string_view) { return uint64_t(42); });
     Scene a = default_scene("basic"), b = a;
     apply_set(b, "camera.distance=7");
-    const Evaluation ea = session.evaluate(a, {"t.value"});
-    const Evaluation eb = session.evaluate(b, {"t.value"});
-    EXPECT_EQ(ea.run("t.value")->key, eb.run("t.value")->key) << "the test wants colliding keys";
-    EXPECT_EQ(eb.run("t.value")->status, StageStatus::Ran) << "a colliding key must not be a cache hit";
-    EXPECT_DOUBLE_EQ(*eb.get<double>("t.value"), 7.0);
+    const Evaluation ea = session.evaluate(a, {kValue});
+    const Evaluation eb = session.evaluate(b, {kValue});
+    EXPECT_EQ(ea.run(kValue)->key, eb.run(kValue)->key) << "the test wants colliding keys";
+    EXPECT_EQ(eb.run(kValue)->status, StageStatus::Ran) << "a colliding key must not be a cache hit";
+    EXPECT_DOUBLE_EQ(*eb.get(kValue), 7.0);
     // Equal inputs still hit.
-    const Evaluation ea2 = session.evaluate(a, {"t.value"});
-    EXPECT_EQ(ea2.run("t.value")->status, StageStatus::Cached);
-    EXPECT_DOUBLE_EQ(*ea2.get<double>("t.value"), *ea.get<double>("t.value"));
+    const Evaluation ea2 = session.evaluate(a, {kValue});
+    EXPECT_EQ(ea2.run(kValue)->status, StageStatus::Cached);
+    EXPECT_DOUBLE_EQ(*ea2.get(kValue), *ea.get(kValue));
     EXPECT_EQ(runs, 2);
 }
 
@@ -231,8 +236,8 @@ TEST(StageCache, FingerprintsCoverTheInputsFingerprints) {
     const StageGraph& g = Registry::instance().stages();
     Scene a = default_scene("bumpsynth"), b = a;
     apply_set(b, "bumpsynth.alpha_x=0.11");
-    EXPECT_NE(g.fingerprint(a, "bumpsynth.lut", 0), g.fingerprint(b, "bumpsynth.lut", 0));
-    EXPECT_NE(g.fingerprint(a, "bumpsynth.lut", 0).find("bumpsynth.ndf"), std::string::npos);
+    EXPECT_NE(g.fingerprint(a, bumpsynth::stages::lut, 0), g.fingerprint(b, bumpsynth::stages::lut, 0));
+    EXPECT_NE(g.fingerprint(a, bumpsynth::stages::lut, 0).find("bumpsynth.ndf"), std::string::npos);
 }
 
 // [SECTION] Memory budget
@@ -265,12 +270,12 @@ TEST(Memory, EstimatesBoundWhatTheStagesAllocate) {
     apply_set(s, "microgeom.resolution=64");
     apply_set(s, "microgeom.directions=64");
     const Evaluation e = session.evaluate_frame(s);
-    const StageDecl& d = Registry::instance().stages().at("microgeom.visibility");
+    const StageDecl& d = Registry::instance().stages().at(microgeom::stages::visibility);
     ASSERT_TRUE(d.memory);
     const ProgressFn no_progress;
     const StageContext ctx(s, e, d.name, 0, no_progress, nullptr);  // its inputs are in e
     const double est = d.memory(ctx).bytes;
-    const double real = double(e.get<microgeom::Visibility>("microgeom.visibility", 0)->bytes());
+    const double real = double(e.get(microgeom::stages::visibility, 0)->bytes());
     EXPECT_GE(est, real);
     EXPECT_LE(est, 2.0 * real) << "an estimate far above the allocation would refuse settings that fit";
 }

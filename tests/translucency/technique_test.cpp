@@ -2,6 +2,7 @@
 // moving a light reruns only the frame passes, blending brings the method to the reference on a
 // curved scanned mesh, and hard inputs never produce NaN or crash.
 #include "app/workbench.h"
+#include "core/translucency/stages.h"
 #include "core/error.h"
 #include "core/scene.h"
 #include "core/translucency/translucency.h"
@@ -144,7 +145,7 @@ TEST(TranslucencyCpuGpu, AgreeAboveSixtyFiveThousandVertices) {
     req.coverage = true;
     req.backend = Backend::Cpu;
     const RenderResult cpu = wb.render(s, req);
-    const auto F = cpu.eval.get<translucency::VertexFactors>("translucency.factors", 0);
+    const auto F = cpu.eval.get(translucency::stages::factors, 0);
     ASSERT_TRUE(F);
     ASSERT_GT(F->n, 65536);
     ASSERT_EQ(F->col_hi.size(), F->pairs());
@@ -182,13 +183,13 @@ TEST(TranslucencyStages, MovingALightRecomputesNoStageAndRerunsTheFramePasses) {
     req.backend = Backend::Cpu;
     req.width = req.height = 64;
     const RenderResult first = wb.render(s, req);
-    for (const char* st : {"translucency.mesh", "translucency.atlas", "translucency.kernels", "translucency.factors", "translucency.blend",
-                           "translucency.gather"})
+    for (const StageName& st : std::vector<StageName>{translucency::stages::mesh, translucency::stages::atlas, translucency::stages::kernels, translucency::stages::factors, translucency::stages::blend,
+                           translucency::stages::gather})
         ASSERT_EQ(first.eval.run(st)->status, StageStatus::Ran) << st;
     apply_set(s, "light.direction", "40,120");
     const RenderResult moved = wb.render(s, req);
-    for (const char* st : {"translucency.mesh", "translucency.atlas", "translucency.kernels", "translucency.factors", "translucency.blend",
-                           "translucency.gather"})
+    for (const StageName& st : std::vector<StageName>{translucency::stages::mesh, translucency::stages::atlas, translucency::stages::kernels, translucency::stages::factors, translucency::stages::blend,
+                           translucency::stages::gather})
         EXPECT_EQ(moved.eval.run(st)->status, StageStatus::Cached) << st;
     ASSERT_FALSE(moved.frame.steps.empty());
     for (const FrameStepRun& r : moved.frame.steps) EXPECT_EQ(r.status, StageStatus::Ran) << r.name;
@@ -206,8 +207,8 @@ TEST(TranslucencyStages, StagesThatNoSettingNeedsAreSkipped) {
     Scene s = small_sphere();
     apply_set(s, "translucency.blend", "false");
     const Evaluation ev = wb.evaluate(s, Registry::instance().frame_stages(s));
-    EXPECT_EQ(ev.run("translucency.blend")->status, StageStatus::Skipped);
-    EXPECT_EQ(ev.run("translucency.albedo")->status, StageStatus::Skipped);
+    EXPECT_EQ(ev.run(translucency::stages::blend)->status, StageStatus::Skipped);
+    EXPECT_EQ(ev.run(translucency::stages::albedo)->status, StageStatus::Skipped);
 }
 
 // [SECTION] Accuracy against the reference, through the technique
@@ -323,14 +324,14 @@ TEST(TranslucencyTexture, AlbedoMapAndVeinsScaleTheRadianceNotTheRadiosity) {
     req.backend = Backend::Cpu;
     req.aovs = {"radiosity"};
     const RenderResult plain = wb.render(s, req);
-    EXPECT_EQ(plain.eval.run("translucency.albedo")->status, StageStatus::Skipped);
+    EXPECT_EQ(plain.eval.run(translucency::stages::albedo)->status, StageStatus::Skipped);
     for (const auto& [key, value] : std::vector<std::pair<std::string, std::string>>{
              {"translucency.albedo_map", test::source_path("presets/basic/maps/sky.exr")}, {"translucency.veins", "0.9"}}) {
         SCOPED_TRACE(key);
         Scene t = s;
         apply_set(t, key, value);
         const RenderResult textured = wb.render(t, req);
-        EXPECT_EQ(textured.eval.run("translucency.albedo")->status, StageStatus::Ran);
+        EXPECT_EQ(textured.eval.run(translucency::stages::albedo)->status, StageStatus::Ran);
         const Image &a = plain.frame.aov("radiance"), &b = textured.frame.aov("radiance");
         const Image &ra = plain.frame.aov("radiosity"), &rb = textured.frame.aov("radiosity");
         double diff = 0.0, rdiff = 0.0;

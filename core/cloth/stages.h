@@ -1,0 +1,21 @@
+#pragma once
+// Technique cloth: the handles of its stages (core/stage.h), declared once. What each computes:
+// technique.h; the declarations: the technique's stage graph.
+#include "core/stage.h"
+
+namespace mesolab {
+struct TriMesh;
+}  // namespace mesolab
+
+namespace mesolab::cloth {
+struct StitchMesh;
+struct SampleGrid;
+struct BrdfPyramid;
+
+namespace stages {
+inline constexpr Stage<StitchMesh> stitch{"cloth.stitch"};        // the stitch's micro-geometry
+inline constexpr Stage<SampleGrid> acquire{"cloth.acquire"};      // virtual acquisition
+inline constexpr Stage<BrdfPyramid> fit{"cloth.fit"};             // the fitted BRDF array and its mip levels
+inline constexpr Stage<TriMesh> garment{"cloth.garment"};         // the procedural garment drawn
+}  // namespace stages
+}  // namespace mesolab::cloth
