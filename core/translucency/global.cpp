@@ -424,11 +424,15 @@ VertexFactors build_vertex_factors(const std::vector<vec3>& position, const std:
     // smoothing R_d, and the blending fit closes the energy); without, they and the diagonal are
     // the hat-pair means R̄ (see global.h).
     std::vector<std::vector<uint32_t>> ring(p.interpolation_correction ? size_t(F.n) : 0);
+    std::vector<float> reach2(ring.size(), 0.f);  // i's longest edge, squared (mm²)
     if (p.interpolation_correction) {
         for (size_t f = 0; f + 2 < index.size(); f += 3)
             for (int k = 0; k < 3; ++k) {
                 const uint32_t a = index[f + size_t(k)], b = index[f + size_t((k + 1) % 3)];
                 ring[a].push_back(b), ring[b].push_back(a);
+                const vec3 e = x[a] - x[b];
+                const float e2 = glm::dot(e, e) * 1.0001f;
+                reach2[a] = std::max(reach2[a], e2), reach2[b] = std::max(reach2[b], e2);
             }
         for (auto& r : ring) {
             std::sort(r.begin(), r.end());
@@ -499,13 +503,17 @@ VertexFactors build_vertex_factors(const std::vector<vec3>& position, const std:
                 const vec3 d = x[size_t(j)] - xi;
                 const float r2 = glm::dot(d, d);
                 vec3 rd = Rd.at_r2(r2);
-                bool neighbour = false;  // j == i or an edge
-                if (!laplacian.empty()) {
+                // j == i or an edge (looked up only within i's longest edge)
+                bool neighbour = j == i;
+                if (!laplacian.empty() && !neighbour && r2 <= reach2[size_t(i)]) {
                     const auto& ri = ring[size_t(i)];
-                    const auto it = j == i ? ri.end() : std::lower_bound(ri.begin(), ri.end(), uint32_t(j));
-                    neighbour = j == i || (it != ri.end() && *it == uint32_t(j));
-                    if (!diag.empty() && neighbour) rd = j == i ? diag[size_t(i)] : edge[size_t(i)][size_t(it - ri.begin())];
+                    const auto it = std::lower_bound(ri.begin(), ri.end(), uint32_t(j));
+                    if (it != ri.end() && *it == uint32_t(j)) {
+                        neighbour = true;
+                        if (!diag.empty()) rd = edge[size_t(i)][size_t(it - ri.begin())];
+                    }
                 }
+                if (!diag.empty() && j == i) rd = diag[size_t(i)];
                 const float mean_area = 0.5f * (ai + third[size_t(j)]);
                 float largest = std::max(rd.x, std::max(rd.y, rd.z));
                 if (!(largest > 0.f) || largest * mean_area < thr) continue;  // the correction only shrinks
