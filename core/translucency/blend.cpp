@@ -7,7 +7,6 @@
 #include <cmath>
 
 #include <tbb/blocked_range.h>
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 namespace mesolab::translucency {
@@ -21,26 +20,11 @@ constexpr double kHatShare = 0.8;
 constexpr double kShareBeyond = 0.2;
 
 // s_j = Σ_i R̂_ij A_i / 3 over F0's kept pairs (dimensionless): the share of the power E_j A_j / 3
-// that F0 sends to the surface. A source texel's F0 power is then A_t Σ_m λ_m s_m.
+// that F0 sends to the surface (A source texel's F0 power is A_t Σ_m λ_m s_m). R̂ is symmetric, so
+// it is F0's product with E = 1.
 std::vector<dvec3> vertex_power(const VertexFactors& F) {
-    tbb::enumerable_thread_specific<std::vector<dvec3>> sums([&] { return std::vector<dvec3>(size_t(F.n), dvec3(0.0)); });
-    tbb::parallel_for(tbb::blocked_range<int>(0, F.n, 256), [&](const tbb::blocked_range<int>& r) {
-        std::vector<dvec3>& s = sums.local();
-        for (int i = r.begin(); i != r.end(); ++i) {
-            dvec3 row(0.0);
-            for (int k = F.outer[size_t(i)]; k < F.outer[size_t(i) + 1]; ++k) {
-                const int j = F.column(size_t(k));
-                const dvec3 rd(F.rd(size_t(k)));
-                row += rd * (double(F.vertex_area[size_t(j)]) / 3.0);
-                if (j != i) s[size_t(j)] += rd * (double(F.vertex_area[size_t(i)]) / 3.0);
-            }
-            s[size_t(i)] += row;
-        }
-    });
-    std::vector<dvec3> out(size_t(F.n), dvec3(0.0));
-    for (const auto& s : sums)
-        for (size_t i = 0; i < out.size(); ++i) out[i] += s[i];
-    return out;
+    const std::vector<vec3> s = F.multiply(std::vector<vec3>(size_t(F.n), vec3(1.f)));
+    return std::vector<dvec3>(s.begin(), s.end());
 }
 
 // P_W(a) = Dipole::reflectance_within_square(a) tabulated over [lo, hi], linear between 256 samples.
