@@ -14,10 +14,37 @@ namespace mesolab::translucency {
 namespace {
 // The energy equation's weight against the ring's (and ridge's), the share of each corner's hat
 // that the region must see for it to apply, and the share that must lie beyond the kernel (see
-// the fit).
+// the fit; the last also guards the energy closure's top-up).
 constexpr double kEnergyWeight = 10.0;
 constexpr double kHatShare = 0.8;
 constexpr double kShareBeyond = 0.2;
+
+// s_j = Σ_i R̂_ij A_i / 3 over F0's kept pairs (dimensionless): the share of the power E_j A_j / 3
+// that F0 sends to the surface (A source texel's F0 power is A_t Σ_m λ_m s_m). R̂ is symmetric, so
+// it is F0's product with E = 1.
+std::vector<dvec3> vertex_power(const VertexFactors& F) {
+    const std::vector<vec3> s = F.multiply(std::vector<vec3>(size_t(F.n), vec3(1.f)));
+    return std::vector<dvec3>(s.begin(), s.end());
+}
+
+// P_W(a) = Dipole::reflectance_within_square(a) tabulated over [lo, hi], linear between 256 samples.
+class SquarePower {
+public:
+    SquarePower(const Dipole& d, double lo, double hi) : lo_(lo), step_(std::max(hi - lo, 1e-12 * lo) / double(kSamples - 1)), table_(kSamples) {
+        for (int k = 0; k < kSamples; ++k) table_[size_t(k)] = d.reflectance_within_square(lo + step_ * double(k));
+    }
+    dvec3 operator()(double a) const {
+        const double u = std::clamp((a - lo_) / step_, 0.0, double(kSamples - 1));
+        const int k = std::min(int(u), kSamples - 2);
+        const double f = u - double(k);
+        return table_[size_t(k)] * (1.0 - f) + table_[size_t(k) + 1] * f;
+    }
+
+private:
+    static constexpr int kSamples = 256;
+    double lo_, step_;
+    std::vector<dvec3> table_;
+};
 
 // F0(i, j) per channel (0 where the factor was dropped), through a small direct-mapped cache:
 // a texel's fit and correction ask for the same few vertex pairs hundreds of times (every texel
@@ -103,6 +130,15 @@ BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position,
     vec3 lo(INFINITY), hi(-INFINITY);
     for (const vec3& v : position) lo = glm::min(lo, v), hi = glm::max(hi, v);
     const RdTable Rd(dipole, std::max(1e-9, double(glm::length(hi - lo)) * mm_per_unit) * 1.0001);
+    // The energy closure's tables: F0's column sums and the dipole's power over a kernel window.
+    const dvec3 R_total = dipole.total_reflectance();
+    const std::vector<dvec3> s0 = vertex_power(F0);
+    double side_lo = INFINITY, side_hi = 0.0;  // kernel windows' sides, mm
+    for (const int32_t t : L.texel) {
+        const double side = double(K) * std::sqrt(double(atlas.texel_area[size_t(t)]) * double(s2));
+        side_lo = std::min(side_lo, side), side_hi = std::max(side_hi, side);
+    }
+    const SquarePower window_power(dipole, L.texel.empty() ? 1.0 : side_lo, L.texel.empty() ? 1.0 : side_hi);
 
     // [SECTION] Fit c per inner texel on the ring just outside its kernel, its energy beyond
     tbb::parallel_for(tbb::blocked_range<size_t>(0, L.texel.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
@@ -113,14 +149,20 @@ BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position,
             const TexelRef src = ref(atlas, index, t);
             const float area_t = atlas.texel_area[t] * s2;
             const vec3 e = source_weights(src, area_t, A);
+            // Region P can only see 80% of every hat if it is at least that large: on triangles far
+            // larger than it, only the kernel and its ring are read.
+            bool region = true;
+            const double region_area = double(2 * R_energy + 1) * double(2 * R_energy + 1) * double(area_t);
+            for (int m = 0; m < 3; ++m) region = region && region_area >= kHatShare * double(A[src.v[size_t(m)]]) / 3.0;
+            const int reach = region ? R_energy : R;
             Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
             Eigen::Matrix3d rhs = Eigen::Matrix3d::Zero();  // column = channel
             int samples = 0;
             Eigen::Vector3d aE = Eigen::Vector3d::Zero();  // Σ_P φ_m A_p
             dvec3 bE(0.0);                                  // Σ_P (R_d A_t − F0 response) A_p
             Eigen::Vector3d a_in = Eigen::Vector3d::Zero();  // Σ_kernel φ_m A_p
-            for (int dy = -R_energy; dy <= R_energy; ++dy)
-                for (int dx = -R_energy; dx <= R_energy; ++dx) {
+            for (int dy = -reach; dy <= reach; ++dy)
+                for (int dx = -reach; dx <= reach; ++dx) {
                     const int ring = std::max(std::abs(dx), std::abs(dy));
                     if (tx + dx < 0 || ty + dy < 0 || tx + dx >= N || ty + dy >= N) continue;
                     const size_t p = size_t(ty + dy) * size_t(N) + size_t(tx + dx);
@@ -162,7 +204,7 @@ BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position,
             // where at least 20% of every corner's hat lies beyond the kernel: where a hat barely
             // leaves it, matching the power takes a large c of either sign (negative radiosity,
             // orange dots on the skin bunny of Fig. 6).
-            bool hats_inside = true;
+            bool hats_inside = region;
             for (int m = 0; m < 3 && hats_inside; ++m)
                 hats_inside = aE[m] >= kShareBeyond * double(A[src.v[size_t(m)]]) / 3.0 && aE[m] + a_in[m] >= kHatShare * double(A[src.v[size_t(m)]]) / 3.0;
             if (hats_inside) {
@@ -170,9 +212,54 @@ BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position,
                 M += w * aE * aE.transpose();
                 for (int c = 0; c < 3; ++c) rhs.col(c) += w * aE * bE[c];
             }
-            const Eigen::Matrix3d sol = (M + ridge * Eigen::Matrix3d::Identity()).ldlt().solve(rhs);
+            Eigen::Matrix3d sol = (M + ridge * Eigen::Matrix3d::Identity()).ldlt().solve(rhs);
             for (int m = 0; m < 3; ++m)
-                for (int c = 0; c < 3; ++c) B.c[k][size_t(m)][c] = std::isfinite(sol(m, c)) ? float(sol(m, c)) : 0.f;
+                for (int c = 0; c < 3; ++c)
+                    if (!std::isfinite(sol(m, c))) sol(m, c) = 0.0;
+
+            // Energy closure (blend.h), where region P does not hold the hats (triangles larger than
+            // it, chunk edges): the power c puts beyond the kernel over its whole hats, Σ_m c_m H_m,
+            // must be the dipole's there less F0's, G = A_t (R_total − P_W) − (F0's power from t −
+            // F0's inside the window). Above G (or above 0 where F0 alone puts more) c is scaled
+            // down; below it, where every hat reaches beyond the kernel, the difference is added
+            // along the source's projection weights e. Never negative.
+            if (!hats_inside) {
+                Eigen::Vector3d hat_in = Eigen::Vector3d::Zero();  // Σ_window, inner texels: φ_m A_p (mm²)
+                dvec3 f0_in(0.0);                                   // Σ_window F0 response A_p (mm²)
+                for (int dy = -h; dy <= h; ++dy)
+                    for (int dx = -h; dx <= h; ++dx) {
+                        if (tx + dx < 0 || ty + dy < 0 || tx + dx >= N || ty + dy >= N) continue;
+                        const size_t p = size_t(ty + dy) * size_t(N) + size_t(tx + dx);
+                        if (atlas.texel_face[p] < 0 || atlas.texel_chunk[p] != atlas.texel_chunk[t] || atlas.texel_kind[p] == Atlas::kClamped) continue;
+                        // The corrected kernels keep the kernel's value here: the global part's share
+                        // does not count (its direct part only at inner receivers, see blend.h).
+                        const TexelRef rp = ref(atlas, index, p);
+                        const double Ap = double(atlas.texel_area[p]) * double(s2);
+                        if (atlas.texel_kind[p] == Atlas::kInner)
+                            for (int m = 0; m < 3; ++m) hat_in[m] += double(hat(rp, src.v[size_t(m)])) * Ap;
+                        f0_in += dvec3(global_response(cache, rp, src, e)) * Ap;
+                    }
+                Eigen::Vector3d H, ew;
+                bool reaches = true;
+                for (int m = 0; m < 3; ++m) {
+                    const double third = double(A[src.v[size_t(m)]]) / 3.0;
+                    H[m] = std::max(0.0, third - hat_in[m]);
+                    ew[m] = double(e[m]);
+                    reaches = reaches && H[m] >= kShareBeyond * third;
+                }
+                const double He = H.dot(ew);
+                const dvec3 P_W = window_power(double(K) * std::sqrt(double(area_t)));
+                for (int c = 0; c < 3; ++c) {
+                    double f0 = 0.0;
+                    for (int m = 0; m < 3; ++m) f0 += double(src.w[m]) * s0[src.v[size_t(m)]][c];
+                    const double G = (R_total[c] - P_W[c] - f0) * double(area_t) + f0_in[c];
+                    const double P = H.dot(sol.col(c));
+                    if (P > std::max(G, 0.0)) sol.col(c) *= std::max(G, 0.0) / P;
+                    else if (reaches && He > 0.0 && G > P) sol.col(c) += (G - P) / He * ew;
+                }
+            }
+            for (int m = 0; m < 3; ++m)
+                for (int c = 0; c < 3; ++c) B.c[k][size_t(m)][c] = float(sol(m, c));
         }
     });
 

@@ -7,12 +7,50 @@
 //      its triangle, with c(t) fitted by least squares so that the global response to unit
 //      irradiance at t (direct part + F0 part, interpolated) equals R_d(|x_p − x_t|) A_t on the
 //      ring of texels p just outside t's K x K kernel, where the kernel no longer reaches;
-//   3. every kernel weight w(t', t) loses that global response at t' (the part the kernel
+//   3. (beyond the paper) c(t) is held to the power the dipole puts beyond t's kernel: by one
+//      more equation in the fit where the texels out to two mean edges hold t's hats, else by
+//      the energy closure below, so that local + global keeps every source texel's power;
+//   4. every kernel weight w(t', t) loses that global response at t' (the part the kernel
 //      already holds), so inside the kernel the total is the kernel's, outside it the global.
 //   B(x) = B_local(x) + Σ_i φ_i(x) (B_G0,i + B_D,i),  B_G0 = F0 E_vertex,  B_D,i = Σ_t c_i(t) E(t).
 // Sources in a kernel that are border texels (the surface beyond a chunk's edge) take the F0
 // part only: their direct part belongs to the inner texel of another chunk that samples the
 // same surface.
+//
+// The energy equation (in the fit): the power beyond the kernel out to two mean edges (region
+// P, t's chunk and border) must be R_d's there, summed over P's texels like the reference's,
+// weighted 10x the ring. It applies only where P sees at least 80% of every corner's hat (and
+// 20% of each beyond the kernel): elsewhere the hats reach surface that P does not see.
+//
+// Energy closure, where the equation does not apply: triangles larger than P (coarse meshes)
+// and hats that cross a chunk's edge. Per unit irradiance at inner texel t (area A_t, mm²;
+// barycentrics λ_m at the corners v_m of its triangle; projection weights e_m = 3 A_t λ_m / A_m,
+// global.h), step 4 leaves the kernel's power inside t's K x K window, so the power that lands
+// beyond it is the global part's there:
+//   P = Σ_m c_m H_m,  H_m = A_m / 3 − Σ_{inner p in the window} φ_m(p) A_p   (mm², corner m's hat
+//                                                                           beyond the kernel)
+// plus F0's power beyond the window, A_t Σ_m λ_m s_m − Σ_{p in the window} F0 response(p) A_p,
+// s_j = Σ_i R̂_ij A_i / 3 (F0's column sums, dimensionless). On a surface flat within R_d's reach
+// the dipole puts A_t (R_total − P_W) there, P_W the integral of R_d over the window (a square of
+// side K √A_t: the disk of half that side in closed form, Dipole::reflectance_within, plus its
+// corners by quadrature); R_d being smooth beyond the kernel, that is also what the brute-force
+// reference's texel sums give. The target for c is then
+//   G = A_t (R_total − P_W − Σ_m λ_m s_m) + Σ_{p in the window} F0 response(p) A_p,
+// and c is moved to it without making it negative: above max(G, 0) it is scaled down (where F0
+// alone already puts more than the dipole beyond the kernel, c is 0); below G, and where every
+// corner's hat reaches at least 20% of its integral beyond the kernel, c += (G − P) e / (H · e),
+// the missing power spread like the source's own irradiance. (Where a hat barely leaves the
+// kernel, the missing power would land as a bright ring just outside it; the mesh is then fine
+// against the kernel and F0 carries the far field.)
+// Why: on a mesh whose triangles are far larger than the diffusion length (a box of 300 mm faces
+// in skin), the ring fit asks c for R_d at the ring, and a hat spreads that over its whole
+// triangle: more than 30x the power the dipole puts beyond the kernel, Σ radiosity / Σ
+// irradiance 18 for 0.43. Where region P holds the hats the equation is kept: the closure's flat
+// target misses what a curved or thin surface adds (3D distances shorter than along it; the
+// skin bunny's reference holds 1.075 R_total in red), and closing every texel to it raised the
+// bunny's red RMSE by 18-46% at 1,000-4,000 vertices (0.076 → 0.111 at 2,000). At chunk edges, which the
+// equation skipped, the closure helps: skin sphere RMSE 0.039, 0.081, 0.134 → 0.034, 0.075,
+// 0.134, Spot 0.044, 0.092, 0.165 → 0.043, 0.091, 0.165 (tests/translucency).
 #include "core/math.h"
 #include "core/translucency/atlas.h"
 #include "core/translucency/global.h"

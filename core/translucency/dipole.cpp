@@ -129,6 +129,21 @@ dvec3 Dipole::reflectance_within(double R) const {
     return out;
 }
 
+dvec3 Dipole::reflectance_within_square(double a) const {
+    static constexpr double x[8] = {0.0950125098376374, 0.2816035507792589, 0.4580167776572274, 0.6178762444026438,
+                                    0.7554044083550030, 0.8656312023878318, 0.9445750230732326, 0.9894009349916499};
+    static constexpr double w[8] = {0.1894506104550685, 0.1826034150449236, 0.1691565193950025, 0.1495959888165767,
+                                    0.1246289712555339, 0.0951585116824928, 0.0622535239386479, 0.0271524594117541};
+    const double b = 0.5 * std::abs(a);
+    dvec3 sum = reflectance_within(b);
+    for (int i = 0; i < 16; ++i) {
+        const double phi = kPiD / 8.0 * (1.0 + (i < 8 ? -x[i] : x[i - 8])), wi = w[i % 8] * kPiD / 8.0;
+        const double c = std::cos(phi);
+        sum += Rd(b / c) * ((2.0 * kPiD - 8.0 * phi) * b * b * std::sin(phi) / (c * c * c) * wi);
+    }
+    return sum;
+}
+
 dvec3 Dipole::total_reflectance() const {
     dvec3 out(0.0);
     for (int c = 0; c < 3; ++c) {

@@ -74,6 +74,12 @@ public:
     // ∫ 2πr R_d(r) dr over [0, R] per channel (closed form), and R_total (R = ∞).
     dvec3 reflectance_within(double R) const;
     dvec3 total_reflectance() const;
+    // ∫ R_d over a square of side a (mm) centred where the light enters, per channel: the disk
+    // of radius b = a / 2 in closed form plus the four corners, where a circle of radius r in
+    // (b, b√2) keeps the length (2π − 8 arccos(b / r)) r inside the square; with r = b / cos φ,
+    // ∫_0^{π/4} R_d(b / cos φ) (2π − 8φ) b² sin φ / cos³ φ dφ (16-point Gauss–Legendre; the
+    // integrand is smooth in φ). The power a K x K texel kernel window holds (blend.h).
+    dvec3 reflectance_within_square(double a) const;
     // The radius within which R_d holds a fraction `f` of R_total in every channel (mm): how far
     // subsurface transport reaches (Lensch et al.: "up to several millimetres in marble").
     double radius_holding(double f) const;

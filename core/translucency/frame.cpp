@@ -34,7 +34,8 @@ AtlasStage make_atlas_stage(const PreparedMesh& mesh, const AtlasParams& p) {
         const vec3 w = a.texel_bary[t];
         const uint32_t i0 = mesh.index[3 * f], i1 = mesh.index[3 * f + 1], i2 = mesh.index[3 * f + 2];
         s.texel_position[t] = w.x * mesh.position[i0] + w.y * mesh.position[i1] + w.z * mesh.position[i2];
-        vec3 n = w.x * mesh.normal[i0] + w.y * mesh.normal[i1] + w.z * mesh.normal[i2];
+        vec3 n = mesh.corner_normal.empty() ? w.x * mesh.normal[i0] + w.y * mesh.normal[i1] + w.z * mesh.normal[i2]
+                                            : w.x * mesh.corner_normal[3 * f] + w.y * mesh.corner_normal[3 * f + 1] + w.z * mesh.corner_normal[3 * f + 2];
         if (!(glm::length(n) > 1e-12f)) n = glm::cross(mesh.position[i1] - mesh.position[i0], mesh.position[i2] - mesh.position[i0]);
         s.texel_normal[t] = glm::length(n) > 0.f ? glm::normalize(n) : vec3(0.f, 0.f, 1.f);
     });
@@ -137,12 +138,14 @@ AtlasStage make_atlas_stage(const PreparedMesh& mesh, const AtlasParams& p) {
         for (int j = 0; j < 3; ++j) {
             const uint32_t v = mesh.index[3 * f + size_t(j)];
             const vec2 c = a.corner_uv[3 * f + size_t(j)];
+            const vec3 n = mesh.corner_normal.empty() ? mesh.normal[v] : mesh.corner_normal[3 * f + size_t(j)];
             const uint64_t key = uint64_t(v) << 32 | uint64_t(uint32_t(a.face_chunk[f]));
             auto [it, fresh] = made.try_emplace(key, uint32_t(m->position.size()));
-            if (!fresh && m->uv[it->second] != vec2(c.x * inv, 1.f - c.y * inv)) fresh = true, it->second = uint32_t(m->position.size());
+            if (!fresh && (m->uv[it->second] != vec2(c.x * inv, 1.f - c.y * inv) || m->normal[it->second] != n))
+                fresh = true, it->second = uint32_t(m->position.size());
             if (fresh) {
                 m->position.push_back(mesh.position[v]);
-                m->normal.push_back(mesh.normal[v]);
+                m->normal.push_back(n);
                 m->tangent.push_back(vec3(0.f));
                 m->uv.push_back(vec2(c.x * inv, 1.f - c.y * inv));
             }

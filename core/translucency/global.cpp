@@ -77,6 +77,91 @@ private:
     static constexpr float kMax = 64.f;
     std::vector<float> table_;
 };
+
+// [SECTION] Hat-pair means (see global.h): R̄_ij = 9 / (A_i A_j) ∫∫ φ_i(x) φ_j(y) R_d(|x − y|) dA dA
+// Every triangle of the two supports split into n² equal sub-triangles (n from its longest edge
+// against the dipole's shortest virtual-source depth z_v, at most kMaxSplit), each sampled at its
+// centroid (exact for the linear φ), the pair of a sub-triangle with itself as a disk of its
+// area (Dipole::reflectance_within, as the local kernels and the reference treat a texel).
+struct SubSamples {
+    std::vector<int> first;        // per face: its first sample; first[faces] = total
+    std::vector<vec3> x, bary;     // mm, barycentrics of the face's corners
+    std::vector<float> area;       // mm²
+    std::vector<int> face;         // per sample
+    std::vector<vec3> disk;        // per face: ∫ R_d over a disk of one sample's area (dimensionless)
+};
+
+constexpr int kMaxSplit = 8;
+
+SubSamples sub_samples(const std::vector<vec3>& x, const std::vector<uint32_t>& index, const Dipole& dipole) {
+    SubSamples S;
+    const size_t faces = index.size() / 3;
+    const dvec3 zv = dipole.z_v();
+    const double z = std::max(1e-12, std::min({zv.x, zv.y, zv.z}));
+    std::vector<int> split(faces, 0);
+    S.first.assign(faces + 1, 0);
+    for (size_t f = 0; f < faces; ++f) {
+        const vec3 a = x[index[3 * f]], b = x[index[3 * f + 1]], c = x[index[3 * f + 2]];
+        const double e = std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
+        split[f] = std::isfinite(e) ? std::clamp(int(std::ceil(e / z)), 1, kMaxSplit) : 1;
+        S.first[f + 1] = split[f] * split[f];
+    }
+    for (size_t f = 0; f < faces; ++f) S.first[f + 1] += S.first[f];
+    const size_t total = size_t(S.first[faces]);
+    S.x.resize(total), S.bary.resize(total), S.area.resize(total), S.face.resize(total), S.disk.assign(faces, vec3(0.f));
+    tbb::parallel_for(size_t(0), faces, [&](size_t f) {
+        const int n = split[f];
+        const vec3 a = x[index[3 * f]], b = x[index[3 * f + 1]], c = x[index[3 * f + 2]];
+        const float sub = 0.5f * glm::length(glm::cross(b - a, c - a)) / float(n * n);
+        S.disk[f] = vec3(dipole.reflectance_within(std::sqrt(double(sub) / 3.14159265358979323846)));
+        size_t k = size_t(S.first[f]);
+        auto put = [&](float u, float v) {
+            const vec3 w(1.f - u - v, u, v);
+            S.bary[k] = w, S.x[k] = w.x * a + w.y * b + w.z * c, S.area[k] = sub, S.face[k] = int(f), ++k;
+        };
+        for (int i = 0; i < n; ++i)
+            for (int j = 0; i + j < n; ++j) {
+                put((float(i) + 1.f / 3.f) / float(n), (float(j) + 1.f / 3.f) / float(n));
+                if (i + j < n - 1) put((float(i) + 2.f / 3.f) / float(n), (float(j) + 2.f / 3.f) / float(n));
+            }
+    });
+    return S;
+}
+
+// (sample, φ_v × its area) over the support of vertex v.
+void hat_samples(const SubSamples& S, const std::vector<uint32_t>& index, const std::vector<uint32_t>& faces, uint32_t v,
+                 std::vector<std::pair<int, float>>& out) {
+    out.clear();
+    for (const uint32_t f : faces) {
+        int corner = 0;
+        while (corner < 3 && index[3 * size_t(f) + size_t(corner)] != v) ++corner;
+        if (corner == 3) continue;
+        for (int k = S.first[f]; k < S.first[size_t(f) + 1]; ++k) out.emplace_back(k, S.bary[size_t(k)][corner] * S.area[size_t(k)]);
+    }
+}
+
+// 9 G_ij / (A_i A_j) from the two supports' samples.
+vec3 hat_pair_mean(const SubSamples& S, const RdTable& Rd, const std::vector<std::pair<int, float>>& si,
+                   const std::vector<std::pair<int, float>>& sj) {
+    dvec3 G(0.0);
+    double wi = 0.0, wj = 0.0;
+    for (const auto& [b, w] : sj) wj += double(w);
+    for (const auto& [a, wa] : si) {
+        wi += double(wa);
+        const vec3 xa = S.x[size_t(a)];
+        vec3 row(0.f);
+        for (const auto& [b, wb] : sj) {
+            if (a == b) {
+                row += S.disk[size_t(S.face[size_t(a)])] / S.area[size_t(a)] * wb;
+                continue;
+            }
+            const vec3 d = S.x[size_t(b)] - xa;
+            row += Rd.at_r2(glm::dot(d, d)) * wb;
+        }
+        G += dvec3(row) * double(wa);
+    }
+    return wi > 0.0 && wj > 0.0 ? vec3(G / (wi * wj)) : vec3(0.f);
+}
 }  // namespace
 
 // [SECTION] Half floats
@@ -334,20 +419,51 @@ VertexFactors build_vertex_factors(const std::vector<vec3>& position, const std:
         }
         for (size_t i = 0; i < q.size(); ++i) q[i] = area[i] > 0.f ? q[i] / area[i] : 0.f;
     }
-    // Pairs that share an edge keep R_d: the zero diagonal sits inside both their stencils, so
-    // interpolation there pulls towards 0 instead of smoothing R_d (and the blending fit's
-    // energy equation settles that ring).
+    // Pairs that share an edge are not shrunk: with blending they keep R_d (the zero diagonal
+    // sits inside both their stencils, so interpolation there pulls towards 0 instead of
+    // smoothing R_d, and the blending fit closes the energy); without, they and the diagonal are
+    // the hat-pair means R̄ (see global.h).
     std::vector<std::vector<uint32_t>> ring(p.interpolation_correction ? size_t(F.n) : 0);
+    std::vector<float> reach2(ring.size(), 0.f);  // i's longest edge, squared (mm²)
     if (p.interpolation_correction) {
         for (size_t f = 0; f + 2 < index.size(); f += 3)
             for (int k = 0; k < 3; ++k) {
                 const uint32_t a = index[f + size_t(k)], b = index[f + size_t((k + 1) % 3)];
                 ring[a].push_back(b), ring[b].push_back(a);
+                const vec3 e = x[a] - x[b];
+                const float e2 = glm::dot(e, e) * 1.0001f;
+                reach2[a] = std::max(reach2[a], e2), reach2[b] = std::max(reach2[b], e2);
             }
         for (auto& r : ring) {
             std::sort(r.begin(), r.end());
             r.erase(std::unique(r.begin(), r.end()), r.end());
         }
+    }
+    // Without blending, the diagonal and the pairs that share an edge (whose hats overlap) are
+    // the hat-pair means R̄_ij (see global.h); diag[i], and edge[i][k] for ring[i][k] > i.
+    std::vector<vec3> diag;
+    std::vector<std::vector<vec3>> edge;
+    if (p.interpolation_correction && !p.zero_diagonal) {
+        std::vector<std::vector<uint32_t>> faces(size_t(F.n));
+        for (size_t f = 0; f + 2 < index.size(); f += 3)
+            for (int k = 0; k < 3; ++k) faces[index[f + size_t(k)]].push_back(uint32_t(f / 3));
+        const SubSamples S = sub_samples(x, index, dipole);
+        diag.assign(size_t(F.n), vec3(0.f));
+        edge.resize(size_t(F.n));
+        tbb::parallel_for(tbb::blocked_range<int>(0, F.n, 16), [&](const tbb::blocked_range<int>& r) {
+            std::vector<std::pair<int, float>> si, sj;
+            for (int i = r.begin(); i != r.end(); ++i) {
+                hat_samples(S, index, faces[size_t(i)], uint32_t(i), si);
+                diag[size_t(i)] = hat_pair_mean(S, Rd, si, si);
+                edge[size_t(i)].assign(ring[size_t(i)].size(), vec3(0.f));
+                for (size_t k = 0; k < ring[size_t(i)].size(); ++k) {
+                    const uint32_t j = ring[size_t(i)][k];
+                    if (j <= uint32_t(i)) continue;
+                    hat_samples(S, index, faces[j], j, sj);
+                    edge[size_t(i)][k] = hat_pair_mean(S, Rd, si, sj);
+                }
+            }
+        });
     }
     constexpr int kLaplacianSamples = 4096;
     std::vector<vec3> laplacian;
@@ -387,10 +503,21 @@ VertexFactors build_vertex_factors(const std::vector<vec3>& position, const std:
                 const vec3 d = x[size_t(j)] - xi;
                 const float r2 = glm::dot(d, d);
                 vec3 rd = Rd.at_r2(r2);
+                // j == i or an edge (looked up only within i's longest edge)
+                bool neighbour = j == i;
+                if (!laplacian.empty() && !neighbour && r2 <= reach2[size_t(i)]) {
+                    const auto& ri = ring[size_t(i)];
+                    const auto it = std::lower_bound(ri.begin(), ri.end(), uint32_t(j));
+                    if (it != ri.end() && *it == uint32_t(j)) {
+                        neighbour = true;
+                        if (!diag.empty()) rd = edge[size_t(i)][size_t(it - ri.begin())];
+                    }
+                }
+                if (!diag.empty() && j == i) rd = diag[size_t(i)];
                 const float mean_area = 0.5f * (ai + third[size_t(j)]);
                 float largest = std::max(rd.x, std::max(rd.y, rd.z));
                 if (!(largest > 0.f) || largest * mean_area < thr) continue;  // the correction only shrinks
-                if (!laplacian.empty() && j != i && !std::binary_search(ring[size_t(i)].begin(), ring[size_t(i)].end(), uint32_t(j))) {
+                if (!laplacian.empty() && !neighbour) {
                     rd *= correction(r2, q[size_t(i)], q[size_t(j)]);
                     largest = std::max(rd.x, std::max(rd.y, rd.z));
                     if (!(largest > 0.f) || largest * mean_area < thr) continue;

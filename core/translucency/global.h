@@ -29,6 +29,26 @@
 // (tests/translucency/blend_test.cpp, the vertex sweep on core/translucency/README.md).
 // With blending (§5.4) the diagonal F_ii is zero: the local kernels carry the short range.
 //
+// Hat-pair means (without blending). The diagonal and the pairs that share an edge have
+// overlapping hats, and R_d(r_ij) stands for them only while R_d is flat over a triangle. In
+// general the factor that keeps the power the lumped projection puts in (E_j A_j / 3) and the
+// interpolation takes out (Σ_i B_i A_i / 3) is the Galerkin one,
+//   F_ij = (3 / A_i) ∫∫ φ_i(x) φ_j(y) R_d(|x − y|) dA_x dA_y = R̄_ij A_j / 3,
+//   R̄_ij = 9 / (A_i A_j) ∫∫ φ_i φ_j R_d   (the mean of R_d over both hats, mm⁻²; symmetric),
+// whose columns hold R_total on a surface that is flat within R_d's reach:
+// Σ_i F_ij A_i / 3 = (3 / A_j) ∫ φ_j(y) ∫ R_d(|x − y|) dA_x dA_y = R_total A_j / 3. Sampling
+// R_d(0) A_i / 3 instead, on triangles far larger than the diffusion length, gives hundreds of
+// R_total (a box of 300 mm faces in skin1: Σ radiosity / Σ irradiance 1719 for 0.43). Computed
+// by splitting every triangle of the two hats into n² equal sub-triangles, n = ⌈longest edge /
+// min z_v⌉ ≤ 8, sampled at their centroids (exact for the linear hats), a sub-triangle paired
+// with itself as a disk of its area (Dipole::reflectance_within, as a texel in local.h). Far
+// below z_v (the bunny at the paper's densities: n = 1) that is R_d between the triangles'
+// centroids; far above the diffusion length the disk holds R_total and F_ii → R_total / 2
+// (∫ φ_i² = A_i / 6), F_ij → R_total (3 / A_i)(A_T + A_T') / 12 (the consistent mass matrix),
+// within the centroid rule's 1 / (3 n²) of ∫ φ_i². With blending the diagonal is zero and
+// the edges keep R_d(r_ij): the kernels and the direct part carry what lands near the source,
+// and the blending fit closes each texel's energy (blend.h).
+//
 // Units: positions in scene units, times mm_per_unit gives mm; R_d in mm⁻², areas in mm²; F
 // is dimensionless (radiosity per unit irradiance).
 //
@@ -100,7 +120,7 @@ struct FactorParams {
     float threshold = 0.f;      // translucency.threshold: smallest factor kept (largest channel)
     bool zero_diagonal = false; // blending on
     bool wide_columns = false;  // keep the columns' high 16 bits below 65,536 vertices too (tests)
-    bool interpolation_correction = true;  // R̂ instead of R_d (above; off: the paper's factors, for tests)
+    bool interpolation_correction = true;  // R̂, and without blending R̄ on overlapping hats, instead of R_d (above; off: the paper's factors, for tests)
 };
 
 // Builds the factors for a mesh (positions, 3 indices per triangle) and a dipole. Rows in

@@ -268,12 +268,39 @@ PreparedMesh prepare_mesh(const std::vector<vec3>& position, const std::vector<u
     }
     for (const auto& e : m.edges()) out.boundary_edges += m.is_boundary(e) ? 1 : 0;
     reorder_along_hilbert_curve(out);
+    out.corner_normal = corner_normals(out.position, out.index);
 
     if (out.welded_vertices > 0) out.warnings.push_back(std::to_string(out.welded_vertices) + " duplicate vertices welded");
     if (out.removed_triangles > 0) out.warnings.push_back(std::to_string(out.removed_triangles) + " degenerate or duplicate triangles removed");
     if (out.detached_triangles > 0)
         out.warnings.push_back(std::to_string(out.detached_triangles) + " triangles on non-manifold edges or vertices kept detached");
     if (out.boundary_edges > 0) out.warnings.push_back(std::to_string(out.boundary_edges) + " boundary edges (holes or open borders)");
+    return out;
+}
+
+std::vector<vec3> corner_normals(const std::vector<vec3>& position, const std::vector<uint32_t>& index) {
+    const size_t faces = index.size() / 3;
+    std::vector<vec3> face(faces);  // 2 x area x unit normal
+    std::vector<std::vector<uint32_t>> around(position.size());
+    for (size_t f = 0; f < faces; ++f) {
+        const vec3 a = position[index[3 * f]], b = position[index[3 * f + 1]], c = position[index[3 * f + 2]];
+        face[f] = glm::cross(b - a, c - a);
+        for (int k = 0; k < 3; ++k) around[index[3 * f + size_t(k)]].push_back(uint32_t(f));
+    }
+    const float cos_crease = std::cos(kCreaseDegrees * 3.14159265358979f / 180.f);
+    std::vector<vec3> out(index.size());
+    for (size_t f = 0; f < faces; ++f) {
+        const float lf = glm::length(face[f]);
+        const vec3 nf = lf > 0.f ? face[f] / lf : vec3(0.f);
+        for (int k = 0; k < 3; ++k) {
+            vec3 sum(0.f);
+            for (const uint32_t g : around[index[3 * f + size_t(k)]]) {
+                const float lg = glm::length(face[g]);
+                if (g == f || (lf > 0.f && lg > 0.f && glm::dot(nf, face[g] / lg) >= cos_crease)) sum += face[g];
+            }
+            out[3 * f + size_t(k)] = glm::length(sum) > 0.f ? glm::normalize(sum) : vec3(0.f, 0.f, 1.f);
+        }
+    }
     return out;
 }
 }  // namespace mesolab::translucency

@@ -27,9 +27,19 @@
 
 namespace mesolab::translucency {
 
+// Edges where the surface turns by more than this (a box's, a tetrahedron's) keep their two
+// faces' normals apart: averaged across them, a flat face's interpolated normal would lean away
+// from it by up to half the turn (a 2 x 2 x 0.4 box: 8-24° at its corners), and a light grazing
+// the face would see its far part from behind (cos θ ≤ 0, no light). Smooth meshes turn by
+// less: a 16-segment sphere 23°, an 8-segment one 45°, an icosahedron 42°.
+inline constexpr float kCreaseDegrees = 60.f;
+
 struct PreparedMesh {
     std::vector<vec3> position;
     std::vector<vec3> normal;      // area-weighted vertex normals
+    // 3 per triangle: the area-weighted normal of the triangles around the corner's vertex that
+    // turn less than kCreaseDegrees from this one (the shading and illumination normal).
+    std::vector<vec3> corner_normal;
     std::vector<uint32_t> index;   // 3 per triangle, counter-clockwise from outside
     std::vector<vec2> corner_uv;   // 3 per triangle when the input had texture coordinates (else empty)
 
@@ -51,4 +61,7 @@ struct PreparedMesh {
 // triangle lies on).
 PreparedMesh prepare_mesh(const std::vector<vec3>& position, const std::vector<uint32_t>& index, int target_vertices,
                           const std::vector<vec2>* uv = nullptr);
+
+// PreparedMesh::corner_normal for a mesh (positions, 3 indices per triangle).
+std::vector<vec3> corner_normals(const std::vector<vec3>& position, const std::vector<uint32_t>& index);
 }  // namespace mesolab::translucency

@@ -44,10 +44,12 @@ dvec3 ratio(const SpotScene& s, const std::vector<vec3>& B) {
 }  // namespace
 
 // Σ radiosity / Σ irradiance over the plane should be the total diffuse reflectance. Measured
-// here (R, G, B): skin1 blended 0.984, 0.990, 1.022, added without blending 1.17, 1.38, 1.76;
-// marble blended 0.994, 0.994, 0.991, without 1.49, 1.69, 1.93. Before the lumped projection,
-// the interpolation correction and the energy equation of the blending fit, skin1 blended was
-// 1.020, 1.049, 1.068.
+// here (R, G, B): skin1 blended 0.984, 0.990, 1.022; marble blended 0.995, 0.994, 0.991. Added
+// without blending, the kernels' light is counted twice: the kernels alone hold 0.21, 0.44, 0.70
+// (skin1) and 0.37, 0.43, 0.49 (marble) of R_total, the factors alone 0.90, 0.82, 0.79 and 0.90,
+// 0.89, 0.89 (short of 1 by the interpolation correction's shrinking of the far pairs), so the
+// sum is 1.11, 1.26, 1.50 and 1.26, 1.32, 1.37. Before the lumped projection, the interpolation
+// correction and the energy closure of the blending fit, skin1 blended was 1.020, 1.049, 1.068.
 TEST(Blending, KeepsTheEnergyOfASpotOnAPlaneWithin3Percent) {
     const SpotScene s = spot_on_plane(3.0);
     for (const char* material : {"skin1", "marble"}) {
@@ -74,13 +76,16 @@ TEST(Blending, KeepsTheEnergyOfASpotOnAPlaneWithin3Percent) {
         const std::vector<vec3> g1 = interpolate_to_texels(s.atlas, s.m.index, F.multiply(Ev));
         for (size_t t = 0; t < plain.size(); ++t) plain[t] += g1[t];
 
-        const dvec3 rb = ratio(s, blended), rp = ratio(s, plain);
-        std::printf("%s: energy ratio / R_total, blended %.4f %.4f %.4f, unblended %.4f %.4f %.4f\n", material, rb.x / R.x, rb.y / R.y, rb.z / R.z,
-                    rp.x / R.x, rp.y / R.y, rp.z / R.z);
+        const dvec3 rb = ratio(s, blended), rp = ratio(s, plain), rl = ratio(s, convolve_local(L1, s.E)), rg = ratio(s, g1);
+        std::printf("%s: energy ratio / R_total, blended %.4f %.4f %.4f, unblended %.4f %.4f %.4f (kernels alone %.4f %.4f %.4f, factors alone %.4f %.4f %.4f)\n",
+                    material, rb.x / R.x, rb.y / R.y, rb.z / R.z, rp.x / R.x, rp.y / R.y, rp.z / R.z, rl.x / R.x, rl.y / R.y, rl.z / R.z, rg.x / R.x,
+                    rg.y / R.y, rg.z / R.z);
         for (int c = 0; c < 3; ++c) {
             const double eb = std::abs(rb[c] / R[c] - 1.0), ep = std::abs(rp[c] / R[c] - 1.0);
             EXPECT_LT(eb, 0.03) << material << " blended, channel " << c << ": " << rb[c] << " vs " << R[c];
-            EXPECT_GT(ep, 0.15) << material << " unblended, channel " << c << ": " << rp[c] << " vs " << R[c];
+            // The factors alone carry most of R_total, so adding the kernels counts their share again.
+            EXPECT_GT(rg[c] / R[c], 0.75) << material << " factors alone, channel " << c;
+            EXPECT_GT(rp[c] - R[c], 0.5 * rl[c]) << material << " unblended, channel " << c << ": " << rp[c] << " vs " << R[c];
             EXPECT_LT(eb, 0.5 * ep) << material << " channel " << c;
         }
     }

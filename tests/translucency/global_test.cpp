@@ -87,8 +87,9 @@ TEST(VertexFactors, EqualRdAtTheVertexDistanceTimesAThirdOfTheVertexArea) {
 }
 
 // R̂_ij = R_d(r_ij) / (ρ(q_i L) ρ(q_j L)), L = ∇²R_d / R_d, 1 / ρ(x) = tanh(b) / b with
-// b = sqrt(3x), q_i the area-weighted Σ e² / 48 around i; R_d itself on the diagonal and for pairs
-// that share an edge. Recomputed here from the triangles and Dipole::laplacian_ratio.
+// b = sqrt(3x), q_i the area-weighted Σ e² / 48 around i. Recomputed here from the triangles and
+// Dipole::laplacian_ratio. The diagonal and the pairs that share an edge, whose hats overlap,
+// are the hat-pair means (tested below).
 TEST(VertexFactors, InterpolationCorrectionShrinksRdByTheSmoothingOfBothSides) {
     const PreparedMesh m = sphere(16);
     const Dipole d(measured_material("skin1").medium);
@@ -115,19 +116,76 @@ TEST(VertexFactors, InterpolationCorrectionShrinksRdByTheSmoothingOfBothSides) {
     int shrunk = 0;
     for (int i = 0; i < n; ++i)
         for (int j = 0; j < n; ++j) {
+            if (i == j || edges.count({i, j})) continue;
             const double r = glm::length(m.position[size_t(i)] - m.position[size_t(j)]) * mm;
             const dvec3 L = d.laplacian_ratio(r);
             dvec3 expect = d.Rd(r) * (A[size_t(j)] / 3.0);
-            if (i != j && !edges.count({i, j}))
-                for (int c = 0; c < 3; ++c) expect[c] *= inv_rho(q[size_t(i)] / A[size_t(i)] * L[c]) * inv_rho(q[size_t(j)] / A[size_t(j)] * L[c]);
+            for (int c = 0; c < 3; ++c) expect[c] *= inv_rho(q[size_t(i)] / A[size_t(i)] * L[c]) * inv_rho(q[size_t(j)] / A[size_t(j)] * L[c]);
             const vec3 got = F.factor(i, j);
             // Half floats (4.9e-4; normal down to 2e-9 R_d(0)), the tables of R_d (1e-4) and of
             // ∇²R_d / R_d (linear between samples).
             for (int c = 0; c < 3; ++c)
                 ASSERT_NEAR(got[c], expect[c], 2e-3 * expect[c] + 4e-9 * d.Rd(0.0, c) * A[size_t(j)] / 3.0) << i << "," << j << " channel " << c;
-            if (i != j && got.z < 0.9f * float(d.Rd(r, 2) * A[size_t(j)] / 3.0)) ++shrunk;
+            if (got.z < 0.9f * float(d.Rd(r, 2) * A[size_t(j)] / 3.0)) ++shrunk;
         }
     EXPECT_GT(shrunk, n);  // blue's R_d is convex enough to lose over 10% on many pairs
+}
+
+namespace {
+// A regular icosahedron (12 vertices, 20 equilateral triangles), circumradius 1.
+PreparedMesh icosahedron() {
+    const float t = (1.f + std::sqrt(5.f)) / 2.f;
+    std::vector<vec3> p = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                           {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+    for (vec3& v : p) v = glm::normalize(v);
+    const std::vector<uint32_t> f = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6, 7, 1, 8,
+                                     3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1};
+    return prepare_mesh(p, f, 0);
+}
+}  // namespace
+
+// Without blending the diagonal and the pairs that share an edge are R̄_ij, the mean of R_d over
+// both hats (9 / (A_i A_j) ∫∫ φ_i φ_j R_d). Triangles far larger than the diffusion length: R_d
+// lands within its hat, so F_ii = R̄_ii A_i / 3 → R_total (3 / A_i) ∫ φ_i² = R_total / 2 (∫ φ_i² =
+// A_i / 6), an edge's F_ij → R_total (3 / A_i)(A_T + A_T') / 12 = R_total / 10 on the icosahedron
+// (five equal triangles around a vertex), and every column keeps R_total (Σ_i F_ij A_i / 3 =
+// R_total A_j / 3): the global part alone conserves energy. Triangles far smaller than z_r: R̄ is
+// R_d at the vertex distance.
+TEST(VertexFactors, WithoutBlendingOverlappingHatsAverageRdOverBothSupports) {
+    const PreparedMesh ico = icosahedron();
+    const Dipole d(measured_material("skin1").medium);
+    const dvec3 Rt = d.total_reflectance();
+    // Edges of 1051 mm: 8 x 8 sub-triangles of 131 mm, each kept as a disk of 36 mm radius that
+    // holds R_d but for its tail beyond (below 1e-4 of R_total in skin1); the centroid rule
+    // misses 1 / (3 n²) of ∫ φ_i² (0.52% for n = 8: measured 0.9948 R_total / 2) and adds half
+    // that to ∫ φ_i φ_j (measured 1.005 R_total / 10); the columns hold R_total to 1e-4.
+    const double mm = 1000.0;
+    const VertexFactors F = build_vertex_factors(ico.position, ico.index, d, {mm, 0.f, false});
+    ASSERT_EQ(F.n, 12);
+    for (int i = 0; i < F.n; ++i) {
+        vec3 column(0.f);
+        for (int j = 0; j < F.n; ++j) column += F.factor(j, i) * (F.vertex_area[size_t(j)] / F.vertex_area[size_t(i)]);
+        for (int c = 0; c < 3; ++c) {
+            EXPECT_NEAR(F.factor(i, i)[c], Rt[c] / 2.0, 5e-3 * Rt[c]) << i << " channel " << c;
+            EXPECT_NEAR(column[c], Rt[c], 5e-3 * Rt[c]) << i << " channel " << c;
+        }
+    }
+    std::set<std::pair<int, int>> edges;
+    for (size_t f = 0; f < ico.triangle_count(); ++f)
+        for (int k = 0; k < 3; ++k) edges.insert({int(ico.index[3 * f + size_t(k)]), int(ico.index[3 * f + size_t((k + 1) % 3)])});
+    for (const auto& [i, j] : edges)
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(F.factor(i, j)[c], Rt[c] / 10.0, 5e-3 * Rt[c]) << i << "," << j << " channel " << c;
+
+    // A sphere of 10 µm: the hats are 5e-3 of skin1's smallest z_r across, R_d is flat over them
+    // to (5e-3)², below the half floats' 4.9e-4 and the table's 1e-4.
+    const PreparedMesh m = sphere(12);
+    const double tiny = 0.01;
+    const VertexFactors S = build_vertex_factors(m.position, m.index, d, {tiny, 0.f, false});
+    for (int i = 0; i < S.n; ++i)
+        for (int j = 0; j < S.n; ++j) {
+            const dvec3 expect = d.Rd(glm::length(m.position[size_t(i)] - m.position[size_t(j)]) * tiny) * (double(S.vertex_area[size_t(j)]) / 3.0);
+            for (int c = 0; c < 3; ++c) ASSERT_NEAR(S.factor(i, j)[c], expect[c], 1e-3 * expect[c]) << i << "," << j << " channel " << c;
+        }
 }
 
 TEST(VertexFactors, TheThresholdKeepsExactlyThePairsWithAFactorAboveIt) {
