@@ -2,7 +2,9 @@
 // Technique bumpsynth: bump map synthesis from an NDF (Kautz et al. 2001), the GLSL twin of
 // core/bumpsynth/{noise,lut,shading,bumpsynth}.cpp: the same bits of noise, of the resampled input
 // CDFs and of the nearest look-up-table entries for the same uv (synthesis.glsl), and the same BRDF.
-// bumpsynth_pass.cpp draws a depth pre-pass first (depth.frag), so this runs once per visible pixel.
+// bumpsynth_pass.cpp draws a depth pre-pass first (depth.frag), so this runs once per visible pixel;
+// both passes put the vertices on the CPU rasteriser's sub-pixel grid (mesh.vert,
+// MESOLAB_SNAP_VERTICES), so that uv is interpolated as on the CPU to a few ULP.
 #include "common.glsl"
 #include "camera.glsl"
 #include "lighting.glsl"

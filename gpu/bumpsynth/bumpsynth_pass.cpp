@@ -18,8 +18,8 @@ using namespace mesolab::bumpsynth;
 class BumpsynthPass final : public TechniquePass {
 public:
     explicit BumpsynthPass(const Technique& t)
-        : program_(Program::graphics("shaders/mesh.vert", "bumpsynth/bumpsynth.frag", {}, fragment_outputs(t))),
-          depth_(Program::graphics("shaders/mesh.vert", "bumpsynth/depth.frag")) {}
+        : program_(Program::graphics("shaders/mesh.vert", "bumpsynth/bumpsynth.frag", {"MESOLAB_SNAP_VERTICES"}, fragment_outputs(t))),
+          depth_(Program::graphics("shaders/mesh.vert", "bumpsynth/depth.frag", {"MESOLAB_SNAP_VERTICES"})) {}
 
     void draw(DrawContext& ctx) override {
         PROFILE_SCOPE("bumpsynth.draw");
