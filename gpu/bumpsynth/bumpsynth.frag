@@ -124,9 +124,10 @@ void main() {
     vec3 cm = vec3(0, 0, 1), ct = vec3(1, 0, 0), cb = vec3(0, 1, 0);
     vec2 uc = vec2(0.5), uf;
     synthesis_inputs(v_uv, k, w > 0.0, uc, uf);
-    if (k > 0) lut_lookup(lut_entry(uc), cm, ct, cb);
+    ivec2 ec = ivec2(-1), ef = ivec2(-1);
+    if (k > 0) lut_lookup(ec = lut_entry(uc), cm, ct, cb);
     vec3 fm = cm, ft = ct, fb = cb;
-    if (w > 0.0) lut_lookup(lut_entry(uf), fm, ft, fb);
+    if (w > 0.0) lut_lookup(ef = lut_entry(uf), fm, ft, fb);
 
     vec3 albedo = u_has_albedo != 0 ? texture(u_albedo, vec2(v_uv.x, 1.0 - v_uv.y)).rgb : vec3(1.0);
     vec3 Lc = vec3(0.0), Lf = vec3(0.0);
@@ -144,4 +145,6 @@ void main() {
     o_radiance = vec4(L, 1.0);
     o_normal = vec4(n, 1.0);
     o_octaves = vec4(oct, 0.0, 0.0, 1.0);
+    o_entry = vec4(vec2(ec), float(k), 1.0);
+    o_entry_fine = w > 0.0 ? vec4(vec2(ef), float(k + 1), 1.0) : o_entry;
 }
