@@ -135,6 +135,12 @@ struct SweepMetricDecl {
 // shadow texel, a direction) can fall either way between two float evaluations: a few
 // arbitrarily wrong pixels inside a face fail. A technique states its tolerances, with the
 // reasons, in Technique::agreement(); every preset is held to them (tests/gallery).
+// A technique whose discrete choices can be told apart from everything else can instead name the
+// AOVs that record them (`choices`: integer indices per channel, e.g. a table entry's (a, b)): off
+// edges, a pixel whose indices differ between the two frames by at most 1 each (an input a float
+// rounding away from a cell edge, on its other side on the other backend) is a flip, whose values
+// are held to nothing; flips may make up at most `interior_flips` of the off-edge pixels, and every
+// other off-edge value must be within interior_max (but interior_outliers).
 struct FrameAgreement {
     double tight = 1e-3;            // most values agree to this
     double frac_tight = 0.99;       // the fraction of covered values within `tight`
@@ -142,6 +148,8 @@ struct FrameAgreement {
     double frac_loose = 0.995;      // the fraction of covered values within `loose`
     double interior_max = 2e-2;     // every value off edges...
     double interior_outliers = 0;   // ...but this fraction of them
+    std::vector<std::string> choices;  // AOVs of the technique's discrete choices (none: no flips)
+    double interior_flips = 0;      // the fraction of off-edge pixels that may be flips
     std::string why;                // where the differences come from
 };
 

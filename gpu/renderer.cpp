@@ -181,6 +181,10 @@ void Renderer::set_camera_uniforms(const Program& p, const FrameCamera& cam, con
     glUniform1i(p.uniform("u_texture_mode"), cam.texture_mode ? 1 : 0);
     glUniform3fv(p.uniform("u_eye"), 1, glm::value_ptr(cam.eye));
     glUniform3fv(p.uniform("u_view_dir"), 1, glm::value_ptr(cam.view_dir));
+    // mesh.vert with MESOLAB_SNAP_VERTICES: the CPU rasteriser's clip transform and frame size.
+    const mat4 clip_from_object = cam.raster.proj * cam.raster.view * model;
+    glUniformMatrix4fv(p.uniform("u_clip_from_object"), 1, GL_FALSE, glm::value_ptr(clip_from_object));
+    glUniform2f(p.uniform("u_viewport_size"), float(cam.raster.width), float(cam.raster.height));
 }
 
 void Renderer::set_lighting_uniforms(const Program& p, const Lighting& L, int env_unit) {

@@ -92,7 +92,9 @@ IndexDetail index_detail(const IndexMap& map, const NoiseParams& n, float amplit
     IndexDetail d;
     d.noise = n;
     d.noise.base_frequency = map.width;
+    d.octaves = NoiseOctaves(d.noise);
     d.amplitude = amplitude;
+    d.scale = amplitude / kS;
     return d;
 }
 
@@ -106,8 +108,8 @@ vec2 index_inputs(const IndexMap& map, const IndexDetail& d, vec2 uv, int k) {
     if (k < 2 || !(d.amplitude > 0.f)) return u;
     uv -= glm::floor(uv);  // the periodic square (the GLSL noise needs it; the same noise either way)
     vec2 T(0.f);
-    for (int o = 0; o < k - 1; ++o) T += vec2(noise_octave(d.noise, uv, o, 0), noise_octave(d.noise, uv, o, 1));
-    u += (d.amplitude / kS) * T;
+    for (int o = 0; o < k - 1; ++o) T += noise_octave_pair(d.octaves, uv, o);
+    u += d.scale * T;
     return {reflect_unit(u.x), reflect_unit(u.y)};
 }
 }  // namespace mesolab::bumpsynth

@@ -73,10 +73,13 @@ struct IndexMap {
 };
 IndexMap make_index_map(const BumpNormals& n, const Lut& lut);
 
-// The detail noise: `noise.base_frequency` is the bump map's width (see above).
+// The detail noise: `noise.base_frequency` is the bump map's width (see above). The GPU computes
+// the same bits from `octaves` and `scale` (gpu/bumpsynth/synthesis.glsl).
 struct IndexDetail {
     NoiseParams noise;
+    NoiseOctaves octaves;  // of noise
     float amplitude = 0.f;
+    float scale = 0.f;     // amplitude / √½, the factor of the noise sum
 };
 IndexDetail index_detail(const IndexMap& map, const NoiseParams& n, float amplitude);
 

@@ -200,9 +200,12 @@ vec3 Lut::sample_uniform(double u1, double u2) const {
 
 LutEntry Lut::sample(vec2 r) const { return microfacet_frame(sample_uniform(G_(r.x), G_(r.y))); }
 
-const LutEntry& Lut::lookup(vec2 r) const {
-    const int a = std::min(S_ - 1, int(clamp01(r.x) * S_)), b = std::min(S_ - 1, int(clamp01(r.y) * S_));
-    return at(a, b);
+// In float, as the GLSL (gpu/bumpsynth/synthesis.glsl lut_entry): r S rounds in float where S is
+// not a power of two, and the double product truncates to the entry below where the float one
+// reaches the next integer.
+ivec2 Lut::entry(vec2 r) const {
+    const auto index = [&](float v) { return std::min(S_ - 1, int((v > 0.f ? (v < 1.f ? v : 1.f) : 0.f) * float(S_))); };
+    return {index(r.x), index(r.y)};
 }
 
 // [SECTION] CDFs and the inverse map (§7)

@@ -113,7 +113,9 @@ public:
     const LutEntry& at(int a, int b) const { return entries_[size_t(b) * size_t(S_) + size_t(a)]; }
 
     // Nearest entry for inputs r (a texture lookup with nearest filtering; r clamped to [0, 1]).
-    const LutEntry& lookup(vec2 r) const;
+    const LutEntry& lookup(vec2 r) const { const ivec2 e = entry(r); return at(e.x, e.y); }
+    // Its indices (a, b).
+    ivec2 entry(vec2 r) const;
     // The exact map for inputs r (what the entries hold at their texel centres; §5.1 software path).
     LutEntry sample(vec2 r) const;
     // The same for already uniform u = (G(r1), G(r2)), without G.

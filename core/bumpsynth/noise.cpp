@@ -22,19 +22,20 @@ int wrap(int i, int n) {
     return r < 0 ? r + n : r;
 }
 
-// r mapped to [0, 1] from the octave sums T and A.
-float to_unit(float T, float A) { return std::clamp(0.5f + T / (2.f * kS * A), 0.f, 1.f); }
+// r mapped to [0, 1] from the octave sum T and the scale 1 / (2 √½ A) (see the header).
+float to_unit(float T, float scale) { return std::clamp(0.5f + T * scale, 0.f, 1.f); }
+float unit_scale_of(float A) { return 1.f / (2.f * kS * A); }
 
 // uv reduced to the periodic square [0, 1] (see the header).
 vec2 wrap_uv(vec2 uv) { return uv - glm::floor(uv); }
 
-// Octave o of both channels at uv (wrapped), including gain^o.
-vec2 octave_pair(const NoiseOctaves& oc, vec2 uv, int o) {
+}  // namespace
+
+vec2 noise_octave_pair(const NoiseOctaves& oc, vec2 uv, int o) {
     const int p0 = oc.period[o][0], p1 = oc.period[o][1];
     return oc.gain[o] * vec2(gradient_noise(uv * float(p0) + oc.offset[o][0], p0, oc.seed[o][0]),
                              gradient_noise(uv * float(p1) + oc.offset[o][1], p1, oc.seed[o][1]));
 }
-}  // namespace
 
 uint32_t octave_seed(uint32_t seed, int octave, int channel) { return hash32(seed * 0x9E3779B1u + uint32_t(octave * 2 + channel) * 0x85EBCA77u + 0x165667B1u); }
 vec2 octave_offset(int octave, int channel) {
@@ -79,8 +80,11 @@ float gradient_noise(vec2 p, int period, uint32_t seed) {
 
 // [SECTION] Fractal noise
 NoiseOctaves::NoiseOctaves(const NoiseParams& n) : count(std::clamp(n.octaves_max, 0, kMax)) {
+    float A = 0.f;
     for (int o = 0; o < count; ++o) {
         gain[o] = std::pow(n.gain, float(o));
+        A += gain[o];
+        unit_scale[o + 1] = unit_scale_of(A);
         for (int c = 0; c < 2; ++c) {
             period[o][c] = (n.base_frequency + c) << o;  // see the header: decorrelated lattices
             seed[o][c] = octave_seed(n.seed, o, c);
@@ -101,7 +105,7 @@ float fractal_noise(const NoiseParams& n, vec2 uv, int k, int channel) {
         T += noise_octave(n, uv, o, channel);
         A += std::pow(n.gain, float(o));
     }
-    return to_unit(T, A);
+    return to_unit(T, unit_scale_of(A));
 }
 
 void fractal_noise_all(const NoiseParams& n, vec2 uv, vec2* out) { fractal_noise_all(NoiseOctaves(n), uv, n.octaves_max, out); }
@@ -109,11 +113,9 @@ void fractal_noise_all(const NoiseParams& n, vec2 uv, vec2* out) { fractal_noise
 void fractal_noise_all(const NoiseOctaves& oc, vec2 uv, int count, vec2* out) {
     uv = wrap_uv(uv);
     vec2 T(0.f);
-    float A = 0.f;
     for (int o = 0; o < count; ++o) {
-        T += octave_pair(oc, uv, o);
-        A += oc.gain[o];
-        out[o] = vec2(to_unit(T.x, A), to_unit(T.y, A));
+        T += noise_octave_pair(oc, uv, o);
+        out[o] = vec2(to_unit(T.x, oc.unit_scale[o + 1]), to_unit(T.y, oc.unit_scale[o + 1]));
     }
 }
 
@@ -170,34 +172,31 @@ float NoiseCdfs::input(int k, int channel, float r) const {
 }
 
 namespace {
-// The first k octaves' sums T (both channels) and amplitude A at uv (wrapped).
-void octave_sums(const NoiseOctaves& oc, vec2 uv, int k, vec2& T, float& A) {
-    T = vec2(0.f);
-    A = 0.f;
-    for (int o = 0; o < k; ++o) {
-        T += octave_pair(oc, uv, o);
-        A += oc.gain[o];
-    }
+// The first k octaves' sums T of both channels at uv (wrapped).
+vec2 octave_sums(const NoiseOctaves& oc, vec2 uv, int k) {
+    vec2 T(0.f);
+    for (int o = 0; o < k; ++o) T += noise_octave_pair(oc, uv, o);
+    return T;
 }
 }  // namespace
 
 vec2 noise_inputs(const NoiseCdfs& cdfs, vec2 uv, int k) {
     uv = wrap_uv(uv);
-    vec2 T;
-    float A;
-    octave_sums(cdfs.octaves, uv, k, T, A);
-    return {cdfs.input(k, 0, to_unit(T.x, A)), cdfs.input(k, 1, to_unit(T.y, A))};
+    const vec2 T = octave_sums(cdfs.octaves, uv, k);
+    const float s = cdfs.octaves.unit_scale[k];
+    return {cdfs.input(k, 0, to_unit(T.x, s)), cdfs.input(k, 1, to_unit(T.y, s))};
 }
 
 void noise_inputs_fading(const NoiseCdfs& cdfs, vec2 uv, int k, vec2& coarse, vec2& fine) {
     uv = wrap_uv(uv);
-    vec2 T;
-    float A;
-    octave_sums(cdfs.octaves, uv, k, T, A);
-    if (k > 0) coarse = {cdfs.input(k, 0, to_unit(T.x, A)), cdfs.input(k, 1, to_unit(T.y, A))};
-    T += octave_pair(cdfs.octaves, uv, k);
-    A += cdfs.octaves.gain[k];
-    fine = {cdfs.input(k + 1, 0, to_unit(T.x, A)), cdfs.input(k + 1, 1, to_unit(T.y, A))};
+    vec2 T = octave_sums(cdfs.octaves, uv, k);
+    if (k > 0) {
+        const float s = cdfs.octaves.unit_scale[k];
+        coarse = {cdfs.input(k, 0, to_unit(T.x, s)), cdfs.input(k, 1, to_unit(T.y, s))};
+    }
+    T += noise_octave_pair(cdfs.octaves, uv, k);
+    const float s = cdfs.octaves.unit_scale[k + 1];
+    fine = {cdfs.input(k + 1, 0, to_unit(T.x, s)), cdfs.input(k + 1, 1, to_unit(T.y, s))};
 }
 
 // [SECTION] Mip-mapped noise texture
@@ -211,7 +210,9 @@ vec2 NoiseTexture::bilinear(int level, vec2 uv) const {
     const float ax = fx - x0f, ay = fy - y0f;
     const int x0 = wrap(int(x0f), s), x1 = wrap(int(x0f) + 1, s), y0 = wrap(int(y0f), s), y1 = wrap(int(y0f) + 1, s);
     auto at = [&](int x, int y) { return t[size_t(y) * size_t(s) + size_t(x)]; };
-    return glm::mix(glm::mix(at(x0, y0), at(x1, y0), ax), glm::mix(at(x0, y1), at(x1, y1), ax), ay);
+    // a + t (b - a), as the GLSL writes it (noise_texture.glsl).
+    const vec2 a = at(x0, y0) + ax * (at(x1, y0) - at(x0, y0)), b = at(x0, y1) + ax * (at(x1, y1) - at(x0, y1));
+    return a + ay * (b - a);
 }
 
 NoiseTexture make_noise_texture(const NoiseCdfs& cdfs, int size) {

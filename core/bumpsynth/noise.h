@@ -5,7 +5,7 @@
 // [SECTION] Gradient noise
 // Perlin's gradient noise (Perlin 2002: quintic fade 6t⁵ - 15t⁴ + 10t³) on the integer lattice, with
 // one of 8 unit gradients per lattice point chosen by an integer hash (no permutation table, so the
-// GLSL version in gpu/bumpsynth/bumpsynth.frag computes the same bits). The lattice is periodic with
+// GLSL version in gpu/bumpsynth/synthesis.glsl computes the same bits). The lattice is periodic with
 // `period` cells, so noise laid over a surface's uv square tiles (no seam at u = 0 = 1 on a sphere).
 // Its values lie in [-√½, √½] (unit gradients in 2D), 0 at lattice points.
 // Cost (it dominates a procedural frame): the fractal noise first reduces uv to the periodic square,
@@ -27,9 +27,12 @@
 // sees it); with F and F + 1 the patterns beat and average out over the uv square. What remains is
 // the finite square's sampling dependence, ~1/sqrt(cells): |corr| ~ 0.03 for F = 8, ~1e-4 for F = 256. The paper's turbulence is this sum (its
 // "Gaussian distributed" random numbers, §4); Perlin's |noise| variant would fold the distribution.
-// The per-octave constants (period, seed, offset, gain^o) are computed once (NoiseOctaves; the
-// shader's uniforms), and T_k, A_k are summed octave by octave in float in this order on both
-// backends, so r_{k+1} is r_k's sums plus octave k: the two octave counts of a fade cost k + 1 octaves.
+// The per-octave constants (period, seed, offset, gain^o and the scale 1 / (2 √½ A_k)) are computed
+// once (NoiseOctaves; the shader's uniforms), and T_k is summed octave by octave in float in this
+// order on both backends, so r_{k+1} is r_k's sums plus octave k: the two octave counts of a fade
+// cost k + 1 octaves. r_k = 1/2 + T_k · scale_k multiplies by the scale rather than dividing by
+// 2 √½ A_k: GLSL leaves a division's rounding to the implementation, not a multiplication's, and
+// the GPU must reproduce these bits (gpu/bumpsynth/synthesis.glsl says why).
 //
 // [SECTION] Input CDFs per octave count (§4)
 // The paper assumes the distribution of the turbulence "remains constant independent of the number of
@@ -100,7 +103,11 @@ struct NoiseOctaves {
     uint32_t seed[kMax][2] = {};    // octave_seed
     vec2 offset[kMax][2] = {};      // octave_offset
     float gain[kMax] = {};          // gain^o
+    float unit_scale[kMax + 1] = {};  // [k], k >= 1: 1 / (2 √½ A_k), A_k = Σ_{o<k} gain^o summed in float
 };
+
+// Octave o of both channels at uv (already in [0, 1]², see above), including gain^o.
+vec2 noise_octave_pair(const NoiseOctaves& oct, vec2 uv, int octave);
 
 // Octave o of channel c (0 or 1), including its gain^o.
 float noise_octave(const NoiseParams& n, vec2 uv, int octave, int channel);

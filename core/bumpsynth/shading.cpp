@@ -88,15 +88,17 @@ FacetBlend facets_at(const Synthesis& s, vec2 uv, float octaves) {
     int k = int(std::floor(o));
     b.w = o - float(k);
     if (k >= K) k = K, b.w = 0.f;
+    b.k = k;
+    vec2 uc(0.f), uf(0.f);
     if (!s.index_map && !s.noise_texture && b.w > 0.f) {  // one pass over k + 1 octaves for both (noise.h)
-        vec2 uc(0.f), uf(0.f);
         noise_inputs_fading(*s.cdfs, uv, k, uc, uf);
-        if (k > 0) b.coarse = s.lut->lookup(uc);
-        b.fine = s.lut->lookup(uf);
-        return b;
+    } else {
+        if (k > 0) uc = synthesis_inputs(s, uv, k);
+        if (b.w > 0.f) uf = synthesis_inputs(s, uv, k + 1);
     }
-    if (k > 0) b.coarse = s.lut->lookup(synthesis_inputs(s, uv, k));
-    b.fine = b.w > 0.f ? s.lut->lookup(synthesis_inputs(s, uv, k + 1)) : b.coarse;
+    if (k > 0) b.coarse_entry = s.lut->entry(uc), b.coarse = s.lut->at(b.coarse_entry.x, b.coarse_entry.y);
+    if (b.w > 0.f) b.fine_entry = s.lut->entry(uf), b.fine = s.lut->at(b.fine_entry.x, b.fine_entry.y);
+    else b.fine_entry = b.coarse_entry, b.fine = b.coarse;
     return b;
 }
 }  // namespace mesolab::bumpsynth

@@ -78,10 +78,13 @@ struct Synthesis {
     const Image* albedo = nullptr;  // albedo map (null: none)
 };
 
-// The two microfacets a pixel blends (coarse: k octaves, fine: k + 1, weight w of fine).
+// The two microfacets a pixel blends (coarse: k octaves, fine: k + 1, weight w of fine), and their
+// look-up-table entries (a, b): (-1, -1) for the macro frame (k = 0); fine = coarse when w = 0.
 struct FacetBlend {
     LutEntry coarse, fine;
     float w = 0.f;
+    int k = 0;
+    ivec2 coarse_entry{-1}, fine_entry{-1};
 };
 FacetBlend facets_at(const Synthesis& s, vec2 uv, float octaves);
 

@@ -5,6 +5,7 @@
 #include "core/bumpsynth/stages.h"
 #include "core/profile.h"
 #include "core/scene_stages.h"
+#include "gpu/bumpsynth/synthesis.h"
 #include "gpu/renderer.h"
 
 #include <glm/gtc/type_ptr.hpp>
@@ -18,8 +19,8 @@ using namespace mesolab::bumpsynth;
 class BumpsynthPass final : public TechniquePass {
 public:
     explicit BumpsynthPass(const Technique& t)
-        : program_(Program::graphics("shaders/mesh.vert", "bumpsynth/bumpsynth.frag", {}, fragment_outputs(t))),
-          depth_(Program::graphics("shaders/mesh.vert", "bumpsynth/depth.frag")) {}
+        : program_(Program::graphics("shaders/mesh.vert", "bumpsynth/bumpsynth.frag", {"MESOLAB_SNAP_VERTICES"}, fragment_outputs(t))),
+          depth_(Program::graphics("shaders/mesh.vert", "bumpsynth/depth.frag", {"MESOLAB_SNAP_VERTICES"})) {}
 
     void draw(DrawContext& ctx) override {
         PROFILE_SCOPE("bumpsynth.draw");
@@ -64,40 +65,13 @@ public:
             const SceneObject& o = ctx.scene.objects[size_t(i)];
             const Bound& b = bound.at(i);
             const Synthesis syn = synthesis_for(ctx.scene, ctx.eval, i);  // the material, parsed once
-            if (!syn.index_map && !syn.cdfs) throw std::logic_error("bumpsynth: neither an index map nor noise CDFs were evaluated");
-            const NoiseParams np = syn.index_map ? syn.index_detail.noise : syn.cdfs->params;
             ctx.renderer.set_camera_uniforms(program_, ctx.camera, object_to_world(o));
             program_.bind_texture(1, GL_TEXTURE_2D, b.ndf, "u_ndf");
             program_.bind_texture(2, GL_TEXTURE_2D_ARRAY, b.lut, "u_lut");
-            program_.bind_texture(3, GL_TEXTURE_2D, b.noise, "u_noise");
             program_.bind_texture(4, GL_TEXTURE_2D, b.smith, "u_smith");
             program_.bind_texture(5, GL_TEXTURE_2D, b.albedo, "u_albedo");
-            program_.bind_texture(6, GL_TEXTURE_2D, b.index, "u_index");
-            glUniform1i(program_.uniform("u_index_map"), syn.index_map ? 1 : 0);
-            glUniform2i(program_.uniform("u_index_size"), syn.index_map ? syn.index_map->width : 1, syn.index_map ? syn.index_map->height : 1);
-            glUniform1f(program_.uniform("u_index_noise"), syn.index_map ? syn.index_detail.amplitude : 0.f);
-            if (b.cdf) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, b.cdf);
+            set_synthesis_uniforms(program_, syn, {.cdf = b.cdf, .noise = b.noise, .index = b.index}, 3, 6);
             glUniform1i(program_.uniform("u_ndf_res"), syn.ndf->resolution());
-            glUniform1i(program_.uniform("u_lut_size"), syn.lut->size());
-            glUniform1i(program_.uniform("u_cdf_nodes"), NoiseCdfs::kCdfNodes);
-            glUniform1i(program_.uniform("u_octaves_max"), np.octaves_max);
-            // The octaves of the noise, or of the index map's detail noise (one lattice cell per texel).
-            const NoiseOctaves oc = syn.index_map ? NoiseOctaves(np) : syn.cdfs->octaves;
-            std::vector<GLint> periods;
-            std::vector<GLuint> seeds;
-            std::vector<float> offsets;
-            for (int oct = 0; oct < oc.count; ++oct)
-                for (int c = 0; c < 2; ++c) {
-                    periods.push_back(oc.period[oct][c]);
-                    seeds.push_back(oc.seed[oct][c]);
-                    offsets.push_back(oc.offset[oct][c].x), offsets.push_back(oc.offset[oct][c].y);
-                }
-            glUniform1iv(program_.uniform("u_octave_period"), GLsizei(periods.size()), periods.data());
-            glUniform1uiv(program_.uniform("u_octave_seed"), GLsizei(seeds.size()), seeds.data());
-            glUniform2fv(program_.uniform("u_octave_offset"), GLsizei(offsets.size() / 2), offsets.data());
-            glUniform1fv(program_.uniform("u_octave_gain"), GLsizei(oc.count), oc.gain);
-            glUniform1i(program_.uniform("u_noise_texture"), b.noise ? 1 : 0);
-            glUniform1i(program_.uniform("u_noise_levels"), syn.noise_texture ? int(syn.noise_texture->levels.size()) : 1);
             glUniform1i(program_.uniform("u_masking"), b.smith ? 1 : 0);
             glUniform1i(program_.uniform("u_fresnel"), syn.model.fresnel ? 1 : 0);
             glUniform3fv(program_.uniform("u_ks"), 1, glm::value_ptr(syn.model.ks));

@@ -2,9 +2,10 @@
 // samples) against the CPU's NoiseTexture::bilinear (core/bumpsynth/noise.cpp), on a texture
 // whose neighbouring texels differ by up to 1.
 //
-// Tolerance: the same float expressions on both sides; the GPU may fuse the multiply-adds of the
-// two lerps, a few ULP of values in [0, 1] (2^-24 each): 1e-6. A filtered texture look-up whose
-// weights have 8 bits (NVIDIA's) errs by up to 1/512 here.
+// Tolerance: none. The same float expressions on both sides, `precise` in the GLSL so that no
+// multiply-add is fused: the same bits (a fused lerp is a few ULP off, enough to pick another
+// look-up-table entry now and then). A filtered texture look-up whose weights have 8 bits
+// (NVIDIA's) errs by up to 1/512 here.
 //
 // llvmpipe filters in float, so a filtered look-up would pass the first check here as well; the
 // second sets the texture's filters to GL_NEAREST, the coarsest a GL implementation may filter with
@@ -93,6 +94,6 @@ TEST(BumpsynthNoiseTexture, GpuLookUpIsTheCpuBilinearWhateverTheFilter) {
     const double linear = worst_difference(GL_LINEAR_MIPMAP_NEAREST, GL_LINEAR);
     const double nearest = worst_difference(GL_NEAREST_MIPMAP_NEAREST, GL_NEAREST);
     std::printf("noise texture look-up: worst difference %.2g (linear filters), %.2g (nearest)\n", linear, nearest);
-    EXPECT_LT(linear, 1e-6);
-    EXPECT_LT(nearest, 1e-6) << "the look-up depends on the texture's filter";
+    EXPECT_EQ(linear, 0.0);
+    EXPECT_EQ(nearest, 0.0) << "the look-up depends on the texture's filter";
 }

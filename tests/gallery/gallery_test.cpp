@@ -69,6 +69,9 @@ TEST(Gallery, EveryPresetAgreesOnBothBackendsAndMatchesItsScreenshot) {
         const Scene s = load_preset(file);
         RenderRequest req;  // as `mesolab capture` renders (512 x 512, or the texture's own size)
         req.aovs = {"radiance", "normal"};
+        for (const SceneObject& o : s.objects)  // and the AOVs of discrete choices the agreement tells flips by
+            for (const std::string& name : Registry::instance().technique(o.technique)->agreement().choices)
+                if (std::find(req.aovs.begin(), req.aovs.end(), name) == req.aovs.end()) req.aovs.push_back(name);
         req.coverage = true;
         req.backend = Backend::Cpu;
         const RenderResult cpu = wb.render(s, req);

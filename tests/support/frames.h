@@ -36,10 +36,30 @@ struct AgreementFigures {
     size_t within_tight = 0, within_loose = 0;
     size_t interior_beyond_max = 0;
     double interior_allowed = 0;  // the outliers the tolerances allow (sum of interior_outliers)
-    double worst_interior = 0, worst = 0;
+    double worst_interior = 0, worst = 0;  // worst_interior: off edges, flips left out
     int worst_interior_x = -1, worst_interior_y = -1;
     size_t nonzero_cpu = 0, nonzero_gpu = 0;  // covered values that are not 0
+    size_t interior_pixels = 0, interior_flips = 0;  // covered pixels off edges, those that are flips
+    double flips_allowed = 0;     // the flips the tolerances allow (sum of interior_flips)
+    double worst_flip = 0;        // the largest difference at a flip
 };
+
+// Whether pixel (x, y) is a flip under `tol` (FrameAgreement::choices): some index of the choice
+// AOVs differs between the frames, and none by more than 1.
+inline bool is_flip(const Frame& cpu, const Frame& gpu, const FrameAgreement& tol, int x, int y) {
+    bool differs = false;
+    for (const std::string& name : tol.choices) {
+        if (!cpu.has(name) || !gpu.has(name)) return false;
+        const Image &a = cpu.aov(name), &b = gpu.aov(name);
+        for (int c = 0; c < a.channels; ++c) {
+            const float va = a.at(x, y)[c], vb = b.at(x, y)[c];
+            if (va == vb) continue;
+            if (!(std::fabs(double(va) - double(vb)) <= 1.0)) return false;
+            differs = true;
+        }
+    }
+    return differs;
+}
 
 // The comparison of one AOV, over covered pixels only; `tol` for a pixel is tolerance(object).
 template <class Tolerance>
@@ -52,6 +72,12 @@ AgreementFigures compare_aov(const Frame& cpu, const Frame& gpu, const char* aov
             const size_t p = size_t(y) * size_t(a.width) + size_t(x);
             if (!cov.covered(p)) continue;
             const FrameAgreement& tol = tolerance(cov.object[p]);
+            const bool interior = !cov.edge[p], flip = interior && is_flip(cpu, gpu, tol, x, y);
+            if (interior) {
+                ++f.interior_pixels;
+                f.interior_flips += flip;
+                f.flips_allowed += tol.interior_flips;
+            }
             for (int c = 0; c < a.channels; ++c) {
                 const float va = a.at(x, y)[c], vb = b.at(x, y)[c];
                 const double d = std::isfinite(va) && std::isfinite(vb) ? std::fabs(double(va) - double(vb)) : INFINITY;
@@ -61,8 +87,12 @@ AgreementFigures compare_aov(const Frame& cpu, const Frame& gpu, const char* aov
                 f.within_tight += d <= tol.tight;
                 f.within_loose += d <= tol.loose;
                 f.worst = std::max(f.worst, d);
-                if (cov.edge[p]) continue;
+                if (!interior) continue;
                 ++f.interior_values;
+                if (flip) {
+                    f.worst_flip = std::max(f.worst_flip, d);
+                    continue;
+                }
                 f.interior_beyond_max += d > tol.interior_max;
                 f.interior_allowed += tol.interior_outliers;
                 if (d > f.worst_interior || f.worst_interior_x < 0) f.worst_interior = d, f.worst_interior_x = x, f.worst_interior_y = y;
@@ -73,9 +103,12 @@ AgreementFigures compare_aov(const Frame& cpu, const Frame& gpu, const char* aov
 
 inline void print_figures(const char* what, const char* aov, const AgreementFigures& f) {
     const double n = double(std::max<size_t>(f.values, 1));
-    std::printf("[ cpu/gpu ] %-40s %-11s covered %7zu (interior %7zu): within tight %.5f, loose %.5f; worst %.2e, interior %.2e at (%d,%d), %zu over max (%.0f allowed)\n",
+    std::printf("[ cpu/gpu ] %-40s %-11s covered %7zu (interior %7zu): within tight %.5f, loose %.5f; worst %.2e, interior %.2e at (%d,%d), %zu over max (%.0f allowed)",
                 what, aov, f.values, f.interior_values, double(f.within_tight) / n, double(f.within_loose) / n, f.worst, f.worst_interior,
                 f.worst_interior_x, f.worst_interior_y, f.interior_beyond_max, std::floor(f.interior_allowed + 1e-9));
+    if (f.interior_flips > 0 || f.flips_allowed > 0)
+        std::printf("; flips %zu of %zu pixels (%.0f allowed), worst %.2e", f.interior_flips, f.interior_pixels, std::floor(f.flips_allowed + 1e-9), f.worst_flip);
+    std::printf("\n");
 }
 
 // Checks one AOV's figures against the tolerances: content in both frames, the fractions within
@@ -90,13 +123,17 @@ inline void expect_figures_agree(const char* aov, const AgreementFigures& f, dou
     EXPECT_LE(double(f.interior_beyond_max), std::floor(f.interior_allowed + 1e-9))
         << aov << ": " << f.interior_beyond_max << " values off silhouettes and triangle edges beyond interior_max (" << std::floor(f.interior_allowed + 1e-9)
         << " allowed); worst " << f.worst_interior << " at pixel (" << f.worst_interior_x << ", " << f.worst_interior_y << ")";
+    EXPECT_LE(double(f.interior_flips), std::floor(f.flips_allowed + 1e-9))
+        << aov << ": " << f.interior_flips << " of " << f.interior_pixels << " pixels off edges are flips (discrete choices one step apart; "
+        << std::floor(f.flips_allowed + 1e-9) << " allowed)";
 }
 
 // For each AOV, over the pixels the objects cover (the CPU frame's coverage, which must be filled:
 // render_cpu_and_gpu does), the CPU and GPU frames agree to the tolerances of the object a pixel
 // shows, tolerance(object) (core/technique.h, FrameAgreement): fractions within tight and loose,
-// every value off edges within interior_max but for the allowed outliers, and content (a value
-// other than 0) in both frames: two black frames agree about nothing.
+// every value off edges within interior_max but for the allowed outliers and flips (the frames must
+// hold the AOVs of the discrete choices the tolerances name), and content (a value other than 0) in
+// both frames: two black frames agree about nothing.
 template <class Tolerance>
 void expect_frames_agree_by_object(const Frame& cpu, const Frame& gpu, std::initializer_list<const char*> aovs, Tolerance&& tolerance,
                                    std::string label = "") {
@@ -107,6 +144,12 @@ void expect_frames_agree_by_object(const Frame& cpu, const Frame& gpu, std::init
     double frac_tight = 1, frac_loose = 1;
     for (int o : cpu.coverage.object)
         if (o >= 0) frac_tight = std::min(frac_tight, tolerance(o).frac_tight), frac_loose = std::min(frac_loose, tolerance(o).frac_loose);
+    for (int o : cpu.coverage.object)
+        if (o >= 0)
+            for (const std::string& name : tolerance(o).choices) {
+                ASSERT_TRUE(cpu.has(name)) << "the CPU frame has no AOV " << name << ", the discrete choices its agreement names";
+                ASSERT_TRUE(gpu.has(name)) << "the GPU frame has no AOV " << name << ", the discrete choices its agreement names";
+            }
     for (const char* aov : aovs) {
         ASSERT_TRUE(cpu.has(aov)) << "the CPU frame has no AOV " << aov;
         ASSERT_TRUE(gpu.has(aov)) << "the GPU frame has no AOV " << aov;
