@@ -9,7 +9,7 @@
 //   bumpsynth.noise_texture  the paper's mip-mapped noise texture (noise = texture only)
 //   bumpsynth.masking        the Smith table of the NDF (masking on only)
 //   bumpsynth.albedo         the albedo map
-// A frame shades every pixel with shading.h's synthesis at o(d) octaves (d: eye distance; all
+// A frame shades every pixel with brdf.h's synthesis at o(d) octaves (d: eye distance; all
 // octaves in camera.mode=texture). AOVs: radiance, normal (the microfacet normal in the surface's
 // tangent frame, blended while an octave fades in), octaves (o at the pixel).
 // Sweep metric: bumpsynth.ndf_histogram, the synthesised normals' histogram against the NDF (sweep_metric.h).
@@ -18,7 +18,7 @@
 #include "core/bumpsynth/lut.h"
 #include "core/bumpsynth/ndf.h"
 #include "core/bumpsynth/noise.h"
-#include "core/bumpsynth/shading.h"
+#include "core/bumpsynth/brdf.h"
 #include "core/stage.h"
 
 namespace mesolab::bumpsynth {

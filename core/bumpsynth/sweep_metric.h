@@ -30,7 +30,7 @@
 // setting itself measures the floor that this realisation and the reference's table set.
 // Cost: ~2^20 syntheses at 8 octaves, a fraction of a second on 2 cores (not part of the sweep's time).
 #include "core/bumpsynth/ndf.h"
-#include "core/bumpsynth/shading.h"
+#include "core/bumpsynth/brdf.h"
 #include "core/technique.h"
 #include <cstdint>
 #include <vector>

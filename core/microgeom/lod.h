@@ -6,7 +6,7 @@
 //             average surface stays where the base is); shaded exactly like the bump level
 //             (macro frame from the base, micro normal, S_i shadows and scattering from the
 //             texture), so it differs from `bump` only by parallax, occlusion and silhouettes;
-//   bump      the base surface with the heightfield as a bump map (microgeom.cpp);
+//   bump      the base surface with the heightfield as a bump map (shading.cpp);
 //   brdf      the base surface with the heightfield's simulated BRDF (goniometer.h), no texture.
 #include "core/heightfield/heightfield.h"
 #include "core/mesh.h"

@@ -1,11 +1,12 @@
 #pragma once
 // Technique microgeom's own internals, shared by the files that implement it (other modules use
-// microgeom.h). MicrogeomTechnique's members are defined by concern:
-//   microgeom.cpp   the parameters, effect and AOVs; the frame's stages, texture size and meshes
-//   stages.cpp      the stage graph (declare_stages)
-//   shading.cpp     CPU shading (shade_cpu)
-//   export_btf.cpp  the BTF export (exports, §6)
-//   bench.cpp       the timing tables (bench_tables: Table 1 and §6)
+// microgeom.h and stages.h). MicrogeomTechnique's members are defined by concern, in the files
+// every technique uses for them (README.md, "How it is built"):
+//   technique.cpp  the parameters, effect and AOVs, the agreement; the frame's stages, texture size and meshes
+//   stages.cpp     the stage graph (declare_stages)
+//   shading.cpp    CPU shading (shade_cpu)
+//   commands.cpp   the BTF export (exports, §6)
+//   bench.cpp      the timing tables (bench_tables: Table 1 and §6)
 // The paper's figures are in paper.h. The stages and the BTF export share the scattering settings
 // of a material and the GPU's light solver with its CPU fallback (below).
 #include "core/error.h"
@@ -32,13 +33,7 @@ public:
     void shade_cpu(const ShadeContext& ctx) const override;
     std::vector<ExportDecl> exports() const override;
     std::vector<BenchTable> bench_tables() const override;
-    // Continuous parts (interpolated directions, ellipse filtering, scattered light) agree to
-    // about 1e-3 of the radiance; the visibility bits S_i and the direction triangle a view falls in
-    // are discrete choices that can flip on the terminator of a shadow and on a triangle's edge.
-    FrameAgreement agreement() const override {
-        return {.tight = 1e-3, .frac_tight = 0.95, .loose = 2e-2, .frac_loose = 0.998, .interior_max = 5e-3, .interior_outliers = 2e-4,
-                .why = "float evaluation order; S_i bits and direction triangles flip on shadow terminators"};
-    }
+    FrameAgreement agreement() const override;
 };
 
 // The scattering settings of a material (microgeom.depth, sampling, paths, scatter_seed, shadows).

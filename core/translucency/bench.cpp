@@ -35,7 +35,7 @@ Scene table_scene(const std::string& mesh, int vertices, const std::string& name
 }
 }  // namespace
 
-std::vector<BenchTable> translucency_bench_tables() {
+std::vector<BenchTable> TranslucencyTechnique::bench_tables() const {
     BenchTable t;
     t.name = "translucency";
     t.title = "Lensch et al. 2002, Table 1: per-frame passes and precomputation (512 x 512 atlas, K = 7)";

@@ -76,7 +76,7 @@ float smith_g1(vec3 w) {
     return a + at * (b - a);
 }
 
-// [SECTION] The BRDF in a facet's frame (core/bumpsynth/shading.cpp shade_facet)
+// [SECTION] The BRDF in a facet's frame (core/bumpsynth/brdf.cpp shade_facet)
 vec3 shade_facet(vec3 fm, vec3 ft, vec3 fb, vec3 wo, vec3 wi, vec3 E, vec3 albedo) {
     if (!(wo.z > 0.0) || !(wi.z > 0.0)) return vec3(0.0);
     vec3 o = vec3(dot(wo, ft), dot(wo, fb), dot(wo, fm));

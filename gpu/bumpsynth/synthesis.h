@@ -2,7 +2,7 @@
 // The uniforms of gpu/bumpsynth/synthesis.glsl (a pixel's look-up-table inputs and entry), set from
 // the CPU's synthesis of an object, so that the shader computes the CPU's bits (bumpsynth.frag and
 // the test shader shaders/test/bumpsynth_inputs.comp).
-#include "core/bumpsynth/shading.h"
+#include "core/bumpsynth/brdf.h"
 #include "gpu/gl.h"
 
 namespace mesolab::gpu {

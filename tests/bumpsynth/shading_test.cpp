@@ -3,7 +3,7 @@
 // CDFs, the mip-mapped texture).
 #include "core/bumpsynth/bumpsynth.h"
 #include "core/bumpsynth/noise.h"
-#include "core/bumpsynth/shading.h"
+#include "core/bumpsynth/brdf.h"
 #include "core/error.h"
 #include "stats.h"
 

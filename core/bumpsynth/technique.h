@@ -1,0 +1,61 @@
+#pragma once
+// Technique bumpsynth's own internals, shared by the files that implement it (other modules use
+// bumpsynth.h and stages.h). BumpsynthTechnique's members are defined by concern, in the files
+// every technique uses for them (README.md, "How it is built"):
+//   technique.cpp  the parameters and AOVs, the frame's stages and texture size, the agreement, the sweep metric
+//   stages.cpp     the stage graph (declare_stages)
+//   shading.cpp    CPU shading (shade_cpu)
+//   bench.cpp      the timing tables (bench_tables)
+// The materials' readers are in bumpsynth.cpp, the BRDF and the synthesis in brdf.cpp.
+#include "core/bumpsynth/bumpsynth.h"
+#include "core/heightfield/params.h"
+#include "core/technique.h"
+#include <string>
+#include <vector>
+
+namespace mesolab::bumpsynth {
+
+// [SECTION] The keys the stages read, and when they run
+// The bump map an NDF may come from (ndf = normal_map | heightfield, §7): the normal map and the
+// heightfield's own keys (core/heightfield/params.h: the same surface as in microgeom).
+inline std::vector<std::string> source_keys() {
+    std::vector<std::string> k{"ndf", "normal_map", "normal_map_encoding", "normal_map_y"};
+    for (const auto& h : heightfield_keys()) k.push_back(h);
+    return k;
+}
+inline const std::vector<std::string> kSourceKeys = source_keys();
+inline const std::vector<std::string> kNdfKeys = [] {
+    std::vector<std::string> k{"alpha_x", "alpha_y", "rotation", "exponent", "lobes", "ndf_image", "ndf_resolution"};
+    k.insert(k.begin(), kSourceKeys.begin(), kSourceKeys.end());
+    return k;
+}();
+inline const std::vector<std::string> kNoiseKeys{"noise_frequency", "noise_gain", "noise_seed", "octaves_max"};
+
+inline std::vector<std::string> keys(const std::vector<std::string>& names) {
+    std::vector<std::string> out;
+    for (const auto& n : names) out.push_back("bumpsynth." + n);
+    return out;
+}
+inline bool from_bump_map(const SceneObject& o) {
+    const std::string& n = o.material.get_string("ndf");
+    return n == "normal_map" || n == "heightfield";
+}
+// §7: the bump map's own normals through the index texture instead of noise.
+inline bool index_mode(const SceneObject& o) { return from_bump_map(o) && o.material.get_bool("index_map"); }
+inline bool noise_inputs_needed(const SceneObject& o) { return !index_mode(o); }
+inline bool texture_noise(const SceneObject& o) { return !index_mode(o) && o.material.get_string("noise") == "texture"; }
+inline bool masking(const SceneObject& o) { return o.material.get_bool("masking"); }
+
+// [SECTION] The technique
+class BumpsynthTechnique final : public Technique {
+public:
+    BumpsynthTechnique();
+    void declare_stages(StageGraph& g) const override;
+    std::vector<StageName> frame_stages() const override;
+    std::optional<ivec2> texture_size(const Scene& s, const Evaluation& ev) const override;
+    void shade_cpu(const ShadeContext& ctx) const override;
+    std::vector<BenchTable> bench_tables() const override;
+    FrameAgreement agreement() const override;
+    std::vector<SweepMetricDecl> sweep_metrics() const override;
+};
+}  // namespace mesolab::bumpsynth
