@@ -135,6 +135,16 @@ thread_local ParamReadWatch* t_read_watch = nullptr;
 ParamReadScope::ParamReadScope(ParamReadWatch* watch) : previous_(t_read_watch) { t_read_watch = watch; }
 ParamReadScope::~ParamReadScope() { t_read_watch = previous_; }
 
+void ParamGroup::section(std::string title, std::vector<std::string> names, bool open) {
+    for (const std::string& n : names) {
+        if (index_of(n) < 0) throw std::logic_error("section " + title + ": no parameter " + name_ + "." + n);
+        for (const ParamSection& sec : sections_)
+            if (std::find(sec.names.begin(), sec.names.end(), n) != sec.names.end())
+                throw std::logic_error("section " + title + ": " + name_ + "." + n + " is already in section " + sec.title);
+    }
+    sections_.push_back({std::move(title), std::move(names), open});
+}
+
 void ParamGroup::set_cost(std::string_view name, Cost c) {
     const int i = index_of(name);
     if (i < 0) throw std::logic_error("no parameter " + name_ + "." + std::string(name));

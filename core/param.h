@@ -74,6 +74,13 @@ struct ParamDecl {
 
 class ParamTable;
 
+// A titled group of a ParamGroup's parameters, as the panels show them (a tree node each).
+struct ParamSection {
+    std::string title;
+    std::vector<std::string> names;  // in the order shown
+    bool open = true;                // open when first shown
+};
+
 class ParamGroup {
 public:
     ParamGroup() = default;
@@ -100,11 +107,16 @@ public:
     ParamTable defaults() const;
     // The derived cost of a change of `name` (the registry sets it once every stage is declared).
     void set_cost(std::string_view name, Cost c);
+    // Declares a section of already declared parameters (std::logic_error for an unknown name or
+    // one already in a section). Parameters in no section are shown after the sections.
+    void section(std::string title, std::vector<std::string> names, bool open = true);
+    const std::vector<ParamSection>& sections() const { return sections_; }
 
 private:
     ParamDecl& add(ParamDecl d);
     std::string name_, title_;
     std::vector<ParamDecl> decls_;
+    std::vector<ParamSection> sections_;
 };
 
 // [SECTION] Values of one group (one object's material, one light, the camera...).

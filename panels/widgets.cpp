@@ -1,7 +1,9 @@
 // Widgets generated from parameter declarations.
 #include "panels/panel.h"
+#include "core/technique.h"
 
 #include <imgui.h>
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -227,12 +229,61 @@ bool param_widgets(ParamTable& t, Dirty& dirty, std::initializer_list<const char
     return changed;
 }
 
-void aov_button(PanelContext& ctx, const char* aov, const char* help) {
+bool param_sections(ParamTable& t, Dirty& dirty, const char* id_suffix, const std::function<void(const std::string&)>& inside) {
+    bool changed = false;
+    std::vector<std::string> shown;
+    for (const ParamSection& sec : t.group().sections()) {
+        shown.insert(shown.end(), sec.names.begin(), sec.names.end());
+        const std::string id = sec.title + "##" + t.group().name() + id_suffix;
+        if (!ImGui::TreeNodeEx(id.c_str(), sec.open ? ImGuiTreeNodeFlags_DefaultOpen : 0)) continue;
+        for (const std::string& n : sec.names) {
+            const ParamDecl* d = t.group().find(n);
+            if (d && t.is_used(*d)) changed |= param_widget(*d, t, dirty, id_suffix);
+        }
+        if (inside) inside(sec.title);
+        ImGui::TreePop();
+    }
+    for (const ParamDecl& d : t.group().decls())
+        if (std::find(shown.begin(), shown.end(), d.name) == shown.end() && t.is_used(d)) changed |= param_widget(d, t, dirty, id_suffix);
+    return changed;
+}
+
+void aov_button(PanelContext& ctx, const std::string& aov, const std::string& help) {
     if (!ctx.aov) return;
     const bool on = *ctx.aov == aov;
     if (on) ImGui::PushStyleColor(ImGuiCol_Button, ImGui::GetStyleColorVec4(ImGuiCol_ButtonActive));
-    if (ImGui::SmallButton(aov)) *ctx.aov = aov;
+    if (ImGui::SmallButton(aov.c_str())) *ctx.aov = aov;
     if (on) ImGui::PopStyleColor();
-    if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", help);
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", help.c_str());
+}
+
+void aov_buttons(PanelContext& ctx, const std::string& technique) {
+    const Technique* t = Registry::instance().technique(technique);
+    if (!t || !ctx.aov) return;
+    const float right = ImGui::GetWindowPos().x + ImGui::GetWindowContentRegionMax().x;
+    bool first = true;
+    for (const AovDecl& a : t->outputs()) {
+        if (a.name == "normal") continue;  // the View menu has it for every technique
+        // Buttons on a row while they fit.
+        if (!first) {
+            const float w = ImGui::CalcTextSize(a.name.c_str()).x + 2.f * ImGui::GetStyle().FramePadding.x;
+            if (ImGui::GetItemRectMax().x + ImGui::GetStyle().ItemSpacing.x + w < right) ImGui::SameLine();
+        }
+        aov_button(ctx, a.name, a.help);
+        first = false;
+    }
+}
+
+const PanelEntry* PanelRegistry::find(const std::string& technique) const {
+    for (const PanelEntry& e : entries)
+        if (e.technique == technique) return &e;
+    return nullptr;
+}
+
+int panel_object(const Scene& s, const std::string& technique, int selected) {
+    if (selected >= 0 && size_t(selected) < s.objects.size() && s.objects[size_t(selected)].technique == technique) return selected;
+    for (size_t i = 0; i < s.objects.size(); ++i)
+        if (s.objects[i].technique == technique) return int(i);
+    return -1;
 }
 }  // namespace mesolab::panels

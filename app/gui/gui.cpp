@@ -155,7 +155,11 @@ private:
     std::string gl_renderer_;      // GL_RENDERER, for the status bar
     Session session_;              // the stage cache, timings and memory budget of this window
     Evaluator evaluator_;          // the worker thread (evaluates with session_)
-    panels::PanelRegistry technique_panels_;
+    panels::PanelRegistry technique_panels_;                                    // the panels' declarations
+    std::map<std::string, std::unique_ptr<panels::TechniquePanel>> panels_;  // this window's panels, by technique
+    void reset_panels() {
+        for (auto& [t, p] : panels_) p->reset();
+    }
     panels::PresetBrowser presets_;
 
     GuiState state_;  // what the window shows and the user changed
@@ -173,6 +177,7 @@ Gui::Gui(GLFWwindow* window, ScriptRunner script, bool scripted, std::optional<S
     session_.set_memory_limit(memory_limit);
     gl_renderer_ = gpu::query_gl_info("glfw").renderer;
     panels::register_technique_panels(technique_panels_);
+    for (const panels::PanelEntry& e : technique_panels_.entries) panels_[e.technique] = e.make();
     if (initial) state_.doc.loaded(std::move(*initial), std::move(initial_file));
     else state_.doc.loaded(default_scene(), "");  // the first frame evaluates it
     if (!initial_error.empty()) report(initial_error, true, ErrorOrigin::Action);
@@ -219,6 +224,7 @@ void Gui::update_title() {
 // [SECTION] Actions
 void Gui::load(const std::string& path) {
     state_.doc.loaded(load_preset(path), path);  // InputError names the file; the old scene stays
+    reset_panels();
     copy_text(presets_.save_as, path);
     if (!scripted_) toast("Loaded " + path);
 }
@@ -243,6 +249,7 @@ void Gui::paste() {
     }
     const std::string base = state_.doc.scene.base_dir.empty() ? fs::current_path().string() : state_.doc.scene.base_dir;
     state_.doc.replaced(scene_from_json(j, "clipboard", base));
+    reset_panels();
     toast("Pasted a preset from the clipboard (untitled)");
 }
 
@@ -552,7 +559,10 @@ void Gui::side_windows() {
         const std::string title = e->title + "###technique." + e->technique;
         if (ImGui::Begin(title.c_str())) {
             ImGui::PushItemWidth(-ImGui::GetFontSize() * 8.5f);
-            e->draw(ctx);
+            // The selected object when it uses the technique, else its first object.
+            panels::PanelContext own = ctx;
+            own.object = panels::panel_object(state_.doc.scene, e->technique, ctx.object);
+            if (own.object >= 0) panels_.at(e->technique)->draw(own);
             ImGui::PopItemWidth();
         }
         ImGui::End();

@@ -66,6 +66,11 @@ BumpsynthTechnique::BumpsynthTechnique() : Technique("bumpsynth", "Bump map synt
     p.add_bool("masking", false).doc("Smith masking-shadowing of the same NDF (off: the paper's implicit term)");
     p.add_path("albedo_map", "")
         .doc("Image multiplying kd at the surface's (u, v) (8-bit images are sRGB); relative to the preset's folder");
+    p.section("NDF", {"ndf", "alpha_x", "alpha_y", "rotation", "exponent", "lobes", "ndf_image", "ndf_resolution"});
+    p.section("Bump map (§7)", {"normal_map", "normal_map_encoding", "normal_map_y", "heightfield", "resolution", "height_scale", "texel_size", "periodic",
+                                "vgroove_angle", "rms_slope", "correlation", "seed", "index_map", "index_noise"});
+    p.section("Synthesis", {"lut_size", "octaves_max", "detail_distance", "noise", "noise_frequency", "noise_gain", "noise_seed", "noise_texture_size"});
+    p.section("Shading", {"ks", "kd", "fresnel", "masking", "albedo_map"});
     aovs_ = {{"octaves", 1, "Octaves of noise at the pixel (0: NDF alone; fractional while an octave fades in)"},
              {"entry", 3, "Look-up-table entry (a, b) of the pixel's microfacet of k octaves, and k ((-1, -1, 0): no bumps)"},
              {"entry_fine", 3, "The same for k + 1 octaves while an octave fades in (else the same as entry)"}};

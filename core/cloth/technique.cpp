@@ -196,6 +196,10 @@ public:
         p.add_enum("mip", {"off", "nearest", "blend"}, "blend")
             .doc("Mip level from the screen-space uv derivatives: off (level 0, aliases), nearest, blend between the two levels around it");
         p.add_float("mip_bias", 0.0).range(-4.0, 4.0).in("levels").used_when("mip", {"nearest", "blend"}).doc("Added to the mip level (positive: blurrier)");
+        params_.section("Stitch", {"stitch", "yarn_radius", "loop_height", "color_a", "color_b", "stitch_resolution"});
+        params_.section("Acquisition", {"spatial", "directions", "visibility_rays", "samples"});
+        params_.section("Fit", {"lobes", "lookup_table", "tolerance"});
+        params_.section("Garment and mip blending", {"garment", "garment_resolution", "repeat", "mip", "mip_bias"});
         aovs_ = {{"alpha", 1, "The table's alpha: 1 yarn, 0 a hole (the background shows through)"},
                  {"mip_level", 1, "Mip level read (fractional when blending): 0 = one BRDF per sample point"},
                  {"brdf_index", 1, "Index of the BRDF read (the finer level when blending), counting level by level from level 0"}};

@@ -55,6 +55,13 @@ MicrogeomTechnique::MicrogeomTechnique() : Technique("microgeom", "Micro-geometr
     p.add_int("sh_bands", 3).range(1, 8).used_when("brdf_fit", {"sh"})
         .doc("SH fit: bands per direction (bands^2 coefficients for the light times bands^2 for the view)");
 
+    p.section("Heightfield", {"heightfield", "resolution", "height_scale", "texel_size", "periodic", "vgroove_angle", "rms_slope", "correlation", "seed",
+                              "albedo", "albedo_map", "tiling"});
+    p.section("Visibility and scattering", {"directions", "depth", "sampling", "paths", "scatter_seed", "shadows", "ellipse_bend", "device"});
+    p.section("Curvature of the base (§5)", {"curvature_u", "curvature_v"});
+    p.section("Level of detail", {"lod", "brdf_fit", "brdf_resolution", "brdf_samples", "sh_bands"});
+    p.section("Shading", {"brdf", "ks", "shininess"}, false);
+
     effects_.push_back({"indirect", true, "Light scattered inside micro-geometry (microgeom.depth bounces)"});
     aovs_ = {{"direct", 3, "Direct light reflected towards the eye (with shadows)"},
              {"indirect", 3, "Scattered and environment light reflected towards the eye"},

@@ -144,6 +144,10 @@ TranslucencyTechnique::TranslucencyTechnique() : Technique("translucency", "Tran
     p.add_float("veins", 0.0).range(0.0, 1.0).doc("Strength of procedural fractal veins in rho (0 = none)");
     p.add_float("vein_scale", 10.0).range(0.01, 1e5).log().in("mm").doc("Vein period (used when veins > 0)");
     p.add_color("vein_color", {0.35, 0.3, 0.28}).doc("rho inside a vein");
+    p.section("Material and size", {"material", "sigma_s", "sigma_a", "eta", "mm_per_unit"});
+    p.section("Accuracy (each costs a recompute)", {"vertices", "atlas_size", "chunk_angle", "kernel", "threshold", "blend"});
+    p.section("Display", {"response", "compare", "shadows", "shadow_map"});
+    p.section("Texture", {"albedo_map", "veins", "vein_scale", "vein_color"}, false);
     aovs_ = {{"irradiance", 3, "Power per unit area entering the medium: incident irradiance x Fresnel transmittance"},
              {"radiosity", 3, "B: power per unit area leaving through subsurface transport, before the outgoing Fresnel term (local + global)"},
              {"local", 3, "The local (kernel) part of B"},

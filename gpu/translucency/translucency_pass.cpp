@@ -4,6 +4,7 @@
 #include "core/translucency/stages.h"
 #include "core/profile.h"
 #include "core/scene_stages.h"
+#include "core/translucency/gpu_layout.h"
 #include "core/translucency/reference.h"
 #include "core/translucency/translucency.h"
 #include "gpu/renderer.h"
@@ -47,6 +48,9 @@ Texture map_texture(int size, const std::vector<vec4>* data = nullptr) {
 struct Table {
     Buffer buffer;
     Texture texture;
+};
+struct ShownTables {
+    Table shown, bary;
 };
 
 void bind(GLuint binding, const Buffer& b) { glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, b.get()); }
@@ -400,14 +404,11 @@ private:
         glDispatchCompute(groups(K.texel.size()), 1, 1);
     }
 
-    // [SECTION] translucency.global: the factors' rows made complete (expand_directed), bound in
-    // pieces that fit the GL's block size
-    static constexpr int kRowQuantum = 32;  // entries: global.comp's 8 invocations x 2 texels x 2 entries
+    // [SECTION] translucency.global: the factors' rows, padded and in pieces (core/translucency/gpu_layout.h)
     struct GpuFactors {
         // Rows [r0, r1) read through buffer textures over their pairs of entries from pair `base` on.
         struct Piece {
-            int r0 = 0, r1 = 0;
-            int64_t base = 0;  // in pairs of entries
+            FactorPiece rows;
             Texture entry, col_hi;
         };
         Buffer outer, entry, col_hi, weight;
@@ -419,55 +420,25 @@ private:
         return ctx.renderer.resources().get<GpuFactors>(in.factors, "directed", [&] {
             PROFILE_SCOPE("translucency.upload_factors");
             const VertexFactors& F = *in.factors;
-            const DirectedFactors D0 = expand_directed(F);
-            // Rows padded with zero entries to a multiple of kRowQuantum: a texel holds two entries
-            // of the same row, and the shader's eight invocations of a row read two texels each
-            // per step, without a last partial step.
-            DirectedFactors D;
-            D.outer.assign(D0.outer.size(), 0);
-            D.entry.reserve(D0.entry.size() + size_t(F.n) * (kRowQuantum / 2) + 2);
-            for (int i = 0; i < F.n; ++i) {
-                const int b = D0.outer[size_t(i)], e = D0.outer[size_t(i) + 1];
-                D.outer[size_t(i)] = int(D.entry.size());
-                D.entry.insert(D.entry.end(), D0.entry.begin() + b, D0.entry.begin() + e);
-                if (!D0.col_hi.empty()) D.col_hi.insert(D.col_hi.end(), D0.col_hi.begin() + b, D0.col_hi.begin() + e);
-                const int pad = (kRowQuantum - (e - b) % kRowQuantum) % kRowQuantum;
-                D.entry.insert(D.entry.end(), size_t(pad), 0);
-                if (!D0.col_hi.empty()) D.col_hi.insert(D.col_hi.end(), size_t(pad), 0);
-            }
-            D.outer[size_t(F.n)] = int(D.entry.size());
-            const int64_t total_pairs = int64_t(D.entry.size()) / 2;
+            const PaddedFactors P = pad_factor_rows(F);
             GpuFactors g;
-            g.outer = storage(D.outer);
-            D.entry.resize(D.entry.size() + 2, 0);  // a piece binds at least one pair
-            g.entry = storage(D.entry);
-            g.wide = !D0.col_hi.empty();
-            if (g.wide) D.col_hi.resize(D.col_hi.size() + 2, 0);
-            g.col_hi = storage(D.col_hi);
+            g.outer = storage(P.outer);
+            g.entry = storage(P.entry);
+            g.wide = P.wide();
+            g.col_hi = storage(P.col_hi);
             std::vector<vec4> weight(size_t(F.n));
             for (int j = 0; j < F.n; ++j) weight[size_t(j)] = vec4(F.weight(j), 0.f);
             g.weight = storage(weight);
             g.weight_tex = make_buffer_texture(g.weight, GL_RGBA32F);
-            // Pieces of rows whose pairs fit the GL's buffer texture size (one piece on every
-            // driver we know: 2^27 texels), each starting at a pair whose 16-byte entry texel and
-            // 4-byte high-column texel are both at a multiple of the offset alignment.
             GLint64 max_texels = 0;
             GLint align = 16;
             glGetInteger64v(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
             glGetIntegerv(GL_TEXTURE_BUFFER_OFFSET_ALIGNMENT, &align);
-            const int64_t align_pairs = std::max<int64_t>(1, (align + 3) / 4);
-            const int64_t cap = std::max<int64_t>(1024, max_texels - align_pairs);
-            const int n = F.n;
-            for (int r0 = 0; r0 < n;) {
-                const int64_t base = int64_t(D.outer[size_t(r0)]) / 2 / align_pairs * align_pairs;
-                int r1 = r0 + 1;
-                while (r1 < n && int64_t(D.outer[size_t(r1) + 1]) / 2 - base <= cap) ++r1;
-                const int64_t count = std::max<int64_t>(1, std::min(int64_t(D.outer[size_t(r1)]) / 2 - base, total_pairs - base));
-                GpuFactors::Piece p{r0, r1, base, {}, {}};
-                p.entry = make_buffer_texture(g.entry, GL_RGBA32UI, GLintptr(base * 16), GLsizeiptr(count * 16));
-                if (g.wide) p.col_hi = make_buffer_texture(g.col_hi, GL_R32UI, GLintptr(base * 4), GLsizeiptr(count * 4));
+            for (const FactorPiece& r : factor_pieces(P, max_texels, (align + 3) / 4)) {
+                GpuFactors::Piece p{r, {}, {}};
+                p.entry = make_buffer_texture(g.entry, GL_RGBA32UI, GLintptr(r.base * 16), GLsizeiptr(r.count * 16));
+                if (g.wide) p.col_hi = make_buffer_texture(g.col_hi, GL_R32UI, GLintptr(r.base * 4), GLsizeiptr(r.count * 4));
                 g.pieces.push_back(std::move(p));
-                r0 = r1;
             }
             return g;
         });
@@ -484,10 +455,10 @@ private:
         for (const GpuFactors::Piece& p : F.pieces) {
             glBindImageTexture(0, p.entry.get(), 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32UI);
             if (F.wide) prog.bind_texture(1, GL_TEXTURE_BUFFER, p.col_hi.get(), "u_col_hi");
-            glUniform1i(prog.uniform("u_row0"), p.r0);
-            glUniform1i(prog.uniform("u_row1"), p.r1);
-            glUniform1i(prog.uniform("u_base"), int(p.base));
-            glDispatchCompute(GLuint((p.r1 - p.r0 + 7) / 8), 1, 1);
+            glUniform1i(prog.uniform("u_row0"), p.rows.r0);
+            glUniform1i(prog.uniform("u_row1"), p.rows.r1);
+            glUniform1i(prog.uniform("u_base"), int(p.rows.base));
+            glDispatchCompute(GLuint((p.rows.r1 - p.rows.r0 + 7) / 8), 1, 1);
         }
     }
 
@@ -511,34 +482,18 @@ private:
         prog.use();
         glUniform1i(prog.uniform("u_size"), a.size);
         glUniform1i(prog.uniform("u_count"), int(A.nonempty.size()));
-        // Per non-empty texel: (texel, fill source, the source's first two vertices) and (the
-        // barycentrics, the third vertex's bits); vertex -1 where the source has no triangle.
-        const auto shown = [&](size_t k, int& t, int& s, int& f) {
-            t = A.nonempty[k];
-            s = A.fill[size_t(t)] >= 0 ? A.fill[size_t(t)] : t;
-            f = a.texel_face[size_t(s)];
-        };
-        prog.bind_texture(0, GL_TEXTURE_BUFFER, table(ctx, in.atlas, "shown", GL_RGBA32I, [&] {
-            std::vector<glm::ivec4> v(A.nonempty.size());
-            for (size_t k = 0; k < v.size(); ++k) {
-                int t, s, f;
-                shown(k, t, s, f);
-                v[k] = f >= 0 ? glm::ivec4(t, s, in.mesh->index[3 * size_t(f)], in.mesh->index[3 * size_t(f) + 1]) : glm::ivec4(t, s, -1, -1);
-            }
-            return v;
-        }), "u_shown");
-        prog.bind_texture(1, GL_TEXTURE_BUFFER, table(ctx, in.atlas, "shown_bary", GL_RGBA32F, [&] {
-            std::vector<vec4> v(A.nonempty.size());
-            for (size_t k = 0; k < v.size(); ++k) {
-                int t, s, f;
-                shown(k, t, s, f);
-                const int32_t v2 = f >= 0 ? int32_t(in.mesh->index[3 * size_t(f) + 2]) : -1;
-                float bits;
-                std::memcpy(&bits, &v2, sizeof bits);
-                v[k] = vec4(f >= 0 ? a.texel_bary[size_t(s)] : vec3(0.f), bits);
-            }
-            return v;
-        }), "u_bary");
+        // The shown texels (core/translucency/gpu_layout.h), made once per atlas.
+        const auto& T = ctx.renderer.resources().get<ShownTables>(in.atlas, "shown", [&] {
+            const ShownTexels st = shown_texels(A, in.mesh->index);
+            ShownTables t;
+            t.shown.buffer = storage(st.shown);
+            t.shown.texture = make_buffer_texture(t.shown.buffer, GL_RGBA32I);
+            t.bary.buffer = storage(st.bary);
+            t.bary.texture = make_buffer_texture(t.bary.buffer, GL_RGBA32F);
+            return t;
+        });
+        prog.bind_texture(0, GL_TEXTURE_BUFFER, T.shown.texture.get(), "u_shown");
+        prog.bind_texture(1, GL_TEXTURE_BUFFER, T.bary.texture.get(), "u_bary");
         prog.bind_texture(3, GL_TEXTURE_BUFFER, w.Bv_tex.get(), "u_Bv");
         prog.bind_texture(4, GL_TEXTURE_BUFFER, w.E_tex.get(), "u_E");
         prog.bind_texture(5, GL_TEXTURE_BUFFER, w.local_tex.get(), "u_L");

@@ -1,25 +1,21 @@
-// Panel of technique basic: the generated widgets for the selected object's material.
+// Panel of technique basic: the generated widgets of the object's material, and its AOV buttons.
 #include "panels/panel.h"
 
 #include <imgui.h>
 
 namespace mesolab::panels {
+namespace {
 
-void register_basic_panel(PanelRegistry& r) {
-    r.add("basic", "Basic (Lambert + Blinn-Phong)", [](PanelContext& ctx) {
-        bool any = false;
-        for (size_t i = 0; i < ctx.scene.objects.size(); ++i) {
-            SceneObject& o = ctx.scene.objects[i];
-            if (o.technique != "basic") continue;
-            any = true;
-            ImGui::PushID(int(i));
-            if (ImGui::TreeNodeEx(o.name.c_str(), ImGuiTreeNodeFlags_DefaultOpen)) {
-                param_table_widgets(o.material, ctx.dirty);
-                ImGui::TreePop();
-            }
-            ImGui::PopID();
-        }
-        if (!any) ImGui::TextDisabled("No object in this scene uses basic.");
-    });
-}
+class BasicPanel final : public TechniquePanel {
+public:
+    void draw(PanelContext& ctx) override {
+        SceneObject& o = ctx.scene.objects[size_t(ctx.object)];
+        ImGui::TextDisabled("%s", o.name.c_str());
+        param_sections(o.material, ctx.dirty);
+        aov_buttons(ctx, "basic");
+    }
+};
+}  // namespace
+
+void register_basic_panel(PanelRegistry& r) { r.add<BasicPanel>("basic", "Basic (Lambert + Blinn-Phong)"); }
 }  // namespace mesolab::panels

@@ -30,8 +30,13 @@ void stage_line(const Evaluation* ev, const StageName& stage, int object) {
 }
 
 // [SECTION] Stitch preview: the centre tile's triangles, orthographic, painter's order, drag to turn.
-void stitch_preview(const StitchMesh& s) {
-    static float yaw = 0.6f, pitch = 0.9f;
+// The view's angles.
+struct PreviewView {
+    float yaw = 0.6f, pitch = 0.9f;
+};
+void stitch_preview(const StitchMesh& s, PreviewView& view_angles) {
+    float& yaw = view_angles.yaw;
+    float& pitch = view_angles.pitch;
     const float side = std::min(ImGui::GetContentRegionAvail().x, ImGui::GetFontSize() * 16.f);
     const ImVec2 p0 = ImGui::GetCursorScreenPos(), size(side, side);
     ImGui::InvisibleButton("##stitch", size);
@@ -85,8 +90,13 @@ void stitch_preview(const StitchMesh& s) {
 }
 
 // [SECTION] BRDF slice: acquired against fitted, one light, every view, at one sample point.
-void brdf_slice(const SampleGrid& g, const BrdfPyramid& p) {
-    static int light = 0, point = -1;
+// The slice's light and sample point.
+struct SliceChoice {
+    int light = 0, point = -1;
+};
+void brdf_slice(const SampleGrid& g, const BrdfPyramid& p, SliceChoice& choice) {
+    int& light = choice.light;
+    int& point = choice.point;
     // The light directions of the grid, in order of first appearance.
     std::vector<dvec3> lights;
     for (const dvec3& l : g.l)
@@ -132,52 +142,39 @@ void brdf_slice(const SampleGrid& g, const BrdfPyramid& p) {
                 all[all.size() / 2]);
 }
 
+class ClothPanel final : public TechniquePanel {
+public:
+    void draw(PanelContext& ctx) override {
+        const int i = ctx.object;
+        SceneObject& o = ctx.scene.objects[size_t(i)];
+        ImGui::TextDisabled("%s", o.name.c_str());
+        param_sections(o.material, ctx.dirty, "##cloth", [&](const std::string& section) {
+            if (section == "Stitch") {
+                if (ctx.eval)
+                    if (const auto s = ctx.eval->get(cloth::stages::stitch, i)) stitch_preview(*s, view_);
+                stage_line(ctx.eval, cloth::stages::stitch, i);
+            } else if (section == "Acquisition") {
+                stage_line(ctx.eval, cloth::stages::acquire, i);
+            } else if (section == "Fit") {
+                stage_line(ctx.eval, cloth::stages::fit, i);
+                if (ctx.eval) {
+                    const auto g = ctx.eval->get(cloth::stages::acquire, i);
+                    const auto p = ctx.eval->get(cloth::stages::fit, i);
+                    if (p) ImGui::Text("%zu BRDFs in %zu levels, %.2f MB", p->count(), p->level.size(), double(p->bytes()) / 1048576.0);
+                    if (g && p && g->res == p->res) brdf_slice(*g, *p, slice_);
+                }
+            } else if (section == "Garment and mip blending") {
+                aov_buttons(ctx, "cloth");
+            }
+        });
+    }
+    void reset() override { view_ = {}, slice_ = {}; }
+
+private:
+    PreviewView view_;
+    SliceChoice slice_;
+};
 }  // namespace
 
-void register_cloth_panel(PanelRegistry& r) {
-    r.add("cloth", "Cloth (Daubert et al. 2001)", [](PanelContext& ctx) {
-        if (ctx.object < 0 || size_t(ctx.object) >= ctx.scene.objects.size()) return;
-        SceneObject& o = ctx.scene.objects[size_t(ctx.object)];
-        if (o.technique != "cloth") {
-            ImGui::TextDisabled("select an object that uses cloth");
-            return;
-        }
-        ParamTable& m = o.material;
-        const int i = ctx.object;
-        if (ImGui::TreeNodeEx("Stitch", ImGuiTreeNodeFlags_DefaultOpen)) {
-            param_widgets(m, ctx.dirty, {"stitch", "yarn_radius", "loop_height", "color_a", "color_b", "stitch_resolution"}, "##cloth");
-            if (ctx.eval)
-                if (const auto s = ctx.eval->get(cloth::stages::stitch, i)) stitch_preview(*s);
-            stage_line(ctx.eval, cloth::stages::stitch, i);
-            ImGui::TreePop();
-        }
-        if (ImGui::TreeNodeEx("Acquisition", ImGuiTreeNodeFlags_DefaultOpen)) {
-            param_widgets(m, ctx.dirty, {"spatial", "directions", "visibility_rays", "samples"}, "##cloth");
-            stage_line(ctx.eval, cloth::stages::acquire, i);
-            ImGui::TreePop();
-        }
-        if (ImGui::TreeNodeEx("Fit", ImGuiTreeNodeFlags_DefaultOpen)) {
-            param_widgets(m, ctx.dirty, {"lobes", "lookup_table", "tolerance"}, "##cloth");
-            stage_line(ctx.eval, cloth::stages::fit, i);
-            if (ctx.eval) {
-                const auto g = ctx.eval->get(cloth::stages::acquire, i);
-                const auto p = ctx.eval->get(cloth::stages::fit, i);
-                if (p) ImGui::Text("%zu BRDFs in %zu levels, %.2f MB", p->count(), p->level.size(), double(p->bytes()) / 1048576.0);
-                if (g && p && g->res == p->res) brdf_slice(*g, *p);
-            }
-            ImGui::TreePop();
-        }
-        if (ImGui::TreeNodeEx("Garment and mip blending", ImGuiTreeNodeFlags_DefaultOpen)) {
-            param_widgets(m, ctx.dirty, {"garment", "garment_resolution", "repeat", "mip", "mip_bias"}, "##cloth");
-            aov_button(ctx, "radiance", "The garment");
-            ImGui::SameLine();
-            aov_button(ctx, "mip_level", "The mip level read per pixel (0: one BRDF per sample point)");
-            ImGui::SameLine();
-            aov_button(ctx, "brdf_index", "The BRDF read per pixel");
-            ImGui::SameLine();
-            aov_button(ctx, "alpha", "The table's alpha: 0 where a hole shows the background");
-            ImGui::TreePop();
-        }
-    });
-}
+void register_cloth_panel(PanelRegistry& r) { r.add<ClothPanel>("cloth", "Cloth (Daubert et al. 2001)"); }
 }  // namespace mesolab::panels

@@ -18,12 +18,6 @@ namespace {
 
 using namespace mesolab::translucency;
 
-void group(ParamTable& t, Dirty& dirty, const char* title, std::initializer_list<const char*> names, bool open) {
-    if (!ImGui::TreeNodeEx(title, open ? ImGuiTreeNodeFlags_DefaultOpen : 0)) return;
-    param_widgets(t, dirty, names, "##tr");
-    ImGui::TreePop();
-}
-
 // R_d(r) per channel, log scale, over the radius holding 99% of the reflectance (Fig. 2).
 void rd_plot(const Medium& m) {
     const Dipole d(m);
@@ -71,20 +65,24 @@ void rd_plot(const Medium& m) {
 }
 
 double mb(double bytes) { return bytes / 1048576.0; }
-}  // namespace
 
-void register_translucency_panel(PanelRegistry& r) {
-    r.add("translucency", "Translucency (Lensch et al. 2002)", [](PanelContext& ctx) {
-        if (ctx.object < 0 || size_t(ctx.object) >= ctx.scene.objects.size()) return;
-        SceneObject& o = ctx.scene.objects[size_t(ctx.object)];
-        if (o.technique != "translucency") {
-            ImGui::TextDisabled("select an object that uses translucency");
-            return;
-        }
-        ParamTable& m = o.material;
-        group(m, ctx.dirty, "Material and size", {"material", "sigma_s", "sigma_a", "eta", "mm_per_unit"}, true);
+class TranslucencyPanel final : public TechniquePanel {
+public:
+    void draw(PanelContext& ctx) override;
+    void reset() override { rmse_.clear(); }
+
+private:
+    std::string rmse_;  // the last "measure RMSE" result, for this scene
+};
+
+void TranslucencyPanel::draw(PanelContext& ctx) {
+    const int i = ctx.object;
+    SceneObject& o = ctx.scene.objects[size_t(i)];
+    ImGui::TextDisabled("%s", o.name.c_str());
+    param_sections(o.material, ctx.dirty, "##tr", [&](const std::string& section) {
+        if (section != "Material and size") return;
         try {
-            const Settings s = Settings::from(o);
+            const Settings s = Settings::from(o, Settings::Medium_);
             if (ImGui::TreeNodeEx("R_d(r) (Fig. 2)", ImGuiTreeNodeFlags_DefaultOpen)) {
                 rd_plot(s.medium);
                 ImGui::TreePop();
@@ -92,67 +90,53 @@ void register_translucency_panel(PanelRegistry& r) {
         } catch (const std::exception& e) {
             ImGui::TextColored(ImVec4(1.f, 0.45f, 0.4f, 1.f), "%s", e.what());
         }
-        group(m, ctx.dirty, "Accuracy (each costs a recompute)", {"vertices", "atlas_size", "chunk_angle", "kernel", "threshold", "blend"}, true);
-        group(m, ctx.dirty, "Display", {"response", "compare", "shadows", "shadow_map"}, true);
-        group(m, ctx.dirty, "Texture", {"albedo_map", "veins", "vein_scale", "vein_color"}, false);
-
-        // What the stages hold for this object.
-        if (ctx.eval && ImGui::TreeNodeEx("Precomputed", ImGuiTreeNodeFlags_DefaultOpen)) {
-            const int i = ctx.object;
-            const auto mesh = ctx.eval->get(translucency::stages::mesh, i);
-            const auto atlas = ctx.eval->get(translucency::stages::atlas, i);
-            const auto F = ctx.eval->get(translucency::stages::factors, i);
-            const auto K = ctx.eval->get(translucency::stages::kernels, i);
-            if (mesh) ImGui::Text("mesh: %zu vertices, %zu triangles (from %d)", mesh->vertex_count(), mesh->triangle_count(), mesh->input_vertices);
-            if (atlas)
-                ImGui::Text("atlas: %d chunks, fill %.1f%%, texel %.3g mm", int(atlas->atlas.chunks.size()), 100.0 * atlas->atlas.fill_ratio,
-                            atlas->atlas.scale > 0.f ? Settings::from(ctx.scene.objects[size_t(i)]).mm_per_unit / double(atlas->atlas.scale) : 0.0);
-            if (F) ImGui::Text("form factors: %zu (%.1f MB)", F->count(), mb(double(F->bytes())));
-            if (K) ImGui::Text("kernels: %zu texels x %d² (%.1f MB)", K->texel.size(), K->K, mb(double(K->bytes())));
-            for (const StageName& st : {StageName(translucency::stages::mesh), StageName(translucency::stages::atlas), StageName(translucency::stages::factors)})
-                for (const StageRun* run : ctx.eval->runs_of(st))
-                    if (run->object == i)
-                        for (const auto& w : run->warnings) ImGui::TextColored(ImVec4(1.f, 0.8f, 0.4f, 1.f), "%s", w.c_str());
-            ImGui::TreePop();
-        }
-
-        // Views: the AOV shown and the camera (texture mode shows the atlas, one pixel per texel).
-        if (ImGui::TreeNodeEx("Views", ImGuiTreeNodeFlags_DefaultOpen)) {
-            const bool texture = ctx.scene.camera.get_string("mode") == "texture";
-            if (ImGui::SmallButton(texture ? "object" : "atlas")) {
-                ctx.scene.camera.set("mode", std::string(texture ? "orbit" : "texture"));
-                ctx.dirty.mark(Cost::Redraw);
-            }
-            if (ImGui::IsItemHovered()) ImGui::SetTooltip("camera.mode: the object, or its texture atlas one pixel per texel");
-            ImGui::SameLine();
-            aov_button(ctx, "radiance", "What is displayed: rho T(cos) B / pi");
-            ImGui::SameLine();
-            aov_button(ctx, "irradiance", "The illumination map: irradiance entering the medium");
-            ImGui::SameLine();
-            aov_button(ctx, "local", "The local (kernel) part of B");
-            aov_button(ctx, "global", "The global (vertex factor) part of B");
-            ImGui::SameLine();
-            aov_button(ctx, "radiosity", "B = local + global");
-            ImGui::SameLine();
-            aov_button(ctx, "reference", "B by brute force (turn on compare)");
-            ImGui::SameLine();
-            aov_button(ctx, "error", "radiosity - reference (turn on compare)");
-            // The error's RMSE, measured on demand (the brute force is O(texels²): seconds on large meshes).
-            static std::string rmse;
-            if (ImGui::SmallButton("measure RMSE vs brute force") && ctx.eval) {
-                try {
-                    char b[96];
-                    std::snprintf(b, sizeof b, "radiosity RMSE / mean: %.4f", radiosity_error(ctx.scene, *ctx.eval, ctx.object));
-                    rmse = b;
-                } catch (const std::exception& e) {
-                    rmse = e.what();
-                }
-            }
-            if (ImGui::IsItemHovered())
-                ImGui::SetTooltip("The method's radiosity against the brute-force sum over the same atlas, for the current lights (CPU; the window waits)");
-            if (!rmse.empty()) ImGui::TextUnformatted(rmse.c_str());
-            ImGui::TreePop();
-        }
     });
+
+    // What the stages hold for this object.
+    if (ctx.eval && ImGui::TreeNodeEx("Precomputed", ImGuiTreeNodeFlags_DefaultOpen)) {
+        const auto mesh = ctx.eval->get(translucency::stages::mesh, i);
+        const auto atlas = ctx.eval->get(translucency::stages::atlas, i);
+        const auto F = ctx.eval->get(translucency::stages::factors, i);
+        const auto K = ctx.eval->get(translucency::stages::kernels, i);
+        if (mesh) ImGui::Text("mesh: %zu vertices, %zu triangles (from %d)", mesh->vertex_count(), mesh->triangle_count(), mesh->input_vertices);
+        if (atlas)
+            ImGui::Text("atlas: %d chunks, fill %.1f%%, texel %.3g mm", int(atlas->atlas.chunks.size()), 100.0 * atlas->atlas.fill_ratio,
+                        atlas->atlas.scale > 0.f ? Settings::from(o, Settings::Scale).mm_per_unit / double(atlas->atlas.scale) : 0.0);
+        if (F) ImGui::Text("form factors: %zu (%.1f MB)", F->count(), mb(double(F->bytes())));
+        if (K) ImGui::Text("kernels: %zu texels x %d² (%.1f MB)", K->texel.size(), K->K, mb(double(K->bytes())));
+        for (const StageName& st : std::vector<StageName>{translucency::stages::mesh, translucency::stages::atlas, translucency::stages::factors})
+            for (const StageRun* run : ctx.eval->runs_of(st))
+                if (run->object == i)
+                    for (const auto& w : run->warnings) ImGui::TextColored(ImVec4(1.f, 0.8f, 0.4f, 1.f), "%s", w.c_str());
+        ImGui::TreePop();
+    }
+
+    // Views: the AOV shown and the camera (texture mode shows the atlas, one pixel per texel).
+    if (ImGui::TreeNodeEx("Views", ImGuiTreeNodeFlags_DefaultOpen)) {
+        const bool texture = ctx.scene.camera.get_string("mode") == "texture";
+        if (ImGui::SmallButton(texture ? "object" : "atlas")) {
+            ctx.scene.camera.set("mode", std::string(texture ? "orbit" : "texture"));
+            ctx.dirty.mark(Cost::Redraw);
+        }
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("camera.mode: the object, or its texture atlas one pixel per texel");
+        aov_buttons(ctx, "translucency");
+        // The error's RMSE, measured on demand (the brute force is O(texels²): seconds on large meshes).
+        if (ImGui::SmallButton("measure RMSE vs brute force") && ctx.eval) {
+            try {
+                char b[96];
+                std::snprintf(b, sizeof b, "radiosity RMSE / mean: %.4f", radiosity_error(ctx.scene, *ctx.eval, i));
+                rmse_ = b;
+            } catch (const std::exception& e) {
+                rmse_ = e.what();
+            }
+        }
+        if (ImGui::IsItemHovered())
+            ImGui::SetTooltip("The method's radiosity against the brute-force sum over the same atlas, for the current lights (CPU; the window waits)");
+        if (!rmse_.empty()) ImGui::TextUnformatted(rmse_.c_str());
+        ImGui::TreePop();
+    }
 }
+}  // namespace
+
+void register_translucency_panel(PanelRegistry& r) { r.add<TranslucencyPanel>("translucency", "Translucency (Lensch et al. 2002)"); }
 }  // namespace mesolab::panels

@@ -561,10 +561,8 @@ TEST(NdfEditorGui, TheRegisteredPanelDrawsThePresetAndReportsBadLoads) {
     const Evaluation ev = evaluate_ndf(s);
     PanelRegistry reg;
     register_technique_panels(reg);
-    const PanelEntry* entry = nullptr;
-    for (const auto& e : reg.entries)
-        if (e.technique == "bumpsynth") entry = &e;
-    ASSERT_NE(entry, nullptr);
+    ASSERT_NE(reg.find("bumpsynth"), nullptr);
+    const std::unique_ptr<TechniquePanel> entry = reg.find("bumpsynth")->make();
     Dirty dirty;
     PanelContext ctx{s, dirty, &ev, 0};
     for (int k = 0; k < 3; ++k) ui.frame([&] { entry->draw(ctx); });

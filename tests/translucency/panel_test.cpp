@@ -19,11 +19,13 @@ Scene small_sphere() {
     apply_set(s, "translucency.mm_per_unit", "10");
     return s;
 }
-const panels::PanelEntry& translucency_panel(panels::PanelRegistry& reg) {
+// A panel of the technique's own, as a window makes it.
+std::unique_ptr<panels::TechniquePanel> translucency_panel() {
+    panels::PanelRegistry reg;
     panels::register_technique_panels(reg);
-    for (const auto& e : reg.entries)
-        if (e.technique == "translucency") return e;
-    throw std::logic_error("no translucency panel");
+    const panels::PanelEntry* e = reg.find("translucency");
+    if (!e) throw std::logic_error("no translucency panel");
+    return e->make();
 }
 }  // namespace
 
@@ -32,13 +34,12 @@ TEST(TranslucencyPanel, DrawsAndItsViewButtonsPickTheAov) {
     Scene s = small_sphere();
     Workbench wb;
     const Evaluation ev = wb.evaluate(s, Registry::instance().frame_stages(s));
-    panels::PanelRegistry reg;
-    const panels::PanelEntry& panel = translucency_panel(reg);
+    const auto panel = translucency_panel();
     panels::Dirty dirty;
     std::string aov = "radiance";
     panels::PanelContext ctx{s, dirty, &ev, 0};
     ctx.aov = &aov;
-    for (int k = 0; k < 3; ++k) ui.frame([&] { panel.draw(ctx); });
+    for (int k = 0; k < 3; ++k) ui.frame([&] { panel->draw(ctx); });
     EXPECT_FALSE(dirty.any());
     ASSERT_NE(ImGui::GetDrawData(), nullptr);
     EXPECT_GT(ImGui::GetDrawData()->TotalVtxCount, 1000) << "the R_d plot and the widgets";
@@ -50,13 +51,12 @@ TEST(TranslucencyPanel, DrawsAndItsViewButtonsPickTheAov) {
     EXPECT_LT(e, 0.5);
 }
 
-TEST(TranslucencyPanel, SaysSoForAnObjectOfAnotherTechnique) {
-    test::HeadlessImGui ui;
+// The window draws a technique's panel only for that technique's objects: the selected one, or else
+// the first; none in a scene without one.
+TEST(TranslucencyPanel, IsDrawnOnlyForObjectsOfItsTechnique) {
     Scene s = default_scene("basic");
-    panels::PanelRegistry reg;
-    const panels::PanelEntry& panel = translucency_panel(reg);
-    panels::Dirty dirty;
-    panels::PanelContext ctx{s, dirty, nullptr, 0};
-    ui.frame([&] { panel.draw(ctx); });
-    EXPECT_FALSE(dirty.any());
+    EXPECT_EQ(panels::panel_object(s, "translucency", 0), -1);
+    s.objects.push_back(default_scene("translucency").objects[0]);
+    EXPECT_EQ(panels::panel_object(s, "translucency", 0), 1) << "the basic object is selected: the panel shows the first translucency object";
+    EXPECT_EQ(panels::panel_object(s, "translucency", 1), 1);
 }
