@@ -313,6 +313,15 @@ void scan_triangle(const ScreenTriangle& t, int32_t id, int x0, int x1, int y0, 
     }
 }
 
+// How the screen-space barycentrics (lambda_1, lambda_2) of `t` change over a step of (dx, dy)
+// pixels: the gradients of the edge functions (scan_triangle) over twice the area.
+inline vec2 lambda_step(const ScreenTriangle& t, int dx, int dy) {
+    const double s = double(kSubPixel) * t.inv_area2;
+    const double l1 = (-(double(t.y[0]) - double(t.y[2])) * dx + (double(t.x[0]) - double(t.x[2])) * dy) * s;
+    const double l2 = (-(double(t.y[1]) - double(t.y[0])) * dx + (double(t.x[1]) - double(t.x[0])) * dy) * s;
+    return vec2(float(l1), float(l2));
+}
+
 // Perspective-correct barycentrics (weights of t.src) from screen-space ones (lambda_1, lambda_2).
 inline vec3 source_barycentrics(const ScreenTriangle& t, vec2 lambda) {
     const vec3 w((1.f - lambda.x - lambda.y) * t.inv_w[0], lambda.x * t.inv_w[1], lambda.y * t.inv_w[2]);
@@ -375,6 +384,8 @@ void rasterize(const std::vector<DrawItem>& items, const RasterCamera& cam, GBuf
     out.normal.resize(n_pixels);
     out.tangent.resize(n_pixels);
     out.uv.resize(n_pixels);
+    out.uv_dx.resize(n_pixels);
+    out.uv_dy.resize(n_pixels);
     if (n_pixels == 0) return;
 
     // Vertex stage, then clipping and setup in chunks of source triangles (kept in submission
@@ -470,6 +481,7 @@ void rasterize(const std::vector<DrawItem>& items, const RasterCamera& cam, GBuf
                         out.normal[o] = vec3(0.f);
                         out.tangent[o] = vec3(0.f);
                         out.uv[o] = vec2(0.f);
+                        out.uv_dx[o] = out.uv_dy[o] = vec2(0.f);
                         continue;
                     }
                     const ScreenTriangle& t = *tris[size_t(id)];
@@ -481,6 +493,17 @@ void rasterize(const std::vector<DrawItem>& items, const RasterCamera& cam, GBuf
                     out.normal[o] = normalize_or_zero(a.normal * beta.x + b.normal * beta.y + c.normal * beta.z);
                     out.tangent[o] = normalize_or_zero(a.tangent * beta.x + b.tangent * beta.y + c.tangent * beta.z);
                     out.uv[o] = a.uv * beta.x + b.uv * beta.y + c.uv * beta.z;
+                    // The quad's other pixels on this triangle: screen-space barycentrics are
+                    // affine in the window position, so they step by their per-pixel gradients.
+                    const vec2 l = buf.lambda[local];
+                    const vec2 step_x = lambda_step(t, 1, 0), step_y = lambda_step(t, 0, 1);
+                    auto uv_at = [&](vec2 lambda) {
+                        const vec3 w = source_barycentrics(t, lambda);
+                        return a.uv * w.x + b.uv * w.y + c.uv * w.z;
+                    };
+                    const float ox = float((tx + int(x)) & 1), oy = float(y & 1);  // 1: the quad's right column, upper row
+                    out.uv_dx[o] = uv_at(l + step_x * (1.f - ox)) - uv_at(l - step_x * ox);
+                    out.uv_dy[o] = uv_at(l + step_y * (1.f - oy)) - uv_at(l - step_y * oy);
                 }
             }
         }

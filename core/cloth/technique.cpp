@@ -100,24 +100,8 @@ PackedPyramid pack_pyramid(const BrdfPyramid& p) {
 }
 
 // [SECTION] Footprint
-double uv_footprint(const GBuffer& gb, int x, int y, int object) {
-    auto same = [&](int xx, int yy) { return xx >= 0 && yy >= 0 && xx < gb.width && yy < gb.height && gb.object[gb.index(xx, yy)] == object; };
-    const vec2 uv = gb.uv[gb.index(x, y)];
-    // The difference towards (x + dx, y + dy), or nothing when that pixel shows something else.
-    auto diff = [&](int dx, int dy, vec2& d) {
-        if (!same(x + dx, y + dy)) return false;
-        d = (gb.uv[gb.index(x + dx, y + dy)] - uv) * float(dx + dy);
-        d -= glm::round(d);  // seams: whole-unit jumps of a wrapped parameterisation
-        return true;
-    };
-    auto axis = [&](int ax, int ay) {
-        const int partner = ((ax ? x : y) & 1) ? -1 : 1;  // the 2 x 2 quad's other pixel
-        vec2 d;
-        if (diff(ax * partner, ay * partner, d) || diff(-ax * partner, -ay * partner, d)) return double(glm::length(d));
-        return -1.0;
-    };
-    const double fx = axis(1, 0), fy = axis(0, 1);
-    return std::max({fx, fy, 0.0});
+double uv_footprint(const GBuffer& gb, size_t pixel) {
+    return double(std::max(glm::length(gb.uv_dx[pixel]), glm::length(gb.uv_dy[pixel])));
 }
 
 namespace {
@@ -316,7 +300,7 @@ void ClothTechnique::shade_cpu(const ShadeContext& ctx) const {
             dvec3 v = dvec3(tf.to_local(wo));
             v.z = std::max(v.z, 1e-4);
             v = glm::normalize(v);
-            const double footprint = uv_footprint(gb, x, y, object) * b.s.repeat;
+            const double footprint = uv_footprint(gb, px) * b.s.repeat;
             const dvec2 uv = dvec2(gb.uv[px]) * b.s.repeat;
             dvec3 L(0.0);
             ClothSample last;
