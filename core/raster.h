@@ -33,6 +33,7 @@ struct DrawItem {
     const TriMesh* mesh = nullptr;
     mat4 model{1.f};
     int object_id = 0;
+    bool uv_derivatives = false;  // fill GBuffer::uv_dx, uv_dy at this item's pixels
 };
 
 // Per-pixel surface data, world space. Pixels not covered have object == -1.
@@ -49,7 +50,9 @@ struct GBuffer {
     // quads are aligned to even columns and rows of GL's window (y up, row 0 at the bottom), and
     // every pixel of a quad is evaluated on the pixel's own triangle, extended beyond its edges
     // as GL's helper invocations are: uv_dx = uv(right column) - uv(left column) in the pixel's
-    // row, uv_dy = uv(upper row) - uv(lower row) in its column. 0 where nothing was drawn.
+    // row, uv_dy = uv(upper row) - uv(lower row) in its column. Filled only when an item asks
+    // (DrawItem::uv_derivatives: they add about a fifth to the rasterisation), at its pixels
+    // (0 elsewhere); empty when none asks.
     std::vector<vec2> uv_dx, uv_dy;
     size_t index(int x, int y) const { return size_t(y) * size_t(width) + size_t(x); }
 };

@@ -212,6 +212,7 @@ public:
                        "border between two sample points read a neighbouring entry"};
     }
     std::vector<SweepMetricDecl> sweep_metrics() const override;
+    bool uses_uv_derivatives() const override { return true; }  // the mip level's footprint
 };
 
 // [SECTION] Stages
@@ -307,6 +308,7 @@ void ClothTechnique::shade_cpu(const ShadeContext& ctx) const {
     const bool constant_env = ctx.lighting.env.constant();
     const vec3 env_const = ctx.lighting.env.color * ctx.lighting.env.intensity;
     const GBuffer& gb = ctx.gbuffer;
+    if (gb.uv_dx.size() != gb.uv.size()) throw std::logic_error("cloth: the G-buffer lacks uv derivatives (DrawItem::uv_derivatives)");
     tbb::parallel_for(0, gb.height, [&](int y) {
         for (int x = 0; x < gb.width; ++x) {
             const size_t px = gb.index(x, y);

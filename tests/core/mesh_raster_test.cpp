@@ -901,15 +901,18 @@ TEST(Raster, MissingTangentsStayZeroAndEmptySceneIsClear) {
 TEST(Raster, ReusedGBufferEqualsAFreshOne) {
     // An interactive caller renders every frame into the same G-buffer: after a frame of another
     // size and scene, a 512x512 render of a 128x64 sphere must equal the one into a fresh buffer,
-    // attribute for attribute and bit for bit (nothing of the earlier frames is left over).
+    // attribute for attribute (uv derivatives included) and bit for bit (nothing of the earlier
+    // frames is left over).
     const TriMesh sphere = make_primitive(Primitive::Sphere, 128), torus = make_primitive(Primitive::Torus, 32);
     const RasterCamera cam = perspective_camera(512, 512, vec3(3.f, 0.f, 0.f), vec3(0.f), 40.f);
-    const GBuffer fresh = render(sphere, cam, mat4(1.f), 0);
+    GBuffer fresh;
+    rasterize({DrawItem{&sphere, mat4(1.f), 0, true}}, cam, fresh);
     GBuffer g;
-    rasterize({DrawItem{&torus, glm::translate(mat4(1.f), vec3(0.f, 0.6f, 0.f)), 5}}, perspective_camera(700, 300, vec3(0.f, -4.f, 1.f), vec3(0.f)), g);
+    rasterize({DrawItem{&torus, glm::translate(mat4(1.f), vec3(0.f, 0.6f, 0.f)), 5, true}}, perspective_camera(700, 300, vec3(0.f, -4.f, 1.f), vec3(0.f)), g);
     ASSERT_GT(covered(g), 0u);
     rasterize({DrawItem{&sphere, mat4(1.f), 0}}, cam, g);
-    rasterize({DrawItem{&sphere, mat4(1.f), 0}}, cam, g);
+    EXPECT_TRUE(g.uv_dx.empty() && g.uv_dy.empty());  // no item asked for them
+    rasterize({DrawItem{&sphere, mat4(1.f), 0, true}}, cam, g);
     ASSERT_EQ(g.width, fresh.width);
     ASSERT_EQ(g.height, fresh.height);
     ASSERT_GT(covered(fresh), 0u);
@@ -949,7 +952,9 @@ TEST(Raster, UvDerivativesAreThoseOfTheQuadOnThePixelsOwnTriangle) {
     const TriMesh fold = soup(pos, idx);
     const int W = 96, H = 63;  // an odd height
     const RasterCamera cam = perspective_camera(W, H, vec3(0.3f, -2.f, 3.f), vec3(0.f, 3.f, 0.f), 60.f, 0.1f, 100.f);
-    const GBuffer g = render(fold, cam);
+    GBuffer g;
+    rasterize({DrawItem{&fold, mat4(1.f), 1, true}}, cam, g);
+    ASSERT_EQ(g.uv_dx.size(), g.uv.size());
     // uv where the ray through pixel (x, row) meets the plane of the side `right` (x > 0).
     auto uv_on = [&](int x, int row, bool right) {
         glm::dvec3 o, d;
