@@ -53,6 +53,7 @@ struct ScreenTriangle {
     std::array<int32_t, 3> x, y;      // window position in 1/kSubPixel pixels
     std::array<float, 3> z;           // window depth in [0,1]
     std::array<float, 3> inv_w;       // 1 / clip w, for perspective-correct interpolation
+    vec2 lambda_dx{0.f}, lambda_dy{0.f};  // change of (lambda_1, lambda_2) over one pixel in x and in y
     std::array<vec3, 3> bary;         // barycentrics of each vertex in the source triangle
     std::array<uint32_t, 3> src;      // source vertex indices (bary refers to these)
     int64_t area2 = 0;                // twice the signed area in fixed-point units, > 0
@@ -200,6 +201,10 @@ bool setup_triangle(const ClipVertex& c0, const ClipVertex& c1, const ClipVertex
         t.area2 = -t.area2;
     }
     t.inv_area2 = 1.0 / double(t.area2);
+    // Screen-space barycentrics are the edge functions (scan_triangle) over twice the area.
+    const double s = double(kSubPixel) * t.inv_area2;
+    t.lambda_dx = vec2(float(-(double(t.y[0]) - double(t.y[2])) * s), float(-(double(t.y[1]) - double(t.y[0])) * s));
+    t.lambda_dy = vec2(float((double(t.x[0]) - double(t.x[2])) * s), float((double(t.x[1]) - double(t.x[0])) * s));
     const int64_t x_lo = std::min({t.x[0], t.x[1], t.x[2]}), x_hi = std::max({t.x[0], t.x[1], t.x[2]});
     const int64_t y_lo = std::min({t.y[0], t.y[1], t.y[2]}), y_hi = std::max({t.y[0], t.y[1], t.y[2]});
     // Pixels whose centre lies in the bounding box: x*256 + 128 in [x_lo, x_hi].
@@ -375,6 +380,9 @@ void rasterize(const std::vector<DrawItem>& items, const RasterCamera& cam, GBuf
     out.normal.resize(n_pixels);
     out.tangent.resize(n_pixels);
     out.uv.resize(n_pixels);
+    const bool derivatives = std::any_of(items.begin(), items.end(), [](const DrawItem& i) { return i.uv_derivatives; });
+    out.uv_dx.resize(derivatives ? n_pixels : 0);
+    out.uv_dy.resize(derivatives ? n_pixels : 0);
     if (n_pixels == 0) return;
 
     // Vertex stage, then clipping and setup in chunks of source triangles (kept in submission
@@ -470,6 +478,7 @@ void rasterize(const std::vector<DrawItem>& items, const RasterCamera& cam, GBuf
                         out.normal[o] = vec3(0.f);
                         out.tangent[o] = vec3(0.f);
                         out.uv[o] = vec2(0.f);
+                        if (derivatives) out.uv_dx[o] = out.uv_dy[o] = vec2(0.f);
                         continue;
                     }
                     const ScreenTriangle& t = *tris[size_t(id)];
@@ -481,6 +490,20 @@ void rasterize(const std::vector<DrawItem>& items, const RasterCamera& cam, GBuf
                     out.normal[o] = normalize_or_zero(a.normal * beta.x + b.normal * beta.y + c.normal * beta.z);
                     out.tangent[o] = normalize_or_zero(a.tangent * beta.x + b.tangent * beta.y + c.tangent * beta.z);
                     out.uv[o] = a.uv * beta.x + b.uv * beta.y + c.uv * beta.z;
+                    if (!derivatives) continue;
+                    if (!items[t.item].uv_derivatives) {
+                        out.uv_dx[o] = out.uv_dy[o] = vec2(0.f);
+                        continue;
+                    }
+                    // The quad's other pixel in the row and in the column, on this triangle:
+                    // screen-space barycentrics step by their per-pixel change.
+                    auto uv_at = [&](vec2 lambda) {
+                        const vec3 w = source_barycentrics(t, lambda);
+                        return a.uv * w.x + b.uv * w.y + c.uv * w.z;
+                    };
+                    const vec2 l = buf.lambda[local], uv = out.uv[o];
+                    out.uv_dx[o] = ((tx + int(x)) & 1) ? uv - uv_at(l - t.lambda_dx) : uv_at(l + t.lambda_dx) - uv;  // odd: the right column
+                    out.uv_dy[o] = (y & 1) ? uv - uv_at(l - t.lambda_dy) : uv_at(l + t.lambda_dy) - uv;              // odd: the upper row
                 }
             }
         }

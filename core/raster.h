@@ -33,6 +33,7 @@ struct DrawItem {
     const TriMesh* mesh = nullptr;
     mat4 model{1.f};
     int object_id = 0;
+    bool uv_derivatives = false;  // fill GBuffer::uv_dx, uv_dy at this item's pixels
 };
 
 // Per-pixel surface data, world space. Pixels not covered have object == -1.
@@ -45,6 +46,14 @@ struct GBuffer {
     std::vector<vec3> normal;       // normalised interpolated world normal
     std::vector<vec3> tangent;      // normalised interpolated world tangent (may be 0 if mesh has none)
     std::vector<vec2> uv;           // interpolated texture coordinate
+    // uv's differences across the pixel's 2 x 2 quad, as OpenGL's dFdxFine / dFdyFine give them:
+    // quads are aligned to even columns and rows of GL's window (y up, row 0 at the bottom), and
+    // every pixel of a quad is evaluated on the pixel's own triangle, extended beyond its edges
+    // as GL's helper invocations are: uv_dx = uv(right column) - uv(left column) in the pixel's
+    // row, uv_dy = uv(upper row) - uv(lower row) in its column. Filled only when an item asks
+    // (DrawItem::uv_derivatives: they add about a fifth to the rasterisation), at its pixels
+    // (0 elsewhere); empty when none asks.
+    std::vector<vec2> uv_dx, uv_dy;
     size_t index(int x, int y) const { return size_t(y) * size_t(width) + size_t(x); }
 };
 

@@ -296,7 +296,8 @@ Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height, co
         for (size_t i = 0; i < s.objects.size(); ++i) {
             keep.push_back(drawn_mesh(s, ev, int(i)));
             if (!keep.back()) throw std::logic_error("render_cpu: scene.geometry was not evaluated for object " + std::to_string(i));
-            items.push_back({keep.back().get(), object_to_world(s.objects[i]), int(i)});
+            const Technique* t = reg.technique(s.objects[i].technique);
+            items.push_back({keep.back().get(), object_to_world(s.objects[i]), int(i), t && t->uses_uv_derivatives()});
         }
         rasterize(items, cam.raster, gb);
     }

@@ -194,6 +194,10 @@ public:
     virtual std::vector<SweepMetricDecl> sweep_metrics() const { return {}; }
     // How closely its GPU frames follow the CPU reference (see FrameAgreement).
     virtual FrameAgreement agreement() const { return {}; }
+    // Whether shade_cpu reads GBuffer::uv_dx and uv_dy (uv's differences across each pixel's
+    // 2 x 2 quad, as a fragment shader's dFdxFine / dFdyFine): the CPU path fills them for this
+    // technique's objects only (they add about a fifth to the rasterisation).
+    virtual bool uses_uv_derivatives() const { return false; }
 
 protected:
     friend class Registry;  // derives the parameters' costs from the stage graph

@@ -38,8 +38,10 @@ struct Lafortune {
 };
 
 // T(v): colour (rgb) and alpha per table direction. Between directions the table is interpolated
-// over the three nearest directions by angle (inverse-angle weights; an exact hit returns its
-// entry), which needs no structure in the directions, so measured and acquired tables read alike.
+// over the three nearest directions by angle, with weights 1/θ_k − 1/θ_4 (θ_4: the fourth
+// nearest's angle; plain 1/θ_k with fewer than four directions; an exact hit returns its entry),
+// which needs no structure in the directions, so measured and acquired tables read alike, and is
+// continuous in v: a direction's weight falls to 0 where it stops being one of the three nearest.
 struct ViewTable {
     std::vector<dvec3> v;  // unit view directions, local frame, z >= 0
     std::vector<dvec4> T;  // per direction: rgb factor, alpha

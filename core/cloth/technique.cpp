@@ -109,24 +109,8 @@ PackedPyramid pack_pyramid(const BrdfPyramid& p) {
 }
 
 // [SECTION] Footprint
-double uv_footprint(const GBuffer& gb, int x, int y, int object) {
-    auto same = [&](int xx, int yy) { return xx >= 0 && yy >= 0 && xx < gb.width && yy < gb.height && gb.object[gb.index(xx, yy)] == object; };
-    const vec2 uv = gb.uv[gb.index(x, y)];
-    // The difference towards (x + dx, y + dy), or nothing when that pixel shows something else.
-    auto diff = [&](int dx, int dy, vec2& d) {
-        if (!same(x + dx, y + dy)) return false;
-        d = (gb.uv[gb.index(x + dx, y + dy)] - uv) * float(dx + dy);
-        d -= glm::round(d);  // seams: whole-unit jumps of a wrapped parameterisation
-        return true;
-    };
-    auto axis = [&](int ax, int ay) {
-        const int partner = ((ax ? x : y) & 1) ? -1 : 1;  // the 2 x 2 quad's other pixel
-        vec2 d;
-        if (diff(ax * partner, ay * partner, d) || diff(-ax * partner, -ay * partner, d)) return double(glm::length(d));
-        return -1.0;
-    };
-    const double fx = axis(1, 0), fy = axis(0, 1);
-    return std::max({fx, fy, 0.0});
+double uv_footprint(const GBuffer& gb, size_t pixel) {
+    return double(std::max(glm::length(gb.uv_dx[pixel]), glm::length(gb.uv_dy[pixel])));
 }
 
 namespace {
@@ -214,14 +198,34 @@ public:
     std::vector<ExportDecl> exports() const override;
     std::vector<CommandDecl> commands() const override;
     std::vector<BenchTable> bench_tables() const override;
-    // Lobes and table entries are blended continuously and agree to about 1e-5; the nearest
-    // view-table directions and the mip level are chosen per pixel (the level from the uv
-    // derivatives, which the GPU takes from helper pixels outside the triangle on its edges).
+    // Both paths evaluate the same continuous functions of the pixel's uv, normal and view: the
+    // lobes, the view table (continuous in v), the mip level from uv's differences across the
+    // pixel's 2 x 2 quad on its own triangle (GL's fine derivatives on both), the blend between
+    // levels. Their inputs differ: the CPU rasteriser interpolates attributes from window
+    // positions snapped to 1/256 pixel, llvmpipe from unsnapped ones, so uv, normals and
+    // positions differ by up to about 3e-3 pixel of their gradients (6e-4 on average; normals by
+    // up to 3.4e-4), and the GPU works in float. Off edges radiance and alpha then differ by at
+    // most 7e-4 and 1.6e-3 on the cloth presets (llvmpipe, 2 cores): tight 2e-3, interior_max
+    // 1e-2 with room for steeper lobes.
+    // One choice is discrete: the sample point under the pixel (the paper's BRDF array, read
+    // nearest within a level). A pixel whose uv lies within that disagreement of a border between
+    // two points reads a neighbouring entry on one of the paths: 2 x 6e-4 x rho of the pixels,
+    // with rho points per pixel along each axis (below 1 where the points are magnified, as on the
+    // near garment and the stitch patches; below 2 at the finer level read when blending, about 3
+    // with mip off on the far garment), and about a third of their values then differ by more
+    // than interior_max. On the near garment (rho about 0.6) 6e-4 of the interior pixels read
+    // another entry and 1.8e-4 of the interior values differ by more than 1e-2 (the stitch
+    // patches up to 7e-5): interior_outliers 3e-4, which holds up to rho = 0.8. On the far
+    // garment with mip off 0.6% of the values differ by more than tight, all on edges:
+    // frac_tight 0.99. Interpolating from unsnapped positions on the CPU too leaves about one
+    // such pixel per frame on llvmpipe, but hardware may interpolate from the snapped positions.
     FrameAgreement agreement() const override {
-        return {.tight = 3e-3, .frac_tight = 0.85, .loose = 3e-2, .frac_loose = 0.995, .interior_max = 2e-2, .interior_outliers = 3e-4,
-                .why = "nearest table directions flip at ties; mip levels from derivatives on triangle edges"};
+        return {.tight = 2e-3, .frac_tight = 0.99, .loose = 3e-2, .frac_loose = 0.995, .interior_max = 1e-2, .interior_outliers = 3e-4,
+                .why = "attributes interpolated from snapped (CPU) or unsnapped (llvmpipe) window positions: pixels within that of a "
+                       "border between two sample points read a neighbouring entry"};
     }
     std::vector<SweepMetricDecl> sweep_metrics() const override;
+    bool uses_uv_derivatives() const override { return true; }  // the mip level's footprint
 };
 
 // [SECTION] Stages
@@ -313,6 +317,7 @@ void ClothTechnique::shade_cpu(const ShadeContext& ctx) const {
     const bool constant_env = ctx.lighting.env.constant();
     const vec3 env_const = ctx.lighting.env.color * ctx.lighting.env.intensity;
     const GBuffer& gb = ctx.gbuffer;
+    if (gb.uv_dx.size() != gb.uv.size()) throw std::logic_error("cloth: the G-buffer lacks uv derivatives (DrawItem::uv_derivatives)");
     tbb::parallel_for(0, gb.height, [&](int y) {
         for (int x = 0; x < gb.width; ++x) {
             const size_t px = gb.index(x, y);
@@ -325,7 +330,7 @@ void ClothTechnique::shade_cpu(const ShadeContext& ctx) const {
             dvec3 v = dvec3(tf.to_local(wo));
             v.z = std::max(v.z, 1e-4);
             v = glm::normalize(v);
-            const double footprint = uv_footprint(gb, x, y, object) * b.s.repeat;
+            const double footprint = uv_footprint(gb, px) * b.s.repeat;
             const dvec2 uv = dvec2(gb.uv[px]) * b.s.repeat;
             dvec3 L(0.0);
             ClothSample last;

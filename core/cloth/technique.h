@@ -61,10 +61,8 @@ struct PackedPyramid {
 };
 PackedPyramid pack_pyramid(const BrdfPyramid& p);
 
-// Screen-space size of a pixel in uv units at pixel (x, y) of `object`: max(|∂uv/∂x|, |∂uv/∂y|),
-// each by the difference with the pixel's partner in its 2 × 2 quad (as OpenGL's fine
-// derivatives), or with the other neighbour where the partner shows something else; uv jumps by
-// whole units (seams of a wrapped parameterisation) are taken modulo 1. 0 where no neighbour
-// shows the object.
-double uv_footprint(const GBuffer& gb, int x, int y, int object);
+// Screen-space size of a pixel in uv units: max(|∂uv/∂x|, |∂uv/∂y|), each the difference across
+// the pixel's 2 × 2 quad on its own triangle (GBuffer::uv_dx, uv_dy), as the GPU pass takes it
+// from dFdxFine and dFdyFine; 0 where the pixel shows nothing.
+double uv_footprint(const GBuffer& gb, size_t pixel);
 }  // namespace mesolab::cloth

@@ -26,54 +26,55 @@ uniform vec3 u_views[MAX_SHARED_VIEWS];
 
 // Fragment outputs o_<aov> are generated from the technique's declaration and inserted after #version.
 
-// T(v) of lafortune.cpp ViewTable::at: the three nearest directions by angle, inverse-angle weights.
+// Keeps the four nearest directions by angle (largest cosine c) as ViewTable::at
+// (core/cloth/lafortune.cpp) does: directions come in index order and a later one must be
+// strictly nearer to pass an earlier one, so equal cosines keep the lower index first.
+void keep_nearest4(float c, int i, inout ivec4 best, inout vec4 cb) {
+    if (c <= cb[3]) return;
+    int k = 3;
+    while (k > 0 && c > cb[k - 1]) { cb[k] = cb[k - 1]; best[k] = best[k - 1]; --k; }
+    cb[k] = c;
+    best[k] = i;
+}
+
+// Weights of the three nearest (best, with d0..d3 their directions): 1/angle less the fourth
+// nearest's, so that a direction's weight falls to 0 where it stops being one of the three and
+// T(v) is continuous (ViewTable::at); an exact hit keeps only itself.
+vec3 nearest_weights(ivec4 best, vec3 w, vec3 d0, vec3 d1, vec3 d2, vec3 d3) {
+    vec4 angle = vec4(atan(length(cross(d0, w)), dot(d0, w)), atan(length(cross(d1, w)), dot(d1, w)),
+                      atan(length(cross(d2, w)), dot(d2, w)), atan(length(cross(d3, w)), dot(d3, w)));
+    if (angle[0] < 1e-7) return vec3(1.0, 0.0, 0.0);
+    float floor_w = best[3] >= 0 ? 1.0 / angle[3] : 0.0;
+    vec3 wt = vec3(0.0);
+    for (int k = 0; k < 3; ++k) wt[k] = best[k] >= 0 ? max(0.0, 1.0 / angle[k] - floor_w) : 0.0;
+    float wsum = wt[0] + wt[1] + wt[2];
+    return wsum > 0.0 ? wt / wsum : vec3(1.0 / 3.0);  // the four at one angle: the mean of the three
+}
+
+// T(v) of lafortune.cpp ViewTable::at, over one entry's own table.
 vec4 table_at(int first, int count, vec3 w) {
     if (count == 0) return vec4(1.0);
-    int b0 = -1, b1 = -1, b2 = -1;
-    float c0 = -2.0, c1 = -2.0, c2 = -2.0;
-    for (int i = 0; i < count; ++i) {
-        float c = dot(P[first + 2 * i].xyz, w);
-        if (c <= c2) continue;
-        if (c > c0) { b2 = b1; c2 = c1; b1 = b0; c1 = c0; b0 = i; c0 = c; }
-        else if (c > c1) { b2 = b1; c2 = c1; b1 = i; c1 = c; }
-        else { b2 = i; c2 = c; }
-    }
-    int best[3] = int[3](b0, b1, b2);
-    vec4 sum = vec4(0.0);
-    float wsum = 0.0;
-    for (int k = 0; k < 3 && best[k] >= 0; ++k) {
-        vec3 d = P[first + 2 * best[k]].xyz;
-        float angle = atan(length(cross(d, w)), dot(d, w));
-        if (angle < 1e-7) return P[first + 2 * best[k] + 1];
-        sum += P[first + 2 * best[k] + 1] / angle;
-        wsum += 1.0 / angle;
-    }
-    return sum / wsum;
+    ivec4 best = ivec4(-1);
+    vec4 cb = vec4(-2.0);
+    for (int i = 0; i < count; ++i) keep_nearest4(dot(P[first + 2 * i].xyz, w), i, best, cb);
+    vec3 d[4];
+    for (int k = 0; k < 4; ++k) d[k] = best[k] >= 0 ? P[first + 2 * best[k]].xyz : vec3(0.0);
+    vec3 wt = nearest_weights(best, w, d[0], d[1], d[2], d[3]);
+    vec4 t = vec4(0.0);
+    for (int k = 0; k < 3 && best[k] >= 0; ++k) t += wt[k] * P[first + 2 * best[k] + 1];
+    return t;
 }
 
 // The same for the shared views, once per pixel: the three nearest to w (pattern frame) and
-// their normalised weights; an exact hit keeps only itself.
+// their normalised weights.
 void nearest_views(vec3 w, out ivec3 idx, out vec3 wt) {
-    int b0 = -1, b1 = -1, b2 = -1;
-    float c0 = -2.0, c1 = -2.0, c2 = -2.0;
-    for (int i = 0; i < u_shared_views; ++i) {
-        float c = dot(u_views[i], w);
-        if (c <= c2) continue;
-        if (c > c0) { b2 = b1; c2 = c1; b1 = b0; c1 = c0; b0 = i; c0 = c; }
-        else if (c > c1) { b2 = b1; c2 = c1; b1 = i; c1 = c; }
-        else { b2 = i; c2 = c; }
-    }
-    idx = ivec3(b0, b1, b2);
-    wt = vec3(0.0);
-    float wsum = 0.0;
-    for (int k = 0; k < 3 && idx[k] >= 0; ++k) {
-        vec3 d = u_views[idx[k]];
-        float angle = atan(length(cross(d, w)), dot(d, w));
-        if (angle < 1e-7) { idx = ivec3(idx[k], -1, -1); wt = vec3(1.0, 0.0, 0.0); return; }
-        wt[k] = 1.0 / angle;
-        wsum += wt[k];
-    }
-    wt /= wsum;
+    ivec4 best = ivec4(-1);
+    vec4 cb = vec4(-2.0);
+    for (int i = 0; i < u_shared_views; ++i) keep_nearest4(dot(u_views[i], w), i, best, cb);
+    vec3 d[4];
+    for (int k = 0; k < 4; ++k) d[k] = best[k] >= 0 ? u_views[best[k]] : vec3(0.0);
+    wt = nearest_weights(best, w, d[0], d[1], d[2], d[3]);
+    idx = best.xyz;
 }
 
 // core/cloth/pyramid.cpp entry_reflectance: the model only where it was fitted (light at least
@@ -101,7 +102,7 @@ vec4 entry_radiance(int k, vec2 uv, vec3 p, vec3 T, vec3 B, vec3 N, vec3 v, ivec
     vec4 t;
     if (u_shared_views > 0) {
         t = vec4(0.0);
-        for (int j = 0; j < 3 && vidx[j] >= 0; ++j) t += vwt[j] * P[table + 2 * vidx[j] + 1];
+        for (int j = 0; j < 3; ++j) if (vidx[j] >= 0) t += vwt[j] * P[table + 2 * vidx[j] + 1];
     } else {
         t = table_at(table, dirs, vh);
     }

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -83,6 +85,51 @@ TEST(ViewTable, ReturnsEntriesAtTheirDirectionsAndBlendsBetween) {
     EXPECT_GT(mid.y, 0.2);
     EXPECT_NEAR(mid.x + mid.y + mid.z, 1.0, 1e-12);  // a convex blend of the three
     EXPECT_EQ(ViewTable{}.at(dvec3(0, 0, 1)), dvec4(1.0));
+}
+
+// T(v) is continuous: a direction's weight falls to 0 where it stops being one of the three
+// nearest, so a view crossing such a border moves T by as little as any other step. Plain
+// inverse-angle weights jumped there by about a quarter of the difference between two entries
+// (up to 0.29 on this circle, against 7e-5 now), so that the CPU and the GPU, whose interpolated view
+// directions differ by about 1e-5, read different values in a band along each border.
+TEST(ViewTable, IsContinuousWhereTheThreeNearestChange) {
+    ViewTable t;
+    t.v = hemisphere_directions(12);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (size_t i = 0; i < t.v.size(); ++i) t.T.push_back(dvec4(u(rng), u(rng), u(rng), u(rng) < 0.5 ? 0.0 : 1.0));
+    // A circle at 40 degrees from the normal, in steps of 2e-5 rad, which passes no direction
+    // closer than 0.05 rad: a step moves the weights' share by about 2 steps / 0.05 rad, so T by at
+    // most 1e-3 (entries differ by at most 1).
+    const int steps = int(2.0 * M_PI / 2e-5);
+    const double theta = 40.0 * M_PI / 180.0;
+    double nearest = 1.0, worst = 0.0;
+    int changes = 0;
+    auto three = [&](dvec3 w) {
+        std::vector<std::pair<double, int>> c;
+        for (size_t i = 0; i < t.v.size(); ++i) c.push_back({-glm::dot(t.v[i], w), int(i)});
+        std::sort(c.begin(), c.end());
+        return std::array<int, 3>{c[0].second, c[1].second, c[2].second};
+    };
+    dvec3 prev_w(std::sin(theta), 0.0, std::cos(theta));
+    dvec4 prev = t.at(prev_w);
+    std::array<int, 3> prev_set = three(prev_w);
+    std::sort(prev_set.begin(), prev_set.end());
+    for (int i = 1; i <= steps; ++i) {
+        const double phi = 2.0 * M_PI * double(i) / double(steps);
+        const dvec3 w(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+        for (const dvec3& d : t.v) nearest = std::min(nearest, std::acos(std::min(1.0, glm::dot(d, w))));
+        const dvec4 T = t.at(w);
+        for (int c = 0; c < 4; ++c) worst = std::max(worst, std::fabs(T[c] - prev[c]));
+        std::array<int, 3> set = three(w);
+        std::sort(set.begin(), set.end());
+        changes += set != prev_set;
+        prev = T, prev_set = set;
+    }
+    ASSERT_GT(nearest, 0.05);
+    EXPECT_GE(changes, 6);  // the circle does cross borders
+    std::printf("worst %g changes %d nearest %g\n", worst, changes, nearest);
+    EXPECT_LT(worst, 1e-3) << changes << " changes of the three nearest";
 }
 
 // Noiseless samples of three lobes per channel: the fit reproduces the BRDF's values to three

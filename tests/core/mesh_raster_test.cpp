@@ -901,15 +901,18 @@ TEST(Raster, MissingTangentsStayZeroAndEmptySceneIsClear) {
 TEST(Raster, ReusedGBufferEqualsAFreshOne) {
     // An interactive caller renders every frame into the same G-buffer: after a frame of another
     // size and scene, a 512x512 render of a 128x64 sphere must equal the one into a fresh buffer,
-    // attribute for attribute and bit for bit (nothing of the earlier frames is left over).
+    // attribute for attribute (uv derivatives included) and bit for bit (nothing of the earlier
+    // frames is left over).
     const TriMesh sphere = make_primitive(Primitive::Sphere, 128), torus = make_primitive(Primitive::Torus, 32);
     const RasterCamera cam = perspective_camera(512, 512, vec3(3.f, 0.f, 0.f), vec3(0.f), 40.f);
-    const GBuffer fresh = render(sphere, cam, mat4(1.f), 0);
+    GBuffer fresh;
+    rasterize({DrawItem{&sphere, mat4(1.f), 0, true}}, cam, fresh);
     GBuffer g;
-    rasterize({DrawItem{&torus, glm::translate(mat4(1.f), vec3(0.f, 0.6f, 0.f)), 5}}, perspective_camera(700, 300, vec3(0.f, -4.f, 1.f), vec3(0.f)), g);
+    rasterize({DrawItem{&torus, glm::translate(mat4(1.f), vec3(0.f, 0.6f, 0.f)), 5, true}}, perspective_camera(700, 300, vec3(0.f, -4.f, 1.f), vec3(0.f)), g);
     ASSERT_GT(covered(g), 0u);
     rasterize({DrawItem{&sphere, mat4(1.f), 0}}, cam, g);
-    rasterize({DrawItem{&sphere, mat4(1.f), 0}}, cam, g);
+    EXPECT_TRUE(g.uv_dx.empty() && g.uv_dy.empty());  // no item asked for them
+    rasterize({DrawItem{&sphere, mat4(1.f), 0, true}}, cam, g);
     ASSERT_EQ(g.width, fresh.width);
     ASSERT_EQ(g.height, fresh.height);
     ASSERT_GT(covered(fresh), 0u);
@@ -919,6 +922,81 @@ TEST(Raster, ReusedGBufferEqualsAFreshOne) {
     EXPECT_TRUE(g.normal == fresh.normal);
     EXPECT_TRUE(g.tangent == fresh.tangent);
     EXPECT_TRUE(g.uv == fresh.uv);
+    EXPECT_TRUE(g.uv_dx == fresh.uv_dx);
+    EXPECT_TRUE(g.uv_dy == fresh.uv_dy);
+}
+
+// uv_dx and uv_dy are OpenGL's fine derivatives: differences across the pixel's 2 x 2 quad,
+// aligned to even columns and rows of GL's window (y up: with an odd height, image rows pair
+// differently from GL rows), both pixels on the pixel's own triangle extended past its edges.
+// A fold of two planes in strong perspective (uv = xy on both): the expected differences come
+// from the pixel rays through the quad's two pixel centres, met by the plane of the pixel's own
+// triangle. Neighbours in the image rather than in the quad, or on the other plane, differ by
+// more than the tolerance (checked, so that the test tells the rules apart).
+TEST(Raster, UvDerivativesAreThoseOfTheQuadOnThePixelsOwnTriangle) {
+    // z = 0 for x <= 0, z = 0.8 x for x >= 0, over [-2, 2] x [0, 6], 1 x 3 quads per plane.
+    std::vector<vec3> pos;
+    std::vector<uint32_t> idx;
+    auto z_of = [](float x) { return x > 0.f ? 0.8f * x : 0.f; };
+    const int nx = 2, ny = 3;
+    for (int j = 0; j <= ny; ++j)
+        for (int i = 0; i <= nx; ++i) {
+            const float x = -2.f + 4.f * float(i) / float(nx), y = 6.f * float(j) / float(ny);
+            pos.push_back(vec3(x, y, z_of(x)));
+        }
+    for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) {
+            const uint32_t a = uint32_t(j * (nx + 1) + i), b = a + 1, c = a + uint32_t(nx + 1), d = c + 1;
+            idx.insert(idx.end(), {a, b, d, a, d, c});
+        }
+    const TriMesh fold = soup(pos, idx);
+    const int W = 96, H = 63;  // an odd height
+    const RasterCamera cam = perspective_camera(W, H, vec3(0.3f, -2.f, 3.f), vec3(0.f, 3.f, 0.f), 60.f, 0.1f, 100.f);
+    GBuffer g;
+    rasterize({DrawItem{&fold, mat4(1.f), 1, true}}, cam, g);
+    ASSERT_EQ(g.uv_dx.size(), g.uv.size());
+    // uv where the ray through pixel (x, row) meets the plane of the side `right` (x > 0).
+    auto uv_on = [&](int x, int row, bool right) {
+        glm::dvec3 o, d;
+        pixel_ray(cam, x, row, o, d);
+        const glm::dvec3 n = right ? glm::dvec3(-0.8, 0.0, 1.0) : glm::dvec3(0.0, 0.0, 1.0);  // planes through the origin
+        const double t = -glm::dot(n, o) / glm::dot(n, d);
+        const glm::dvec3 hit = o + d * t;
+        return glm::dvec2(hit.x, hit.y);
+    };
+    size_t checked = 0, fold_quads = 0, other_rule_off = 0;
+    for (int row = 0; row < H; ++row)
+        for (int x = 0; x < W; ++x) {
+            const size_t i = g.index(x, row);
+            if (g.object[i] < 0) continue;
+            const bool right = g.position[i].x > 0.f;
+            if (std::fabs(g.position[i].x) < 1e-3f) continue;  // on the fold itself
+            const int gy = H - 1 - row;                       // GL window row
+            const int xl = x & ~1, gl = gy & ~1;              // the quad's left column and lower GL row
+            const glm::dvec2 dx = uv_on(xl + 1, row, right) - uv_on(xl, row, right);
+            const glm::dvec2 dy = uv_on(x, H - 1 - (gl + 1), right) - uv_on(x, H - 1 - gl, right);
+            // Window positions snap to 1/256 pixel: 5e-4 of the differences here.
+            const double tol = 2e-3 * std::max(glm::length(dx), glm::length(dy));
+            ASSERT_NEAR(g.uv_dx[i].x, dx.x, tol) << x << "," << row;
+            ASSERT_NEAR(g.uv_dx[i].y, dx.y, tol) << x << "," << row;
+            ASSERT_NEAR(g.uv_dy[i].x, dy.x, tol) << x << "," << row;
+            ASSERT_NEAR(g.uv_dy[i].y, dy.y, tol) << x << "," << row;
+            ++checked;
+            // The rules this is not: the image rows' pairs, and the other plane across the fold.
+            if (row + 1 < H && (row & 1) == 0 && gy - 1 != gl) {
+                const glm::dvec2 image_pair = uv_on(x, row, right) - uv_on(x, row + 1, right);
+                other_rule_off += glm::length(image_pair - dy) > 2.0 * tol;
+            }
+            const int xo = x ^ 1;
+            if (xo < W && g.object[g.index(xo, row)] >= 0 && (g.position[g.index(xo, row)].x > 0.f) != right) {
+                ++fold_quads;
+                const glm::dvec2 across = xo > x ? uv_on(xo, row, !right) - uv_on(x, row, right) : uv_on(x, row, right) - uv_on(xo, row, !right);
+                other_rule_off += glm::length(across - dx) > 2.0 * tol;
+            }
+        }
+    EXPECT_GT(checked, size_t(1500));
+    EXPECT_GT(fold_quads, size_t(10));
+    EXPECT_GT(other_rule_off, checked / 3);
 }
 
 // [SECTION] Mesh files
