@@ -201,28 +201,20 @@ public:
     // Both paths evaluate the same continuous functions of the pixel's uv, normal and view: the
     // lobes, the view table (continuous in v), the mip level from uv's differences across the
     // pixel's 2 x 2 quad on its own triangle (GL's fine derivatives on both), the blend between
-    // levels. Their inputs differ: the CPU rasteriser interpolates attributes from window
-    // positions snapped to 1/256 pixel, llvmpipe from unsnapped ones, so uv, normals and
-    // positions differ by up to about 3e-3 pixel of their gradients (6e-4 on average; normals by
-    // up to 3.4e-4), and the GPU works in float. Off edges radiance and alpha then differ by at
-    // most 7e-4 and 1.6e-3 on the cloth presets (llvmpipe, 2 cores): tight 2e-3, interior_max
-    // 1e-2 with room for steeper lobes.
+    // levels. Their inputs agree closely: the GPU draws its vertices on the CPU rasteriser's
+    // 1/256-pixel grid (mesh.vert, MESOLAB_SNAP_VERTICES), so both interpolate uv, normals and
+    // positions from the same window positions, and the rest is float rounding: off edges the
+    // stitch presets agree to 8e-6 (llvmpipe, 2 cores). tight 2e-3 and interior_max 1e-2 leave
+    // room for the GPU's float evaluation of steeper lobes (NVIDIA: fused multiply-adds).
     // One choice is discrete: the sample point under the pixel (the paper's BRDF array, read
-    // nearest within a level). A pixel whose uv lies within that disagreement of a border between
-    // two points reads a neighbouring entry on one of the paths: 2 x 6e-4 x rho of the pixels,
-    // with rho points per pixel along each axis (below 1 where the points are magnified, as on the
-    // near garment and the stitch patches; below 2 at the finer level read when blending, about 3
-    // with mip off on the far garment), and about a third of their values then differ by more
-    // than interior_max. On the near garment (rho about 0.6) 6e-4 of the interior pixels read
-    // another entry and 1.8e-4 of the interior values differ by more than 1e-2 (the stitch
-    // patches up to 7e-5): interior_outliers 3e-4, which holds up to rho = 0.8. On the far
-    // garment with mip off 0.6% of the values differ by more than tight, all on edges:
-    // frac_tight 0.99. Interpolating from unsnapped positions on the CPU too leaves about one
-    // such pixel per frame on llvmpipe, but hardware may interpolate from the snapped positions.
+    // nearest within a level), and a pixel whose uv lies within rounding of a border between two
+    // points may read a neighbouring entry on one path: 3 of 108,189 interior values beyond
+    // interior_max on fig5, 2 of 173,976 on the near garment, none on the stitch patches:
+    // interior_outliers 1e-4. On the far garment with mip off (about 3 points per pixel) 0.01% of
+    // the values differ by more than tight, all on edges.
     FrameAgreement agreement() const override {
-        return {.tight = 2e-3, .frac_tight = 0.99, .loose = 3e-2, .frac_loose = 0.995, .interior_max = 1e-2, .interior_outliers = 3e-4,
-                .why = "attributes interpolated from snapped (CPU) or unsnapped (llvmpipe) window positions: pixels within that of a "
-                       "border between two sample points read a neighbouring entry"};
+        return {.tight = 2e-3, .frac_tight = 0.99, .loose = 3e-2, .frac_loose = 0.995, .interior_max = 1e-2, .interior_outliers = 1e-4,
+                .why = "a pixel whose uv lies within rounding of a border between two sample points reads a neighbouring entry"};
     }
     std::vector<SweepMetricDecl> sweep_metrics() const override;
     bool uses_uv_derivatives() const override { return true; }  // the mip level's footprint

@@ -12,7 +12,7 @@ namespace {
 
 class BasicPass final : public TechniquePass {
 public:
-    explicit BasicPass(const Technique& t) : program_(Program::graphics("shaders/mesh.vert", "basic/basic.frag", {}, fragment_outputs(t))) {}
+    explicit BasicPass(const Technique& t) : program_(Program::graphics("shaders/mesh.vert", "basic/basic.frag", {"MESOLAB_SNAP_VERTICES"}, fragment_outputs(t))) {}
 
     void draw(DrawContext& ctx) override {
         PROFILE_SCOPE("basic.draw");

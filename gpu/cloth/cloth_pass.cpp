@@ -19,7 +19,10 @@ struct GpuPyramid {
 
 class ClothPass final : public TechniquePass {
 public:
-    explicit ClothPass(const Technique& t) : program_(Program::graphics("shaders/mesh.vert", "cloth/cloth.frag", {}, fragment_outputs(t))) {}
+    // Vertices on the CPU rasteriser's sub-pixel grid (mesh.vert): the nearest sample point is a
+    // discrete choice of the interpolated uv.
+    explicit ClothPass(const Technique& t)
+        : program_(Program::graphics("shaders/mesh.vert", "cloth/cloth.frag", {"MESOLAB_SNAP_VERTICES"}, fragment_outputs(t))) {}
 
     void draw(DrawContext& ctx) override {
         PROFILE_SCOPE("cloth.draw");

@@ -149,7 +149,7 @@ BrdfTables upload_brdf(const SimulatedBrdf& b) {
 
 class MicrogeomPass final : public TechniquePass {
 public:
-    explicit MicrogeomPass(const Technique& t) : program_(Program::graphics("shaders/mesh.vert", "microgeom/microgeom.frag", {}, fragment_outputs(t))) {}
+    explicit MicrogeomPass(const Technique& t) : program_(Program::graphics("shaders/mesh.vert", "microgeom/microgeom.frag", {"MESOLAB_SNAP_VERTICES"}, fragment_outputs(t))) {}
 
     void draw(DrawContext& ctx) override {
         PROFILE_SCOPE("microgeom.draw");

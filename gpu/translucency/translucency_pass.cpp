@@ -580,7 +580,7 @@ private:
     const Program& draw_program(int need) {
         auto it = draw_.find(need);
         if (it != draw_.end()) return it->second;
-        std::vector<std::string> defines;
+        std::vector<std::string> defines{"MESOLAB_SNAP_VERTICES"};  // the CPU rasteriser's window positions (mesh.vert)
         if (need & kHasRho) defines.push_back("HAS_RHO");
         if (need & kNeedIrradiance) defines.push_back("NEED_IRRADIANCE");
         if (need & kNeedParts) defines.push_back("NEED_PARTS");

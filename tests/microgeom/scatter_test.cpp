@@ -253,8 +253,8 @@ TEST(Stages, ChangingTheCurvatureNeverRecomputesVisibility) {
 
 // CPU and GPU (llvmpipe) agree on every AOV. Texture space (one pixel per texel): to 1e-4 on
 // every value. Orbit views magnify the heightfield (tiling x texels per unit of uv), so float
-// differences in the rasterisers' interpolated uv (~1e-6) move sharp micro-normals measurably:
-// there, the technique's own tolerances (MicrogeomTechnique::agreement).
+// rounding in the interpolated uv moves sharp micro-normals: there, the technique's own
+// tolerances (MicrogeomTechnique::agreement).
 TEST(CpuGpu, AgreeOnEveryAov) {
     Workbench wb;
     const FrameAgreement texture{.tight = 1e-4, .frac_tight = 1.0, .loose = 1e-4, .frac_loose = 1.0, .interior_max = 1e-4};
