@@ -6,7 +6,7 @@ MESOLAB_PACKAGES=(
   libglfw3-dev libimgui-dev libglm-dev libepoxy-dev libegl-dev libgl-dev
   libegl-mesa0 libgl1-mesa-dri libglx-mesa0
   libopenmesh-dev libopenimageio-dev libeigen3-dev nlohmann-json3-dev libcli11-dev libtbb-dev
-  libceres-dev libembree-dev
+  libceres-dev libembree-dev libimath-dev
   libfreetype-dev fonts-dejavu-core
   libgtest-dev libgmock-dev
   xvfb xauth

@@ -1,5 +1,6 @@
 // Environment lighting: lat-long lookup, order-2 spherical-harmonic projection and irradiance.
 #include "core/env.h"
+#include "core/sampling.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -39,17 +40,9 @@ vec3 Environment::radiance(vec3 dir) const {
     const float theta = std::acos(std::clamp(d.z, -1.f, 1.f));
     float phi = std::atan2(d.y, d.x);
     if (phi < 0.f) phi += 2.f * kPi;
-    // Continuous texel coordinates with texel centres at integer + 0.5 (as GL sampling).
-    const float fx = phi * (0.5f * kInvPi) * float(map.width) - 0.5f;
-    const float fy = theta * kInvPi * float(map.height) - 0.5f;
-    const float x0f = std::floor(fx), y0f = std::floor(fy);
-    const float tx = fx - x0f, ty = fy - y0f;
-    const int w = map.width, h = map.height;
-    const int x0 = ((int(x0f) % w) + w) % w, x1 = (x0 + 1) % w;
-    const int y0 = std::clamp(int(y0f), 0, h - 1), y1 = std::clamp(int(y0f) + 1, 0, h - 1);
-    const vec3 top = texel(map, x0, y0) * (1.f - tx) + texel(map, x1, y0) * tx;
-    const vec3 bottom = texel(map, x0, y1) * (1.f - tx) + texel(map, x1, y1) * tx;
-    return (top * (1.f - ty) + bottom * ty) * intensity;
+    // Around in phi, clamped at the poles (as GL_REPEAT x GL_CLAMP_TO_EDGE).
+    const BilinearTaps t = BilinearTaps::at_uv({phi * (0.5f * kInvPi), theta * kInvPi}, map.width, map.height, Edge::Wrap, Edge::Clamp);
+    return t.blend([&](int x, int y) { return texel(map, x, y); }) * intensity;
 }
 
 // Spherical-harmonic projection

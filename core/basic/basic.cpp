@@ -1,4 +1,5 @@
 #include "core/basic/basic.h"
+#include "core/sampling.h"
 #include "core/error.h"
 
 
@@ -23,17 +24,12 @@ vec3 brdf(const Material& m, vec3 n, vec3 wo, vec3 wi, vec3 albedo_tex) {
 
 vec3 sample_albedo(const Image& img, vec2 uv) {
     if (img.empty()) return vec3(1.f);
-    const float fx = uv.x * float(img.width) - 0.5f, fy = (1.f - uv.y) * float(img.height) - 0.5f;
-    const float x0f = std::floor(fx), y0f = std::floor(fy);
-    const float ax = fx - x0f, ay = fy - y0f;
-    auto wrap = [](int i, int n) { return ((i % n) + n) % n; };
-    const int x0 = wrap(int(x0f), img.width), x1 = wrap(int(x0f) + 1, img.width);
-    const int y0 = wrap(int(y0f), img.height), y1 = wrap(int(y0f) + 1, img.height);
-    auto texel = [&](int x, int y) {
+    // Row 0 at v = 1 (the image's top), wrapping.
+    const BilinearTaps t(uv.x * float(img.width) - 0.5f, (1.f - uv.y) * float(img.height) - 0.5f, img.width, img.height, Edge::Wrap, Edge::Wrap);
+    return t.blend([&](int x, int y) {
         const float* p = img.at(x, y);
         return img.channels >= 3 ? vec3(p[0], p[1], p[2]) : vec3(p[0]);
-    };
-    return glm::mix(glm::mix(texel(x0, y0), texel(x1, y0), ax), glm::mix(texel(x0, y1), texel(x1, y1), ax), ay);
+    });
 }
 
 std::optional<Image> read_albedo_map(const Scene& s, const ParamTable& material) {

@@ -1,5 +1,6 @@
 // Existing bump maps: normals from heightfields and normal maps, index textures, detail (see bump_map.h).
 #include "core/bumpsynth/bump_map.h"
+#include "core/sampling.h"
 #include "core/error.h"
 #include "core/heightfield/heightfield.h"
 #include "core/image.h"
@@ -76,15 +77,9 @@ IndexMap make_index_map(const BumpNormals& n, const Lut& lut) {
 }
 
 vec2 IndexMap::bilinear(vec2 uv) const {
-    const float fx = uv.x * float(width) - 0.5f, fy = (1.f - uv.y) * float(height) - 0.5f;
-    const float x0f = std::floor(fx), y0f = std::floor(fy);
-    const float tx = fx - x0f, ty = fy - y0f;
-    auto wrap = [](int i, int n) { return ((i % n) + n) % n; };
-    const int x0 = wrap(int(x0f), width), y0 = wrap(int(y0f), height);
-    const int x1 = x0 + 1 == width ? 0 : x0 + 1, y1 = y0 + 1 == height ? 0 : y0 + 1;
-    const vec2 a = at(x0, y0) + tx * (at(x1, y0) - at(x0, y0));
-    const vec2 b = at(x0, y1) + tx * (at(x1, y1) - at(x0, y1));
-    return a + ty * (b - a);
+    // Row 0 at v = 1; a + t (b - a), as the GLSL writes it (synthesis.glsl).
+    const BilinearTaps taps(uv.x * float(width) - 0.5f, (1.f - uv.y) * float(height) - 0.5f, width, height, Edge::Wrap, Edge::Wrap);
+    return taps.blend_lerp([&](int x, int y) { return at(x, y); });
 }
 
 // [SECTION] Detail

@@ -1,4 +1,5 @@
 #include "core/bumpsynth/noise.h"
+#include "core/sampling.h"
 #include "core/error.h"
 
 #include <tbb/parallel_for.h>
@@ -205,14 +206,8 @@ int NoiseTexture::level_of(int k) const { return std::clamp(octaves_max - k, 0, 
 vec2 NoiseTexture::bilinear(int level, vec2 uv) const {
     const int s = std::max(1, size >> level);
     const std::vector<vec2>& t = levels[size_t(level)];
-    const float fx = uv.x * float(s) - 0.5f, fy = uv.y * float(s) - 0.5f;
-    const float x0f = std::floor(fx), y0f = std::floor(fy);
-    const float ax = fx - x0f, ay = fy - y0f;
-    const int x0 = wrap(int(x0f), s), x1 = wrap(int(x0f) + 1, s), y0 = wrap(int(y0f), s), y1 = wrap(int(y0f) + 1, s);
-    auto at = [&](int x, int y) { return t[size_t(y) * size_t(s) + size_t(x)]; };
     // a + t (b - a), as the GLSL writes it (noise_texture.glsl).
-    const vec2 a = at(x0, y0) + ax * (at(x1, y0) - at(x0, y0)), b = at(x0, y1) + ax * (at(x1, y1) - at(x0, y1));
-    return a + ay * (b - a);
+    return BilinearTaps::at_uv(uv, s, s, Edge::Wrap, Edge::Wrap).blend_lerp([&](int x, int y) { return t[size_t(y) * size_t(s) + size_t(x)]; });
 }
 
 NoiseTexture make_noise_texture(const NoiseCdfs& cdfs, int size) {

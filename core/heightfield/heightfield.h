@@ -16,6 +16,7 @@
 // surface ends at the outermost texel centres.
 #include "core/image.h"
 #include "core/math.h"
+#include "core/sampling.h"
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -46,13 +47,13 @@ struct Heightfield {
 // w x h row-major texture laid out like a heightfield) at continuous texel coordinates (c, r)
 // (texel (x, y) at (x, y)). Inline: the scattering and shading loops call it per texel.
 template <class T>
+inline T sample_bilinear(const T* tex, int w, int h, bool periodic, float c, float r) {
+    const Edge e = periodic ? Edge::Wrap : Edge::Clamp;
+    return BilinearTaps(c, r, w, h, e, e).blend(tex, w);
+}
+template <class T>
 inline T sample_bilinear(const std::vector<T>& tex, int w, int h, bool periodic, float c, float r) {
-    const float c0f = std::floor(c), r0f = std::floor(r);
-    const float fc = c - c0f, fr = r - r0f;
-    auto wrap = [&](int i, int n) { return periodic ? ((i % n) + n) % n : std::clamp(i, 0, n - 1); };
-    const int c0 = wrap(int(c0f), w), c1 = wrap(int(c0f) + 1, w), r0 = wrap(int(r0f), h), r1 = wrap(int(r0f) + 1, h);
-    auto at = [&](int x, int y) { return tex[size_t(y) * size_t(w) + size_t(x)]; };
-    return (at(c0, r0) * (1.f - fc) + at(c1, r0) * fc) * (1.f - fr) + (at(c0, r1) * (1.f - fc) + at(c1, r1) * fc) * fr;
+    return sample_bilinear(tex.data(), w, h, periodic, c, r);
 }
 
 // [SECTION] Procedural fields

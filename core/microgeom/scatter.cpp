@@ -151,15 +151,6 @@ ScatterResult scatter(const Heightfield& hf, const DirectionSet& dirs, const Vis
 
 // [SECTION] Scattering tabulated over light directions (non-planar bases)
 namespace {
-// Bilinear, wrapping look-up in one direction's layer (the arithmetic of sample_bilinear).
-vec3 layer_bilinear(const vec3* layer, int w, int h, float c, float r) {
-    const float c0f = std::floor(c), r0f = std::floor(r);
-    const float fc = c - c0f, fr = r - r0f;
-    auto wrap = [](int i, int n) { return ((i % n) + n) % n; };
-    const int c0 = wrap(int(c0f), w), c1 = wrap(int(c0f) + 1, w), r0 = wrap(int(r0f), h), r1 = wrap(int(r0f) + 1, h);
-    auto at = [&](int x, int y) { return layer[size_t(y) * size_t(w) + size_t(x)]; };
-    return (at(c0, r0) * (1.f - fc) + at(c1, r0) * fc) * (1.f - fr) + (at(c0, r1) * (1.f - fc) + at(c1, r1) * fc) * fr;
-}
 constexpr int kDirectionBlock = 8;  // directions solved in parallel between progress calls
 }  // namespace
 
@@ -173,7 +164,7 @@ vec3 DirectionalScatter::irradiance(const std::array<int, 3>& tri, vec3 bary, fl
     const size_t T = size_t(width) * size_t(height);
     vec3 sum(0.f);
     for (int k = 0; k < 3; ++k)
-        if (tri[size_t(k)] < count) sum += bary[k] * layer_bilinear(E.data() + size_t(tri[size_t(k)]) * T, width, height, c, r);
+        if (tri[size_t(k)] < count) sum += bary[k] * sample_bilinear(E.data() + size_t(tri[size_t(k)]) * T, width, height, true, c, r);
     return sum;
 }
 

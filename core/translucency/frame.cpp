@@ -1,5 +1,6 @@
 // Technique translucency: the atlas stage's extras, the gather table, ρ and the per-frame CPU passes (see translucency.h).
 #include "core/translucency/translucency.h"
+#include "core/sampling.h"
 #include "core/basic/basic.h"
 #include "core/error.h"
 #include "core/image.h"
@@ -504,14 +505,12 @@ Maps combine(const AtlasStage& a, const std::vector<uint32_t>& index, const std:
 }
 
 TexelTap::TexelTap(int size, vec2 uv) {
-    const float fx = uv.x * float(size) - 0.5f, fy = (1.f - uv.y) * float(size) - 0.5f;
-    const float x0f = std::floor(fx), y0f = std::floor(fy);
-    ax = fx - x0f, ay = fy - y0f;
-    const int x0 = std::clamp(int(x0f), 0, size - 1), x1 = std::clamp(int(x0f) + 1, 0, size - 1);
-    const int y0 = std::clamp(int(y0f), 0, size - 1), y1 = std::clamp(int(y0f) + 1, 0, size - 1);
+    // Row 0 at v = 1, clamped to the edge.
+    const BilinearTaps t(uv.x * float(size) - 0.5f, (1.f - uv.y) * float(size) - 0.5f, size, size, Edge::Clamp, Edge::Clamp);
+    ax = t.ax, ay = t.ay;
     const size_t n = size_t(size);
-    i00 = size_t(y0) * n + size_t(x0), i10 = size_t(y0) * n + size_t(x1);
-    i01 = size_t(y1) * n + size_t(x0), i11 = size_t(y1) * n + size_t(x1);
+    i00 = size_t(t.y0) * n + size_t(t.x0), i10 = size_t(t.y0) * n + size_t(t.x1);
+    i01 = size_t(t.y1) * n + size_t(t.x0), i11 = size_t(t.y1) * n + size_t(t.x1);
 }
 
 vec3 sample_texels(const std::vector<vec3>& map, int size, vec2 uv) { return TexelTap(size, uv)(map); }

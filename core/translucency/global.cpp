@@ -3,6 +3,8 @@
 #include "core/translucency/atlas.h"
 #include "core/error.h"
 
+#include <Imath/half.h>
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -165,38 +167,9 @@ vec3 hat_pair_mean(const SubSamples& S, const RdTable& Rd, const std::vector<std
 }  // namespace
 
 // [SECTION] Half floats
-uint16_t half_bits(float f) {
-    uint32_t x;
-    std::memcpy(&x, &f, sizeof x);
-    const uint32_t sign = (x >> 16) & 0x8000u;
-    x &= 0x7fffffffu;
-    if (x >= 0x7f800000u) return uint16_t(sign | 0x7c00u | (x > 0x7f800000u ? 0x200u : 0u));  // inf, NaN
-    if (x >= 0x477ff000u) return uint16_t(sign | 0x7c00u);                                   // rounds above 65504
-    if (x < 0x38800000u) {                                                                  // below 2^-14: subnormal or 0
-        if (x < 0x33000000u) return uint16_t(sign);
-        const uint32_t e = x >> 23, m = (x & 0x7fffffu) | 0x800000u, shift = 126u - e;
-        uint32_t h = m >> shift;
-        const uint32_t rem = m & ((1u << shift) - 1u), half = 1u << (shift - 1u);
-        if (rem > half || (rem == half && (h & 1u))) ++h;
-        return uint16_t(sign | h);
-    }
-    uint32_t h = (x - 0x38000000u) >> 13;
-    const uint32_t rem = x & 0x1fffu;
-    if (rem > 0x1000u || (rem == 0x1000u && (h & 1u))) ++h;
-    return uint16_t(sign | h);
-}
-
-float half_value(uint16_t h) {
-    const uint32_t sign = uint32_t(h & 0x8000u) << 16, e = (h >> 10) & 0x1fu, m = h & 0x3ffu;
-    if (e == 0) {
-        const float v = float(m) * 5.9604644775390625e-8f;  // m 2^-24
-        return sign ? -v : v;
-    }
-    const uint32_t x = sign | (e == 31 ? 0x7f800000u | (m << 13) : ((e + 112u) << 23) | (m << 13));
-    float f;
-    std::memcpy(&f, &x, sizeof f);
-    return f;
-}
+// Imath's conversions (OpenEXR's half): round to nearest even, F16C instructions where the build has them.
+uint16_t half_bits(float f) { return imath_float_to_half(f); }
+float half_value(uint16_t h) { return imath_half_to_float(h); }
 
 namespace {
 vec3 decode(uint64_t p) { return {half_value(uint16_t(p)), half_value(uint16_t(p >> 16)), half_value(uint16_t(p >> 32))}; }
