@@ -1,5 +1,6 @@
 #include "core/session.h"
 #include "core/error.h"
+#include "core/format.h"
 #include "core/technique.h"
 
 #include <cctype>
@@ -36,15 +37,6 @@ uint64_t parse_memory_size(const std::string& text) {
     else throw bad();
     if (!(v > 0) || !std::isfinite(v * scale) || v * scale > 1.8e19) throw bad();
     return uint64_t(v * scale);
-}
-
-std::string format_bytes(double bytes) {
-    char b[48];
-    if (bytes >= 1024.0 * 1024.0 * 1024.0) std::snprintf(b, sizeof b, "%.2f GiB", bytes / (1024.0 * 1024.0 * 1024.0));
-    else if (bytes >= 1024.0 * 1024.0) std::snprintf(b, sizeof b, "%.1f MiB", bytes / (1024.0 * 1024.0));
-    else if (bytes >= 1024.0) std::snprintf(b, sizeof b, "%.1f KiB", bytes / 1024.0);
-    else std::snprintf(b, sizeof b, "%.0f B", bytes);
-    return b;
 }
 
 uint64_t available_memory() {

@@ -67,8 +67,6 @@ using StageKeys = std::vector<StageKey>;
 
 // Parse "512M", "4G", "1.5GiB", "800MB", "123456" (bytes) for --memory-limit; InputError otherwise.
 uint64_t parse_memory_size(const std::string& text);
-// "1.50 GiB", "12.0 MiB", "512 B".
-std::string format_bytes(double bytes);
 // The machine's available memory (MemAvailable of /proc/meminfo), 0 when unknown.
 uint64_t available_memory();
 

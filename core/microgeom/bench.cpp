@@ -1,4 +1,5 @@
 // Technique microgeom: the timing tables (mesolab bench microgeom, microgeom-brdf, ...).
+#include "core/format.h"
 #include "core/microgeom/stages.h"
 #include "core/microgeom/goniometer.h"
 #include "core/microgeom/paper.h"
@@ -34,11 +35,7 @@ std::vector<BenchTable> MicrogeomTechnique::bench_tables() const {
             return s;
         };
     };
-    auto mb = [](size_t bytes) {
-        char b[32];
-        std::snprintf(b, sizeof b, "%.2f MB", double(bytes) / 1048576.0);
-        return std::string(b);
-    };
+    auto mb = [](size_t bytes) { return strprintf("%.2f MB", double(bytes) / 1048576.0); };
     BenchTable t;
     t.name = "microgeom";
     t.title = "Heidrich et al. 2000, Table 1: precomputation and rendering (100 directions)";

@@ -1,4 +1,5 @@
 // Technique translucency: the timing table (mesolab bench translucency), Table 1 of the paper.
+#include "core/format.h"
 #include "core/translucency/paper.h"
 #include "core/translucency/technique.h"
 #include "core/translucency/translucency.h"
@@ -17,11 +18,7 @@ std::string shipped_mesh(const std::string& name) {
     return std::string(MESOLAB_SOURCE_DIR) + "/" + rel;
 }
 
-std::string mb(double bytes) {
-    char b[32];
-    std::snprintf(b, sizeof b, "%.1f MB", bytes / 1048576.0);
-    return b;
-}
+std::string mb(double bytes) { return strprintf("%.1f MB", bytes / 1048576.0); }
 
 // The row's scene: the mesh lit from behind at 45 degrees, marble, 512 x 512 atlas.
 Scene table_scene(const std::string& mesh, int vertices, const std::string& name) {

@@ -1,7 +1,7 @@
 // GPU pass of technique cloth: one draw per garment with shaders/mesh.vert + cloth/cloth.frag,
-// the object's BRDF pyramid packed into a shader storage buffer (core/cloth/technique.h).
+// the object's BRDF pyramid packed into a shader storage buffer (core/cloth/cloth.h).
 #include "core/cloth/stages.h"
-#include "core/cloth/technique.h"
+#include "core/cloth/cloth.h"
 #include "core/profile.h"
 #include "core/scene_stages.h"
 #include "gpu/renderer.h"

@@ -2,7 +2,7 @@
 // times, fitted against acquired BRDF slices with the fit's error, and the garment's mip blending
 // with one-click views of the mip level, the BRDF index and alpha.
 #include "core/cloth/stages.h"
-#include "core/cloth/technique.h"
+#include "core/cloth/cloth.h"
 #include "core/technique.h"
 #include "panels/panel.h"
 

@@ -5,7 +5,7 @@
 #include "app/workbench.h"
 #include "core/cloth/stages.h"
 #include "core/cloth/samples.h"
-#include "core/cloth/technique.h"
+#include "core/cloth/cloth.h"
 #include "core/error.h"
 #include "core/scene.h"
 #include "support/cli.h"

@@ -49,7 +49,14 @@ struct GalleryDifference {
     double mean = 0, p99 = 0, max = 0;
 };
 
-constexpr double kGalleryMean = 1.0, kGalleryP99 = 6.0;
+// On the machine that captured the gallery a fresh capture is the same image. Another CPU, libm or
+// GL driver rounds differently: most values move by a step or two at 8 bits, and a few per cent of
+// the pixels more where the result hinges on a comparison (a shadow-map edge, a silhouette, a
+// table look-up's cell in cloth's specular lobe, measured at mean 0.6 and p99 13 steps between two
+// x86-64 machines whose libm differ in fused multiply-adds). An object drawn black, a lost texture
+// or a moved light changes the mean by tens of steps (the black marble bunny: 15 over the whole
+// 512 x 512 image, 34 against 49) and the 99th percentile by most of the object's brightness.
+constexpr double kGalleryMean = 2.0, kGalleryP99 = 24.0;
 
 GalleryDifference difference_to_png(const Image& radiance, const std::string& png) {
     const Image committed = read_image(png, false);
@@ -97,10 +104,6 @@ TEST(Gallery, EveryPresetAgreesOnBothBackendsAndMatchesItsScreenshot) {
         ++screenshots;
         const GalleryDifference d = difference_to_png(gpu.frame.aov("radiance"), png);
         std::printf("[ gallery ] %-40s mean %.3f, p99 %.0f, max %.0f (8-bit steps)\n", s.name.c_str(), d.mean, d.p99, d.max);
-        // On the machine that captured the gallery a fresh capture is the same image. Another CPU
-        // or GL driver moves values by a step or two (rounding at 8 bits), and a few pixels more on
-        // silhouettes and shadow edges. An object drawn black, a lost texture or a moved light
-        // changes the mean by tens of steps (the black marble bunny: 15 over the whole image).
         EXPECT_LE(d.mean, kGalleryMean) << png << " is not what `build/mesolab capture presets -o screenshots` gives now";
         EXPECT_LE(d.p99, kGalleryP99) << png << " is not what `build/mesolab capture presets -o screenshots` gives now";
     }

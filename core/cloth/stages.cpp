@@ -1,0 +1,88 @@
+// Technique cloth: the stage graph (stages.h): the stitch mesh, the virtual acquisition (or the
+// samples file), the fitted pyramid and the procedural garment.
+#include "core/cloth/stages.h"
+#include "core/cloth/garment.h"
+#include "core/cloth/samples.h"
+#include "core/cloth/technique.h"
+
+#include <string>
+#include <vector>
+
+namespace mesolab::cloth {
+namespace {
+// [SECTION] Stages
+const std::vector<std::string> kStitchKeys = {"cloth.stitch", "cloth.yarn_radius", "cloth.loop_height", "cloth.color_a", "cloth.color_b",
+                                              "cloth.stitch_resolution"};
+
+}  // namespace
+
+void ClothTechnique::declare_stages(StageGraph& g) const {
+    g.add(stages::stitch, {.help = "Stitch micro-geometry: yarn tubes around Bezier skeletons over 3 x 3 tiles, marching cubes",
+           .scope = StageScope::Object,
+           .technique = "cloth",
+           .params = kStitchKeys,
+           .applies = [](const Scene&, const SceneObject& o) { return o.material.get_string("samples").empty(); },
+           .when_text = "cloth.samples is empty (the samples are acquired)",
+           .memory = [](const StageContext& ctx) {
+               const double n = double(ctx.material().get_int("stitch_resolution"));
+               return MemoryEstimate{27.0 * n * n * n * 12.0, "the field over 3 x 3 tiles at " + std::to_string(int(n)) + " cells per side",
+                                     {"cloth.stitch_resolution"}};
+           },
+           .run = [](StageContext& ctx) -> std::any {
+               const Settings s = Settings::from(ctx.scene, ctx.obj(), Settings::Stitch);
+               return stage_result(stages::stitch, build_stitch_mesh(make_stitch(s.stitch), s.stitch_resolution));
+           }});
+    std::vector<std::string> acquire_keys = kStitchKeys;
+    acquire_keys.insert(acquire_keys.end(), {"cloth.spatial", "cloth.directions", "cloth.visibility_rays", "cloth.samples"});
+    g.add(stages::acquire, {.help = "Virtual acquisition (Embree): lighting by precomputed visibility, parallax samples per light x view pair, alpha per view",
+           .scope = StageScope::Object,
+           .technique = "cloth",
+           .params = acquire_keys,
+           .inputs = {stages::stitch},
+           .paper = PaperFigure{45.0 * 60e3, "Daubert 2001, §4: acquisition 15-45 min (Athlon 1 GHz)"},
+           .memory = [](const StageContext& ctx) {
+               const double n = double(ctx.material().get_int("spatial")), d = double(ctx.material().get_int("directions"));
+               return MemoryEstimate{n * n * d * d * 24.0, std::to_string(int(n)) + "² points x " + std::to_string(int(d * d)) + " pairs x 3 doubles",
+                                     {"cloth.spatial", "cloth.directions"}};
+           },
+           .run = [](StageContext& ctx) -> std::any {
+               const Settings s = Settings::from(ctx.scene, ctx.obj(), Settings::Acquire);
+               if (!s.samples.empty()) {
+                   SampleGrid g = read_sample_grid(s.samples);
+                   return stage_result(stages::acquire, std::move(g));
+               }
+               const ProgressFn progress = [&](const std::string&, double f) {
+                   if (!ctx.cancelled()) ctx.progress(f);
+               };
+               return stage_result(stages::acquire, acquire(*ctx.input(stages::stitch), s.acquire, progress, ctx.cancel_flag()));
+           }});
+    g.add(stages::fit, {.help = "Lafortune x view-table fits (Ceres) of every mip level's entries, coarse to fine",
+           .scope = StageScope::Object,
+           .technique = "cloth",
+           .params = {"cloth.lobes", "cloth.lookup_table", "cloth.tolerance"},
+           .inputs = {stages::acquire},
+           .paper = PaperFigure{2.5 * 3600e3, "Daubert 2001, §5: fitting ~2.5 h (Athlon 1 GHz)"},
+           .run = [](StageContext& ctx) -> std::any {
+               const Settings s = Settings::from(ctx.scene, ctx.obj(), Settings::Fit);
+               const ProgressFn progress = [&](const std::string&, double f) {
+                   if (!ctx.cancelled()) ctx.progress(f);
+               };
+               BrdfPyramid p = fit_pyramid(*ctx.input(stages::acquire), s.fit, progress, ctx.cancel_flag());
+               size_t unconverged = 0;
+               for (const auto& level : p.report)
+                   for (const FitReport& r : level) unconverged += r.converged ? 0 : 1;
+               if (unconverged)
+                   ctx.warn(std::to_string(unconverged) + " of " + std::to_string(p.count()) + " BRDFs stopped before the table met cloth.tolerance");
+               return stage_result(stages::fit, std::move(p));
+           }});
+    g.add(stages::garment, {.help = "The procedural garment (folded curtain, bent sleeve) drawn instead of the object's geometry",
+           .scope = StageScope::Object,
+           .technique = "cloth",
+           .params = {"cloth.garment", "cloth.garment_resolution"},
+           .applies = [](const Scene&, const SceneObject& o) { return o.material.get_string("garment") != "geometry"; },
+           .when_text = "cloth.garment is curtain or sleeve",
+           .run = [](StageContext& ctx) -> std::any {
+               return stage_result(stages::garment, make_garment(ctx.material().get_string("garment"), int(ctx.material().get_int("garment_resolution"))));
+           }});
+}
+}  // namespace mesolab::cloth

@@ -1,0 +1,35 @@
+#include "core/format.h"
+
+#include <cstdarg>
+#include <cstdio>
+
+namespace mesolab {
+
+std::string strprintf(const char* format, ...) {
+    va_list args;
+    va_start(args, format);
+    va_list again;
+    va_copy(again, args);
+    char small[256];
+    const int n = std::vsnprintf(small, sizeof small, format, args);
+    va_end(args);
+    std::string out;
+    if (n < 0) out.clear();
+    else if (size_t(n) < sizeof small) out.assign(small, size_t(n));
+    else {
+        out.resize(size_t(n) + 1);
+        std::vsnprintf(out.data(), out.size(), format, again);
+        out.resize(size_t(n));
+    }
+    va_end(again);
+    return out;
+}
+
+std::string format_bytes(double bytes) {
+    constexpr double KiB = 1024.0, MiB = KiB * 1024.0, GiB = MiB * 1024.0;
+    if (bytes >= GiB) return strprintf("%.2f GiB", bytes / GiB);
+    if (bytes >= MiB) return strprintf("%.1f MiB", bytes / MiB);
+    if (bytes >= KiB) return strprintf("%.1f KiB", bytes / KiB);
+    return strprintf("%.0f B", bytes);
+}
+}  // namespace mesolab
