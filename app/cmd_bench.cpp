@@ -1,5 +1,6 @@
 // mesolab bench: timing tables laid out like the papers' tables, our CPU/GPU medians beside
 // the paper's figures.
+#include "core/file.h"
 #include "app/commands.h"
 #include "app/workbench.h"
 #include "core/bench.h"

@@ -1,4 +1,5 @@
 // mesolab capture: headless render of presets to PNG + AOV EXRs + a JSON sidecar.
+#include "core/file.h"
 #include "app/commands.h"
 #include "app/workbench.h"
 #include "core/error.h"

@@ -1,5 +1,6 @@
 // mesolab sweep: accuracy vs time for one knob against a reference setting, measured by the radiance
 // RMSE against the reference rendering (default) or a technique's metric (--metric, Technique::sweep_metrics).
+#include "core/file.h"
 #include "app/commands.h"
 #include "app/workbench.h"
 #include "core/error.h"

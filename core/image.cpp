@@ -2,6 +2,7 @@
 #include "core/image.h"
 
 #include "core/error.h"
+#include "core/file.h"
 
 #include <OpenImageIO/imageio.h>
 #include <unistd.h>
@@ -122,31 +123,6 @@ Image read_image(const std::string& path, bool srgb_to_linear_8bit, bool reject_
     return img;
 }
 
-// Atomic writing
-// Writes through `write_to(tmp_path)` (which returns an error string, empty on success) into
-// "<path>.tmp-<pid>" next to `path`, then renames it over `path`.
-static void write_atomically(const std::string& path, const std::function<std::string(const std::string&)>& write_to) {
-    const fs::path target(path);
-    std::error_code ec;
-    if (target.has_parent_path()) {
-        const fs::path parent = target.parent_path();
-        fs::create_directories(parent, ec);
-        if (ec || !fs::is_directory(parent))
-            throw InputError(path + ": cannot write image: cannot create folder " + parent.string() + ": " +
-                             (ec ? ec.message() : std::string("not a folder")));
-    }
-    const std::string tmp = path + ".tmp-" + std::to_string(long(::getpid()));
-    std::string err = write_to(tmp);
-    if (err.empty()) {
-        fs::rename(tmp, target, ec);
-        if (ec) err = "cannot rename " + tmp + ": " + ec.message();
-    }
-    if (!err.empty()) {
-        fs::remove(tmp, ec);
-        throw InputError(path + ": cannot write image: " + err);
-    }
-}
-
 // ImageOutput::open with OIIO's debug messages off (Debian's build prints them by default, and
 // the EXR writer would report the dropped int "DateTime" on every save); serialised so that the
 // saved level is always restored.
@@ -203,7 +179,7 @@ void write_png_srgb(const std::string& path, const Image& img) {
         spec.attribute("oiio:UnassociatedAlpha", 1);  // straight alpha: write the values as given
     }
     spec.attribute("oiio:ColorSpace", "sRGB");
-    write_atomically(path, [&](const std::string& tmp) { return write_oiio(tmp, "png", spec, px.data()); });
+    write_file_atomic(path, "image", [&](const std::string& tmp) { return write_oiio(tmp, "png", spec, px.data()); });
 }
 
 void write_exr(const std::string& path, const Image& img) {
@@ -230,7 +206,7 @@ void write_exr(const std::string& path, const Image& img) {
     // present; an int-typed one suppresses the stamp and is then dropped as the wrong type for
     // capDate (a string): no timestamp, so identical images give identical bytes.
     spec.attribute("DateTime", 0);
-    write_atomically(path, [&](const std::string& tmp) { return write_oiio(tmp, "openexr", spec, img.data.data()); });
+    write_file_atomic(path, "image", [&](const std::string& tmp) { return write_oiio(tmp, "openexr", spec, img.data.data()); });
 }
 
 void write_png_rgba8(const std::string& path, int width, int height, const uint8_t* rgba, bool flip_vertically) {
@@ -246,6 +222,6 @@ void write_png_rgba8(const std::string& path, int width, int height, const uint8
     spec.alpha_channel = 3;
     spec.attribute("oiio:UnassociatedAlpha", 1);
     spec.attribute("oiio:ColorSpace", "sRGB");
-    write_atomically(path, [&](const std::string& tmp) { return write_oiio(tmp, "png", spec, px.data()); });
+    write_file_atomic(path, "image", [&](const std::string& tmp) { return write_oiio(tmp, "png", spec, px.data()); });
 }
 }  // namespace mesolab

@@ -1,5 +1,6 @@
 #include "core/scene.h"
 #include "core/error.h"
+#include "core/file.h"
 #include "core/technique.h"
 
 #include <filesystem>
@@ -302,31 +303,6 @@ json scene_to_json(const Scene& s) {
 }
 
 std::string scene_to_text(const Scene& s) { return scene_to_json(s).dump(2) + "\n"; }
-
-void write_text_atomic(const std::string& path, const std::string& text) {
-    const fs::path target = fs::absolute(path);
-    std::error_code ec;
-    if (target.has_parent_path()) fs::create_directories(target.parent_path(), ec);
-    if (ec) throw InputError(path + ": cannot create folder " + target.parent_path().string() + " (" + ec.message() + ")");
-    const fs::path tmp = target.string() + ".tmp-" + std::to_string(::getpid());
-    {
-        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-        if (!out) throw InputError(path + ": cannot write (could not create " + tmp.string() + ")");
-        out << text;
-        out.flush();
-        if (!out) {
-            out.close();
-            fs::remove(tmp, ec);
-            throw InputError(path + ": write failed; the existing file is unchanged");
-        }
-    }
-    fs::rename(tmp, target, ec);
-    if (ec) {
-        std::error_code ec2;
-        fs::remove(tmp, ec2);
-        throw InputError(path + ": cannot replace (" + ec.message() + "); the existing file is unchanged");
-    }
-}
 
 void save_preset(const Scene& s, const std::string& path) {
     // Rebase relative paths from the scene's folder to the new file's folder.

@@ -56,10 +56,8 @@ Scene load_preset(const std::string& path);
 // Serialise every used parameter in declaration order.
 json scene_to_json(const Scene& s);
 std::string scene_to_text(const Scene& s);  // pretty JSON with a trailing newline
-// Atomic save: writes "<path>.tmp-<pid>" then renames; the old file survives any failure.
+// Saved through a temporary file renamed over `path` (core/file.h): the old file survives any failure.
 void save_preset(const Scene& s, const std::string& path);
-// Atomic text write used by save_preset and the capture sidecars.
-void write_text_atomic(const std::string& path, const std::string& text);
 
 // `--set KEY=VALUE`. KEY is a public name: camera.*, env.*, effects.*, light.* (the first
 // light), lights.N.*, geometry.* (the first object), objects.N.geometry.*, TECHNIQUE.* (every

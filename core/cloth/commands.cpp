@@ -1,5 +1,6 @@
 // Technique cloth: its commands, mesolab cloth fit (measured samples in, one fitted model per
 // point out) and mesolab cloth eval (a fitted model at given directions).
+#include "core/file.h"
 #include "core/cloth/samples.h"
 #include "core/cloth/stages.h"
 #include "core/cloth/technique.h"

@@ -1,4 +1,5 @@
 // Cloth sample and model files (see samples.h).
+#include "core/file.h"
 #include "core/cloth/samples.h"
 #include "core/error.h"
 #include "core/scene.h"

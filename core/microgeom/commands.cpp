@@ -1,4 +1,5 @@
 // Technique microgeom: the BTF export (mesolab export btf; see btf.h).
+#include "core/file.h"
 #include "core/error.h"
 #include "core/image.h"
 #include "core/microgeom/stages.h"

@@ -7,6 +7,8 @@
 #include "core/translucency/global.h"
 #include "core/translucency/mesh_prep.h"
 
+#include "shapes.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -15,13 +17,6 @@
 
 using namespace mesolab;
 using namespace mesolab::translucency;
-
-namespace {
-PreparedMesh sphere(int resolution) {
-    const TriMesh s = make_primitive(Primitive::Sphere, resolution);
-    return prepare_mesh(s.position, s.index, 0);
-}
-}  // namespace
 
 TEST(RdTable, AgreesWithTheDipoleWithin1e4) {
     for (const char* name : {"marble", "skin1", "ketchup", "spectralon"}) {
@@ -61,7 +56,7 @@ TEST(HalfFloat, EveryHalfSurvivesTheRoundTripAndFloatsRoundToTheNearestHalf) {
 }
 
 TEST(VertexFactors, EqualRdAtTheVertexDistanceTimesAThirdOfTheVertexArea) {
-    const PreparedMesh m = sphere(16);
+    const PreparedMesh m = test::prepared_sphere(16);
     const Dipole d(measured_material("skin1").medium);
     const double mm = 10.0;  // a sphere of radius 10 mm
     FactorParams p{mm, 0.f, false};
@@ -91,7 +86,7 @@ TEST(VertexFactors, EqualRdAtTheVertexDistanceTimesAThirdOfTheVertexArea) {
 // Dipole::laplacian_ratio. The diagonal and the pairs that share an edge, whose hats overlap,
 // are the hat-pair means (tested below).
 TEST(VertexFactors, InterpolationCorrectionShrinksRdByTheSmoothingOfBothSides) {
-    const PreparedMesh m = sphere(16);
+    const PreparedMesh m = test::prepared_sphere(16);
     const Dipole d(measured_material("skin1").medium);
     const double mm = 10.0;
     const VertexFactors F = build_vertex_factors(m.position, m.index, d, {mm, 0.f, false});
@@ -178,7 +173,7 @@ TEST(VertexFactors, WithoutBlendingOverlappingHatsAverageRdOverBothSupports) {
 
     // A sphere of 10 µm: the hats are 5e-3 of skin1's smallest z_r across, R_d is flat over them
     // to (5e-3)², below the half floats' 4.9e-4 and the table's 1e-4.
-    const PreparedMesh m = sphere(12);
+    const PreparedMesh m = test::prepared_sphere(12);
     const double tiny = 0.01;
     const VertexFactors S = build_vertex_factors(m.position, m.index, d, {tiny, 0.f, false});
     for (int i = 0; i < S.n; ++i)
@@ -189,7 +184,7 @@ TEST(VertexFactors, WithoutBlendingOverlappingHatsAverageRdOverBothSupports) {
 }
 
 TEST(VertexFactors, TheThresholdKeepsExactlyThePairsWithAFactorAboveIt) {
-    const PreparedMesh m = sphere(24);
+    const PreparedMesh m = test::prepared_sphere(24);
     const Dipole d(measured_material("marble").medium);
     const VertexFactors all = build_vertex_factors(m.position, m.index, d, {20.0, 0.f, false});
     auto largest = [](vec3 v) { return std::max({v.x, v.y, v.z}); };
@@ -227,7 +222,7 @@ TEST(VertexFactors, TheThresholdKeepsExactlyThePairsWithAFactorAboveIt) {
 }
 
 TEST(VertexFactors, ZeroDiagonalWhenBlending) {
-    const PreparedMesh m = sphere(16);
+    const PreparedMesh m = test::prepared_sphere(16);
     const VertexFactors F = build_vertex_factors(m.position, m.index, Dipole(measured_material("marble").medium), {5.0, 0.f, true});
     for (int i = 0; i < F.n; ++i) {
         for (int k = F.outer[size_t(i)]; k < F.outer[size_t(i) + 1]; ++k) ASSERT_GT(F.column(size_t(k)), i);
@@ -240,7 +235,7 @@ TEST(VertexFactors, ZeroDiagonalWhenBlending) {
 // The symmetric half-float product (F16C and portable) against Eigen's product of the decoded
 // matrices, and the complete rows the GPU reads against both; also with the columns' high bits.
 TEST(VertexFactors, SymmetricProductEqualsEigensAndTheCompleteRows) {
-    const PreparedMesh m = sphere(32);
+    const PreparedMesh m = test::prepared_sphere(32);
     for (bool blend : {true, false})
         for (bool wide : {false, true}) {
             const VertexFactors F =
@@ -267,7 +262,7 @@ TEST(VertexFactors, SymmetricProductEqualsEigensAndTheCompleteRows) {
 }
 
 TEST(VertexFactors, MillimetresPerUnitScaleDistancesAndAreas) {
-    const PreparedMesh m = sphere(12);
+    const PreparedMesh m = test::prepared_sphere(12);
     const Dipole d(measured_material("potato").medium);
     FactorParams pa{3.0, 0.f, false}, pb{6.0, 0.f, false};
     pa.interpolation_correction = pb.interpolation_correction = false;
@@ -282,7 +277,7 @@ TEST(VertexFactors, MillimetresPerUnitScaleDistancesAndAreas) {
 }
 
 TEST(Projection, ConstantIrradianceProjectsToTheSameValueAtEveryVertexAndPowerIsKept) {
-    const PreparedMesh m = sphere(20);
+    const PreparedMesh m = test::prepared_sphere(20);
     const Atlas atlas = build_atlas(m.position, m.index, {512, 4, 30.f});
     const double mm = 10.0;
     const std::vector<float> A = vertex_areas(m.position, m.index, mm);
@@ -315,7 +310,7 @@ TEST(Projection, ConstantIrradianceProjectsToTheSameValueAtEveryVertexAndPowerIs
 }
 
 TEST(VertexFactors, BadSettingsNameTheirKeys) {
-    const PreparedMesh m = sphere(8);
+    const PreparedMesh m = test::prepared_sphere(8);
     const Dipole d(measured_material("marble").medium);
     const auto message = [&](FactorParams p) {
         try {

@@ -6,6 +6,8 @@
 #include "core/translucency/gpu_layout.h"
 #include "core/translucency/mesh_prep.h"
 
+#include "shapes.h"
+
 #include <gtest/gtest.h>
 #include <algorithm>
 #include <cstring>
@@ -14,18 +16,13 @@ using namespace mesolab;
 using namespace mesolab::translucency;
 
 namespace {
-PreparedMesh sphere(int resolution) {
-    const TriMesh s = make_primitive(Primitive::Sphere, resolution);
-    return prepare_mesh(s.position, s.index, 0);
-}
-
 VertexFactors factors(const PreparedMesh& m, bool wide) {
     return build_vertex_factors(m.position, m.index, Dipole(measured_material("skin2").medium), {15.0, 1e-6f, true, wide});
 }
 }  // namespace
 
 TEST(GpuLayout, PaddedRowsStartOnTheQuantumAndGiveTheProductOfTheFactors) {
-    const PreparedMesh m = sphere(24);
+    const PreparedMesh m = test::prepared_sphere(24);
     for (bool wide : {false, true}) {
         SCOPED_TRACE(wide);
         const VertexFactors F = factors(m, wide);
@@ -59,7 +56,7 @@ TEST(GpuLayout, PaddedRowsStartOnTheQuantumAndGiveTheProductOfTheFactors) {
 }
 
 TEST(GpuLayout, PiecesCoverEveryRowAtAlignedOffsetsWithinTheBufferTextureSize) {
-    const PaddedFactors P = pad_factor_rows(factors(sphere(24), true));
+    const PaddedFactors P = pad_factor_rows(factors(test::prepared_sphere(24), true));
     const int n = int(P.outer.size()) - 1;
     // One piece where the buffer texture holds every pair.
     const std::vector<FactorPiece> one = factor_pieces(P, int64_t(1) << 27, 4);
@@ -92,7 +89,7 @@ TEST(GpuLayout, PiecesCoverEveryRowAtAlignedOffsetsWithinTheBufferTextureSize) {
 }
 
 TEST(GpuLayout, ShownTexelsNameTheirSourceTriangleAndBarycentrics) {
-    const PreparedMesh m = sphere(16);
+    const PreparedMesh m = test::prepared_sphere(16);
     const AtlasStage A = make_atlas_stage(m, AtlasParams{128, 4, 30.f});
     const ShownTexels T = shown_texels(A, m.index);
     ASSERT_EQ(T.shown.size(), A.nonempty.size());
