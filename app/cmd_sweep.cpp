@@ -1,5 +1,6 @@
 // mesolab sweep: accuracy vs time for one knob against a reference setting, measured by the radiance
 // RMSE against the reference rendering (default) or a technique's metric (--metric, Technique::sweep_metrics).
+#include "core/strings.h"
 #include "core/file.h"
 #include "app/commands.h"
 #include "app/workbench.h"
@@ -24,14 +25,6 @@ namespace mesolab {
 namespace {
 
 constexpr const char* kDefaultMetric = "rmse";
-
-std::vector<std::string> split(const std::string& s, char sep) {
-    std::vector<std::string> r;
-    std::stringstream ss(s);
-    std::string item;
-    while (std::getline(ss, item, sep)) r.push_back(item);
-    return r;
-}
 
 // Root-mean-square difference of the radiance AOVs.
 double rmse(const Image& a, const Image& b) {

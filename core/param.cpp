@@ -1,3 +1,4 @@
+#include "core/strings.h"
 #include "core/param.h"
 #include "core/error.h"
 
@@ -301,14 +302,11 @@ json value_to_json(const ParamDecl& d, const Value& v) {
 
 Value value_from_text(const ParamDecl& d, std::string_view text, const std::string& where) {
     auto bad = [&]() -> Value { fail(where, "expected " + std::string(expected_text(d)) + ", got '" + std::string(text) + "'"); };
-    auto split = [&](size_t n, double* out) {
+    auto numbers = [&](size_t n, double* out) {
         std::string s(text);
         for (char& c : s)
             if (c == '[' || c == ']') c = ' ';
-        std::vector<std::string> parts;
-        std::stringstream ss(s);
-        std::string item;
-        while (std::getline(ss, item, ',')) parts.push_back(item);
+        const std::vector<std::string> parts = mesolab::split(s, ',');
         if (parts.size() != n) return false;
         for (size_t i = 0; i < n; ++i)
             if (!parse_double(parts[i], out[i])) return false;
@@ -336,14 +334,14 @@ Value value_from_text(const ParamDecl& d, std::string_view text, const std::stri
         }
         case ParamType::Vec2: {
             std::array<double, 2> a{};
-            if (!split(2, a.data())) return bad();
+            if (!numbers(2, a.data())) return bad();
             v = a;
             break;
         }
         case ParamType::Vec3:
         case ParamType::Color: {
             std::array<double, 3> a{};
-            if (!split(3, a.data())) return bad();
+            if (!numbers(3, a.data())) return bad();
             v = a;
             break;
         }

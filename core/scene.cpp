@@ -1,3 +1,4 @@
+#include "core/strings.h"
 #include "core/scene.h"
 #include "core/error.h"
 #include "core/file.h"
@@ -77,14 +78,6 @@ size_t parse_index(const std::string& s, size_t count, const std::string& key, c
     if (!ok || n >= count)
         throw InputError("--set " + key + ": " + what + " index '" + s + "' is out of range (the scene has " + std::to_string(count) + " " + what + (count == 1 ? "" : "s") + ")");
     return n;
-}
-
-std::vector<std::string> split(const std::string& s, char sep) {
-    std::vector<std::string> r;
-    std::stringstream ss(s);
-    std::string item;
-    while (std::getline(ss, item, sep)) r.push_back(item);
-    return r;
 }
 
 // Targets of a public key: the tables it addresses and the short parameter name.

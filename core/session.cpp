@@ -1,6 +1,6 @@
 #include "core/session.h"
 #include "core/error.h"
-#include "core/format.h"
+#include "core/strings.h"
 #include "core/technique.h"
 
 #include <cctype>

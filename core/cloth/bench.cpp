@@ -1,7 +1,7 @@
 // Technique cloth: the timing table (mesolab bench cloth) beside the paper's §7 figures.
 #include "core/cloth/stages.h"
 #include "core/cloth/technique.h"
-#include "core/format.h"
+#include "core/strings.h"
 
 #include <algorithm>
 #include <string>

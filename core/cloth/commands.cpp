@@ -5,7 +5,7 @@
 #include "core/cloth/stages.h"
 #include "core/cloth/technique.h"
 #include "core/error.h"
-#include "core/format.h"
+#include "core/strings.h"
 
 #include <tbb/parallel_for.h>
 #include <algorithm>

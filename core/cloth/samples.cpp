@@ -1,4 +1,5 @@
 // Cloth sample and model files (see samples.h).
+#include "core/strings.h"
 #include "core/file.h"
 #include "core/cloth/samples.h"
 #include "core/error.h"
@@ -20,14 +21,11 @@ namespace mesolab::cloth {
 namespace {
 // [SECTION] CSV rows
 std::vector<std::string> split_row(const std::string& line) {
-    std::vector<std::string> out;
-    std::string cell;
-    std::istringstream in(line);
-    while (std::getline(in, cell, ',')) {
+    std::vector<std::string> out = split(line, ',');
+    for (std::string& cell : out) {
         const size_t a = cell.find_first_not_of(" \t\r"), b = cell.find_last_not_of(" \t\r");
-        out.push_back(a == std::string::npos ? "" : cell.substr(a, b - a + 1));
+        cell = a == std::string::npos ? "" : cell.substr(a, b - a + 1);
     }
-    if (!line.empty() && line.back() == ',') out.emplace_back();
     return out;
 }
 

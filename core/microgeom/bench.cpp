@@ -1,5 +1,5 @@
 // Technique microgeom: the timing tables (mesolab bench microgeom, microgeom-brdf, ...).
-#include "core/format.h"
+#include "core/strings.h"
 #include "core/microgeom/stages.h"
 #include "core/microgeom/goniometer.h"
 #include "core/microgeom/paper.h"

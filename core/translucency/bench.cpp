@@ -1,5 +1,5 @@
 // Technique translucency: the timing table (mesolab bench translucency), Table 1 of the paper.
-#include "core/format.h"
+#include "core/strings.h"
 #include "core/translucency/paper.h"
 #include "core/translucency/technique.h"
 #include "core/translucency/translucency.h"

@@ -1,7 +1,7 @@
 // Sessions own the mutable state: two sessions share nothing and may run in parallel; object
 // stages are keyed by their own object only; the cache never trusts a 64-bit key alone; a stage
 // above the memory budget stops before it allocates.
-#include "core/format.h"
+#include "core/strings.h"
 #include "app/workbench.h"
 #include "core/microgeom/stages.h"
 #include "core/scene_stages.h"

@@ -1,4 +1,4 @@
-#include "core/format.h"
+#include "core/strings.h"
 
 #include <cstdarg>
 #include <cstdio>
@@ -23,6 +23,17 @@ std::string strprintf(const char* format, ...) {
     }
     va_end(again);
     return out;
+}
+
+std::vector<std::string> split(const std::string& s, char sep) {
+    std::vector<std::string> fields;
+    size_t start = 0;
+    for (size_t i = s.find(sep); i != std::string::npos; i = s.find(sep, start)) {
+        fields.push_back(s.substr(start, i - start));
+        start = i + 1;
+    }
+    fields.push_back(s.substr(start));
+    return fields;
 }
 
 std::string format_bytes(double bytes) {

@@ -1,6 +1,7 @@
 #pragma once
-// [SECTION] Text for people: numbers formatted as printf does, byte counts in binary units.
+// [SECTION] Text: numbers formatted as printf does, byte counts in binary units, fields split.
 #include <string>
+#include <vector>
 
 namespace mesolab {
 
@@ -9,4 +10,8 @@ std::string strprintf(const char* format, ...) __attribute__((format(printf, 1, 
 
 // A byte count with a binary unit: "812 B", "3.5 KiB", "48.0 MiB", "1.50 GiB".
 std::string format_bytes(double bytes);
+
+// The fields of `s` between the separators, empty ones included: n separators give n + 1 fields
+// ("a,,b," -> "a", "", "b", "").
+std::vector<std::string> split(const std::string& s, char sep);
 }  // namespace mesolab
