@@ -6,10 +6,10 @@
 #include "app/workbench.h"
 #include "core/error.h"
 #include "core/image.h"
-#include "core/plot.h"
+#include "app/plot.h"
 #include "core/profile.h"
 #include "core/scene.h"
-#include "core/text.h"
+#include "app/plot_text.h"
 #include "core/technique.h"
 
 #include <algorithm>

@@ -1,7 +1,7 @@
 // Plotting: text in the plot font, anti-aliased polylines and an XY chart with linear or log axes.
-#include "core/plot.h"
+#include "app/plot.h"
 
-#include "core/text.h"
+#include "app/plot_text.h"
 
 #include <algorithm>
 #include <array>

@@ -2,7 +2,7 @@
 // Small plotting for `mesolab sweep`: error against time as an RGB image (written as PNG by the
 // caller) or as SVG, with axes, ticks, tick labels, axis titles, a title, a legend and point
 // labels. Text is UTF-8 (Greek letters, units such as µs, m², °) in the plot font, DejaVu Sans
-// through FreeType (core/text.h). Without the font file (Debian package fonts-dejavu-core),
+// through FreeType (app/plot_text.h). Without the font file (Debian package fonts-dejavu-core),
 // rendering a plot throws std::runtime_error naming the file and the package: there is no
 // fallback font, since one without these glyphs would put placeholders in the labels.
 #include "core/image.h"

@@ -1,5 +1,5 @@
 // Text for plots: FreeType faces, a glyph cache per pixel size, UTF-8 decoding and line layout.
-#include "core/text.h"
+#include "app/plot_text.h"
 
 #include <ft2build.h>
 #include FT_FREETYPE_H
