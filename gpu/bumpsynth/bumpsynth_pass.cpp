@@ -31,17 +31,17 @@ public:
         for (int i : ctx.objects) {
             const Evaluation& ev = ctx.eval;
             Bound b{};
-            b.ndf = res.get<Texture>(ev.get(bumpsynth::stages::ndf, i), "bumpsynth.ndf", [&] { return upload_ndf(*ev.get(bumpsynth::stages::ndf, i)); }).get();
-            b.lut = res.get<Texture>(ev.get(bumpsynth::stages::lut, i), "bumpsynth.lut", [&] { return upload_lut(*ev.get(bumpsynth::stages::lut, i)); }).get();
+            b.ndf = res.get<Texture>(ev.get(bumpsynth::stages::ndf, i), "ndf", [&] { return upload_ndf(*ev.get(bumpsynth::stages::ndf, i)); }).get();
+            b.lut = res.get<Texture>(ev.get(bumpsynth::stages::lut, i), "lut", [&] { return upload_lut(*ev.get(bumpsynth::stages::lut, i)); }).get();
             if (auto index = ev.get(bumpsynth::stages::index_map, i)) {
-                b.index = res.get<Texture>(index, "bumpsynth.index_map", [&] { return upload_index(*index); }).get();
+                b.index = res.get<Texture>(index, "index_map", [&] { return upload_index(*index); }).get();
             } else if (auto cdfs = ev.get(bumpsynth::stages::noise_cdf, i)) {
-                b.cdf = res.get<Buffer>(cdfs, "bumpsynth.cdf", [&] { return make_storage_buffer(cdfs->table.data(), cdfs->table.size() * sizeof(float)); }).get();
+                b.cdf = res.get<Buffer>(cdfs, "cdf", [&] { return make_storage_buffer(cdfs->table.data(), cdfs->table.size() * sizeof(float)); }).get();
             }
             if (auto tex = ev.get(bumpsynth::stages::noise_texture, i))
-                b.noise = res.get<Texture>(tex, "bumpsynth.noise_texture", [&] { return upload_noise(*tex); }).get();
+                b.noise = res.get<Texture>(tex, "noise_texture", [&] { return upload_noise(*tex); }).get();
             if (auto smith = ev.get(bumpsynth::stages::masking, i))
-                b.smith = res.get<Texture>(smith, "bumpsynth.masking", [&] { return upload_smith(*smith); }).get();
+                b.smith = res.get<Texture>(smith, "masking", [&] { return upload_smith(*smith); }).get();
             if (auto albedo = ev.get(bumpsynth::stages::albedo, i)) b.albedo = ctx.renderer.texture(albedo);
             bound[i] = b;
         }

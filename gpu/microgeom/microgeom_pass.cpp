@@ -167,16 +167,16 @@ public:
             Bound b{ObjectFrame::from(ctx.scene, ctx.eval, i)};
             const ObjectFrame& f = b.f;
             const Heightfield& hf = *f.hf;
-            b.vis = res.get<Texture>(f.vis, "microgeom.vis", [&] { return upload_visibility(*f.vis); }).get();
-            b.normals = res.get<Texture>(f.hf, "microgeom.normals", [&] { return upload_normals(hf); }).get();
-            b.albedo = res.get<Texture>(f.hf, "microgeom.albedo", [&] { return make_rgb_texture(hf.albedo, hf.width, hf.height); }).get();
-            b.dirs = &res.get<DirectionBuffers>(f.dirs, "microgeom.directions", [&] { return upload_directions(*f.dirs); });
-            if (f.env) b.e_env = res.get<Texture>(f.env, "microgeom.E_env", [&] { return make_rgb_texture(f.env->result.E_indirect, hf.width, hf.height); }).get();
-            if (f.lights) b.e_light = res.get<Texture>(f.lights, "microgeom.E_light", [&] { return upload_per_light(*f.lights, hf); }).get();
-            if (f.table) b.e_dirs = res.get<Texture>(f.table, "microgeom.E_dirs", [&] { return upload_per_direction(*f.table); }).get();
-            if (f.imp && !f.imp->folded.empty()) b.folded = res.get<Texture>(f.imp, "microgeom.folded", [&] { return upload_folded(*f.imp); }).get();
-            if (f.ell) b.ellipses = &res.get<Ellipses>(f.ell, "microgeom.ellipses", [&] { return upload_ellipses(*f.ell); });
-            if (f.brdf) b.brdf = &res.get<BrdfTables>(f.brdf, "microgeom.brdf", [&] { return upload_brdf(*f.brdf); });
+            b.vis = res.get<Texture>(f.vis, "vis", [&] { return upload_visibility(*f.vis); }).get();
+            b.normals = res.get<Texture>(f.hf, "normals", [&] { return upload_normals(hf); }).get();
+            b.albedo = res.get<Texture>(f.hf, "albedo", [&] { return make_rgb_texture(hf.albedo, hf.width, hf.height); }).get();
+            b.dirs = &res.get<DirectionBuffers>(f.dirs, "directions", [&] { return upload_directions(*f.dirs); });
+            if (f.env) b.e_env = res.get<Texture>(f.env, "E_env", [&] { return make_rgb_texture(f.env->result.E_indirect, hf.width, hf.height); }).get();
+            if (f.lights) b.e_light = res.get<Texture>(f.lights, "E_light", [&] { return upload_per_light(*f.lights, hf); }).get();
+            if (f.table) b.e_dirs = res.get<Texture>(f.table, "E_dirs", [&] { return upload_per_direction(*f.table); }).get();
+            if (f.imp && !f.imp->folded.empty()) b.folded = res.get<Texture>(f.imp, "folded", [&] { return upload_folded(*f.imp); }).get();
+            if (f.ell) b.ellipses = &res.get<Ellipses>(f.ell, "ellipses", [&] { return upload_ellipses(*f.ell); });
+            if (f.brdf) b.brdf = &res.get<BrdfTables>(f.brdf, "brdf", [&] { return upload_brdf(*f.brdf); });
             bound.emplace(i, std::move(b));
         }
         program_.use();
