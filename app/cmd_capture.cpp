@@ -56,7 +56,7 @@ namespace {
 
 Image radiance_rgb(const Frame& f) { return f.aov("radiance"); }
 
-json sidecar(const Scene& s, const std::string& file, const RenderResult& r, const std::vector<std::string>& written) {
+json sidecar(const Scene& s, const std::string& file, const RenderResult& r, const std::vector<std::string>& written, const TruthSettings& req_truth) {
     json j;
     j["preset"] = s.name;
     j["file"] = file;
@@ -99,6 +99,22 @@ json sidecar(const Scene& s, const std::string& file, const RenderResult& r, con
     j["aovs_available"] = aovs;
     j["aovs_rendered"] = rendered;
     j["outputs"] = written;
+    if (r.renderer == "truth") {
+        json tr;
+        tr["spp"] = req_truth.spp;
+        tr["seed"] = req_truth.seed;
+        tr["noise_rel"] = truth_noise_rel(r.frame);
+        j["truth"] = tr;
+    } else if (r.truth) {  // the frame against its truth (--aov truth_error)
+        json tr;
+        tr["spp"] = r.truth->spp;
+        tr["seed"] = r.truth->seed;
+        tr["noise_rel"] = r.truth->noise_rel;
+        tr["rmse_rel"] = r.truth->rmse_rel;
+        tr["below_noise"] = r.truth->below_noise;
+        tr["ms"] = r.truth_ms;
+        j["truth"] = tr;
+    }
     return j;
 }
 }  // namespace
@@ -124,6 +140,9 @@ int run_capture(const CaptureOptions& o) {
     req.height = h;
     req.progress = tty_progress();
     req.aovs = o.aovs.empty() ? std::vector<std::string>{"radiance"} : o.aovs;  // radiance and the requested AOVs only
+    req.truth.spp = o.spp;
+    req.truth.seed = o.seed;
+    if (req.backend == Backend::Truth && o.spp < 1) throw InputError("--spp " + std::to_string(o.spp) + ": expected at least 1 sample per pixel");
     const auto files = expand_presets(o.presets);
     // Validate everything first, so that bad input fails before any work.
     std::vector<Scene> scenes;
@@ -131,7 +150,18 @@ int run_capture(const CaptureOptions& o) {
         Scene s = load_preset(f);
         apply_sets(s, o.sets);
         try {
-            frame_layout(s, o.aovs);  // every requested AOV exists in this scene
+            if (req.backend == Backend::Truth) {
+                truth_stages(s);  // every object's technique has a truth
+                for (const auto& a : o.aovs)
+                    if (std::find(truth_aovs().begin(), truth_aovs().end(), a) == truth_aovs().end())
+                        throw InputError("--aov " + a + ": the truth does not write it (it writes radiance, normal, truth_stderr)");
+            } else {
+                std::vector<std::string> realtime;  // truth_error is made from the frame and the truth
+                for (const auto& a : o.aovs)
+                    if (a != "truth_error") realtime.push_back(a);
+                if (realtime.size() != o.aovs.size()) truth_stages(s);  // every object's technique has a truth
+                frame_layout(s, realtime);  // every requested AOV exists in this scene
+            }
         } catch (const InputError& e) {
             throw InputError(f + ": " + e.what());
         }
@@ -162,7 +192,7 @@ int run_capture(const CaptureOptions& o) {
         }
         const std::string side = (dir / (s.name + ".json")).string();
         written.push_back(side);
-        write_text_atomic(side, sidecar(s, files[i], r, written).dump(2) + "\n");
+        write_text_atomic(side, sidecar(s, files[i], r, written, req.truth).dump(2) + "\n");
         int ran = 0, cached = 0, skipped = 0;
         for (const auto& run : r.eval.runs)
             for (const auto& w : run.warnings)
@@ -173,7 +203,7 @@ int run_capture(const CaptureOptions& o) {
             skipped += run.status == StageStatus::Skipped;
         }
         std::printf("%-28s %4dx%-4d %-6s stages %7.2f ms (%d ran, %d cached, %d skipped)  render %7.2f ms  -> %s\n", s.name.c_str(), r.frame.width,
-                    r.frame.height, req.backend == Backend::Cpu ? "cpu" : "gpu", r.stages_ms, ran, cached, skipped, r.render_ms, png.c_str());
+                    r.frame.height, req.backend == Backend::Cpu ? "cpu" : req.backend == Backend::Gpu ? "gpu" : "truth", r.stages_ms, ran, cached, skipped, r.render_ms, png.c_str());
     }
     if (o.profile) print_profile(wb.session().profiler());
     return 0;

@@ -18,6 +18,8 @@ struct CaptureOptions {
     std::vector<std::string> sets;
     std::vector<std::string> aovs;
     bool profile = false;
+    int spp = 64;        // --backend truth: samples per pixel
+    uint64_t seed = 1;   // --backend truth: the random streams' seed
 };
 int run_capture(const CaptureOptions& o);
 

@@ -55,7 +55,9 @@ int main(int argc, char** argv) {
     c->add_option("presets", cap.presets, "Preset files or folders (every *.json below)")->required();
     c->add_option("-o,--output", cap.out_dir, "Output folder")->capture_default_str();
     c->add_option("--size", cap.size, "Frame size WxH (texture mode may use the technique's native size)")->capture_default_str();
-    c->add_option("--backend", cap.backend, "gpu (EGL, headless) or cpu")->capture_default_str();
+    c->add_option("--backend", cap.backend, "gpu (EGL, headless), cpu, or truth (the Monte-Carlo reference of the explicit geometry)")->capture_default_str();
+    c->add_option("--spp", cap.spp, "--backend truth: samples per pixel")->capture_default_str();
+    c->add_option("--seed", cap.seed, "--backend truth: seed of the random streams (the same seed gives the same bytes)")->capture_default_str();
     c->add_option("--set", cap.sets, "Override a parameter: KEY=VALUE (repeatable), e.g. camera.distance=4");
     c->add_flag("--profile", cap.profile, "Print the scoped CPU/GPU timing hierarchy at the end");
     c->add_option("--aov", cap.aovs, "Also render this AOV and write it as 32-bit float EXR (repeatable): radiance, normal, ...");

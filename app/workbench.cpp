@@ -4,6 +4,7 @@
 #include "gpu/renderer.h"
 
 #include <epoxy/gl.h>
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <unistd.h>
@@ -13,7 +14,8 @@ namespace mesolab {
 Backend parse_backend(const std::string& s) {
     if (s == "cpu") return Backend::Cpu;
     if (s == "gpu") return Backend::Gpu;
-    throw InputError("--backend: '" + s + "' is not one of gpu|cpu");
+    if (s == "truth") return Backend::Truth;
+    throw InputError("--backend: '" + s + "' is not one of gpu|cpu|truth");
 }
 
 Workbench::Workbench() { gpu::install_gpu_compute(); }
@@ -40,9 +42,43 @@ std::string Workbench::gl_renderer() {
 }
 
 RenderResult Workbench::render(const Scene& s, const RenderRequest& req) {
+    // truth_error: the real-time frame without it, the truth at the same size, their difference.
+    const auto te = std::find(req.aovs.begin(), req.aovs.end(), "truth_error");
+    if (te == req.aovs.end() || req.backend == Backend::Truth) return render_one(s, req);
+    RenderRequest rt = req;
+    rt.aovs.erase(rt.aovs.begin() + (te - req.aovs.begin()));
+    if (rt.aovs.empty()) rt.aovs = {"radiance"};
+    RenderResult r = render_one(s, rt);
+    RenderRequest tr = req;
+    tr.backend = Backend::Truth;
+    tr.width = r.frame.width, tr.height = r.frame.height;
+    tr.aovs = {"truth_stderr"};
+    tr.coverage = false;
+    const RenderResult t = render_one(s, tr);
+    r.truth = compare_to_truth(r.frame, t.frame, req.truth);
+    r.truth_ms = t.render_ms;
+    r.frame.layout.push_back({"truth_error", 3, "Real-time radiance minus the truth's"});
+    r.frame.aovs["truth_error"] = r.truth->error;
+    return r;
+}
+
+RenderResult Workbench::render_one(const Scene& s, const RenderRequest& req) {
     using clock = std::chrono::steady_clock;
     RenderResult r;
     auto t0 = clock::now();
+    if (req.backend == Backend::Truth) {  // only the physical description's stages
+        r.eval = session_.evaluate(s, truth_stages(s), req.progress);
+        r.stages_ms = std::chrono::duration<double, std::milli>(clock::now() - t0).count();
+        const ivec2 size{req.width, req.height};
+        session_.check_memory("a " + std::to_string(size.x) + "x" + std::to_string(size.y) + " truth",
+                              {double(size.x) * double(size.y) * 9.0 * sizeof(float), "3 AOVs", {"--size"}});
+        t0 = clock::now();
+        r.frame = render_truth(s, r.eval, size.x, size.y, req.truth, req.aovs, req.progress);
+        r.render_ms = std::chrono::duration<double, std::milli>(clock::now() - t0).count();
+        r.renderer = "truth";
+        if (req.coverage) r.frame.coverage = frame_coverage(s, r.eval, size.x, size.y);
+        return r;
+    }
     r.eval = session_.evaluate_frame(s, req.progress);
     ProfilerBinding bind(session_.profiler());
     r.stages_ms = std::chrono::duration<double, std::milli>(clock::now() - t0).count();

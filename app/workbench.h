@@ -8,6 +8,7 @@
 #include "core/session.h"
 #include "core/stage.h"
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -20,7 +21,7 @@ namespace mesolab {
 
 const char* version_string();
 
-enum class Backend { Cpu, Gpu };
+enum class Backend { Cpu, Gpu, Truth };
 Backend parse_backend(const std::string& s);  // "cpu" | "gpu", InputError otherwise
 
 struct RenderRequest {
@@ -28,6 +29,7 @@ struct RenderRequest {
     int width = 512, height = 512;
     std::vector<std::string> aovs;  // besides radiance (frame_layout); empty = every AOV of the scene
     bool coverage = false;          // also fill Frame::coverage (untimed; either backend)
+    TruthSettings truth;            // Backend::Truth: samples per pixel and seed
     ProgressFn progress;
 };
 
@@ -38,12 +40,18 @@ struct RenderResult {
     double stages_ms = 0;   // evaluation of the stage graph
     double render_ms = 0;   // frame render (GPU: wall time to a finished frame, read-back excluded)
     double gpu_ms = 0;      // GPU timer query of the frame (GPU backend)
+    // When the request asked for the AOV truth_error: the comparison with the truth (whose
+    // render time is truth_ms); the frame then holds truth_error.
+    std::optional<TruthComparison> truth;
+    double truth_ms = 0;
 };
 
 class Workbench {
 public:
     Workbench();
     ~Workbench();
+    // A frame of `s` on the requested backend. Asking for the AOV truth_error renders the truth
+    // too (r.truth settings) and fills RenderResult::truth.
     RenderResult render(const Scene& s, const RenderRequest& r);
     // The headless GL context, created on first use; throws with an explanation when none can be made.
     gpu::Renderer& gpu();
@@ -56,6 +64,7 @@ public:
     }
 
 private:
+    RenderResult render_one(const Scene& s, const RenderRequest& r);
     Session session_;
     FrameStepScheduler cpu_steps_;
     std::unique_ptr<gpu::HeadlessContext> context_;

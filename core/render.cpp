@@ -11,10 +11,12 @@
 namespace mesolab {
 
 // [SECTION] Camera
-vec3 FrameCamera::ray_dir(int x, int y) const {
+vec3 FrameCamera::ray_dir(int x, int y) const { return ray_dir_at(float(x) + 0.5f, float(y) + 0.5f); }
+
+vec3 FrameCamera::ray_dir_at(float px, float py) const {
     if (texture_mode) return -view_dir;
-    const float nx = (float(x) + 0.5f) / float(raster.width) * 2.f - 1.f;
-    const float ny = 1.f - (float(y) + 0.5f) / float(raster.height) * 2.f;
+    const float nx = px / float(raster.width) * 2.f - 1.f;
+    const float ny = 1.f - py / float(raster.height) * 2.f;
     vec4 a = inv_view_proj * vec4(nx, ny, -1.f, 1.f), b = inv_view_proj * vec4(nx, ny, 1.f, 1.f);
     return glm::normalize(vec3(b) / b.w - vec3(a) / a.w);
 }

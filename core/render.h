@@ -32,6 +32,8 @@ struct FrameCamera {
     vec3 wo(vec3 p) const { return texture_mode ? view_dir : glm::normalize(eye - p); }
     // World direction of the primary ray through the centre of pixel (x, y), image row 0 at the top.
     vec3 ray_dir(int x, int y) const;
+    // The same through any point (px, py) of the image, in pixels from its top-left corner.
+    vec3 ray_dir_at(float px, float py) const;
 };
 
 // Near and far planes come from the scene's bounds so that any zoom (1e-3..1e6) keeps depth precision.

@@ -9,6 +9,7 @@
 #include "core/mesh.h"
 #include "core/param.h"
 #include "core/stage.h"
+#include "core/truth/truth.h"
 #include <any>
 #include <functional>
 #include <map>
@@ -198,6 +199,13 @@ public:
     // 2 x 2 quad, as a fragment shader's dFdxFine / dFdyFine): the CPU path fills them for this
     // technique's objects only (they add about a fifth to the rasterisation).
     virtual bool uses_uv_derivatives() const { return false; }
+
+    // The truth (core/truth/truth.h): whether the technique has one, the explicit geometry and
+    // material of one of its objects as the truth traces them, and the stages that reads (only
+    // physical ones: the mesh, material maps; never an accuracy knob's).
+    virtual bool has_truth() const { return false; }
+    virtual TruthObject truth_object(const Scene&, const Evaluation&, int /*object*/) const { return {}; }
+    virtual std::vector<StageName> truth_stages() const { return {}; }
 
 protected:
     friend class Registry;  // derives the parameters' costs from the stage graph

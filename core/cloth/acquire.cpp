@@ -2,8 +2,8 @@
 #include "core/cloth/stages.h"
 #include "core/cloth/acquire.h"
 #include "core/error.h"
+#include "core/raytrace.h"
 
-#include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -28,58 +28,20 @@ std::vector<dvec3> hemisphere_directions(int n, double z_min) {
 }
 
 namespace {
-// [SECTION] Embree scene
-struct Scene {
-    RTCDevice device = nullptr;
-    RTCScene scene = nullptr;
-    explicit Scene(const TriMesh& m) {
-        device = rtcNewDevice(nullptr);
-        if (!device) throw std::runtime_error("cloth acquisition: Embree could not create a device");
-        scene = rtcNewScene(device);
-        RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), m.vertex_count()));
-        for (size_t i = 0; i < m.vertex_count(); ++i) v[3 * i] = m.position[i].x, v[3 * i + 1] = m.position[i].y, v[3 * i + 2] = m.position[i].z;
-        auto* ix = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), m.triangle_count()));
-        for (size_t i = 0; i < m.index.size(); ++i) ix[i] = m.index[i];
-        rtcCommitGeometry(g);
-        rtcAttachGeometry(scene, g);
-        rtcReleaseGeometry(g);
-        rtcCommitScene(scene);
-        if (rtcGetDeviceError(device) != RTC_ERROR_NONE) throw std::runtime_error("cloth acquisition: Embree could not build the stitch's scene");
+// [SECTION] The stitch's micro-geometry as a ray-casting scene (core/raytrace.h)
+struct StitchScene {
+    RayScene rt;
+    explicit StitchScene(const TriMesh& m) {
+        rt.add(m);
+        rt.commit();
     }
-    ~Scene() {
-        if (scene) rtcReleaseScene(scene);
-        if (device) rtcReleaseDevice(device);
-    }
-    Scene(const Scene&) = delete;
-    Scene& operator=(const Scene&) = delete;
-
     // The first hit along o + t d, t in (0, inf): triangle (or -1) and barycentrics of vertices 1, 2.
     int intersect(vec3 o, vec3 d, float& u, float& v) const {
-        RTCIntersectContext ctx;
-        rtcInitIntersectContext(&ctx);
-        RTCRayHit rh;
-        rh.ray.org_x = o.x, rh.ray.org_y = o.y, rh.ray.org_z = o.z;
-        rh.ray.dir_x = d.x, rh.ray.dir_y = d.y, rh.ray.dir_z = d.z;
-        rh.ray.tnear = 0.f, rh.ray.tfar = std::numeric_limits<float>::infinity();
-        rh.ray.mask = 0xffffffffu, rh.ray.flags = 0, rh.ray.time = 0.f;
-        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID, rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-        rtcIntersect1(scene, &ctx, &rh);
-        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return -1;
-        u = rh.hit.u, v = rh.hit.v;
-        return int(rh.hit.primID);
+        const RayHit h = rt.intersect(o, d);
+        u = h.u, v = h.v;
+        return h.triangle;
     }
-    bool occluded(vec3 o, vec3 d) const {
-        RTCIntersectContext ctx;
-        rtcInitIntersectContext(&ctx);
-        RTCRay r;
-        r.org_x = o.x, r.org_y = o.y, r.org_z = o.z;
-        r.dir_x = d.x, r.dir_y = d.y, r.dir_z = d.z;
-        r.tnear = 0.f, r.tfar = std::numeric_limits<float>::infinity();
-        r.mask = 0xffffffffu, r.flags = 0, r.time = 0.f;
-        rtcOccluded1(scene, &ctx, &r);
-        return r.tfar < 0.f;  // Embree marks a blocked ray with tfar = −inf
-    }
+    bool occluded(vec3 o, vec3 d) const { return rt.occluded(o, d); }
 };
 
 struct Hit {
@@ -123,7 +85,7 @@ SampleGrid acquire(const StitchMesh& st, const AcquireParams& p, const ProgressF
     if (p.directions < 4 || p.directions > 128) throw InputError("cloth.directions: " + std::to_string(p.directions) + " must be in [4, 128]");
     const TriMesh& m = st.mesh;
     if (m.triangle_count() == 0) throw InputError("cloth.stitch: the stitch mesh has no triangles");
-    const Scene rt(m);
+    const StitchScene rt(m);
     const size_t V = m.vertex_count();
     const float eps = 1e-3f * std::max(st.tile.x, st.tile.y);
     std::mutex progress_mutex;

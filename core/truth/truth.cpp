@@ -1,0 +1,267 @@
+#include "core/truth/truth.h"
+#include "core/error.h"
+#include "core/raytrace.h"
+#include "core/render.h"
+#include "core/scene.h"
+#include "core/scene_stages.h"
+#include "core/technique.h"
+
+#include <tbb/parallel_for.h>
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+#include <set>
+#include <stdexcept>
+
+namespace mesolab {
+using glm::dvec3;
+
+// [SECTION] Random numbers
+namespace {
+uint64_t mix(uint64_t z) {
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
+}  // namespace
+
+TruthRng::TruthRng(uint64_t seed, uint64_t pixel, uint64_t sample)
+    : state_(mix(mix(mix(seed + 0x9e3779b97f4a7c15ull) ^ pixel) + sample * 0x9e3779b97f4a7c15ull)) {}
+
+float TruthRng::next() {
+    state_ += 0x9e3779b97f4a7c15ull;
+    return float(mix(state_) >> 40) * 0x1p-24f;  // 24 bits: exactly representable, < 1
+}
+
+// [SECTION] Materials
+vec3 TruthMaterial::sample(const TruthHit& h, vec3 wo, TruthRng& rng, vec3& wi) const {
+    // Cosine-weighted: pdf = cos θ / π, so the weight is f π.
+    const float u1 = rng.next(), u2 = rng.next();
+    const float r = std::sqrt(u1), phi = 2.f * kPi * u2;
+    const vec3 local(r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.f, 1.f - u1)));
+    const vec3 t = std::fabs(h.n.x) > 0.9f ? glm::normalize(glm::cross(vec3(0.f, 1.f, 0.f), h.n)) : glm::normalize(glm::cross(vec3(1.f, 0.f, 0.f), h.n));
+    const vec3 b = glm::cross(h.n, t);
+    wi = local.x * t + local.y * b + local.z * h.n;
+    if (local.z <= 0.f) return vec3(0.f);
+    return f(h, wo, wi) * kPi;
+}
+
+// [SECTION] Setting up
+const std::vector<std::string>& truth_aovs() {
+    static const std::vector<std::string> names = {"radiance", "normal", "truth_stderr"};
+    return names;
+}
+
+namespace {
+const Technique& technique_with_truth(const Scene& s, size_t object) {
+    const std::string& name = s.objects[object].technique;
+    const Technique* t = Registry::instance().technique(name);
+    if (!t) throw InputError("objects[" + std::to_string(object) + "].technique: unknown technique '" + name + "'");
+    if (!t->has_truth())
+        throw InputError("--backend truth: technique " + name + " (object '" + s.objects[object].name + "') has no truth renderer yet");
+    return *t;
+}
+}  // namespace
+
+std::vector<StageName> truth_stages(const Scene& s) {
+    std::vector<StageName> out = {stages::geometry, stages::env_map};
+    std::set<std::string> seen;
+    for (size_t i = 0; i < s.objects.size(); ++i) {
+        const Technique& t = technique_with_truth(s, i);
+        if (!seen.insert(t.name()).second) continue;
+        for (const StageName& n : t.truth_stages()) out.push_back(n);
+    }
+    return out;
+}
+
+// [SECTION] The path tracer
+namespace {
+struct TruthScene {
+    RayScene rt;
+    std::vector<TruthObject> objects;  // by geometry index
+    std::vector<glm::mat3> normal_to_world;
+    float eps = 1e-4f;                 // ray offset: 1e-5 of the scene's extent
+
+    TruthHit hit_point(const RayHit& h, vec3 o, vec3 d) const {
+        const TruthObject& ob = objects[size_t(h.geometry)];
+        const TriMesh& m = *ob.mesh;
+        const size_t f = size_t(h.triangle);
+        const uint32_t i0 = m.index[3 * f], i1 = m.index[3 * f + 1], i2 = m.index[3 * f + 2];
+        const float w0 = 1.f - h.u - h.v;
+        TruthHit th;
+        th.triangle = h.triangle;
+        th.p = o + h.t * d;
+        th.ng = glm::normalize(h.ng);
+        vec3 n = th.ng;
+        if (!m.normal.empty()) {
+            const vec3 ns = normal_to_world[size_t(h.geometry)] * (w0 * m.normal[i0] + h.u * m.normal[i1] + h.v * m.normal[i2]);
+            if (glm::dot(ns, ns) > 0.f) n = glm::normalize(ns);
+        }
+        if (!m.uv.empty()) th.uv = w0 * m.uv[i0] + h.u * m.uv[i1] + h.v * m.uv[i2];
+        // Two-sided: both normals face the side the ray came from.
+        if (glm::dot(th.ng, d) > 0.f) th.ng = -th.ng;
+        if (glm::dot(n, th.ng) < 0.f) n = -n;
+        th.n = n;
+        return th;
+    }
+};
+
+struct PixelSample {
+    vec3 L{0.f};
+    vec3 normal{0.f};
+};
+
+PixelSample trace(const TruthScene& sc, const Lighting& lighting, const FrameCamera& cam, int x, int y, const TruthSettings& st, uint64_t pixel,
+                  uint64_t sample) {
+    TruthRng rng(st.seed, pixel, sample);
+    vec3 d = cam.ray_dir(x, y);
+    vec3 o = cam.eye;
+    PixelSample out;
+    vec3 beta(1.f);
+    for (int depth = 0; depth < st.max_depth; ++depth) {
+        const RayHit h = sc.rt.intersect(o, d, depth == 0 ? 0.f : sc.eps);
+        if (!h.hit()) {
+            if (depth == 0 || lighting.env_lighting) out.L += beta * lighting.env.radiance(d);
+            break;
+        }
+        const TruthHit th = sc.hit_point(h, o, d);
+        if (depth == 0) out.normal = th.n;
+        const TruthMaterial& mat = *sc.objects[size_t(h.geometry)].material;
+        const vec3 wo = -d;
+        const vec3 p = th.p + sc.eps * th.ng;
+        for (const Light& l : lighting.lights) {
+            vec3 wi, E;
+            l.sample(th.p, wi, E);
+            const float cos_i = glm::dot(th.n, wi);
+            if (cos_i <= 0.f || glm::dot(th.ng, wi) <= 0.f) continue;
+            const float dist = l.point ? glm::length(l.position - p) : 3.4e38f;
+            if (sc.rt.occluded(p, wi, 0.f, dist)) continue;
+            out.L += beta * mat.f(th, wo, wi) * E * cos_i;
+        }
+        vec3 wi;
+        const vec3 w = mat.sample(th, wo, rng, wi);
+        if (!(glm::dot(w, w) > 0.f)) break;
+        // A direction above the shading normal's plane but below the triangle's is mirrored to
+        // above the triangle: the light the material sends there is kept (no furnace loses it).
+        if (const float below = glm::dot(th.ng, wi); below <= 0.f) wi = glm::normalize(wi - 2.f * below * th.ng);
+        beta *= w;
+        if (depth >= 3) {  // Russian roulette
+            const float q = std::max(0.05f, 1.f - std::max(beta.x, std::max(beta.y, beta.z)));
+            if (rng.next() < q) break;
+            beta /= 1.f - q;
+        }
+        o = p;
+        d = wi;
+    }
+    return out;
+}
+}  // namespace
+
+Frame render_truth(const Scene& s, const Evaluation& ev, int width, int height, const TruthSettings& st, const std::vector<std::string>& aovs,
+                   const std::function<void(const std::string&, double)>& progress, const std::atomic<bool>* cancel) {
+    if (st.spp < 1) throw InputError("--spp " + std::to_string(st.spp) + ": expected at least 1 sample per pixel");
+    if (width < 1 || height < 1 || width > 16384 || height > 16384)
+        throw InputError("frame size " + std::to_string(width) + "x" + std::to_string(height) + " is out of range (1..16384 per side)");
+    for (const std::string& a : aovs)
+        if (std::find(truth_aovs().begin(), truth_aovs().end(), a) == truth_aovs().end())
+            throw InputError("--aov " + a + ": the truth does not write it (it writes radiance, normal, truth_stderr)");
+    if (s.camera.get_string("mode") == "texture") throw InputError("camera.mode texture: the truth renders orbit cameras only so far");
+
+    TruthScene sc;
+    Bounds all{vec3(1e30f), vec3(-1e30f)};
+    for (size_t i = 0; i < s.objects.size(); ++i) {
+        const Technique& t = technique_with_truth(s, i);
+        TruthObject ob = t.truth_object(s, ev, int(i));
+        if (!ob.mesh || !ob.material) throw std::logic_error("truth: technique " + t.name() + " gave no mesh or material for object " + std::to_string(i));
+        sc.rt.add(*ob.mesh, ob.to_world);
+        sc.normal_to_world.push_back(glm::transpose(glm::inverse(glm::mat3(ob.to_world))));
+        const Bounds b = bounds(*ob.mesh);
+        for (int c = 0; c < 8; ++c) {
+            const vec3 corner((c & 1) ? b.hi.x : b.lo.x, (c & 2) ? b.hi.y : b.lo.y, (c & 4) ? b.hi.z : b.lo.z);
+            const vec3 w = vec3(ob.to_world * vec4(corner, 1.f));
+            all.lo = glm::min(all.lo, w), all.hi = glm::max(all.hi, w);
+        }
+        sc.objects.push_back(std::move(ob));
+    }
+    sc.rt.commit();
+    if (!s.objects.empty()) sc.eps = std::max(1e-6f, 1e-5f * glm::length(all.hi - all.lo));
+
+    const FrameCamera cam = make_camera(s, world_bounds(s, ev), width, height);
+    const Lighting lighting = make_lighting(s, ev);
+    std::vector<AovDecl> layout = {{"radiance", 3, ""}, {"normal", 3, ""}, {"truth_stderr", 3, "Standard error of the truth's radiance per pixel"}};
+    Frame f = make_frame(layout, width, height);
+    std::atomic<int> rows_done{0};
+    std::mutex progress_mutex;
+    tbb::parallel_for(0, height, [&](int y) {
+        if (cancel && cancel->load()) return;
+        for (int x = 0; x < width; ++x) {
+            const uint64_t pixel = uint64_t(y) * uint64_t(width) + uint64_t(x);
+            dvec3 sum(0.0), sum2(0.0);
+            vec3 normal(0.f);
+            for (int k = 0; k < st.spp; ++k) {
+                const PixelSample ps = trace(sc, lighting, cam, x, y, st, pixel, uint64_t(k));
+                const dvec3 L(ps.L);
+                sum += L, sum2 += L * L;
+                if (k == 0) normal = ps.normal;
+            }
+            const double n = double(st.spp);
+            const dvec3 mean = sum / n;
+            const dvec3 var = n > 1.0 ? glm::max(dvec3(0.0), (sum2 - n * mean * mean) / (n - 1.0)) : dvec3(0.0);
+            const dvec3 se = glm::sqrt(var / n);
+            float* r = f.aov("radiance").at(x, y);
+            float* nn = f.aov("normal").at(x, y);
+            float* e = f.aov("truth_stderr").at(x, y);
+            for (int c = 0; c < 3; ++c) r[c] = float(mean[c]), nn[c] = normal[c], e[c] = float(se[c]);
+        }
+        const int done = ++rows_done;
+        if (progress && (done % 8 == 0 || done == height)) {
+            std::lock_guard<std::mutex> lock(progress_mutex);
+            progress("truth", double(done) / double(height));
+        }
+    });
+    return f;
+}
+
+TruthComparison compare_to_truth(const Frame& rt, const Frame& truth, const TruthSettings& st) {
+    const Image& a = rt.aov("radiance");
+    const Image& b = truth.aov("radiance");
+    if (a.width != b.width || a.height != b.height) throw std::invalid_argument("compare_to_truth: the frames differ in size");
+    TruthComparison c;
+    c.spp = st.spp, c.seed = st.seed;
+    c.error = Image(a.width, a.height, 3);
+    double se = 0.0, sum = 0.0;
+    size_t count = 0;
+    const Image& n = truth.aov("normal");
+    for (int y = 0; y < a.height; ++y)
+        for (int x = 0; x < a.width; ++x) {
+            const float* nn = n.at(x, y);
+            const bool object = nn[0] != 0.f || nn[1] != 0.f || nn[2] != 0.f;
+            for (int ch = 0; ch < 3; ++ch) {
+                const float d = a.at(x, y)[std::min(ch, a.channels - 1)] - b.at(x, y)[ch];
+                c.error.at(x, y)[ch] = d;
+                if (object) se += double(d) * d, sum += b.at(x, y)[ch], ++count;
+            }
+        }
+    c.noise_rel = truth_noise_rel(truth);
+    c.rmse_rel = count && sum > 0.0 ? std::sqrt(se / double(count)) / (sum / double(count)) : 0.0;
+    c.below_noise = c.rmse_rel <= 2.0 * c.noise_rel;
+    return c;
+}
+
+double truth_noise_rel(const Frame& truth) {
+    const Image& L = truth.aov("radiance");
+    const Image& e = truth.aov("truth_stderr");
+    const Image& n = truth.aov("normal");
+    double sum = 0.0, se2 = 0.0;
+    size_t count = 0;
+    for (int y = 0; y < L.height; ++y)
+        for (int x = 0; x < L.width; ++x) {
+            const float* nn = n.at(x, y);
+            if (nn[0] == 0.f && nn[1] == 0.f && nn[2] == 0.f) continue;  // background
+            for (int c = 0; c < 3; ++c) sum += L.at(x, y)[c], se2 += double(e.at(x, y)[c]) * e.at(x, y)[c];
+            count += 3;
+        }
+    if (!count || !(sum > 0.0)) return 0.0;
+    return std::sqrt(se2 / double(count)) / (sum / double(count));
+}
+}  // namespace mesolab

@@ -1,0 +1,121 @@
+#pragma once
+// [SECTION] The truth: a Monte-Carlo reference of the light transport a technique approximates.
+// `--backend truth` renders the explicit geometry of every object with a path tracer on Embree
+// (core/raytrace.h): camera rays through each pixel's centre, as the real-time paths sample
+// them, so that a difference to the truth is one of light transport, not of anti-aliasing
+// on silhouettes (a technique whose pixel stands for a footprint integrates it itself); next-event
+// estimation towards every light with shadow rays, the environment where a path escapes, all
+// bounces (Russian roulette from the fourth), surfaces two-sided as on the real-time paths.
+//
+// What a technique's truth traces is the technique's to say (Technique::truth_object): the mesh
+// and a TruthMaterial. It reads only the physical description of the scene (geometry, materials,
+// lights, environment, camera), never a technique's accuracy knobs, so one truth serves a sweep.
+//
+// Determinism: sample s of pixel p draws from its own random stream, seeded by (seed, p, s), and
+// each pixel sums its samples in order, so a truth is the same bytes at any thread count, and a
+// truth of 2N samples continues one of N. The estimate's standard error per pixel and channel
+// (the sample standard deviation over sqrt(spp)) is the AOV `truth_stderr`.
+//
+// Shading normals: materials see the interpolated normal, as on the real-time paths; a sampled
+// direction above its plane but below the triangle is mirrored to above the triangle, so that
+// no light is lost where the two planes differ (a white furnace stays 1).
+//
+// Effects: the truth always has shadows and interreflections (they are the light transport);
+// effects.environment off removes the environment's light but not the background seen directly.
+#include "core/image.h"
+#include "core/math.h"
+#include "core/mesh.h"
+#include "core/stage.h"
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace mesolab {
+struct Scene;
+struct Frame;
+struct Evaluation;
+
+// [SECTION] Random numbers
+// A counter-based stream: the state is a 64-bit hash of (seed, pixel, sample), advanced by the
+// SplitMix64 increment; next() gives floats in [0, 1).
+class TruthRng {
+public:
+    TruthRng(uint64_t seed, uint64_t pixel, uint64_t sample);
+    float next();
+
+private:
+    uint64_t state_;
+};
+
+// [SECTION] Materials
+// The reflectance of a surface point for the truth, in a frame whose normal is n (unit, facing
+// the incoming ray's side; two-sided surfaces are flipped by the integrator).
+struct TruthHit {
+    vec3 p{0.f};   // world position
+    vec3 n{0.f};   // shading normal, unit, on the side of wo
+    vec3 ng{0.f};  // geometric normal, unit, on the side of wo
+    vec2 uv{0.f};
+    int triangle = -1;
+};
+
+class TruthMaterial {
+public:
+    virtual ~TruthMaterial() = default;
+    // f_r(wo, wi) in 1/sr, per channel (wo, wi unit, world space).
+    virtual vec3 f(const TruthHit& h, vec3 wo, vec3 wi) const = 0;
+    // Samples wi for a continuing path; returns f cos θi / pdf (0 when the path ends). The default
+    // samples the cosine-weighted hemisphere around h.n.
+    virtual vec3 sample(const TruthHit& h, vec3 wo, TruthRng& rng, vec3& wi) const;
+};
+
+// One object as the truth sees it: a mesh placed by `to_world`, and its material.
+struct TruthObject {
+    std::shared_ptr<const TriMesh> mesh;
+    mat4 to_world{1.f};
+    std::shared_ptr<const TruthMaterial> material;
+};
+
+// [SECTION] Rendering
+struct TruthSettings {
+    int spp = 64;        // samples per pixel (--spp)
+    uint64_t seed = 1;   // --seed
+    int max_depth = 64;  // bounces at most (Russian roulette ends most paths far sooner)
+};
+
+// The truth's AOVs: radiance, normal (the first hit's shading normal) and truth_stderr.
+const std::vector<std::string>& truth_aovs();
+
+// The stages the truth of `s` needs evaluated: the scene's geometry and environment map, and
+// what each object's technique declares (Technique::truth_stages). InputError naming the
+// technique when one has no truth.
+std::vector<StageName> truth_stages(const Scene& s);
+
+// Renders the truth of `s` at width x height. `progress` gets ("truth", fraction); `cancel`, when
+// set, stops at the next row: the rows done keep their samples, the others stay 0 (std::runtime_error
+// is not thrown). InputError for spp < 1, texture mode, an AOV the truth does not write, or a
+// technique without a truth.
+Frame render_truth(const Scene& s, const Evaluation& ev, int width, int height, const TruthSettings& settings,
+                   const std::vector<std::string>& aovs = {}, const std::function<void(const std::string&, double)>& progress = {},
+                   const std::atomic<bool>* cancel = nullptr);
+
+// Over the pixels that show an object in the truth (all channels): the RMS of truth_stderr over
+// the mean radiance there, the truth's relative noise. 0 when no pixel shows an object.
+double truth_noise_rel(const Frame& truth);
+
+// [SECTION] Against the truth
+// A real-time frame against the truth of the same scene at the same size.
+struct TruthComparison {
+    Image error;             // truth_error = real-time radiance − truth radiance (RGB)
+    double noise_rel = 0;    // truth_noise_rel(truth)
+    double rmse_rel = 0;     // RMS of `error` over the object pixels, over the truth's mean radiance there
+    bool below_noise = false;  // rmse_rel <= 2 noise_rel: the truth cannot resolve the error
+    int spp = 0;
+    uint64_t seed = 0;
+};
+// std::invalid_argument when the sizes differ.
+TruthComparison compare_to_truth(const Frame& realtime, const Frame& truth, const TruthSettings& settings);
+}  // namespace mesolab

@@ -1,0 +1,240 @@
+// The truth renderer (core/truth/truth.h) on scenes of the basic technique, whose answers are
+// known: a white furnace, Lambert's closed form, a shadow, determinism at any thread count,
+// honest standard errors, and bad input.
+#include "app/workbench.h"
+#include "core/error.h"
+#include "core/scene.h"
+#include "core/truth/truth.h"
+#include "support/cli.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+using namespace mesolab;
+
+namespace {
+// A basic scene: `objects` and `lights` as JSON text, constant environment `env`.
+Scene scene(const std::string& objects, const std::string& lights, float env, const std::string& camera = R"({"mode": "orbit", "distance": 3.0, "orbit": [50, -60], "fov": 40})") {
+    const std::string text = R"({"schema": 1, "name": "truth-test", "camera": )" + camera + R"(, "lights": )" + lights +
+                             R"(, "env": {"color": [1, 1, 1], "intensity": )" + std::to_string(env) + R"(}, "effects": {"environment": true}, "objects": )" +
+                             objects + "}";
+    return scene_from_json(nlohmann::json::parse(text), "truth-test", test::source_path("presets"));
+}
+
+Frame truth(const Scene& s, int size, int spp, uint64_t seed = 1) {
+    Workbench wb;
+    RenderRequest req;
+    req.backend = Backend::Truth;
+    req.width = req.height = size;
+    req.truth.spp = spp;
+    req.truth.seed = seed;
+    req.aovs = {"truth_stderr"};
+    return wb.render(s, req).frame;
+}
+
+bool shows_object(const Frame& f, int x, int y) {
+    const float* n = f.aov("normal").at(x, y);
+    return n[0] != 0.f || n[1] != 0.f || n[2] != 0.f;
+}
+
+const char* kWhiteTorus = R"([{"name": "torus", "geometry": {"type": "torus", "resolution": 48},
+    "material": {"technique": "basic", "kd": [1, 1, 1], "ks": [0, 0, 0]}}])";
+const char* kWhiteSphere = R"([{"name": "sphere", "geometry": {"type": "sphere", "resolution": 48},
+    "material": {"technique": "basic", "kd": [1, 1, 1], "ks": [0, 0, 0]}}])";
+}  // namespace
+
+// A white (kd = 1) convex object under a uniform sky of radiance 1: every path's first bounce
+// escapes, so every sample is exactly 1 and the standard error 0.
+TEST(TruthFurnace, AWhiteSphereUnderAUniformSkyIsExactlyOne) {
+    const Frame f = truth(scene(kWhiteSphere, "[]", 1.f), 32, 4);
+    int shown = 0;
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 32; ++x) {
+            const float* L = f.aov("radiance").at(x, y);
+            for (int c = 0; c < 3; ++c) EXPECT_NEAR(L[c], 1.f, 1e-5f) << x << "," << y;  // background too: the sky is 1
+            if (!shows_object(f, x, y)) continue;
+            ++shown;
+            for (int c = 0; c < 3; ++c) EXPECT_LT(f.aov("truth_stderr").at(x, y)[c], 1e-6f);  // float rounding of f π
+        }
+    EXPECT_GT(shown, 200);
+}
+
+// A concave white object (the torus sees itself) under the same sky: radiance 1 in expectation
+// (any number of bounces; Russian roulette keeps the estimate unbiased). The mean over the
+// object's pixels, within 4.4 of its standard errors (two-sided 1e-5).
+TEST(TruthFurnace, AWhiteTorusUnderAUniformSkyIsOneWithinTheNoise) {
+    const Frame f = truth(scene(kWhiteTorus, "[]", 1.f), 48, 32);
+    double sum = 0.0, var = 0.0;
+    int n = 0;
+    for (int y = 0; y < 48; ++y)
+        for (int x = 0; x < 48; ++x)
+            if (shows_object(f, x, y)) {
+                sum += f.aov("radiance").at(x, y)[1];
+                const double se = f.aov("truth_stderr").at(x, y)[1];
+                var += se * se, ++n;
+            }
+    ASSERT_GT(n, 300);
+    const double mean = sum / n, se_mean = std::sqrt(var) / n;
+    std::printf("torus furnace: mean %.5f, standard error %.5f over %d pixels\n", mean, se_mean, n);
+    EXPECT_GT(se_mean, 0.0);  // interreflections are sampled: the estimate does vary
+    EXPECT_LT(std::abs(mean - 1.0), 4.4 * se_mean);
+}
+
+// A Lambert plane lit by a directional light 60 degrees from its normal, no sky: L = kd / π E cos θ
+// at every pixel that shows it (nothing else to bounce off).
+TEST(TruthLambert, APlaneUnderADirectionalLightIsTheClosedForm) {
+    const Scene s = scene(R"([{"name": "plane", "geometry": {"type": "plane", "resolution": 4},
+        "material": {"technique": "basic", "kd": [0.5, 0.25, 0.125], "ks": [0, 0, 0]}}])",
+                          R"([{"type": "directional", "direction": [60, 30], "intensity": 2, "color": [1, 1, 1]}])", 0.f,
+                          R"({"mode": "orbit", "distance": 2.0, "orbit": [20, -60], "fov": 30})");
+    const Frame f = truth(s, 32, 2);
+    int shown = 0;
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 32; ++x) {
+            if (!shows_object(f, x, y)) continue;
+            ++shown;
+            const float* L = f.aov("radiance").at(x, y);
+            const float E = 2.f * 0.5f;  // cos 60°
+            EXPECT_NEAR(L[0], 0.5f / kPi * E, 1e-6f);
+            EXPECT_NEAR(L[1], 0.25f / kPi * E, 1e-6f);
+            EXPECT_NEAR(L[2], 0.125f / kPi * E, 1e-6f);
+        }
+    EXPECT_GT(shown, 500);
+}
+
+// A black sphere above a white plane, lit straight from above with no sky: a point of the plane
+// is kd / π E where it sees the light and exactly 0 in the sphere's shadow (the black sphere
+// reflects nothing and a plane cannot see itself). Every sample of a pixel starts through its
+// centre, so a pixel is one or the other, also on the shadow's edge.
+TEST(TruthShadows, APlaneIsLitOrInTheShadowOfABlackSphere) {
+    const Scene s = scene(R"([{"name": "plane", "geometry": {"type": "plane", "resolution": 4, "scale": 6},
+          "material": {"technique": "basic", "kd": [0.8, 0.8, 0.8], "ks": [0, 0, 0]}},
+        {"name": "ball", "geometry": {"type": "sphere", "resolution": 48, "position": [0, 0, 2]},
+          "material": {"technique": "basic", "kd": [0, 0, 0], "ks": [0, 0, 0]}}])",
+                          R"([{"type": "directional", "direction": [0, 0], "intensity": 3, "color": [1, 1, 1]}])", 0.f,
+                          R"({"mode": "orbit", "distance": 14.0, "orbit": [35, -90], "fov": 40})");
+    const Frame f = truth(s, 64, 4);
+    const float lit_value = 0.8f / kPi * 3.f;
+    int lit = 0, shadow = 0;
+    for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 64; ++x) {
+            if (!shows_object(f, x, y)) continue;
+            const float* n = f.aov("normal").at(x, y);
+            if (std::abs(n[2]) < 0.9999f) continue;  // the sphere
+            const float L = f.aov("radiance").at(x, y)[1];
+            if (L == 0.f) ++shadow;
+            else if (std::abs(L - lit_value) < 1e-5f) ++lit;
+            else ADD_FAILURE() << "pixel " << x << "," << y << ": " << L << ", neither lit (" << lit_value << ") nor in the shadow";
+        }
+    std::printf("plane pixels: %d lit, %d in the shadow\n", lit, shadow);
+    EXPECT_GT(lit, 500);
+    EXPECT_GT(shadow, 20);
+}
+
+// The same seed gives the same bytes whatever the number of threads; another seed does not.
+TEST(TruthDeterminism, TheSameSeedGivesTheSameBytesAtAnyThreadCount) {
+    const Scene s = scene(kWhiteTorus, R"([{"type": "directional", "direction": [40, 10], "intensity": 2, "color": [1, 1, 1]}])", 0.5f);
+    Frame one, two;
+    {
+        tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+        one = truth(s, 24, 8, 7);
+    }
+    {
+        tbb::global_control c(tbb::global_control::max_allowed_parallelism, 4);
+        two = truth(s, 24, 8, 7);
+    }
+    for (const char* aov : {"radiance", "normal", "truth_stderr"}) EXPECT_EQ(one.aov(aov).data, two.aov(aov).data) << aov;
+    EXPECT_NE(truth(s, 24, 8, 8).aov("radiance").data, one.aov("radiance").data);
+}
+
+// truth_stderr says how far a pixel's estimate is from its expectation: over 8 seeds, the spread
+// of each pixel's estimates matches the standard error reported. The ratio of their mean squares
+// over P pixels x 8 seeds follows an F-like law with about 7P degrees of freedom: within 15% at
+// P > 400 is many standard deviations wide, and a standard error off by a factor sqrt(2) fails.
+TEST(TruthNoise, TheStandardErrorMatchesTheSpreadOverSeeds) {
+    const Scene s = scene(R"([{"name": "torus", "geometry": {"type": "torus", "resolution": 48},
+        "material": {"technique": "basic", "kd": [0.7, 0.7, 0.7], "ks": [0, 0, 0]}}])",
+                          R"([{"type": "directional", "direction": [40, 10], "intensity": 2, "color": [1, 1, 1]}])", 0.5f);
+    constexpr int kSeeds = 8, kSize = 32;
+    std::vector<Frame> frames;
+    for (int k = 0; k < kSeeds; ++k) frames.push_back(truth(s, kSize, 16, uint64_t(100 + k)));
+    double spread2 = 0.0, se2 = 0.0;
+    int pixels = 0;
+    for (int y = 0; y < kSize; ++y)
+        for (int x = 0; x < kSize; ++x) {
+            if (!shows_object(frames[0], x, y)) continue;
+            double m = 0.0;
+            for (const Frame& f : frames) m += f.aov("radiance").at(x, y)[1];
+            m /= kSeeds;
+            for (const Frame& f : frames) {
+                const double d = f.aov("radiance").at(x, y)[1] - m, e = f.aov("truth_stderr").at(x, y)[1];
+                spread2 += d * d, se2 += e * e;
+            }
+            ++pixels;
+        }
+    spread2 *= double(kSeeds) / double(kSeeds - 1);  // unbiased
+    const double ratio = std::sqrt(spread2 / se2);
+    std::printf("spread over seeds / reported standard error: %.3f over %d pixels\n", ratio, pixels);
+    ASSERT_GT(pixels, 400);
+    EXPECT_NEAR(ratio, 1.0, 0.15);
+}
+
+// Bad input is an error naming what is wrong.
+TEST(TruthErrors, ZeroSamplesATextureCameraAndATechniqueWithoutTruth) {
+    const Scene s = scene(kWhiteSphere, "[]", 1.f);
+    EXPECT_THROW(truth(s, 8, 0), InputError);
+    try {
+        truth(s, 8, 0);
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("--spp 0"), std::string::npos) << e.what();
+    }
+    Scene tex = s;
+    apply_set(tex, "camera.mode", "texture");
+    EXPECT_THROW(truth(tex, 8, 1), InputError);
+    Scene cloth = load_preset(test::source_path("presets/cloth/stitch-knit.json"));
+    try {
+        truth(cloth, 8, 1);
+        ADD_FAILURE() << "cloth has no truth yet";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("technique cloth"), std::string::npos) << e.what();
+    }
+}
+
+// truth_error renders the truth beside the real-time frame. A Lambert plane under a directional
+// light with no sky is exact on the real-time path (L = kd / π E cos θ): no error, and none the
+// truth could resolve. Add a black sphere and its shadow, which the rasteriser leaves out: the
+// error is the shadow, far above the truth's noise.
+TEST(TruthError, IsZeroWhereTheRealTimePathIsExactAndShowsTheMissingShadow) {
+    const std::string plane = R"({"name": "plane", "geometry": {"type": "plane", "resolution": 4, "scale": 6},
+          "material": {"technique": "basic", "kd": [0.8, 0.8, 0.8], "ks": [0, 0, 0]}})";
+    const std::string ball = R"({"name": "ball", "geometry": {"type": "sphere", "resolution": 48, "position": [0, 0, 2]},
+          "material": {"technique": "basic", "kd": [0, 0, 0], "ks": [0, 0, 0]}})";
+    const std::string light = R"([{"type": "directional", "direction": [0, 0], "intensity": 3, "color": [1, 1, 1]}])";
+    const std::string camera = R"({"mode": "orbit", "distance": 14.0, "orbit": [35, -90], "fov": 40})";
+    Workbench wb;
+    RenderRequest req;
+    req.backend = Backend::Cpu;
+    req.width = req.height = 48;
+    req.truth.spp = 4;
+    req.aovs = {"truth_error"};
+    const RenderResult exact = wb.render(scene("[" + plane + "]", light, 0.f, camera), req);
+    ASSERT_TRUE(exact.truth);
+    ASSERT_TRUE(exact.frame.has("truth_error"));
+    EXPECT_LT(exact.truth->rmse_rel, 1e-5);
+    EXPECT_TRUE(exact.truth->below_noise);
+    const RenderResult shadowed = wb.render(scene("[" + plane + ", " + ball + "]", light, 0.f, camera), req);
+    ASSERT_TRUE(shadowed.truth);
+    std::printf("missing shadow: rmse_rel %.4f, truth noise %.4f\n", shadowed.truth->rmse_rel, shadowed.truth->noise_rel);
+    EXPECT_GT(shadowed.truth->rmse_rel, 0.05);
+    EXPECT_FALSE(shadowed.truth->below_noise);
+    float most = 0.f;  // the real-time path is brighter than the truth in the shadow, never darker
+    float least = 0.f;
+    for (float v : shadowed.frame.aov("truth_error").data) most = std::max(most, v), least = std::min(least, v);
+    EXPECT_GT(least, -1e-5f);
+    EXPECT_GT(most, 0.5f);
+}
