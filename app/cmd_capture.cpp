@@ -104,6 +104,7 @@ json sidecar(const Scene& s, const std::string& file, const RenderResult& r, con
         tr["spp"] = req_truth.spp;
         tr["seed"] = req_truth.seed;
         tr["noise_rel"] = truth_noise_rel(r.frame);
+        tr["cached_spp"] = r.truth_cached_spp;  // samples read from the truth cache (all of them: nothing rendered)
         j["truth"] = tr;
     } else if (r.truth) {  // the frame against its truth (--aov truth_error)
         json tr;

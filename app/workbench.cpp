@@ -73,7 +73,17 @@ RenderResult Workbench::render_one(const Scene& s, const RenderRequest& req) {
         session_.check_memory("a " + std::to_string(size.x) + "x" + std::to_string(size.y) + " truth",
                               {double(size.x) * double(size.y) * 9.0 * sizeof(float), "3 AOVs", {"--size"}});
         t0 = clock::now();
-        r.frame = render_truth(s, r.eval, size.x, size.y, req.truth, req.aovs, req.progress);
+        check_truth_request(s, size.x, size.y, req.truth, req.aovs);
+        const std::string key = truth_cache_.key(s, size.x, size.y, req.truth.seed);
+        std::optional<TruthAccumulator> cached = truth_cache_.load(key);
+        const bool keep_file = cached && cached->spp > req.truth.spp;  // a truth of more samples than asked stays on disk
+        if (cached && !cached->continues(size.x, size.y, req.truth.seed, req.truth.spp)) cached.reset();
+        r.truth_cached_spp = cached ? cached->spp : 0;
+        TruthAccumulator a = r.truth_cached_spp == req.truth.spp
+                                 ? std::move(*cached)
+                                 : accumulate_truth(s, r.eval, size.x, size.y, req.truth, cached ? &*cached : nullptr, req.progress);
+        if (r.truth_cached_spp != req.truth.spp && !keep_file) truth_cache_.store(key, a);
+        r.frame = truth_frame(a);
         r.render_ms = std::chrono::duration<double, std::milli>(clock::now() - t0).count();
         r.renderer = "truth";
         if (req.coverage) r.frame.coverage = frame_coverage(s, r.eval, size.x, size.y);

@@ -4,6 +4,7 @@
 // GPU resources (an EGL context made on first use and its renderer), so two workbenches in one
 // process share nothing. It evaluates the stage graph, renders on the CPU or the GPU, and
 // reports what ran.
+#include "app/truth_cache.h"
 #include "core/render.h"
 #include "core/session.h"
 #include "core/stage.h"
@@ -44,6 +45,7 @@ struct RenderResult {
     // render time is truth_ms); the frame then holds truth_error.
     std::optional<TruthComparison> truth;
     double truth_ms = 0;
+    int truth_cached_spp = 0;  // Backend::Truth: samples read from the truth cache (continued to the rest, or all reused)
 };
 
 class Workbench {
@@ -57,6 +59,8 @@ public:
     gpu::Renderer& gpu();
     std::string gl_renderer();
     Session& session() { return session_; }
+    // Where truths are kept between runs (default: TruthCache's folder from the environment).
+    void set_truth_cache(TruthCache c) { truth_cache_ = std::move(c); }
     // The next frame runs every frame step again (bench times them from scratch).
     void forget_frame_steps();
     Evaluation evaluate(const Scene& s, const std::vector<StageName>& targets, const ProgressFn& progress = {}) {
@@ -66,6 +70,7 @@ public:
 private:
     RenderResult render_one(const Scene& s, const RenderRequest& r);
     Session session_;
+    TruthCache truth_cache_;
     FrameStepScheduler cpu_steps_;
     std::unique_ptr<gpu::HeadlessContext> context_;
     std::unique_ptr<gpu::Renderer> renderer_;

@@ -157,8 +157,7 @@ PixelSample trace(const TruthScene& sc, const Lighting& lighting, const FrameCam
 }
 }  // namespace
 
-Frame render_truth(const Scene& s, const Evaluation& ev, int width, int height, const TruthSettings& st, const std::vector<std::string>& aovs,
-                   const std::function<void(const std::string&, double)>& progress, const std::atomic<bool>* cancel) {
+void check_truth_request(const Scene& s, int width, int height, const TruthSettings& st, const std::vector<std::string>& aovs) {
     if (st.spp < 1) throw InputError("--spp " + std::to_string(st.spp) + ": expected at least 1 sample per pixel");
     if (width < 1 || height < 1 || width > 16384 || height > 16384)
         throw InputError("frame size " + std::to_string(width) + "x" + std::to_string(height) + " is out of range (1..16384 per side)");
@@ -166,7 +165,12 @@ Frame render_truth(const Scene& s, const Evaluation& ev, int width, int height, 
         if (std::find(truth_aovs().begin(), truth_aovs().end(), a) == truth_aovs().end())
             throw InputError("--aov " + a + ": the truth does not write it (it writes radiance, normal, truth_stderr)");
     if (s.camera.get_string("mode") == "texture") throw InputError("camera.mode texture: the truth renders orbit cameras only so far");
+    for (size_t i = 0; i < s.objects.size(); ++i) technique_with_truth(s, i);
+}
 
+TruthAccumulator accumulate_truth(const Scene& s, const Evaluation& ev, int width, int height, const TruthSettings& st, const TruthAccumulator* from,
+                                  const std::function<void(const std::string&, double)>& progress, const std::atomic<bool>* cancel) {
+    check_truth_request(s, width, height, st, {});
     TruthScene sc;
     Bounds all{vec3(1e30f), vec3(-1e30f)};
     for (size_t i = 0; i < s.objects.size(); ++i) {
@@ -188,30 +192,29 @@ Frame render_truth(const Scene& s, const Evaluation& ev, int width, int height, 
 
     const FrameCamera cam = make_camera(s, world_bounds(s, ev), width, height);
     const Lighting lighting = make_lighting(s, ev);
-    std::vector<AovDecl> layout = {{"radiance", 3, ""}, {"normal", 3, ""}, {"truth_stderr", 3, "Standard error of the truth's radiance per pixel"}};
-    Frame f = make_frame(layout, width, height);
+    TruthAccumulator a;
+    if (from && from->continues(width, height, st.seed, st.spp)) a = *from;
+    else {
+        a.width = width, a.height = height, a.seed = st.seed, a.spp = 0;
+        const size_t n = size_t(width) * size_t(height) * 3;
+        a.sum.assign(n, 0.0), a.sum2.assign(n, 0.0), a.normal.assign(n, 0.f);
+    }
+    const int first = a.spp;
     std::atomic<int> rows_done{0};
     std::mutex progress_mutex;
     tbb::parallel_for(0, height, [&](int y) {
         if (cancel && cancel->load()) return;
         for (int x = 0; x < width; ++x) {
             const uint64_t pixel = uint64_t(y) * uint64_t(width) + uint64_t(x);
-            dvec3 sum(0.0), sum2(0.0);
-            vec3 normal(0.f);
-            for (int k = 0; k < st.spp; ++k) {
+            const size_t o = 3 * size_t(pixel);
+            for (int k = first; k < st.spp; ++k) {
                 const PixelSample ps = trace(sc, lighting, cam, x, y, st, pixel, uint64_t(k));
-                const dvec3 L(ps.L);
-                sum += L, sum2 += L * L;
-                if (k == 0) normal = ps.normal;
+                for (int c = 0; c < 3; ++c) {
+                    const double L = ps.L[c];
+                    a.sum[o + size_t(c)] += L, a.sum2[o + size_t(c)] += L * L;
+                    if (k == 0) a.normal[o + size_t(c)] = ps.normal[c];
+                }
             }
-            const double n = double(st.spp);
-            const dvec3 mean = sum / n;
-            const dvec3 var = n > 1.0 ? glm::max(dvec3(0.0), (sum2 - n * mean * mean) / (n - 1.0)) : dvec3(0.0);
-            const dvec3 se = glm::sqrt(var / n);
-            float* r = f.aov("radiance").at(x, y);
-            float* nn = f.aov("normal").at(x, y);
-            float* e = f.aov("truth_stderr").at(x, y);
-            for (int c = 0; c < 3; ++c) r[c] = float(mean[c]), nn[c] = normal[c], e[c] = float(se[c]);
         }
         const int done = ++rows_done;
         if (progress && (done % 8 == 0 || done == height)) {
@@ -219,7 +222,33 @@ Frame render_truth(const Scene& s, const Evaluation& ev, int width, int height, 
             progress("truth", double(done) / double(height));
         }
     });
+    a.spp = st.spp;
+    return a;
+}
+
+Frame truth_frame(const TruthAccumulator& a) {
+    std::vector<AovDecl> layout = {{"radiance", 3, ""}, {"normal", 3, ""}, {"truth_stderr", 3, "Standard error of the truth's radiance per pixel"}};
+    Frame f = make_frame(layout, a.width, a.height);
+    const double n = double(a.spp);
+    for (int y = 0; y < a.height; ++y)
+        for (int x = 0; x < a.width; ++x) {
+            const size_t o = 3 * (size_t(y) * size_t(a.width) + size_t(x));
+            float* r = f.aov("radiance").at(x, y);
+            float* nn = f.aov("normal").at(x, y);
+            float* e = f.aov("truth_stderr").at(x, y);
+            for (int c = 0; c < 3; ++c) {
+                const double mean = a.sum[o + size_t(c)] / n;
+                const double var = n > 1.0 ? std::max(0.0, (a.sum2[o + size_t(c)] - n * mean * mean) / (n - 1.0)) : 0.0;
+                r[c] = float(mean), nn[c] = a.normal[o + size_t(c)], e[c] = float(std::sqrt(var / n));
+            }
+        }
     return f;
+}
+
+Frame render_truth(const Scene& s, const Evaluation& ev, int width, int height, const TruthSettings& st, const std::vector<std::string>& aovs,
+                   const std::function<void(const std::string&, double)>& progress, const std::atomic<bool>* cancel) {
+    check_truth_request(s, width, height, st, aovs);
+    return truth_frame(accumulate_truth(s, ev, width, height, st, nullptr, progress, cancel));
 }
 
 TruthComparison compare_to_truth(const Frame& rt, const Frame& truth, const TruthSettings& st) {

@@ -86,6 +86,19 @@ struct TruthSettings {
     int max_depth = 64;  // bounces at most (Russian roulette ends most paths far sooner)
 };
 
+// The samples of a truth so far, per pixel and channel: their sum and sum of squares, summed in
+// sample order, so that continuing it to more samples gives the bytes a fresh render of as many
+// would. `normal` is the first sample's first hit (0 for the background).
+struct TruthAccumulator {
+    int width = 0, height = 0, spp = 0;
+    uint64_t seed = 0;
+    std::vector<double> sum, sum2;  // 3 per pixel
+    std::vector<float> normal;      // 3 per pixel
+    bool continues(int w, int h, uint64_t s, int target_spp) const {
+        return width == w && height == h && seed == s && spp > 0 && spp <= target_spp;
+    }
+};
+
 // The truth's AOVs: radiance, normal (the first hit's shading normal) and truth_stderr.
 const std::vector<std::string>& truth_aovs();
 
@@ -101,6 +114,18 @@ std::vector<StageName> truth_stages(const Scene& s);
 Frame render_truth(const Scene& s, const Evaluation& ev, int width, int height, const TruthSettings& settings,
                    const std::vector<std::string>& aovs = {}, const std::function<void(const std::string&, double)>& progress = {},
                    const std::atomic<bool>* cancel = nullptr);
+
+// InputError for spp < 1, a size out of range, an AOV the truth does not write, texture mode or a
+// technique without a truth: what render_truth checks before any work.
+void check_truth_request(const Scene& s, int width, int height, const TruthSettings& settings, const std::vector<std::string>& aovs);
+
+// The samples of the truth of `s` up to settings.spp, continuing `from` when it holds fewer samples
+// of the same size and seed (from->continues), else from none. Arguments and errors as render_truth.
+TruthAccumulator accumulate_truth(const Scene& s, const Evaluation& ev, int width, int height, const TruthSettings& settings,
+                                  const TruthAccumulator* from = nullptr, const std::function<void(const std::string&, double)>& progress = {},
+                                  const std::atomic<bool>* cancel = nullptr);
+// The frame of an accumulator: radiance (the mean), normal, truth_stderr.
+Frame truth_frame(const TruthAccumulator& a);
 
 // Over the pixels that show an object in the truth (all channels): the RMS of truth_stderr over
 // the mean radiance there, the truth's relative noise. 0 when no pixel shows an object.

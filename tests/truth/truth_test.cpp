@@ -13,6 +13,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <unistd.h>
 #include <string>
 
 using namespace mesolab;
@@ -28,6 +30,7 @@ Scene scene(const std::string& objects, const std::string& lights, float env, co
 
 Frame truth(const Scene& s, int size, int spp, uint64_t seed = 1) {
     Workbench wb;
+    wb.set_truth_cache(TruthCache(""));  // rendered every time: no test reads another's truth
     RenderRequest req;
     req.backend = Backend::Truth;
     req.width = req.height = size;
@@ -217,6 +220,7 @@ TEST(TruthError, IsZeroWhereTheRealTimePathIsExactAndShowsTheMissingShadow) {
     const std::string light = R"([{"type": "directional", "direction": [0, 0], "intensity": 3, "color": [1, 1, 1]}])";
     const std::string camera = R"({"mode": "orbit", "distance": 14.0, "orbit": [35, -90], "fov": 40})";
     Workbench wb;
+    wb.set_truth_cache(TruthCache(""));
     RenderRequest req;
     req.backend = Backend::Cpu;
     req.width = req.height = 48;
@@ -237,4 +241,39 @@ TEST(TruthError, IsZeroWhereTheRealTimePathIsExactAndShowsTheMissingShadow) {
     for (float v : shadowed.frame.aov("truth_error").data) most = std::max(most, v), least = std::min(least, v);
     EXPECT_GT(least, -1e-5f);
     EXPECT_GT(most, 0.5f);
+}
+
+// A truth continued from fewer samples is the bytes a fresh one of as many samples is; the cache
+// on disk gives a truth back without rendering, continues it when asked for more, and keys it by
+// everything it depends on (here the light).
+TEST(TruthCache, ContinuesAndReusesTruthsKeyedByWhatTheyRead) {
+    const Scene s = scene(kWhiteTorus, R"([{"type": "directional", "direction": [40, 10], "intensity": 2, "color": [1, 1, 1]}])", 0.5f);
+    const Frame fresh = truth(s, 16, 12, 3);
+    const std::string folder = (std::filesystem::temp_directory_path() / ("mesolab-truth-cache-" + std::to_string(::getpid()))).string();
+    std::filesystem::remove_all(folder);
+    Workbench wb;
+    wb.set_truth_cache(TruthCache(folder));
+    RenderRequest req;
+    req.backend = Backend::Truth;
+    req.width = req.height = 16;
+    req.truth.seed = 3;
+    req.aovs = {"truth_stderr"};
+    req.truth.spp = 5;
+    const RenderResult five = wb.render(s, req);
+    EXPECT_EQ(five.truth_cached_spp, 0);
+    req.truth.spp = 12;
+    const RenderResult twelve = wb.render(s, req);
+    EXPECT_EQ(twelve.truth_cached_spp, 5);  // continued from the 5 on disk
+    for (const char* aov : {"radiance", "normal", "truth_stderr"}) EXPECT_EQ(twelve.frame.aov(aov).data, fresh.aov(aov).data) << aov;
+    const RenderResult again = wb.render(s, req);
+    EXPECT_EQ(again.truth_cached_spp, 12);  // nothing rendered
+    EXPECT_EQ(again.frame.aov("radiance").data, fresh.aov("radiance").data);
+    Scene moved = s;
+    apply_set(moved, "light.direction", "41,10");
+    EXPECT_EQ(wb.render(moved, req).truth_cached_spp, 0);
+    req.truth.spp = 4;  // fewer than kept: rendered afresh (the same seed's first 4 samples)
+    const RenderResult four = wb.render(s, req);
+    EXPECT_EQ(four.truth_cached_spp, 0);
+    EXPECT_EQ(four.frame.aov("radiance").data, truth(s, 16, 4, 3).aov("radiance").data);
+    std::filesystem::remove_all(folder);
 }

@@ -1,0 +1,31 @@
+#pragma once
+// [SECTION] The truths on disk: a truth's samples (TruthAccumulator) kept between runs, outside
+// the repository, so that asking again costs nothing and asking for more samples continues it.
+// Folder: $MESOLAB_CACHE_DIR, else $XDG_CACHE_HOME/mesolab/truth, else ~/.cache/mesolab/truth.
+// A truth is keyed by a hash of the program version, the whole scene (every key), the contents of
+// every file a key names (meshes, maps), the frame size and the seed; a file that cannot be read
+// back is ignored and rendered again.
+#include "core/scene.h"
+#include "core/truth/truth.h"
+
+#include <optional>
+#include <string>
+
+namespace mesolab {
+
+class TruthCache {
+public:
+    TruthCache();  // the folder from the environment
+    explicit TruthCache(std::string folder) : folder_(std::move(folder)) {}
+    const std::string& folder() const { return folder_; }
+
+    std::string key(const Scene& s, int width, int height, uint64_t seed) const;
+    std::optional<TruthAccumulator> load(const std::string& key) const;
+    // Through a temporary file and a rename; a failure to write is not an error (the truth was
+    // rendered), it only costs the next run the time again: returns false.
+    bool store(const std::string& key, const TruthAccumulator& a) const;
+
+private:
+    std::string folder_;
+};
+}  // namespace mesolab
