@@ -11,11 +11,14 @@
 #include "core/scene.h"
 #include "app/plot_text.h"
 #include "core/technique.h"
+#include "core/truth/truth.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -25,6 +28,7 @@ namespace mesolab {
 namespace {
 
 constexpr const char* kDefaultMetric = "rmse";
+constexpr const char* kTruthMetric = "truth";
 
 // Root-mean-square difference of the radiance AOVs.
 double rmse(const Image& a, const Image& b) {
@@ -60,8 +64,8 @@ std::vector<SweepMetricDecl> technique_metrics() {
 
 // The technique metric named `name`, or none for the default radiance RMSE; InputError naming the value otherwise.
 std::optional<SweepMetricDecl> find_metric(const std::string& name) {
-    if (name == kDefaultMetric) return std::nullopt;
-    std::vector<std::string> known{kDefaultMetric};
+    if (name == kDefaultMetric || name == kTruthMetric) return std::nullopt;
+    std::vector<std::string> known{kDefaultMetric, kTruthMetric};
     for (auto& m : technique_metrics()) {
         if (m.name == name) return m;
         known.push_back(m.name);
@@ -142,6 +146,8 @@ struct Point {
     std::string value;
     double ms, err, rel;
     double knob_ms = 0;  // of ms: the stages the knob controls
+    bool below_noise = false;  // --metric truth: the truth cannot resolve the error
+    std::string by;            // --by: the second knob's value
 };
 
 double stages_ms(const Evaluation& ev, const std::vector<std::string>& names) {
@@ -157,6 +163,34 @@ struct Measure {
     SweepMeasure technique;
     Image reference;
     double ref_mean = 0;
+    // --metric truth: the truth of each physical description met (one for a sweep over accuracy
+    // knobs; --by over a physical key needs one per value), its settings and render times.
+    bool vs_truth = false;
+    TruthSettings truth_settings;
+    std::map<std::string, Frame> truths;
+    double truth_noise = 0, truth_ms = 0;
+    int truth_cached_spp = 0;
+
+    const Frame& truth_of(Workbench& wb, const Scene& s, int w, int h) {
+        const std::string d = truth_description(s);
+        auto it = truths.find(d);
+        if (it != truths.end()) return it->second;
+        RenderRequest tr;
+        tr.backend = Backend::Truth;
+        tr.width = w, tr.height = h;
+        tr.truth = truth_settings;
+        tr.aovs = {"truth_stderr"};
+        tr.progress = [](const std::string& stage, double f) {
+            if (stage == "truth") std::fprintf(stderr, "\r  truth %3d%%", int(100.0 * f + 0.5));
+        };
+        RenderResult r = wb.render(s, tr);
+        std::fprintf(stderr, "\r  truth: %d spp (%d from the cache), noise_rel %.4f, %.0f ms\n", truth_settings.spp, r.truth_cached_spp,
+                     truth_noise_rel(r.frame), r.render_ms);
+        truth_noise = std::max(truth_noise, truth_noise_rel(r.frame));
+        truth_ms += r.render_ms;
+        truth_cached_spp = r.truth_cached_spp;
+        return truths.emplace(d, std::move(r.frame)).first->second;
+    }
 
     void prepare(const Scene& ref, RenderResult& rr) {
         if (metric) {
@@ -168,6 +202,12 @@ struct Measure {
     }
     Point measure(const Scene& s, const std::string& key, const std::string& v, RenderResult& res) const {
         if (metric) return {v, 0, technique.error(s, res.eval), 0};
+        if (vs_truth) {
+            const TruthComparison c = compare_to_truth(res.frame, truths.at(truth_description(s)), truth_settings);
+            Point p{v, 0, c.rmse_rel, c.rmse_rel};
+            p.below_noise = c.below_noise;
+            return p;
+        }
         const Image& img = res.frame.aov("radiance");
         if (img.width != reference.width || img.height != reference.height)
             throw InputError("--knob " + key + "=" + v + ": the frame size changed (" + std::to_string(img.width) + "x" + std::to_string(img.height) +
@@ -202,6 +242,15 @@ struct Report {
 
 std::string header_md(const SweepOptions& o, const Scene& base, const Knob& k, const std::string& ref_text, int w, int h, const Measure& m) {
     std::ostringstream md;
+    if (m.vs_truth) {
+        md << "Sweep of `" << k.key << "`" << (o.by.empty() ? "" : " by `" + o.by.substr(0, o.by.find('=')) + "`") << " on `" << base.name << "` (" << o.backend << ", " << w
+           << "x" << h << ", median of " << o.repeat << " cold-cache runs) against the truth (" << m.truth_settings.spp << " spp, seed " << m.truth_settings.seed
+           << ", noise_rel " << strprintf("%.4f", m.truth_noise) << "). Error: `rmse_rel`, the RMS of the real-time radiance minus the truth's over the object's "
+              "pixels, over the truth's mean there; an error within twice the truth's noise is reported as unresolved, not as a number.\n\n| "
+           << k.key << (o.by.empty() ? "" : " | " + o.by.substr(0, o.by.find('='))) << " | time (ms) | rmse_rel vs truth |\n|---|" << (o.by.empty() ? "" : "---|")
+           << "---|---|\n";
+        return md.str();
+    }
     md << "Sweep of `" << k.key << "` on `" << base.name << "` (" << o.backend << ", " << w << "x" << h << ", median of " << o.repeat
        << " cold-cache runs); reference " << ref_text << ".";
     if (m.metric) {
@@ -218,8 +267,30 @@ std::string header_md(const SweepOptions& o, const Scene& base, const Knob& k, c
 Report report(const SweepOptions& o, const Scene& base, const Knob& k, const std::string& ref_text, int w, int h, const Measure& m,
               const std::vector<Point>& points) {
     std::ostringstream csv, md;
-    csv << (m.metric ? "value,time_ms,knob_stages_ms," + m.metric->name + "\n" : "value,time_ms,rmse,relative_rmse\n");
     md << header_md(o, base, k, ref_text, w, h, m);
+    if (m.vs_truth) {
+        csv << "value,by,time_ms,rmse_rel,below_noise\n";
+        Report r;
+        r.plot.title = "error vs time against the truth: " + k.key + (o.by.empty() ? "" : " by " + o.by.substr(0, o.by.find('='))) + " (" + base.name + ")";
+        r.plot.xlabel = "time per frame incl. stages, cold cache (ms)";
+        r.plot.ylabel = "relative RMSE vs the truth";
+        double lo = 1e300, hi = 0;
+        for (const auto& p : points) {
+            csv << p.value << "," << p.by << "," << p.ms << "," << p.rel << "," << (p.below_noise ? "true" : "false") << "\n";
+            md << "| " << p.value << (o.by.empty() ? "" : " | " + p.by) << " | " << strprintf("%.3f", p.ms) << " | "
+               << (p.below_noise ? strprintf("below the noise (%.2e)", p.rel) : strprintf("%.3e", p.rel)) << " |\n";
+            if (r.plot.series.empty() || r.plot.series.back().label != (o.by.empty() ? k.key : o.by.substr(0, o.by.find('=')) + "=" + p.by))
+                r.plot.series.push_back({o.by.empty() ? k.key : o.by.substr(0, o.by.find('=')) + "=" + p.by, {}, {}, {}});
+            PlotSeries& sr = r.plot.series.back();
+            sr.x.push_back(p.ms), sr.y.push_back(p.rel), sr.point_labels.push_back(p.value);
+            lo = std::min(lo, p.ms), hi = std::max(hi, p.ms);
+        }
+        if (hi > 0) r.plot.series.push_back({"truth's noise floor (2 noise_rel)", {lo, hi}, {2.0 * m.truth_noise, 2.0 * m.truth_noise}, {}});
+        md << "\nThe truth took " << strprintf("%.1f s", m.truth_ms / 1000.0) << (m.truth_cached_spp ? " (read from the truth cache)" : "") << ".\n";
+        r.csv = csv.str(), r.md = md.str();
+        return r;
+    }
+    csv << (m.metric ? "value,time_ms,knob_stages_ms," + m.metric->name + "\n" : "value,time_ms,rmse,relative_rmse\n");
     // A technique metric is plotted against the time of the stages the knob changes (when there are
     // any): the whole frame's time is dominated by what every setting shares.
     const bool knob_time = m.metric && !k.stages.empty();
@@ -253,7 +324,8 @@ Report report(const SweepOptions& o, const Scene& base, const Knob& k, const std
 }  // namespace
 
 std::string sweep_metric_names() {
-    std::string r = std::string(kDefaultMetric) + " (default: radiance RMSE against the reference rendering)";
+    std::string r = std::string(kDefaultMetric) + " (default: radiance RMSE against the reference rendering), " + kTruthMetric +
+                    " (relative RMSE against the truth, --backend truth's path tracer, --spp and --seed)";
     for (const auto& m : technique_metrics()) r += ", " + m.name;
     return r;
 }
@@ -274,9 +346,18 @@ int run_sweep(const SweepOptions& o) {
             throw InputError("--metric " + m.metric->name + ": " + o.preset + ": " + e.what());
         }
     }
+    m.vs_truth = o.metric == kTruthMetric;
+    if (!o.by.empty() && !m.vs_truth) throw InputError("--by: a sweep over two knobs measures against the truth; add --metric truth");
+    if (o.spp < 1) throw InputError("--spp " + std::to_string(o.spp) + ": expected at least 1 sample per pixel");
+    m.truth_settings.spp = o.spp;
+    m.truth_settings.seed = o.seed;
     const Knob k = parse_knob(base, o.knob);
-    std::string ref_text;
-    const Scene ref = reference_scene(base, k, o.reference, ref_text);
+    std::optional<Knob> by;
+    if (!o.by.empty()) {
+        by = parse_knob(base, o.by);
+        if (by->key == k.key) throw InputError("--by " + by->key + ": the same key as --knob");
+    }
+    std::string ref_text = m.vs_truth ? "the truth" : "";
 
     Workbench wb;
     wb.session().set_memory_limit(memory_limit_bytes(o.memory_limit));
@@ -285,19 +366,43 @@ int run_sweep(const SweepOptions& o) {
     req.backend = parse_backend(o.backend);
     req.width = w;
     req.height = h;
-    std::fprintf(stderr, "reference: %s\n", ref_text.c_str());
-    RenderResult rr = wb.render(ref, req);
-    m.prepare(ref, rr);
-
-    std::vector<Point> points;
-    const std::string err_name = m.metric ? m.metric->name : "rmse";
-    for (const auto& v : k.values) {
-        points.push_back(sweep_point(wb, base, k, v, req, o.repeat, m));
-        std::fprintf(stderr, "  %s=%-10s %10.3f ms  %s %.3e\n", k.key.c_str(), v.c_str(), points.back().ms, err_name.c_str(), points.back().err);
+    if (m.vs_truth && req.backend == Backend::Truth) throw InputError("--metric truth: compares a real-time backend (cpu or gpu) with the truth; --backend truth measures against a reference truth with --metric rmse");
+    if (req.backend == Backend::Truth) req.truth = m.truth_settings;
+    if (!m.vs_truth) {
+        const Scene ref = reference_scene(base, k, o.reference, ref_text);
+        std::fprintf(stderr, "reference: %s\n", ref_text.c_str());
+        RenderResult rr = wb.render(ref, req);
+        m.prepare(ref, rr);
     }
 
+    std::vector<Point> points;
+    const std::string err_name = m.metric ? m.metric->name : m.vs_truth ? "rmse_rel" : "rmse";
+    for (const std::string& b : by ? by->values : std::vector<std::string>{""}) {
+        Scene sb = base;
+        if (by) apply_set(sb, by->key, b);
+        if (m.vs_truth) {
+            Scene probe = sb;
+            apply_set(probe, k.key, k.values.front());
+            m.truth_of(wb, probe, w, h);
+            for (const auto& v : k.values) {  // a knob that changes the physical description needs a truth per value
+                Scene sv = sb;
+                apply_set(sv, k.key, v);
+                m.truth_of(wb, sv, w, h);
+            }
+        }
+        for (const auto& v : k.values) {
+            points.push_back(sweep_point(wb, sb, k, v, req, o.repeat, m));
+            points.back().by = b;
+            std::fprintf(stderr, "  %s=%-10s%s %10.3f ms  %s %.3e%s\n", k.key.c_str(), v.c_str(), by ? (" " + by->key + "=" + b).c_str() : "", points.back().ms,
+                         err_name.c_str(), points.back().err, points.back().below_noise ? " (below the truth's noise)" : "");
+        }
+    }
+    if (m.vs_truth && m.truths.size() > 1) std::fprintf(stderr, "  %zu truths: the knobs change what the truth reads\n", m.truths.size());
+
     // A technique metric's outputs are named after it too, so they do not replace the RMSE sweep's.
-    const std::string stem = (fs::path(o.out_dir) / (base.name + "." + k.key + (m.metric ? "." + m.metric->name : ""))).string();
+    const std::string metric_suffix = m.metric ? "." + m.metric->name : m.vs_truth ? std::string(".truth") : std::string();
+    const std::string stem =
+        (fs::path(o.out_dir) / (base.name + "." + k.key + (by ? "." + by->key : "") + metric_suffix)).string();
     const Report r = report(o, base, k, ref_text, w, h, m, points);
     write_text_atomic(stem + ".csv", r.csv);
     write_text_atomic(stem + ".md", r.md);

@@ -48,7 +48,10 @@ struct SweepOptions {
     std::string backend = "cpu";
     std::vector<std::string> sets;
     int repeat = 3;
-    std::string metric = "rmse";          // rmse or a technique's (Technique::sweep_metrics)
+    std::string metric = "rmse";          // rmse, truth or a technique's (Technique::sweep_metrics)
+    std::string by;                       // --by KEY=V1,V2,...: a second knob (a grid; --metric truth)
+    int spp = 64;                         // the truth's samples per pixel (--metric truth, --backend truth)
+    uint64_t seed = 1;
 };
 int run_sweep(const SweepOptions& o);
 std::string sweep_metric_names();  // "rmse (default: ...), bumpsynth.ndf_histogram" for help texts and errors

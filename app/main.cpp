@@ -97,10 +97,13 @@ int main(int argc, char** argv) {
     s->add_option("--reference", sweep.reference, "KEY=V settings of the reference rendering (default: the knob's most accurate setting)");
     s->add_option("-o,--output", sweep.out_dir, "Output folder for CSV, Markdown and the plot (PNG and SVG)")->capture_default_str();
     s->add_option("--size", sweep.size, "Frame size WxH")->capture_default_str();
-    s->add_option("--backend", sweep.backend, "cpu or gpu")->capture_default_str();
+    s->add_option("--backend", sweep.backend, "cpu, gpu or truth")->capture_default_str();
     s->add_option("--set", sweep.sets, "Override a parameter: KEY=VALUE (repeatable)");
     s->add_option("--repeat", sweep.repeat, "Timed runs per value (median)")->capture_default_str();
     s->add_option("--metric", sweep.metric, "Error measure: " + sweep_metric_names())->capture_default_str();
+    s->add_option("--by", sweep.by, "KEY=V1,V2,...: a second knob, one curve per value (a grid; with --metric truth)");
+    s->add_option("--spp", sweep.spp, "The truth's samples per pixel (--metric truth, --backend truth)")->capture_default_str();
+    s->add_option("--seed", sweep.seed, "The truth's seed")->capture_default_str();
     add_memory_limit(s, sweep.memory_limit);
 
     auto* p = app.add_subcommand("preset", "Validate, describe and show presets");

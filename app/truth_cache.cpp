@@ -27,18 +27,6 @@ struct Fnv {
     }
 };
 
-void add_files(Fnv& f, const Scene& s, const ParamTable& t) {
-    if (!t.valid()) return;
-    const auto& decls = t.group().decls();
-    for (size_t i = 0; i < decls.size(); ++i) {
-        if (decls[i].type != ParamType::Path) continue;
-        const std::string& v = t.get_string(decls[i].name);
-        if (v.empty()) continue;
-        std::ifstream in(s.resolve(v), std::ios::binary);
-        const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-        f.add(bytes);
-    }
-}
 }  // namespace
 
 TruthCache::TruthCache() {
@@ -50,10 +38,7 @@ TruthCache::TruthCache() {
 std::string TruthCache::key(const Scene& s, int width, int height, uint64_t seed) const {
     Fnv f;
     f.add(std::string(version_string()));
-    f.add(scene_to_text(s));
-    add_files(f, s, s.camera), add_files(f, s, s.env), add_files(f, s, s.effects);
-    for (const ParamTable& l : s.lights) add_files(f, s, l);
-    for (const SceneObject& o : s.objects) add_files(f, s, o.geometry), add_files(f, s, o.material);
+    f.add(truth_description(s));
     const int64_t dims[3] = {width, height, int64_t(seed)};
     f.add(dims, sizeof dims);
     char hex[17];

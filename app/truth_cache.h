@@ -2,9 +2,10 @@
 // [SECTION] The truths on disk: a truth's samples (TruthAccumulator) kept between runs, outside
 // the repository, so that asking again costs nothing and asking for more samples continues it.
 // Folder: $MESOLAB_CACHE_DIR, else $XDG_CACHE_HOME/mesolab/truth, else ~/.cache/mesolab/truth.
-// A truth is keyed by a hash of the program version, the whole scene (every key), the contents of
-// every file a key names (meshes, maps), the frame size and the seed; a file that cannot be read
-// back is ignored and rendered again.
+// A truth is keyed by a hash of the program version, what the truth reads (truth_description: the
+// physical description, with the contents of the files it names, never an accuracy knob, so
+// one truth serves a whole sweep), the frame size and the seed; a file that cannot be read back is
+// ignored and rendered again.
 #include "core/scene.h"
 #include "core/truth/truth.h"
 

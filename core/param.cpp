@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 #include <sys/stat.h>
 
@@ -368,12 +369,23 @@ std::string value_to_text(const ParamDecl& d, const Value& v) {
     return {};
 }
 
-std::string value_canonical(const ParamDecl& d, const Value& v, const std::string& base_dir) {
+std::string value_canonical(const ParamDecl& d, const Value& v, const std::string& base_dir, FileIdentity files) {
     std::string s = d.name + "=" + value_to_text(d, v);
     if (d.is_file(v)) {
         namespace fs = std::filesystem;
         fs::path p = std::get<std::string>(v);
         if (p.is_relative() && !base_dir.empty()) p = fs::path(base_dir) / p;
+        if (files == FileIdentity::Contents) {
+            std::ifstream in(p, std::ios::binary);
+            if (!in) return s + "|missing";
+            uint64_t h = 0xcbf29ce484222325ull;  // FNV-1a over the bytes
+            char buf[1 << 16];
+            while (in.read(buf, sizeof buf) || in.gcount() > 0) {
+                for (std::streamsize i = 0; i < in.gcount(); ++i) h = (h ^ uint8_t(buf[i])) * 0x100000001b3ull;
+                if (!in) break;
+            }
+            return s + "|" + std::to_string(h);
+        }
         // Size, modification time and file number (device, inode): file systems stamp times with
         // a coarse clock (several ms), so two atomic saves of one size within a tick differ only
         // by the new file that each rename puts in place.

@@ -184,7 +184,10 @@ void validate_value(const ParamDecl& d, const Value& v, const std::string& where
 // Canonical bytes for cache keys. Paths include the file's size, modification time and file
 // number (device, inode), so editing a file on disk invalidates the stages that read it, and so
 // does an atomic re-save (a new file renamed over the old) within one tick of the file clock.
-std::string value_canonical(const ParamDecl& d, const Value& v, const std::string& base_dir);
+// FileIdentity::Contents (for keys kept between runs and machines) puts a hash of the file's bytes
+// in their place.
+enum class FileIdentity { Stat, Contents };
+std::string value_canonical(const ParamDecl& d, const Value& v, const std::string& base_dir, FileIdentity files = FileIdentity::Stat);
 // The schema of one group as JSON (every parameter with type, default, range, unit, help, cost).
 json group_schema(const ParamGroup& g);
 std::string describe_range(const ParamDecl& d);

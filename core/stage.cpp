@@ -6,10 +6,10 @@
 namespace mesolab {
 namespace {
 
-void append_table(std::string& out, const Scene& s, const ParamTable& t, const std::string& param) {
+void append_table(std::string& out, const Scene& s, const ParamTable& t, const std::string& param, FileIdentity files) {
     for (const auto& d : t.group().decls()) {
         if (param != "*" && d.name != param) continue;
-        out += value_canonical(d, t.get(d.name), s.base_dir);
+        out += value_canonical(d, t.get(d.name), s.base_dir, files);
         out += ';';
     }
 }
@@ -67,34 +67,34 @@ void StageContext::progress(double fraction) const {
 }
 
 // [SECTION] Fingerprints of parameter values
-std::string param_fingerprint(const Scene& s, const std::string& pattern, int object) {
+std::string param_fingerprint(const Scene& s, const std::string& pattern, int object, FileIdentity files) {
     const auto dot = pattern.find('.');
     const std::string group = pattern.substr(0, dot), param = dot == std::string::npos ? "*" : pattern.substr(dot + 1);
     std::string out = pattern + "{";
-    if (group == "camera") append_table(out, s, s.camera, param);
-    else if (group == "env") append_table(out, s, s.env, param);
-    else if (group == "effects") append_table(out, s, s.effects, param);
+    if (group == "camera") append_table(out, s, s.camera, param, files);
+    else if (group == "env") append_table(out, s, s.env, param, files);
+    else if (group == "effects") append_table(out, s, s.effects, param, files);
     else if (group == "light") {
         out.append(std::to_string(s.lights.size())).append(":");
-        for (const auto& l : s.lights) append_table(out, s, l, param);
+        for (const auto& l : s.lights) append_table(out, s, l, param, files);
     } else if (group == "geometry") {
         if (object >= 0) {
-            append_table(out, s, s.objects.at(size_t(object)).geometry, param);
+            append_table(out, s, s.objects.at(size_t(object)).geometry, param, files);
         } else {
             out.append(std::to_string(s.objects.size())).append(":");
-            for (const auto& o : s.objects) append_table(out, s, o.geometry, param);
+            for (const auto& o : s.objects) append_table(out, s, o.geometry, param, files);
         }
     } else if (object >= 0) {
         // A technique, for one object: its material when it uses that technique.
         const SceneObject& o = s.objects.at(size_t(object));
-        if (o.technique == group) append_table(out, s, o.material, param);
+        if (o.technique == group) append_table(out, s, o.material, param, files);
         else out += "-";
     } else {
         // A technique: every object using it, in order (the object index is part of the text).
         for (size_t i = 0; i < s.objects.size(); ++i)
             if (s.objects[i].technique == group) {
                 out.append("#").append(std::to_string(i)).append(":");
-                append_table(out, s, s.objects[i].material, param);
+                append_table(out, s, s.objects[i].material, param, files);
             }
     }
     return out + "}";

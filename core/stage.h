@@ -264,5 +264,6 @@ private:
 // Canonical values behind a parameter pattern ("basic.kd", "geometry.*", "light.*"). `object` >= 0
 // restricts geometry.* and technique keys to that object (nothing when it uses another
 // technique); -1 covers every object (their indices are part of the text).
-std::string param_fingerprint(const Scene& scene, const std::string& pattern, int object = -1);
+// `files` as value_canonical's.
+std::string param_fingerprint(const Scene& scene, const std::string& pattern, int object = -1, FileIdentity files = FileIdentity::Stat);
 }  // namespace mesolab

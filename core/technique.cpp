@@ -163,10 +163,13 @@ std::vector<AovDecl> Registry::aovs(const Scene& s) const {
     return r;
 }
 
+BenchTable truth_bench_table();  // core/truth/bench.cpp
+
 std::vector<BenchTable> bench_tables() {
     std::vector<BenchTable> r;
     for (const Technique* t : Registry::instance().techniques())
         for (auto& b : t->bench_tables()) r.push_back(std::move(b));
+    r.push_back(truth_bench_table());
     return r;
 }
 }  // namespace mesolab

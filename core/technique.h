@@ -206,6 +206,10 @@ public:
     virtual bool has_truth() const { return false; }
     virtual TruthObject truth_object(const Scene&, const Evaluation&, int /*object*/) const { return {}; }
     virtual std::vector<StageName> truth_stages() const { return {}; }
+    // The technique's keys truth_object reads itself (its material's), beside those of its
+    // truth_stages: with them and the scene's camera, lights, environment and geometry they are
+    // all a truth depends on (truth_description), so its accuracy knobs leave a truth as it is.
+    virtual std::vector<std::string> truth_params() const { return {}; }
 
 protected:
     friend class Registry;  // derives the parameters' costs from the stage graph

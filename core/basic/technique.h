@@ -17,5 +17,6 @@ public:
     bool has_truth() const override { return true; }
     TruthObject truth_object(const Scene& s, const Evaluation& ev, int object) const override;
     std::vector<StageName> truth_stages() const override;
+    std::vector<std::string> truth_params() const override;
 };
 }  // namespace mesolab::basic

@@ -61,4 +61,6 @@ TruthObject BasicTechnique::truth_object(const Scene& s, const Evaluation& ev, i
 }
 
 std::vector<StageName> BasicTechnique::truth_stages() const { return {stages::albedo}; }
+
+std::vector<std::string> BasicTechnique::truth_params() const { return {"basic.kd", "basic.ks", "basic.shininess", "basic.albedo_map"}; }
 }  // namespace mesolab::basic

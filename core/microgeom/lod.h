@@ -28,4 +28,28 @@ int displacement_resolution(const std::string& type, int base_resolution, int fi
 // Vertices are displaced independently: where a base has separate vertices at one position with
 // different uvs (the teapot's patch borders), cracks can open.
 TriMesh displace(const TriMesh& base, const Heightfield& hf, float tiling);
+
+// [SECTION] The truth's surface (core/truth/truth.h)
+// The heightfield as the triangles through its texel centres: the piecewise-linear surface that
+// takes texel (x, y)'s height at its centre, (c, r) = (x, y) in the shading's texel coordinates
+// (c = u W tiling - 0.5, r = (1 - v) H tiling - 0.5), with each cell split along the diagonal the
+// base's own triangles use (from low (u, v) to high (u, v)), tiled `tiling` times over (u, v)
+// (every field wraps there, as on the geometry level of detail).
+float height_through_centres(const Heightfield& hf, float c, float r);
+
+// Segments along u for truth_surface: two per texel of the tiled field (so that texel centres
+// are vertices and each cell's diagonal is an edge of the finer triangles, which then represent the
+// surface through the centres exactly on a grid base), never fewer than `base_resolution`; the
+// sphere and the teapot twice as many (mesh.h). Capped at 16384 (*capped set when it was).
+int truth_surface_resolution(Primitive base, int base_resolution, int field_width, int field_height, float tiling, bool* capped);
+// Triangles truth_surface makes.
+double truth_surface_triangles(Primitive base, int resolution);
+
+// The base primitive (mesh.h) tessellated at `resolution` and displaced along its normals by
+// height_through_centres, as `displace` does (mean height removed, heights in texels scaled by
+// the texel's world length). On a plane, curvature_u / curvature_v (degrees across one tile of the
+// field, + convex, - concave; §5) bend it into a cylinder along u, then along v, keeping lengths
+// along the bend. No normals or tangents: the truth shades with the triangles' geometric normals.
+TriMesh truth_surface(Primitive base, int resolution, float minor_ratio, const Heightfield& hf, float tiling, float curvature_u_deg,
+                      float curvature_v_deg);
 }  // namespace mesolab::microgeom

@@ -331,6 +331,40 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
                           ctx.warn("the teapot's 32 patches are displaced independently (each has its own cell of the uv atlas), so cracks can open along the patch borders");
                       return stage_result(stages::displaced, displace(make_primitive(primitive_named(type), res, float(o.geometry.get_float("minor_ratio"))), *h, tiling));
                   }}));
+    // The truth's surface: the heightfield through its texel centres on the base (core/truth).
+    g.add(stages::truth_surface, object({.help = "The truth's micro-geometry: the base tessellated at two vertices per texel and displaced through the texel centres (--backend truth)",
+                  .params = {"microgeom.tiling", "microgeom.curvature_u", "microgeom.curvature_v", "geometry.type", "geometry.resolution", "geometry.minor_ratio"},
+                  .inputs = {stages::heightfield},
+                  .memory = [](const StageContext& ctx) {
+                      const SceneObject& o = ctx.obj();
+                      const std::string type = o.geometry.get_string("type");
+                      if (type == "mesh") return MemoryEstimate{};
+                      const auto hf = ctx.input(stages::heightfield);
+                      const Primitive base = primitive_named(type);
+                      const int n = truth_surface_resolution(base, int(o.geometry.get_int("resolution")), hf->width, hf->height,
+                                                             float(o.material.get_float("tiling")), nullptr);
+                      const double triangles = truth_surface_triangles(base, n);
+                      // The mesh (positions, uv and indices: ~24 bytes a vertex, 12 a triangle) and Embree's BVH over it (~100 bytes a triangle).
+                      return memory_of(triangles * (12.0 + 12.0 + 100.0), "about " + std::to_string(int64_t(triangles)) + " triangles for the truth",
+                                       {"microgeom.tiling", "microgeom.resolution"});
+                  },
+                  .run = [](StageContext& ctx) -> std::any {
+                      const SceneObject& o = ctx.obj();
+                      const ParamTable& m = ctx.material();
+                      const std::string type = o.geometry.get_string("type");
+                      if (type == "mesh")
+                          throw InputError("--backend truth: object '" + o.name + "': microgeom's truth displaces a procedural base (geometry.type plane, sphere, cylinder, torus or teapot), not a mesh file");
+                      const auto h = ctx.input(stages::heightfield);
+                      const Primitive base = primitive_named(type);
+                      const float tiling = float(m.get_float("tiling"));
+                      bool capped = false;
+                      const int n = truth_surface_resolution(base, int(o.geometry.get_int("resolution")), h->width, h->height, tiling, &capped);
+                      if (capped) ctx.warn("the truth's surface is capped at 16384 segments, fewer than two per texel: lower microgeom.tiling or the heightfield resolution");
+                      if (base != Primitive::Plane && curved(o))
+                          ctx.warn("microgeom.curvature_u/v bend only a plane in the truth; a " + type + " has its own curvature");
+                      return stage_result(stages::truth_surface, truth_surface(base, n, float(o.geometry.get_float("minor_ratio")), *h, tiling,
+                                                                               float(m.get_float("curvature_u")), float(m.get_float("curvature_v"))));
+                  }}));
     // BRDF level of detail: the virtual goniometer (§6).
     g.add(stages::brdf, object({.help = "Simulate the heightfield's BRDF with the virtual goniometer: average radiance of texture-space images with masking (lod = brdf)",
                   .params = with(with(keys(kScatterKeys), keys(kBrdfKeys)), {"microgeom.device", "effects.indirect", "effects.environment"}),

@@ -31,5 +31,7 @@ inline constexpr Stage<SimulatedBrdf> brdf{"microgeom.brdf"};
 inline constexpr Stage<LightScatter> scatter_env{"microgeom.scatter_env"};
 inline constexpr Stage<LightsScatter> scatter{"microgeom.scatter"};
 inline constexpr Stage<DirectionalScatter> scatter_directions{"microgeom.scatter_directions"};
+// The truth's explicit micro-geometry (lod.h, truth_surface): only `--backend truth` evaluates it.
+inline constexpr Stage<TriMesh> truth_surface{"microgeom.truth_surface"};
 }  // namespace stages
 }  // namespace mesolab::microgeom

@@ -34,6 +34,10 @@ public:
     std::vector<ExportDecl> exports() const override;
     std::vector<BenchTable> bench_tables() const override;
     FrameAgreement agreement() const override;
+    bool has_truth() const override { return true; }
+    TruthObject truth_object(const Scene& s, const Evaluation& ev, int object) const override;
+    std::vector<StageName> truth_stages() const override;
+    std::vector<std::string> truth_params() const override;
 };
 
 // The scattering settings of a material (microgeom.depth, sampling, paths, scatter_seed, shadows).

@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <mutex>
 #include <set>
 #include <stdexcept>
@@ -74,6 +75,31 @@ std::vector<StageName> truth_stages(const Scene& s) {
     return out;
 }
 
+std::string truth_description(const Scene& s) {
+    const StageGraph& g = Registry::instance().stages();
+    // (key pattern, object) pairs the truth reads, in a fixed order; object -1 for scene-wide keys.
+    std::set<std::pair<std::string, int>> keys = {{"camera.*", -1}, {"light.*", -1}, {"env.*", -1}, {"effects.environment", -1}};
+    std::set<std::pair<std::string, int>> seen;
+    std::function<void(const StageDecl&, int)> visit = [&](const StageDecl& d, int object) {
+        if (!seen.insert({d.name, object}).second) return;
+        for (const std::string& p : d.params) keys.insert({p, object});
+        g.for_each_input(s, d, object, visit);
+    };
+    for (const StageName& n : truth_stages(s)) {
+        const StageDecl& d = g.at(n.str());
+        for (int object : g.subjects(s, d)) visit(d, object);
+    }
+    std::string out;
+    for (size_t i = 0; i < s.objects.size(); ++i) {
+        const Technique& t = technique_with_truth(s, i);
+        out += "object " + std::to_string(i) + " " + t.name() + ";";
+        keys.insert({"geometry.*", int(i)});
+        for (const std::string& p : t.truth_params()) keys.insert({p, int(i)});
+    }
+    for (const auto& [pattern, object] : keys) out += param_fingerprint(s, pattern, object, FileIdentity::Contents);
+    return out;
+}
+
 // [SECTION] The path tracer
 namespace {
 struct TruthScene {
@@ -124,8 +150,9 @@ PixelSample trace(const TruthScene& sc, const Lighting& lighting, const FrameCam
             if (depth == 0 || lighting.env_lighting) out.L += beta * lighting.env.radiance(d);
             break;
         }
-        const TruthHit th = sc.hit_point(h, o, d);
+        TruthHit th = sc.hit_point(h, o, d);
         if (depth == 0) out.normal = th.n;
+        th.depth = depth;
         const TruthMaterial& mat = *sc.objects[size_t(h.geometry)].material;
         const vec3 wo = -d;
         const vec3 p = th.p + sc.eps * th.ng;

@@ -60,6 +60,7 @@ struct TruthHit {
     vec3 ng{0.f};  // geometric normal, unit, on the side of wo
     vec2 uv{0.f};
     int triangle = -1;
+    int depth = 0;  // bounces before this hit: 0 where the camera sees it
 };
 
 class TruthMaterial {
@@ -78,6 +79,13 @@ struct TruthObject {
     mat4 to_world{1.f};
     std::shared_ptr<const TruthMaterial> material;
 };
+
+// What the truth of `s` depends on, as canonical text: the program's physical description only.
+// The values of every key the truth stages declare (and their inputs), of each technique's
+// truth_params, and of the camera, lights, environment, effects.environment and each object's
+// geometry, with the contents (not the names or dates) of the files they name. A technique's
+// accuracy knobs are not in it, so one truth serves a sweep over them. InputError as truth_stages.
+std::string truth_description(const Scene& s);
 
 // [SECTION] Rendering
 struct TruthSettings {
