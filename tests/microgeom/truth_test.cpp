@@ -11,6 +11,7 @@
 #include "core/scene.h"
 #include "core/truth/truth.h"
 #include "support/cli.h"
+#include "support/truth.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -42,10 +43,7 @@ RenderResult render(const Scene& s, Backend backend, int size, int spp, std::vec
     return wb.render(s, req);
 }
 
-bool shows_object(const Frame& f, int x, int y) {
-    const float* n = f.aov("normal").at(x, y);
-    return n[0] != 0.f || n[1] != 0.f || n[2] != 0.f;
-}
+using test::shows_object;
 }  // namespace
 
 // The surface passes through every texel centre at its height (mean removed, in texel lengths),
@@ -102,18 +100,9 @@ TEST(MicrogeomTruth, AWhiteFieldOfAnyShapeUnderAUniformSkyIsOne) {
     for (const char* field : {R"("heightfield": "vgrooves", "resolution": 32, "vgroove_angle": 60)",
                               R"("heightfield": "gaussian", "resolution": 32, "rms_slope": 1.5, "correlation": 2)"}) {
         const Scene s = scene(std::string(field) + R"(, "albedo": [1, 1, 1], "tiling": 2)", "[]", 1.f, "[40, -60]");
-        const Frame f = render(s, Backend::Truth, 32, 16, {"truth_stderr"}).frame;
-        double sum = 0.0, var = 0.0;
-        int n = 0;
-        for (int y = 0; y < 32; ++y)
-            for (int x = 0; x < 32; ++x)
-                if (shows_object(f, x, y)) {
-                    sum += f.aov("radiance").at(x, y)[1];
-                    const double se = f.aov("truth_stderr").at(x, y)[1];
-                    var += se * se, ++n;
-                }
-        ASSERT_GT(n, 300) << field;
-        const double mean = sum / n, se_mean = std::sqrt(var) / n;
+        const test::ObjectMean m = test::object_mean(render(s, Backend::Truth, 32, 16, {"truth_stderr"}).frame);
+        ASSERT_GT(m.pixels, 300) << field;
+        const double mean = m.mean, se_mean = m.stderr_mean;
         std::printf("%s: mean %.5f, standard error %.5f\n", field, mean, se_mean);
         EXPECT_GT(se_mean, 0.0) << field;
         EXPECT_LT(std::abs(mean - 1.0), 4.4 * se_mean) << field;

@@ -6,6 +6,7 @@
 #include "core/scene.h"
 #include "core/truth/truth.h"
 #include "support/cli.h"
+#include "support/truth.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -40,10 +41,7 @@ Frame truth(const Scene& s, int size, int spp, uint64_t seed = 1) {
     return wb.render(s, req).frame;
 }
 
-bool shows_object(const Frame& f, int x, int y) {
-    const float* n = f.aov("normal").at(x, y);
-    return n[0] != 0.f || n[1] != 0.f || n[2] != 0.f;
-}
+using test::shows_object;
 
 const char* kWhiteTorus = R"([{"name": "torus", "geometry": {"type": "torus", "resolution": 48},
     "material": {"technique": "basic", "kd": [1, 1, 1], "ks": [0, 0, 0]}}])";
@@ -72,18 +70,10 @@ TEST(TruthFurnace, AWhiteSphereUnderAUniformSkyIsExactlyOne) {
 // object's pixels, within 4.4 of its standard errors (two-sided 1e-5).
 TEST(TruthFurnace, AWhiteTorusUnderAUniformSkyIsOneWithinTheNoise) {
     const Frame f = truth(scene(kWhiteTorus, "[]", 1.f), 48, 32);
-    double sum = 0.0, var = 0.0;
-    int n = 0;
-    for (int y = 0; y < 48; ++y)
-        for (int x = 0; x < 48; ++x)
-            if (shows_object(f, x, y)) {
-                sum += f.aov("radiance").at(x, y)[1];
-                const double se = f.aov("truth_stderr").at(x, y)[1];
-                var += se * se, ++n;
-            }
-    ASSERT_GT(n, 300);
-    const double mean = sum / n, se_mean = std::sqrt(var) / n;
-    std::printf("torus furnace: mean %.5f, standard error %.5f over %d pixels\n", mean, se_mean, n);
+    const test::ObjectMean m = test::object_mean(f);
+    ASSERT_GT(m.pixels, 300);
+    const double mean = m.mean, se_mean = m.stderr_mean;
+    std::printf("torus furnace: mean %.5f, standard error %.5f over %d pixels\n", mean, se_mean, m.pixels);
     EXPECT_GT(se_mean, 0.0);  // interreflections are sampled: the estimate does vary
     EXPECT_LT(std::abs(mean - 1.0), 4.4 * se_mean);
 }
