@@ -30,6 +30,7 @@
 #include "app/gui/evaluator.h"
 #include "app/gui/script.h"
 #include "app/gui/state.h"
+#include "app/gui/truth_view.h"
 #include "app/gui/viewport.h"
 #include "app/gui/window.h"
 #include "app/workbench.h"
@@ -138,6 +139,7 @@ private:
     ShotResult window_screenshot_result() const override;
     void request_size(int w, int h) override;
     bool has_size(int w, int h) const override;
+    void view(const std::string& what, int spp) override;
 
     // State changes
     void on_scene_changed();
@@ -155,6 +157,12 @@ private:
     std::string gl_renderer_;      // GL_RENDERER, for the status bar
     Session session_;              // the stage cache, timings and memory budget of this window
     Evaluator evaluator_;          // the worker thread (evaluates with session_)
+    TruthRunner truth_;            // the Truth view's worker (its own session)
+    std::optional<Frame> truth_frame_;  // the newest truth it published for the frame on screen
+    std::string truth_key_;             // the frame on screen's truth (TruthRunner::key_of)
+    uint64_t frames_drawn_ = 0;    // real-time renders and display passes: the truth is asked for again after each
+    uint64_t truth_asked_at_ = ~uint64_t(0);
+    void update_truth_view(bool display_changed);
     panels::PanelRegistry technique_panels_;                                    // the panels' declarations
     std::map<std::string, std::unique_ptr<panels::TechniquePanel>> panels_;  // this window's panels, by technique
     void reset_panels() {
@@ -257,7 +265,9 @@ std::string Gui::screenshot_path(bool window) const {
     return "screenshots/" + file_safe(state_.doc.scene.name) + (window ? "-window-" : "-") + timestamp() + ".png";
 }
 
-void Gui::screenshot_viewport(const std::string& path) { viewport_.screenshot(state_.frame, path); }
+void Gui::screenshot_viewport(const std::string& path) {
+    viewport_.screenshot(state_.frame, path, truth_frame_ ? &*truth_frame_ : nullptr, state_.ui);
+}
 
 void Gui::capture_window(const std::string& path) {
     int w = 0, h = 0;
@@ -310,12 +320,27 @@ void Gui::poll_evaluator() {
     }
 }
 
-bool Gui::settled() const { return state_.settled(evaluator_.idle()); }
+bool Gui::settled() const {
+    if (!state_.settled(evaluator_.idle())) return false;
+    if (state_.ui.truth.show == UiState::TruthView::Show::RealTime) return true;
+    const TruthRunner::Status ts = truth_.status();
+    return !ts.error.empty() || (!ts.running && state_.ui.truth.on_screen);
+}
+
+void Gui::view(const std::string& what, int spp) {
+    using Show = UiState::TruthView::Show;
+    UiState::TruthView& tv = state_.ui.truth;
+    tv.show = what == "truth" ? Show::Truth : what == "error" ? Show::Error : Show::RealTime;
+    if (spp > 0) tv.spp = spp;
+    tv.on_screen = false;
+    truth_asked_at_ = ~uint64_t(0);
+    state_.frame.display_outdated = true;
+}
 
 // [SECTION] Frame loop
 void Gui::wait_or_poll() {
     const bool shot_pending = state_.ui.window_shot.kind == UiState::WindowShot::Kind::Requested;
-    if (scripted_ || busy_frames_ > 0 || evaluator_.busy() || state_.ui.toast.visible() || state_.frame.outdated || ImGui::IsAnyMouseDown() || shot_pending) {
+    if (scripted_ || busy_frames_ > 0 || evaluator_.busy() || truth_.status().running || state_.ui.toast.visible() || state_.frame.outdated || ImGui::IsAnyMouseDown() || shot_pending) {
         glfwPollEvents();
         if (busy_frames_ > 0) --busy_frames_;
     } else {
@@ -420,12 +445,50 @@ void Gui::build_ui() {
 void Gui::after_ui() {
     if (state_.doc.take_edits()) attempt([&] { on_scene_changed(); });
     const bool interacting = ImGui::IsAnyItemActive();
+    bool display_changed = false;
     if (state_.eval.last && state_.frame.needs_render(state_.ui.viewport.size, interacting)) {
         attempt([&] { viewport_.render(state_.frame, state_.ui.viewport, *state_.eval.last, interacting && !scripted_); }, ErrorOrigin::Render);
+        display_changed = true;
     } else if (state_.frame.shown() && state_.frame.display_outdated) {
         attempt([&] { viewport_.update_display(state_.frame, state_.ui.viewport); }, ErrorOrigin::Render);
+        display_changed = true;
     }
+    if (display_changed) {
+        ++frames_drawn_;
+        state_.ui.truth.on_screen = false;
+    }
+    update_truth_view(display_changed);
     update_title();
+}
+
+// The Truth view: the truth of the frame on screen is asked for after each real-time frame (the
+// runner starts over only when what the truth reads changed), and shown once it has a pass of
+// the frame's size; previews during drags keep the real-time frame.
+void Gui::update_truth_view(bool display_changed) {
+    UiState::TruthView& tv = state_.ui.truth;
+    if (tv.show == UiState::TruthView::Show::RealTime || !state_.frame.shown() || state_.frame.preview()) return;
+    if (truth_asked_at_ != frames_drawn_) {
+        TruthSettings st;
+        st.spp = tv.spp;
+        st.seed = uint64_t(tv.seed);
+        truth_.want(state_.frame.scene, state_.frame.px.x, state_.frame.px.y, st);
+        truth_asked_at_ = frames_drawn_;
+        std::string key;
+        try {
+            key = TruthRunner::key_of(state_.frame.scene, state_.frame.px.x, state_.frame.px.y, st.seed);
+        } catch (const std::exception&) {
+            // no truth (the status bar says why)
+        }
+        if (key != truth_key_) truth_frame_.reset();  // another truth: the real-time frame until its first pass
+        truth_key_ = std::move(key);
+    }
+    bool fresh = false;
+    while (auto f = truth_.take_frame())
+        if (f->key == truth_key_) truth_frame_ = std::move(f->frame), fresh = true;
+    if (truth_key_.empty()) truth_frame_.reset();
+    (void)display_changed;
+    if ((fresh || !tv.on_screen) && truth_frame_ && truth_frame_->width == state_.frame.px.x && truth_frame_->height == state_.frame.px.y)
+        attempt([&] { viewport_.show_truth(*truth_frame_, state_.ui); }, ErrorOrigin::Render);
 }
 
 void Gui::present() {
@@ -497,6 +560,25 @@ void Gui::menu_bar() {
         if (ImGui::MenuItem("Reset exposure", nullptr, false, state_.ui.viewport.exposure_ev != 0.f)) {
             state_.ui.viewport.exposure_ev = 0.f;
             state_.frame.display_outdated = true;
+        }
+        ImGui::Separator();
+        ImGui::TextDisabled("Truth (path traced, --backend truth)");
+        using Show = UiState::TruthView::Show;
+        UiState::TruthView& tv = state_.ui.truth;
+        const Show before = tv.show;
+        if (ImGui::MenuItem("Real-time", "T", tv.show == Show::RealTime)) tv.show = Show::RealTime;
+        if (ImGui::MenuItem("Truth", nullptr, tv.show == Show::Truth)) tv.show = Show::Truth;
+        if (ImGui::IsItemHovered())
+            ImGui::SetTooltip("The scene's truth, refined in the background while you watch (spp and noise in the status bar); a technique without a truth says so there");
+        if (ImGui::MenuItem("Error: real-time - truth", nullptr, tv.show == Show::Error)) tv.show = Show::Error;
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("Blue where the real-time frame is darker than the truth, red where brighter; the legend gives the scale");
+        ImGui::SetNextItemWidth(ImGui::GetFontSize() * 9.f);
+        if (ImGui::SliderInt("Truth samples", &tv.spp, 1, 4096, "%d spp", ImGuiSliderFlags_Logarithmic)) truth_asked_at_ = ~uint64_t(0);
+        if (ImGui::MenuItem("Cancel the truth", nullptr, false, truth_.status().running)) truth_.cancel();
+        if (tv.show != before) {
+            tv.on_screen = false;
+            truth_asked_at_ = ~uint64_t(0);
+            state_.frame.display_outdated = true;  // back to the real-time frame until the truth is there
         }
         ImGui::Separator();
         if (ImGui::MenuItem("Reset layout")) state_.ui.layout.relayout = true;
@@ -621,6 +703,19 @@ void Gui::status_bar() {
         else if (state_.eval.failed()) ImGui::TextColored(ImVec4(0.92f, 0.4f, 0.35f, 1.f), "evaluation failed");
         else if (state_.eval.cancelled()) ImGui::TextColored(ImVec4(0.9f, 0.67f, 0.3f, 1.f), "evaluation cancelled: the frame is out of date");
         else if (state_.eval.last) ImGui::TextDisabled("up to date");
+        if (state_.ui.truth.show != UiState::TruthView::Show::RealTime) {
+            const TruthRunner::Status ts = truth_.status();
+            ImGui::SameLine(0, 24);
+            if (!ts.error.empty()) ImGui::TextColored(ImVec4(0.92f, 0.4f, 0.35f, 1.f), "truth: %s", ts.error.c_str());
+            else if (ts.running)
+                ImGui::TextColored(ImVec4(0.45f, 0.7f, 1.f, 1.f), "truth %d/%d spp, noise %.2f%%, refining %.0f%%", ts.spp, ts.target, 100.0 * ts.noise_rel, 100.0 * ts.fraction);
+            else if (ts.cancelled) ImGui::TextColored(ImVec4(0.9f, 0.67f, 0.3f, 1.f), "truth cancelled at %d/%d spp, noise %.2f%%", ts.spp, ts.target, 100.0 * ts.noise_rel);
+            else if (ts.spp > 0) ImGui::TextDisabled("truth %d spp, noise %.2f%%", ts.spp, 100.0 * ts.noise_rel);
+            if (ts.running) {
+                ImGui::SameLine();
+                if (ImGui::SmallButton("Cancel truth")) truth_.cancel();
+            }
+        }
         TimingStat fs{};
         char right[256];
         const bool have = session_.profiler().find("gui.frame", fs);
@@ -731,6 +826,14 @@ void Gui::shortcuts() {
         state_.ui.open_modal(Modal::SaveAs, presets_.save_as);
     }
     if (io.KeyCtrl && ImGui::IsKeyPressed(GLFW_KEY_Q, false)) glfwSetWindowShouldClose(window_, GLFW_TRUE);
+    if (!io.KeyCtrl && ImGui::IsKeyPressed(GLFW_KEY_T, false)) {  // real-time -> truth -> error -> real-time
+        using Show = UiState::TruthView::Show;
+        UiState::TruthView& tv = state_.ui.truth;
+        tv.show = tv.show == Show::RealTime ? Show::Truth : tv.show == Show::Truth ? Show::Error : Show::RealTime;
+        tv.on_screen = false;
+        truth_asked_at_ = ~uint64_t(0);
+        state_.frame.display_outdated = true;
+    }
     if (ImGui::IsKeyPressed(GLFW_KEY_F12, false)) {
         if (io.KeyShift) {
             state_.ui.request_window_shot(screenshot_path(true), 0);

@@ -19,7 +19,8 @@ std::string trim(const std::string& s) {
     return s.substr(b, e - b + 1);
 }
 
-const char* const kScriptVerbs = "load PRESET, set KEY=VALUE, frames N, wait, screenshot PATH, window-screenshot PATH, size WxH, quit";
+const char* const kScriptVerbs =
+    "load PRESET, set KEY=VALUE, frames N, wait, screenshot PATH, window-screenshot PATH, size WxH, view real-time|truth|error [SPP], quit";
 }  // namespace
 
 // [SECTION] Parsing
@@ -56,6 +57,22 @@ std::vector<ScriptCommand> parse_script(const std::string& path) {
             } catch (const InputError&) {
                 throw bad("'size' expects WxH within 1..16384 per side (e.g. 1600x900), got '" + c.arg + "'");
             }
+        } else if (c.verb == "view") {
+            const auto sp2 = c.arg.find_first_of(" \t");
+            const std::string what = c.arg.substr(0, sp2), spp = sp2 == std::string::npos ? "" : trim(c.arg.substr(sp2));
+            if (what != "real-time" && what != "truth" && what != "error") throw bad("'view' expects real-time, truth or error, got '" + what + "'");
+            c.n = 0;
+            if (!spp.empty()) {
+                size_t used = 0;
+                long v = -1;
+                try {
+                    v = std::stol(spp, &used);
+                } catch (const std::exception&) {
+                }
+                if (used != spp.size() || v < 1 || v > 1000000) throw bad("'view " + what + "' expects a sample count 1..1000000, got '" + spp + "'");
+                c.n = int(v);
+            }
+            c.arg = what;
         } else if (c.verb == "wait" || c.verb == "quit") {
             if (!c.arg.empty()) throw bad("'" + c.verb + "' takes no argument, got '" + c.arg + "'");
         } else {
@@ -141,6 +158,10 @@ bool ScriptRunner::run(const ScriptCommand& c, ScriptHost& host) {
     }
     if (c.verb == "set") {
         host.set(c.arg);
+        return true;
+    }
+    if (c.verb == "view") {
+        host.view(c.arg, c.n);
         return true;
     }
     if (c.verb == "frames") {

@@ -2,7 +2,8 @@
 // [SECTION] Scripted GUI runs
 //  - ScriptCommand, parse_script: a script file, one command per line ('#' starts a comment):
 //      load PRESET, set KEY=VALUE, frames N, wait, screenshot PATH, window-screenshot PATH,
-//      size WxH, quit. Bad lines throw InputError naming FILE:LINE and the command.
+//      size WxH, view real-time|truth|error [SPP], quit. Bad lines throw InputError naming
+//      FILE:LINE and the command.
 //  - frames_script: `--frames N [--screenshot P] [--window-screenshot P]` as the same commands.
 //  - ScriptRunner: steps through the commands once per frame against a ScriptHost (the window),
 //    waiting where a command needs later frames, and keeps the first failure with its FILE:LINE.
@@ -44,6 +45,9 @@ public:
     virtual ShotResult window_screenshot_result() const = 0;
     virtual void request_size(int w, int h) = 0;             // the window's framebuffer size
     virtual bool has_size(int w, int h) const = 0;
+    // What the viewport shows: "real-time", "truth" or "error" (the Truth view), refining the
+    // truth to `spp` samples (0: as it is); `wait` then also waits for the truth.
+    virtual void view(const std::string& what, int spp) = 0;
 };
 
 // Longest a command waits for one evaluation (or a window resize) before giving up.

@@ -113,6 +113,15 @@ struct UiState {
         std::string aov = "radiance";  // the AOV shown
         float exposure_ev = 0.f;       // display only: scales the radiance shown
     };
+    // The Truth view (app/gui/truth_view.h): what the viewport shows instead of the real-time frame.
+    struct TruthView {
+        enum class Show { RealTime, Truth, Error };
+        Show show = Show::RealTime;
+        int spp = 64;             // the target the truth refines to
+        int seed = 1;
+        bool on_screen = false;   // the truth (or the error) is what the viewport shows now
+        float error_scale = 1.f;  // the error view's legend: colours saturate at ±this
+    };
     struct Layout {
         bool relayout = true;      // put the windows back in their default places this frame
         vec2 display{0, 0};        // the display size laid out for
@@ -125,6 +134,7 @@ struct UiState {
     ErrorBanner error;
     WindowShot window_shot;
     Viewport viewport;
+    TruthView truth;
     Layout layout;
     bool close_confirmed = false;  // the user chose to quit with unsaved changes
 

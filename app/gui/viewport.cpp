@@ -1,5 +1,7 @@
 // The viewport: the window with the frame, camera input and overlays; rendering and display.
 #include "app/gui/viewport.h"
+#include "app/gui/truth_view.h"
+#include "gpu/gl.h"
 #include "core/error.h"
 #include "core/image.h"
 #include "core/render.h"
@@ -123,11 +125,34 @@ Viewport::Requests overlays(GuiState& s, const Evaluator::Progress& pr, ImVec2 p
     // Frame info, top right.
     if (s.frame.shown()) {
         char info[160];
-        std::snprintf(info, sizeof info, "%dx%d%s  %s  %.1f ms", s.frame.px.x, s.frame.px.y, s.frame.preview() ? " (preview)" : "", s.ui.viewport.aov.c_str(), s.frame.render_ms);
+        const char* shown = !s.ui.truth.on_screen ? s.ui.viewport.aov.c_str()
+                            : s.ui.truth.show == UiState::TruthView::Show::Error ? "error against the truth" : "truth";
+        std::snprintf(info, sizeof info, "%dx%d%s  %s  %.1f ms", s.frame.px.x, s.frame.px.y, s.frame.preview() ? " (preview)" : "", shown, s.frame.render_ms);
         const ImVec2 ts = ImGui::CalcTextSize(info);
         const ImVec2 a(p0.x + size.x - ts.x - pad - 8.f, p0.y + pad + (s.ui.error.text.empty() ? 0.f : y - p0.y - pad));
         dl->AddRectFilled(ImVec2(a.x - 6.f, a.y - 3.f), ImVec2(a.x + ts.x + 6.f, a.y + ts.y + 3.f), IM_COL32(15, 16, 18, 170), 3.f);
         dl->AddText(a, IM_COL32(200, 203, 210, 255), info);
+    }
+
+    // The error view's legend, bottom right: blue below the truth, white equal, red above.
+    if (s.ui.truth.on_screen && s.ui.truth.show == UiState::TruthView::Show::Error) {
+        const float w = 180.f, h = 10.f;
+        const float scale = s.ui.truth.error_scale;
+        char lo[32], hi[32];
+        std::snprintf(lo, sizeof lo, "%+.3g", -double(scale));
+        std::snprintf(hi, sizeof hi, "%+.3g", double(scale));
+        const char* caption = "real-time - truth (radiance, mean of RGB)";
+        const float line = ImGui::GetTextLineHeight();
+        const ImVec2 a(p0.x + size.x - w - pad - 8.f, p0.y + size.y - pad - h - 2.f * line - 8.f);
+        const float box_w = std::max(w, ImGui::CalcTextSize(caption).x);
+        dl->AddRectFilled(ImVec2(a.x - 8.f - (box_w - w), a.y - line - 8.f), ImVec2(a.x + w + 8.f, a.y + h + line + 8.f), IM_COL32(15, 16, 18, 200), 4.f);
+        dl->AddText(ImVec2(a.x + w - ImGui::CalcTextSize(caption).x, a.y - line - 4.f), IM_COL32(200, 203, 210, 255), caption);
+        const ImU32 blue = IM_COL32(13, 137, 255, 255), white = IM_COL32(255, 255, 255, 255), red = IM_COL32(255, 89, 63, 255);
+        dl->AddRectFilledMultiColor(a, ImVec2(a.x + w * 0.5f, a.y + h), blue, white, white, blue);
+        dl->AddRectFilledMultiColor(ImVec2(a.x + w * 0.5f, a.y), ImVec2(a.x + w, a.y + h), white, red, red, white);
+        dl->AddText(ImVec2(a.x, a.y + h + 2.f), IM_COL32(200, 203, 210, 255), lo);
+        dl->AddText(ImVec2(a.x + w * 0.5f - 3.f, a.y + h + 2.f), IM_COL32(200, 203, 210, 255), "0");
+        dl->AddText(ImVec2(a.x + w - ImGui::CalcTextSize(hi).x, a.y + h + 2.f), IM_COL32(200, 203, 210, 255), hi);
     }
 
     // Toast, bottom left, fading out.
@@ -157,6 +182,11 @@ ivec2 render_request(ivec2 view, bool dragging, double full_render_ms, bool& red
 }
 
 // [SECTION] Viewport
+struct Viewport::TruthTexture {
+    gpu::Texture texture;
+    gpu::TextureSpec spec;
+};
+
 Viewport::Viewport() : renderer_(std::make_unique<gpu::Renderer>()), display_(std::make_unique<gpu::DisplayPass>()) {}
 
 Viewport::~Viewport() = default;
@@ -229,10 +259,44 @@ void Viewport::update_display(FrameState& f, const UiState::Viewport& v) {
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
+Image Viewport::truth_image(const Frame& truth, UiState& ui) const {
+    if (ui.truth.show != UiState::TruthView::Show::Error) return truth.aov("radiance");
+    const Frame rt = renderer_->read_frame();
+    const TruthComparison c = compare_to_truth(rt, truth, TruthSettings{});
+    ui.truth.error_scale = error_scale(c.error, truth);
+    return error_colors(c.error, truth, ui.truth.error_scale);
+}
+
+void Viewport::show_truth(const Frame& truth, UiState& ui) {
+    const Image image = truth_image(truth, ui);
+    const Image* shown = &image;
+    // GL rows run bottom-up: flip while packing the RGB floats.
+    std::vector<float> rows(size_t(shown->width) * size_t(shown->height) * 3);
+    for (int y = 0; y < shown->height; ++y)
+        for (int x = 0; x < shown->width; ++x)
+            for (int c = 0; c < 3; ++c) rows[(size_t(shown->height - 1 - y) * size_t(shown->width) + size_t(x)) * 3 + size_t(c)] = shown->at(x, y)[c];
+    if (!truth_texture_ || truth_texture_->spec.width != shown->width || truth_texture_->spec.height != shown->height) {
+        truth_texture_ = std::make_unique<TruthTexture>();
+        truth_texture_->spec.format = GL_RGB32F;
+        truth_texture_->spec.width = shown->width, truth_texture_->spec.height = shown->height;
+        truth_texture_->texture = gpu::make_texture(truth_texture_->spec, {GL_RGB, GL_FLOAT, rows.data()});
+    } else {
+        gpu::upload_texture(truth_texture_->texture, truth_texture_->spec, 0, {GL_RGB, GL_FLOAT, rows.data()});
+    }
+    const bool error = ui.truth.show == UiState::TruthView::Show::Error;
+    display_->run(truth_texture_->texture.get(), shown->width, shown->height, gpu::DisplayMode::Color, 3, error ? 1.f : std::exp2(ui.viewport.exposure_ev));
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    ui.truth.on_screen = true;
+}
+
 const std::vector<FrameStepRun>& Viewport::frame_steps() const { return renderer_->last_steps(); }
 
-void Viewport::screenshot(const FrameState& f, const std::string& path) {
+void Viewport::screenshot(const FrameState& f, const std::string& path, const Frame* truth, UiState& ui) {
     if (!f.shown()) throw InputError("screenshot " + path + ": no frame rendered yet");
+    if (truth && ui.truth.on_screen) {  // what the viewport shows: the truth, or the error's colours
+        write_png_srgb(path, truth_image(*truth, ui));
+        return;
+    }
     const Frame frame = renderer_->read_frame();
     write_png_srgb(path, frame.aov("radiance"));
 }

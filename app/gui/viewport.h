@@ -50,13 +50,21 @@ public:
     void render(FrameState& f, const UiState::Viewport& v, const Evaluation& eval, bool dragging);
     // The display pass only: the AOV shown and the exposure.
     void update_display(FrameState& f, const UiState::Viewport& v);
-    // The radiance of the frame on screen as an 8-bit sRGB PNG.
-    void screenshot(const FrameState& f, const std::string& path);
+    // The Truth view: shows `truth`'s radiance (with the exposure) or, for the error view, the
+    // real-time radiance minus the truth's in colours (ui.truth.error_scale is set for the legend).
+    void show_truth(const Frame& truth, UiState& ui);
+    // What the Truth view shows: the truth's radiance, or the error's colours.
+    Image truth_image(const Frame& truth, UiState& ui) const;
+    // The frame on screen as an 8-bit sRGB PNG: the real-time radiance, or, while the Truth view
+    // shows `truth`, what it shows.
+    void screenshot(const FrameState& f, const std::string& path, const Frame* truth, UiState& ui);
     // The frame steps of the frame on screen (offscreen work before it), for the Timings panel.
     const std::vector<FrameStepRun>& frame_steps() const;
 
 private:
     std::unique_ptr<gpu::Renderer> renderer_;
     std::unique_ptr<gpu::DisplayPass> display_;
+    struct TruthTexture;
+    std::unique_ptr<TruthTexture> truth_texture_;  // the truth's image, uploaded for the display pass
 };
 }  // namespace mesolab::gui

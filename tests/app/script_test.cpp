@@ -66,6 +66,7 @@ struct FakeHost : ScriptHost {
     ShotResult window_screenshot_result() const override { return shot; }
     void request_size(int w, int h) override { log.push_back("size " + std::to_string(w) + "x" + std::to_string(h)); }
     bool has_size(int w, int h) const override { return w == fb_w && h == fb_h; }
+    void view(const std::string& what, int spp) override { log.push_back("view " + what + " " + std::to_string(spp)); }
 };
 
 ScriptCommand cmd(std::string verb, std::string arg = "", int n = 0) {
@@ -136,6 +137,8 @@ TEST_F(ScriptFiles, BadArgumentsNameFileLineAndTheValue) {
         {"quit please\n", "bad.txt:1", "'quit' takes no argument"},
         {"load\n", "bad.txt:1", "'load' needs a path"},
         {"screenshot\n", "bad.txt:1", "'screenshot' needs a path"},
+        {"view sideways\n", "bad.txt:1", "'sideways'"},
+        {"view truth 0\n", "bad.txt:1", "'0'"},
     };
     for (const Case& c : cases) {
         const std::string e = parse_error(c.text);
@@ -282,6 +285,21 @@ TEST_F(ScriptFiles, LoadFallsBackToTheScriptsFolder) {
     ScriptRunner r(parse_script(script), script);
     r.step(host);
     EXPECT_EQ(host.log, (std::vector<std::string>{"load " + (dir_ / name).string(), "load /abs/elsewhere.json", "load not_here.json"}));
+    EXPECT_TRUE(r.finished());
+}
+
+// `view` switches the Truth view (with a target of samples when given) and completes at once;
+// the `wait` after it waits for the truth (the host's settled()).
+TEST(ScriptRunner, ViewSwitchesTheTruthView) {
+    FakeHost host;
+    ScriptCommand truth = cmd("view", "truth", 16), back = cmd("view", "real-time");
+    ScriptRunner r = runner({truth, cmd("wait"), back});
+    host.is_settled = false;
+    r.step(host);
+    EXPECT_EQ(host.log, std::vector<std::string>{"view truth 16"});
+    host.is_settled = true;
+    r.step(host);
+    EXPECT_EQ(host.log.back(), "view real-time 0");
     EXPECT_TRUE(r.finished());
 }
 

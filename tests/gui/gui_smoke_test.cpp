@@ -198,3 +198,34 @@ TEST_F(GuiSmoke, BadScriptLineExitsWithStatus2NamingFileAndLine) {
     EXPECT_NE(r2.err.find("badkey.txt:3"), std::string::npos) << r2.err;
     EXPECT_NE(r2.err.find("light.direction"), std::string::npos) << r2.err;  // the suggestion
 }
+
+// The Truth view: the viewport shows the truth refined to the samples asked for, then the error
+// against it (colours, mostly white where the two agree); the screenshot is what is shown. A
+// scene without a truth (a texture-mode camera) says so and the window keeps running.
+TEST_F(GuiSmoke, TruthViewShowsTheTruthAndTheErrorAndSurvivesASceneWithoutOne) {
+    const fs::path rt = dir_ / "rt.png", truth = dir_ / "truth.png", error = dir_ / "error.png", back = dir_ / "back.png", script = dir_ / "truth.txt";
+    std::ofstream(script) << "load " << preset_.string() << "\n"
+                          << "size 1280x720\n"
+                          << "wait\n"
+                          << "screenshot " << rt.string() << "\n"
+                          << "view truth 4\n"
+                          << "wait\n"
+                          << "screenshot " << truth.string() << "\n"
+                          << "view error\n"
+                          << "wait\n"
+                          << "screenshot " << error.string() << "\n"
+                          << "set camera.mode=texture\n"
+                          << "wait\n"
+                          << "view real-time\n"
+                          << "wait\n"
+                          << "screenshot " << back.string() << "\n"
+                          << "quit\n";
+    const Result r = gui("--script " + q(script.string()));
+    ASSERT_EQ(r.status, 0) << r.err;
+    const mesolab::Image a = mesolab::read_image(rt.string()), t = mesolab::read_image(truth.string()), e = mesolab::read_image(error.string());
+    EXPECT_GT(varied_fraction(t), 0.1);
+    EXPECT_GT(mean_abs_diff(a, t), 0.005);  // the truth is not the real-time frame (noise, shadows)
+    EXPECT_LT(mean_abs_diff(a, t), 0.2);    // but the same scene
+    EXPECT_GT(mean_abs_diff(t, e), 0.05);   // the error's colours
+    EXPECT_GT(varied_fraction(mesolab::read_image(back.string())), 0.1);
+}
