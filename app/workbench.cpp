@@ -69,7 +69,7 @@ RenderResult Workbench::render_one(const Scene& s, const RenderRequest& req) {
     if (req.backend == Backend::Truth) {  // only the physical description's stages
         r.eval = session_.evaluate(s, truth_stages(s), req.progress);
         r.stages_ms = std::chrono::duration<double, std::milli>(clock::now() - t0).count();
-        const ivec2 size{req.width, req.height};
+        const ivec2 size = frame_size(s, r.eval, {req.width, req.height});  // texture mode: the techniques' native size, as the real-time frame
         session_.check_memory("a " + std::to_string(size.x) + "x" + std::to_string(size.y) + " truth",
                               {double(size.x) * double(size.y) * 9.0 * sizeof(float), "3 AOVs", {"--size"}});
         t0 = clock::now();

@@ -210,6 +210,11 @@ public:
     // truth_stages: with them and the scene's camera, lights, environment and geometry they are
     // all a truth depends on (truth_description), so its accuracy knobs leave a truth as it is.
     virtual std::vector<std::string> truth_params() const { return {}; }
+    // Texture-mode cameras: how far (object units, along the normal) the truth's surface of an
+    // object may reach above the surface the rasteriser draws in texture space; the truth's
+    // ray for a texel starts that far above the drawn point and goes down the normal to the first
+    // hit. 0 (the default): the truth's surface is the drawn one.
+    virtual float truth_lift(const Scene&, const Evaluation&, int /*object*/) const { return 0.f; }
 
 protected:
     friend class Registry;  // derives the parameters' costs from the stage graph

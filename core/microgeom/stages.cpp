@@ -49,6 +49,7 @@ const std::vector<std::string> kBrdfKeys{"lod", "brdf_fit", "brdf_resolution", "
 constexpr int kMaxDisplacementSegments = 2048;
 
 std::string lod(const SceneObject& o) { return o.material.get_string("lod"); }
+bool texture_mode(const Scene& s) { return s.camera.get_string("mode") == "texture"; }
 bool curved(const SceneObject& o) { return o.material.get_float("curvature_u") != 0.0 || o.material.get_float("curvature_v") != 0.0; }
 bool ellipse_shadows(const SceneObject& o) { return o.material.get_string("shadows") == "ellipse"; }
 bool want_gpu(const StageContext& ctx) { return ctx.material().get_string("device") == "gpu"; }
@@ -333,7 +334,8 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
                   }}));
     // The truth's surface: the heightfield through its texel centres on the base (core/truth).
     g.add(stages::truth_surface, object({.help = "The truth's micro-geometry: the base tessellated at two vertices per texel and displaced through the texel centres (--backend truth)",
-                  .params = {"microgeom.tiling", "microgeom.curvature_u", "microgeom.curvature_v", "geometry.type", "geometry.resolution", "geometry.minor_ratio"},
+                  .params = {"microgeom.tiling", "microgeom.curvature_u", "microgeom.curvature_v", "geometry.type", "geometry.resolution", "geometry.minor_ratio",
+                             "camera.mode"},
                   .inputs = {stages::heightfield},
                   .memory = [](const StageContext& ctx) {
                       const SceneObject& o = ctx.obj();
@@ -342,7 +344,7 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
                       const auto hf = ctx.input(stages::heightfield);
                       const Primitive base = primitive_named(type);
                       const int n = truth_surface_resolution(base, int(o.geometry.get_int("resolution")), hf->width, hf->height,
-                                                             float(o.material.get_float("tiling")), nullptr);
+                                                             truth_tiling(ctx.scene, o), nullptr);
                       const double triangles = truth_surface_triangles(base, n);
                       // The mesh (positions, uv and indices: ~24 bytes a vertex, 12 a triangle) and Embree's BVH over it (~100 bytes a triangle).
                       return memory_of(triangles * (12.0 + 12.0 + 100.0), "about " + std::to_string(int64_t(triangles)) + " triangles for the truth",
@@ -356,14 +358,19 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
                           throw InputError("--backend truth: object '" + o.name + "': microgeom's truth displaces a procedural base (geometry.type plane, sphere, cylinder, torus or teapot), not a mesh file");
                       const auto h = ctx.input(stages::heightfield);
                       const Primitive base = primitive_named(type);
-                      const float tiling = float(m.get_float("tiling"));
+                      const float tiling = truth_tiling(ctx.scene, o);
                       bool capped = false;
                       const int n = truth_surface_resolution(base, int(o.geometry.get_int("resolution")), h->width, h->height, tiling, &capped);
                       if (capped) ctx.warn("the truth's surface is capped at 16384 segments, fewer than two per texel: lower microgeom.tiling or the heightfield resolution");
                       if (base != Primitive::Plane && curved(o))
                           ctx.warn("microgeom.curvature_u/v bend only a plane in the truth; a " + type + " has its own curvature");
-                      return stage_result(stages::truth_surface, truth_surface(base, n, float(o.geometry.get_float("minor_ratio")), *h, tiling,
-                                                                               float(m.get_float("curvature_u")), float(m.get_float("curvature_v"))));
+                      TriMesh surface = truth_surface(base, n, float(o.geometry.get_float("minor_ratio")), *h, tiling, float(m.get_float("curvature_u")),
+                                                      float(m.get_float("curvature_v")));
+                      // Texture mode on a plane: the field once on the plane with a copy on every side (3 x 3
+                      // over three times the plane), so that light in the border texels meets their neighbours.
+                      if (tiling == 3.f && texture_mode(ctx.scene) && base == Primitive::Plane)
+                          for (vec3& p : surface.position) p *= 3.f;  // the heights too: displaced at a third of the texel length
+                      return stage_result(stages::truth_surface, std::move(surface));
                   }}));
     // BRDF level of detail: the virtual goniometer (§6).
     g.add(stages::brdf, object({.help = "Simulate the heightfield's BRDF with the virtual goniometer: average radiance of texture-space images with masking (lod = brdf)",

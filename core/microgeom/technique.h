@@ -38,7 +38,12 @@ public:
     TruthObject truth_object(const Scene& s, const Evaluation& ev, int object) const override;
     std::vector<StageName> truth_stages() const override;
     std::vector<std::string> truth_params() const override;
+    float truth_lift(const Scene& s, const Evaluation& ev, int object) const override;
 };
+
+// The tiling of the truth's surface (truth.cpp): microgeom.tiling; in texture mode the field
+// once (1:1, as the real-time texture mode draws it), on a plane with a copy on every side (3).
+float truth_tiling(const Scene& s, const SceneObject& o);
 
 // The scattering settings of a material (microgeom.depth, sampling, paths, scatter_seed, shadows).
 ScatterSettings scatter_settings(const ParamTable& material);

@@ -9,8 +9,10 @@
 #include "core/heightfield/heightfield.h"
 #include "core/microgeom/stages.h"
 #include "core/microgeom/technique.h"
+#include "core/render.h"
 #include "core/scene_stages.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace mesolab::microgeom {
@@ -61,14 +63,45 @@ TruthObject MicrogeomTechnique::truth_object(const Scene& s, const Evaluation& e
     TruthObject t;
     t.mesh = ev.get(stages::truth_surface, object);
     t.to_world = object_to_world(o);
-    t.material = std::make_shared<MicrogeomTruthMaterial>(ev.get(stages::heightfield, object), float(m.get_float("tiling")), phong,
+    t.material = std::make_shared<MicrogeomTruthMaterial>(ev.get(stages::heightfield, object), truth_tiling(s, o), phong,
                                                           phong ? m.get_vec3("ks") : vec3(0.f), float(m.get_float("shininess")));
     return t;
+}
+
+float truth_tiling(const Scene& s, const SceneObject& o) {
+    if (s.camera.get_string("mode") != "texture") return float(o.material.get_float("tiling"));
+    return o.geometry.get_string("type") == "plane" ? 3.f : 1.f;
+}
+
+// Texture mode: the heights' largest reach above the base, in object units (the displacement of
+// lod.h at the largest world length per uv unit of the drawn base's triangles), and, on a bent
+// plane, the bend's sag over the three tiles.
+float MicrogeomTechnique::truth_lift(const Scene& s, const Evaluation& ev, int object) const {
+    const SceneObject& o = s.objects.at(size_t(object));
+    const auto hf = ev.get(stages::heightfield, object);
+    const auto base = drawn_mesh(s, ev, object);
+    if (!hf || !base) return 0.f;
+    double per_uv = 0.0;
+    for (size_t t = 0; t < base->triangle_count(); ++t) {
+        const uint32_t a = base->index[3 * t], b = base->index[3 * t + 1], c = base->index[3 * t + 2];
+        const double aw = 0.5 * double(glm::length(glm::cross(base->position[b] - base->position[a], base->position[c] - base->position[a])));
+        const vec2 e1 = base->uv[b] - base->uv[a], e2 = base->uv[c] - base->uv[a];
+        const double auv = 0.5 * std::fabs(double(e1.x) * e2.y - double(e1.y) * e2.x);
+        if (auv > 0.0) per_uv = std::max(per_uv, std::sqrt(aw / auv));
+    }
+    double mean = 0.0, reach = 0.0;
+    for (float h : hf->h) mean += h;
+    mean /= double(std::max<size_t>(1, hf->h.size()));
+    for (float h : hf->h) reach = std::max(reach, std::fabs(double(h) - mean));
+    double lift = reach / hf->texel_size * per_uv / double(hf->width);
+    const double bend = std::max(std::fabs(o.material.get_float("curvature_u")), std::fabs(o.material.get_float("curvature_v")));
+    if (bend > 0.0) lift += 3.0;  // the plane's half-width three times over: above any bent copy
+    return float(1.5 * lift);
 }
 
 std::vector<StageName> MicrogeomTechnique::truth_stages() const { return {stages::heightfield, stages::truth_surface}; }
 
 std::vector<std::string> MicrogeomTechnique::truth_params() const {
-    return {"microgeom.tiling", "microgeom.brdf", "microgeom.ks", "microgeom.shininess"};
+    return {"microgeom.tiling", "microgeom.brdf", "microgeom.ks", "microgeom.shininess", "microgeom.curvature_u", "microgeom.curvature_v"};
 }
 }  // namespace mesolab::microgeom

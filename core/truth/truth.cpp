@@ -1,5 +1,6 @@
 #include "core/truth/truth.h"
 #include "core/error.h"
+#include "core/raster.h"
 #include "core/raytrace.h"
 #include "core/render.h"
 #include "core/scene.h"
@@ -137,24 +138,40 @@ struct PixelSample {
     vec3 normal{0.f};
 };
 
-PixelSample trace(const TruthScene& sc, const Lighting& lighting, const FrameCamera& cam, int x, int y, const TruthSettings& st, uint64_t pixel,
-                  uint64_t sample) {
+// The first ray of a pixel's paths: through the pixel's centre from the eye (orbit), or, for a
+// texel (texture mode), down the drawn surface's normal onto the truth's surface, seen from the
+// camera's direction whatever lies between (masking as the real-time texture mode treats it).
+// In texture mode each sample starts at a uniform point of the texel's footprint (dpdx, dpdy: the
+// drawn surface's step across one pixel), so that a texel is the mean over its patch of the
+// micro-surface: at its centre alone, a vertex of facets, the surface has no one normal.
+struct Primary {
+    vec3 o{0.f}, d{0.f};
+    bool texture = false;
+    vec3 view{0.f};  // texture: the direction towards the viewer
+    vec3 dpdx{0.f}, dpdy{0.f};
+};
+
+PixelSample trace(const TruthScene& sc, const Lighting& lighting, const Primary& primary, const TruthSettings& st, uint64_t pixel, uint64_t sample) {
     TruthRng rng(st.seed, pixel, sample);
-    vec3 d = cam.ray_dir(x, y);
-    vec3 o = cam.eye;
+    vec3 d = primary.d;
+    vec3 o = primary.o;
+    if (primary.texture) {
+        const float jx = rng.next() - 0.5f, jy = rng.next() - 0.5f;
+        o += jx * primary.dpdx + jy * primary.dpdy;
+    }
     PixelSample out;
     vec3 beta(1.f);
     for (int depth = 0; depth < st.max_depth; ++depth) {
         const RayHit h = sc.rt.intersect(o, d, depth == 0 ? 0.f : sc.eps);
         if (!h.hit()) {
-            if (depth == 0 || lighting.env_lighting) out.L += beta * lighting.env.radiance(d);
+            if ((depth == 0 && !primary.texture) || (depth > 0 && lighting.env_lighting)) out.L += beta * lighting.env.radiance(d);
             break;
         }
         TruthHit th = sc.hit_point(h, o, d);
         if (depth == 0) out.normal = th.n;
         th.depth = depth;
         const TruthMaterial& mat = *sc.objects[size_t(h.geometry)].material;
-        const vec3 wo = -d;
+        const vec3 wo = depth == 0 && primary.texture ? primary.view : -d;
         const vec3 p = th.p + sc.eps * th.ng;
         for (const Light& l : lighting.lights) {
             vec3 wi, E;
@@ -191,7 +208,6 @@ void check_truth_request(const Scene& s, int width, int height, const TruthSetti
     for (const std::string& a : aovs)
         if (std::find(truth_aovs().begin(), truth_aovs().end(), a) == truth_aovs().end())
             throw InputError("--aov " + a + ": the truth does not write it (it writes radiance, normal, truth_stderr)");
-    if (s.camera.get_string("mode") == "texture") throw InputError("camera.mode texture: the truth renders orbit cameras only so far");
     for (size_t i = 0; i < s.objects.size(); ++i) technique_with_truth(s, i);
 }
 
@@ -219,6 +235,21 @@ TruthAccumulator accumulate_truth(const Scene& s, const Evaluation& ev, int widt
 
     const FrameCamera cam = make_camera(s, world_bounds(s, ev), width, height);
     const Lighting lighting = make_lighting(s, ev);
+    // Texture mode: the texels' surface points, as the real-time paths rasterise them in (u, v).
+    GBuffer gb;
+    std::vector<float> lift;  // world units above the drawn surface, per object
+    if (cam.texture_mode) {
+        std::vector<DrawItem> items;
+        std::vector<std::shared_ptr<const TriMesh>> keep;
+        for (size_t i = 0; i < s.objects.size(); ++i) {
+            keep.push_back(drawn_mesh(s, ev, int(i)));
+            const mat4 m = object_to_world(s.objects[i]);
+            items.push_back({keep.back().get(), m, int(i), false});
+            const float scale = std::max({glm::length(vec3(m[0])), glm::length(vec3(m[1])), glm::length(vec3(m[2]))});
+            lift.push_back(technique_with_truth(s, i).truth_lift(s, ev, int(i)) * scale + 2.f * sc.eps);
+        }
+        rasterize(items, cam.raster, gb);
+    }
     TruthAccumulator a;
     if (from && from->continues(width, height, st.seed, st.spp)) a = *from;
     else {
@@ -234,8 +265,34 @@ TruthAccumulator accumulate_truth(const Scene& s, const Evaluation& ev, int widt
         for (int x = 0; x < width; ++x) {
             const uint64_t pixel = uint64_t(y) * uint64_t(width) + uint64_t(x);
             const size_t o = 3 * size_t(pixel);
+            Primary primary;
+            if (cam.texture_mode) {
+                const size_t g = gb.index(x, y);
+                if (gb.object[g] < 0) continue;  // no surface at this texel: left 0, as the real-time paths leave it
+                const vec3 n = gb.normal[g];
+                primary.texture = true;
+                primary.view = cam.view_dir;
+                primary.o = gb.position[g] + lift[size_t(gb.object[g])] * n;
+                primary.d = -n;
+                // The footprint: central differences of the drawn positions (one-sided at the object's edge).
+                auto step = [&](int dx, int dy) {
+                    auto at = [&](int xx, int yy) -> const vec3* {
+                        if (xx < 0 || yy < 0 || xx >= width || yy >= height || gb.object[gb.index(xx, yy)] != gb.object[g]) return nullptr;
+                        return &gb.position[gb.index(xx, yy)];
+                    };
+                    const vec3 *a = at(x - dx, y - dy), *b = at(x + dx, y + dy);
+                    if (a && b) return 0.5f * (*b - *a);
+                    if (b) return *b - gb.position[g];
+                    if (a) return gb.position[g] - *a;
+                    return vec3(0.f);
+                };
+                primary.dpdx = step(1, 0), primary.dpdy = step(0, 1);
+            } else {
+                primary.o = cam.eye;
+                primary.d = cam.ray_dir(x, y);
+            }
             for (int k = first; k < st.spp; ++k) {
-                const PixelSample ps = trace(sc, lighting, cam, x, y, st, pixel, uint64_t(k));
+                const PixelSample ps = trace(sc, lighting, primary, st, pixel, uint64_t(k));
                 for (int c = 0; c < 3; ++c) {
                     const double L = ps.L[c];
                     a.sum[o + size_t(c)] += L, a.sum2[o + size_t(c)] += L * L;

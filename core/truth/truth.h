@@ -3,7 +3,11 @@
 // `--backend truth` renders the explicit geometry of every object with a path tracer on Embree
 // (core/raytrace.h): camera rays through each pixel's centre, as the real-time paths sample
 // them, so that a difference to the truth is one of light transport, not of anti-aliasing
-// on silhouettes (a technique whose pixel stands for a footprint integrates it itself); next-event
+// on silhouettes (a technique whose pixel stands for a footprint integrates it itself). In texture
+// mode a pixel is a texel: points of the texel's footprint on the drawn surface (uniform over it,
+// one per sample: at the centre alone a surface of facets has no one normal), carried onto the
+// truth's surface (a ray down the drawn surface's normal from Technique::truth_lift above it), seen
+// from the camera's direction with no masking, as the real-time texture mode treats it. Next-event
 // estimation towards every light with shadow rays, the environment where a path escapes, all
 // bounces (Russian roulette from the fourth), surfaces two-sided as on the real-time paths.
 //
@@ -117,13 +121,13 @@ std::vector<StageName> truth_stages(const Scene& s);
 
 // Renders the truth of `s` at width x height. `progress` gets ("truth", fraction); `cancel`, when
 // set, stops at the next row: the rows done keep their samples, the others stay 0 (std::runtime_error
-// is not thrown). InputError for spp < 1, texture mode, an AOV the truth does not write, or a
+// is not thrown). InputError for spp < 1, an AOV the truth does not write, or a
 // technique without a truth.
 Frame render_truth(const Scene& s, const Evaluation& ev, int width, int height, const TruthSettings& settings,
                    const std::vector<std::string>& aovs = {}, const std::function<void(const std::string&, double)>& progress = {},
                    const std::atomic<bool>* cancel = nullptr);
 
-// InputError for spp < 1, a size out of range, an AOV the truth does not write, texture mode or a
+// InputError for spp < 1, a size out of range, an AOV the truth does not write or a
 // technique without a truth: what render_truth checks before any work.
 void check_truth_request(const Scene& s, int width, int height, const TruthSettings& settings, const std::vector<std::string>& aovs);
 

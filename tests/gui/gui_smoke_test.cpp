@@ -201,8 +201,8 @@ TEST_F(GuiSmoke, BadScriptLineExitsWithStatus2NamingFileAndLine) {
 
 // The Truth view: the viewport shows the truth refined to the samples asked for, then the error
 // against it (colours, mostly white where the two agree); the screenshot is what is shown. A
-// scene without a truth (a texture-mode camera) says so and the window keeps running.
-TEST_F(GuiSmoke, TruthViewShowsTheTruthAndTheErrorAndSurvivesASceneWithoutOne) {
+// technique without a truth says so and the window keeps running.
+TEST_F(GuiSmoke, TruthViewShowsTheTruthAndTheErrorAndSurvivesATechniqueWithoutOne) {
     const fs::path rt = dir_ / "rt.png", truth = dir_ / "truth.png", error = dir_ / "error.png", back = dir_ / "back.png", script = dir_ / "truth.txt";
     std::ofstream(script) << "load " << preset_.string() << "\n"
                           << "size 1280x720\n"
@@ -214,7 +214,7 @@ TEST_F(GuiSmoke, TruthViewShowsTheTruthAndTheErrorAndSurvivesASceneWithoutOne) {
                           << "view error\n"
                           << "wait\n"
                           << "screenshot " << error.string() << "\n"
-                          << "set camera.mode=texture\n"
+                          << "load " << (fs::path(MESOLAB_SOURCE_DIR) / "presets/bumpsynth/fig1-sphere-distances.json").string() << "\n"
                           << "wait\n"
                           << "view real-time\n"
                           << "wait\n"

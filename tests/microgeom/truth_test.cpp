@@ -188,3 +188,41 @@ TEST(MicrogeomTruth, SweepOverTwoKnobsAgainstOneTruth) {
     EXPECT_EQ(zero.status, 2);
     EXPECT_NE(zero.err.find("--spp 0"), std::string::npos) << zero.err;
 }
+
+// Texture mode: a texel is the mean over its patch of the micro-surface, seen from the camera's
+// direction. A flat field is Lambert's closed form in every texel; V-grooves (4 across the field,
+// period 8 texels) under a uniform sky are periodic in the truth too: the border columns, whose
+// light crosses to the neighbouring tile, match the same columns one period in (within 4.4
+// standard errors of the difference, Šidák over the 8 phases: 1e-5 each).
+TEST(MicrogeomTruth, TextureModeTexelsSeeTheirNeighboursAcrossTheBorder) {
+    Scene flat = scene(R"("heightfield": "gaussian", "resolution": 16, "height_scale": 0, "albedo": [0.5, 0.5, 0.5])",
+                       R"([{"type": "directional", "direction": [60, 30], "intensity": 2, "color": [1, 1, 1]}])", 0.f);
+    apply_set(flat, "camera.mode", "texture");
+    const RenderResult f = render(flat, Backend::Truth, 64, 2);
+    ASSERT_EQ(f.frame.width, 16);  // the field's own size, as the real-time texture mode
+    for (int y = 0; y < 16; ++y)
+        for (int x = 0; x < 16; ++x) EXPECT_NEAR(f.frame.aov("radiance").at(x, y)[0], 0.5f / kPi, 1e-6f) << x << "," << y;
+
+    Scene grooves = scene(R"("heightfield": "vgrooves", "resolution": 32, "albedo": [0.8, 0.8, 0.8])", "[]", 1.f);
+    apply_set(grooves, "camera.mode", "texture");
+    const Frame g = render(grooves, Backend::Truth, 32, 256, {"truth_stderr"}).frame;
+    ASSERT_EQ(g.width, 32);
+    for (int phase = 0; phase < 8; ++phase) {
+        double border = 0, inner = 0, var = 0;
+        for (int y = 0; y < 32; ++y) {
+            border += g.aov("radiance").at(phase, y)[1], inner += g.aov("radiance").at(phase + 8, y)[1];
+            var += std::pow(g.aov("truth_stderr").at(phase, y)[1], 2.0) + std::pow(g.aov("truth_stderr").at(phase + 8, y)[1], 2.0);
+        }
+        const double diff = (border - inner) / 32.0, se = std::sqrt(var) / 32.0;
+        std::printf("column %d: %.4f, column %d: %.4f (difference %.4f, standard error %.4f)\n", phase, border / 32.0, phase + 8, inner / 32.0, diff, se);
+        EXPECT_LT(std::abs(diff), 4.4 * se) << phase;
+        EXPECT_LT(inner / 32.0, 0.79);  // the walls see each other: less than the open plane's albedo 0.8
+    }
+    // Seen from above, texel by texel, the scattering converges onto the truth: at depth 4 the
+    // real-time texture is within the truth's noise (measured: 1.2% against a noise of 1.0%).
+    apply_set(grooves, "microgeom.depth", "4");
+    const RenderResult rt = render(grooves, Backend::Cpu, 32, 256, {"truth_error"});
+    ASSERT_TRUE(rt.truth);
+    std::printf("texture mode, depth 4: rmse_rel %.4f, truth noise %.4f\n", rt.truth->rmse_rel, rt.truth->noise_rel);
+    EXPECT_TRUE(rt.truth->below_noise);
+}
