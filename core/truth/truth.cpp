@@ -125,6 +125,7 @@ struct TruthScene {
             if (glm::dot(ns, ns) > 0.f) n = glm::normalize(ns);
         }
         if (!m.uv.empty()) th.uv = w0 * m.uv[i0] + h.u * m.uv[i1] + h.v * m.uv[i2];
+        th.bary = vec2(h.u, h.v);
         // Two-sided: both normals face the side the ray came from.
         if (glm::dot(th.ng, d) > 0.f) th.ng = -th.ng;
         if (glm::dot(n, th.ng) < 0.f) n = -n;
@@ -172,6 +173,10 @@ PixelSample trace(const TruthScene& sc, const Lighting& lighting, const Primary&
         th.depth = depth;
         const TruthMaterial& mat = *sc.objects[size_t(h.geometry)].material;
         const vec3 wo = depth == 0 && primary.texture ? primary.view : -d;
+        if (mat.emitter()) {
+            out.L += beta * mat.emitted(th, wo, sample);
+            break;
+        }
         const vec3 p = th.p + sc.eps * th.ng;
         for (const Light& l : lighting.lights) {
             vec3 wi, E;
@@ -258,6 +263,12 @@ TruthAccumulator accumulate_truth(const Scene& s, const Evaluation& ev, int widt
         a.sum.assign(n, 0.0), a.sum2.assign(n, 0.0), a.normal.assign(n, 0.f);
     }
     const int first = a.spp;
+    for (size_t i = 0; i < sc.objects.size(); ++i)
+        if (sc.objects[i].prepare && first < st.spp) {
+            if (progress) progress("truth: " + s.objects[i].name, 0.0);
+            sc.objects[i].prepare(TruthPrep{sc.rt, int(i), lighting, first, st.spp, st.seed, sc.eps, 0.5f * (all.lo + all.hi),
+                                            0.5f * glm::length(all.hi - all.lo), cancel});
+        }
     std::atomic<int> rows_done{0};
     std::mutex progress_mutex;
     tbb::parallel_for(0, height, [&](int y) {

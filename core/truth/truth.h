@@ -65,6 +65,7 @@ struct TruthHit {
     vec2 uv{0.f};
     int triangle = -1;
     int depth = 0;  // bounces before this hit: 0 where the camera sees it
+    vec2 bary{0.f}; // barycentrics of the triangle's vertices 1 and 2
 };
 
 class TruthMaterial {
@@ -75,6 +76,27 @@ public:
     // Samples wi for a continuing path; returns f cos θi / pdf (0 when the path ends). The default
     // samples the cosine-weighted hemisphere around h.n.
     virtual vec3 sample(const TruthHit& h, vec3 wo, TruthRng& rng, vec3& wi) const;
+    // A surface that sends out light of its own (a translucent object's subsurface light, computed
+    // by its TruthObject::prepare): paths end on it with beta x emitted. `sample` is the pixel's
+    // sample index (the light of sample k comes from the object's k-th independent estimate).
+    virtual bool emitter() const { return false; }
+    virtual vec3 emitted(const TruthHit& /*h*/, vec3 /*wo*/, uint64_t /*sample*/) const { return vec3(0.f); }
+};
+
+class RayScene;
+struct Lighting;
+// What TruthObject::prepare gets: the whole scene to trace in (its object is geometry `geometry`),
+// the lights, the samples to prepare [first, spp), the seed and the ray offset.
+struct TruthPrep {
+    const RayScene& rt;
+    int geometry = 0;
+    const Lighting& lighting;
+    int first = 0, spp = 0;
+    uint64_t seed = 0;
+    float eps = 1e-4f;
+    vec3 centre{0.f};   // the scene's bounding sphere
+    float radius = 1.f;
+    const std::atomic<bool>* cancel = nullptr;
 };
 
 // One object as the truth sees it: a mesh placed by `to_world`, and its material.
@@ -82,6 +104,9 @@ struct TruthObject {
     std::shared_ptr<const TriMesh> mesh;
     mat4 to_world{1.f};
     std::shared_ptr<const TruthMaterial> material;
+    // Work before the pixels' paths, once the scene is built (a translucent object's light
+    // tracing); none for most.
+    std::function<void(const TruthPrep&)> prepare;
 };
 
 // What the truth of `s` depends on, as canonical text: the program's physical description only.
