@@ -75,6 +75,12 @@ double fresnel_transmittance(double cos_theta, double eta) {
     return std::clamp(1.0 - (r0 + (1.0 - r0) * m2 * m2 * m), 0.0, 1.0);
 }
 
+double diffuse_transmittance(double eta) {
+    if (eta == 1.0) return 1.0;
+    const double r0 = (eta - 1.0) / (eta + 1.0) * ((eta - 1.0) / (eta + 1.0));
+    return (1.0 - r0) * 20.0 / 21.0;  // 2 ∫ (1 - r0)(1 - (1 - μ)^5) μ dμ, ∫ (1 - μ)^5 μ dμ = 1/42
+}
+
 // [SECTION] The dipole
 Dipole::Dipole(const Medium& m) : m_(m) {
     validate(m);

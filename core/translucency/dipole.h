@@ -57,6 +57,11 @@ void validate(const Medium& m, const std::string& group = "translucency");
 double fresnel_diffuse_reflectance(double eta);
 // Schlick's Fresnel transmittance into (or out of) a medium of relative index η at cos θ.
 double fresnel_transmittance(double cos_theta, double eta);
+// Its cosine-weighted mean over the hemisphere, 2 ∫ T(μ) μ dμ = (1 − R0) 20/21 (1 at η = 1): the
+// fraction of a uniform environment's irradiance that enters the medium, and of the light leaving
+// it that the display's T(cos θo) / π sends out. (1 − F_dr is the same from inside the medium, where
+// light meets the boundary from the denser side: 0.40 for η = 1.5 against 0.91 from outside.)
+double diffuse_transmittance(double eta);
 
 // The dipole for one medium, with the per-channel constants computed once.
 class Dipole {

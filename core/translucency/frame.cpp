@@ -431,7 +431,7 @@ ShadowMap make_shadow_map(const TriMesh& display, const mat4& model, const Light
 std::vector<vec3> illuminate(const AtlasStage& a, const mat4& model, const Lighting& L, double eta, const std::vector<ShadowMap>& shadows) {
     std::vector<vec3> E(a.texel_position.size(), vec3(0.f));
     const mat3 normal_matrix = glm::transpose(glm::inverse(mat3(model)));
-    const float env_t = float(1.0 - fresnel_diffuse_reflectance(eta));
+    const float env_t = float(diffuse_transmittance(eta));  // entering from outside: the lights' T averaged over the hemisphere
     // Schlick's transmittance (fresnel_transmittance) in single precision: c is in (0, 1] here.
     const float r0 = float((eta - 1.0) / (eta + 1.0) * ((eta - 1.0) / (eta + 1.0)));
     const auto transmittance = [&](float c) {

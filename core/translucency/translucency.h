@@ -18,7 +18,7 @@
 // Frame steps, in order (each a row of the timing tables):
 //   translucency.illumination  irradiance per texel entering the medium: every light times the
 //                              Fresnel transmittance T(cos θi), with the object's shadow map,
-//                              plus the environment times 1 − F_dr
+//                              plus the environment times the same T averaged over the hemisphere (diffuse_transmittance)
 //   translucency.vertices      E_j per vertex (hat-weighted) and the direct part B_D (blended)
 //   translucency.local         B_local per inner texel (the kernels)
 //   translucency.global        B_G = F E + B_D per vertex

@@ -64,24 +64,62 @@ void basis(vec3 n, vec3& t, vec3& b) {
     b = glm::cross(n, t);
 }
 
-// The number of edges used by other than exactly two triangles, after welding equal positions
-// (a mesh's uv seams duplicate vertices); triangles with two equal corners are left out.
-size_t open_edges(const TriMesh& m) {
+// The mesh closed for the truth: positions welded (a mesh's uv seams duplicate vertices), and
+// each hole (a loop of edges that one triangle uses) filled by a fan from the centroid of the
+// loop's vertices, facing as the triangles around it (a scan's holes, such as the Stanford
+// bunny's five under its base). `filled` counts the holes; InputError naming `what` for an edge
+// that more than two triangles share or a hole whose edges do not form loops.
+TriMesh closed_mesh(const TriMesh& m, const std::string& what, int& filled) {
     std::map<std::tuple<float, float, float>, uint32_t> weld;
-    std::vector<uint32_t> id(m.vertex_count());
+    std::vector<uint32_t> id(m.vertex_count()), rep;  // welded id of each vertex; a vertex of each id
     for (size_t v = 0; v < m.vertex_count(); ++v) {
         const vec3 p = m.position[v];
-        id[v] = weld.emplace(std::make_tuple(p.x, p.y, p.z), uint32_t(weld.size())).first->second;
+        const auto [it, fresh] = weld.emplace(std::make_tuple(p.x, p.y, p.z), uint32_t(rep.size()));
+        if (fresh) rep.push_back(uint32_t(v));
+        id[v] = it->second;
     }
-    std::map<std::pair<uint32_t, uint32_t>, int> edges;
+    std::map<std::pair<uint32_t, uint32_t>, int> directed;  // welded a -> b, by triangle winding
     for (size_t t = 0; t < m.triangle_count(); ++t) {
         const uint32_t a = id[m.index[3 * t]], b = id[m.index[3 * t + 1]], c = id[m.index[3 * t + 2]];
         if (a == b || b == c || a == c) continue;
-        for (auto [x, y] : {std::pair{a, b}, std::pair{b, c}, std::pair{c, a}}) ++edges[{std::min(x, y), std::max(x, y)}];
+        for (auto [x, y] : {std::pair{a, b}, std::pair{b, c}, std::pair{c, a}}) ++directed[{x, y}];
     }
-    size_t open = 0;
-    for (const auto& [e, n] : edges) open += n != 2;
-    return open;
+    std::map<uint32_t, uint32_t> next;  // along the holes' edges, reversed: b -> a for a boundary a -> b
+    for (const auto& [e, n] : directed) {
+        const int both = n + (directed.count({e.second, e.first}) ? directed.at({e.second, e.first}) : 0);
+        if (both > 2) throw InputError("--backend truth: translucency's truth needs a closed mesh, and " + what + " has an edge shared by " + std::to_string(both) + " triangles");
+        if (both == 1 && !next.emplace(e.second, e.first).second)
+            throw InputError("--backend truth: translucency's truth needs a closed mesh, and the holes of " + what + " meet at a vertex (they cannot be filled)");
+    }
+    TriMesh out = m;
+    filled = 0;
+    while (!next.empty()) {
+        std::vector<uint32_t> loop{next.begin()->first};
+        for (uint32_t v = next.begin()->second; v != loop.front(); v = next.at(v)) {
+            if (!next.count(v) || loop.size() > next.size()) throw InputError("--backend truth: translucency's truth needs a closed mesh, and a hole of " + what + " is not a loop");
+            loop.push_back(v);
+        }
+        vec3 c(0.f), n(0.f);
+        vec2 uv(0.f);
+        for (uint32_t v : loop) {
+            c += m.position[rep[v]];
+            if (!m.normal.empty()) n += m.normal[rep[v]];
+            if (!m.uv.empty()) uv += m.uv[rep[v]];
+        }
+        const float k = 1.f / float(loop.size());
+        const uint32_t centre = uint32_t(out.position.size());
+        out.position.push_back(c * k);
+        if (!out.normal.empty()) out.normal.push_back(glm::dot(n, n) > 0.f ? glm::normalize(n) : vec3(0.f));
+        if (!out.tangent.empty()) out.tangent.push_back(vec3(0.f));
+        if (!out.uv.empty()) out.uv.push_back(uv * k);
+        for (size_t i = 0; i < loop.size(); ++i) {
+            const uint32_t a = loop[i], b = loop[(i + 1) % loop.size()];
+            out.index.insert(out.index.end(), {rep[a], rep[b], centre});  // the boundary edge b -> a of the mesh, reversed
+        }
+        for (uint32_t v : loop) next.erase(v);
+        ++filled;
+    }
+    return out;
 }
 
 class TranslucentTruth final : public TruthMaterial {
@@ -89,13 +127,7 @@ public:
     TranslucentTruth(std::shared_ptr<const TriMesh> mesh, mat4 to_world, Settings s, double mm_per_world, std::optional<Image> map)
         : mesh_(std::move(mesh)), to_world_(to_world), from_world_(glm::inverse(to_world)), s_(std::move(s)), mm_per_world_(mm_per_world),
           map_(std::move(map)) {
-        // t̄ = 2 ∫ T(μ) μ dμ (midpoint rule, 1024 steps: far below the noise).
-        double t = 0.0;
-        for (int i = 0; i < 1024; ++i) {
-            const double mu = (i + 0.5) / 1024.0;
-            t += 2.0 * fresnel_transmittance(mu, s_.medium.eta) * mu / 1024.0;
-        }
-        t_bar_ = t;
+        t_bar_ = diffuse_transmittance(s_.medium.eta);
         // A third of each vertex's triangles' world area.
         area_.assign(mesh_->vertex_count(), 0.0);
         for (size_t f = 0; f < mesh_->triangle_count(); ++f) {
@@ -264,10 +296,13 @@ TruthObject TranslucencyTechnique::truth_object(const Scene& s, const Evaluation
     const SceneObject& o = s.objects.at(size_t(object));
     const auto mesh = ev.get(mesolab::stages::geometry, object);
     if (!mesh) throw std::logic_error("translucency truth: scene.geometry was not evaluated");
-    const std::string what = o.geometry.get_string("type") == "mesh" ? s.resolve(o.geometry.get_string("path")) : "geometry.type " + o.geometry.get_string("type");
-    if (const size_t open = open_edges(*mesh))
-        throw InputError("--backend truth: object '" + o.name + "': translucency's truth needs a closed mesh (light travels inside it), and " + what +
-                         " has " + std::to_string(open) + " open edge" + (open == 1 ? "" : "s"));
+    const std::string what = "object '" + o.name + "' (" +
+                             (o.geometry.get_string("type") == "mesh" ? s.resolve(o.geometry.get_string("path")) : "geometry.type " + o.geometry.get_string("type")) + ")";
+    int holes = 0;
+    auto closed = std::make_shared<const TriMesh>(closed_mesh(*mesh, what, holes));
+    if (o.geometry.get_string("type") == "plane")  // not a solid with holes: a sheet
+        throw InputError("--backend truth: " + what + ": translucency's truth needs a closed mesh (light travels inside it), and a plane is open");
+    (void)holes;
     const Settings st = Settings::from(o, Settings::Medium_ | Settings::Scale | Settings::Rho);
     std::optional<Image> map;
     if (!st.albedo_map.empty()) {
@@ -275,9 +310,9 @@ TruthObject TranslucencyTechnique::truth_object(const Scene& s, const Evaluation
         map = read_image(s.resolve(st.albedo_map), true, true);
     }
     TruthObject t;
-    t.mesh = mesh;
+    t.mesh = closed;
     t.to_world = object_to_world(o);
-    auto material = std::make_shared<TranslucentTruth>(mesh, t.to_world, st, o.material.get_float("mm_per_unit"), std::move(map));
+    auto material = std::make_shared<TranslucentTruth>(closed, t.to_world, st, o.material.get_float("mm_per_unit"), std::move(map));
     t.material = material;
     t.prepare = [material](const TruthPrep& p) { material->prepare(p); };
     return t;

@@ -319,7 +319,7 @@ private:
         glUniformMatrix4fv(illumination_.uniform("u_model"), 1, GL_FALSE, glm::value_ptr(model));
         glUniformMatrix3fv(illumination_.uniform("u_normal_matrix"), 1, GL_FALSE, glm::value_ptr(nm));
         glUniform1f(illumination_.uniform("u_eta"), float(in.s.medium.eta));
-        glUniform1f(illumination_.uniform("u_env_transmittance"), float(1.0 - fresnel_diffuse_reflectance(in.s.medium.eta)));
+        glUniform1f(illumination_.uniform("u_env_transmittance"), float(diffuse_transmittance(in.s.medium.eta)));
         glUniform1i(illumination_.uniform("u_count"), int(a.lit.size()));
         clear(w.E);
         // Units 1-3 (0 holds the environment map, 6-9 the shadow maps).
