@@ -155,7 +155,7 @@ int run_capture(const CaptureOptions& o) {
                 truth_stages(s);  // every object's technique has a truth
                 for (const auto& a : o.aovs)
                     if (std::find(truth_aovs().begin(), truth_aovs().end(), a) == truth_aovs().end())
-                        throw InputError("--aov " + a + ": the truth does not write it (it writes radiance, normal, truth_stderr)");
+                        throw InputError("--aov " + a + ": the truth does not write it (it writes radiance, normal, truth_stderr, exitance)");
             } else {
                 std::vector<std::string> realtime;  // truth_error is made from the frame and the truth
                 for (const auto& a : o.aovs)

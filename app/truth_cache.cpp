@@ -12,7 +12,7 @@ namespace fs = std::filesystem;
 
 namespace mesolab {
 namespace {
-constexpr char kMagic[8] = {'M', 'L', 'T', 'R', 'U', 'T', 'H', '1'};
+constexpr char kMagic[8] = {'M', 'L', 'T', 'R', 'U', 'T', 'H', '2'};
 
 struct Fnv {
     uint64_t h = 0xcbf29ce484222325ull;
@@ -58,9 +58,10 @@ std::optional<TruthAccumulator> TruthCache::load(const std::string& key) const {
     a.width = dims[0], a.height = dims[1], a.spp = dims[2];
     if (a.width < 1 || a.height < 1 || a.width > 16384 || a.height > 16384 || a.spp < 1) return std::nullopt;
     const size_t n = size_t(a.width) * size_t(a.height) * 3;
-    a.sum.resize(n), a.sum2.resize(n), a.normal.resize(n);
+    a.sum.resize(n), a.sum2.resize(n), a.exitance.resize(n), a.normal.resize(n);
     if (!in.read(reinterpret_cast<char*>(a.sum.data()), std::streamsize(n * sizeof(double))) ||
         !in.read(reinterpret_cast<char*>(a.sum2.data()), std::streamsize(n * sizeof(double))) ||
+        !in.read(reinterpret_cast<char*>(a.exitance.data()), std::streamsize(n * sizeof(double))) ||
         !in.read(reinterpret_cast<char*>(a.normal.data()), std::streamsize(n * sizeof(float))))
         return std::nullopt;
     return a;
@@ -74,6 +75,7 @@ bool TruthCache::store(const std::string& key, const TruthAccumulator& a) const 
     bytes.append(reinterpret_cast<const char*>(&a.seed), sizeof a.seed);
     bytes.append(reinterpret_cast<const char*>(a.sum.data()), a.sum.size() * sizeof(double));
     bytes.append(reinterpret_cast<const char*>(a.sum2.data()), a.sum2.size() * sizeof(double));
+    bytes.append(reinterpret_cast<const char*>(a.exitance.data()), a.exitance.size() * sizeof(double));
     bytes.append(reinterpret_cast<const char*>(a.normal.data()), a.normal.size() * sizeof(float));
     try {
         write_text_atomic((fs::path(folder_) / (key + ".truth")).string(), bytes);

@@ -47,7 +47,7 @@ public:
     void want(const Scene& s, int width, int height, const TruthSettings& settings);
     // Stops the pass under way; the last finished pass stays.
     void cancel();
-    // The newest frame published since the last call (radiance, normal, truth_stderr) and the
+    // The newest frame published since the last call (radiance, normal, truth_stderr, exitance) and the
     // key of the request it answers (key_of).
     struct Published {
         Frame frame;

@@ -141,13 +141,15 @@ public:
 
     vec3 f(const TruthHit&, vec3, vec3) const override { return vec3(0.f); }
     bool emitter() const override { return true; }
-    vec3 emitted(const TruthHit& h, vec3 wo, uint64_t sample) const override {
+    vec3 exitance(const TruthHit& h, uint64_t sample) const override {
         if (sample < uint64_t(first_) || sample - uint64_t(first_) >= batches_.size()) return vec3(0.f);
         const std::vector<vec3>& M = batches_[size_t(sample - uint64_t(first_))];
         const size_t f = size_t(h.triangle);
-        const vec3 m = (1.f - h.bary.x - h.bary.y) * M[mesh_->index[3 * f]] + h.bary.x * M[mesh_->index[3 * f + 1]] + h.bary.y * M[mesh_->index[3 * f + 2]];
+        return (1.f - h.bary.x - h.bary.y) * M[mesh_->index[3 * f]] + h.bary.x * M[mesh_->index[3 * f + 1]] + h.bary.y * M[mesh_->index[3 * f + 2]];
+    }
+    vec3 emitted(const TruthHit& h, vec3 wo, uint64_t sample) const override {
         const float T = float(fresnel_transmittance(std::fabs(glm::dot(h.n, wo)), s_.medium.eta));
-        return rho(h) * T * m / float(kPi * t_bar_);
+        return rho(h) * T * exitance(h, sample) / float(kPi * t_bar_);
     }
 
     // The photon batches of samples [first, spp).

@@ -50,7 +50,7 @@ vec3 TruthMaterial::sample(const TruthHit& h, vec3 wo, TruthRng& rng, vec3& wi) 
 
 // [SECTION] Setting up
 const std::vector<std::string>& truth_aovs() {
-    static const std::vector<std::string> names = {"radiance", "normal", "truth_stderr"};
+    static const std::vector<std::string> names = {"radiance", "normal", "truth_stderr", "exitance"};
     return names;
 }
 
@@ -137,6 +137,7 @@ struct TruthScene {
 struct PixelSample {
     vec3 L{0.f};
     vec3 normal{0.f};
+    vec3 exitance{0.f};
 };
 
 // The first ray of a pixel's paths: through the pixel's centre from the eye (orbit), or, for a
@@ -175,6 +176,7 @@ PixelSample trace(const TruthScene& sc, const Lighting& lighting, const Primary&
         const vec3 wo = depth == 0 && primary.texture ? primary.view : -d;
         if (mat.emitter()) {
             out.L += beta * mat.emitted(th, wo, sample);
+            if (depth == 0) out.exitance = mat.exitance(th, sample);
             break;
         }
         const vec3 p = th.p + sc.eps * th.ng;
@@ -212,7 +214,7 @@ void check_truth_request(const Scene& s, int width, int height, const TruthSetti
         throw InputError("frame size " + std::to_string(width) + "x" + std::to_string(height) + " is out of range (1..16384 per side)");
     for (const std::string& a : aovs)
         if (std::find(truth_aovs().begin(), truth_aovs().end(), a) == truth_aovs().end())
-            throw InputError("--aov " + a + ": the truth does not write it (it writes radiance, normal, truth_stderr)");
+            throw InputError("--aov " + a + ": the truth does not write it (it writes radiance, normal, truth_stderr, exitance)");
     for (size_t i = 0; i < s.objects.size(); ++i) technique_with_truth(s, i);
 }
 
@@ -260,7 +262,7 @@ TruthAccumulator accumulate_truth(const Scene& s, const Evaluation& ev, int widt
     else {
         a.width = width, a.height = height, a.seed = st.seed, a.spp = 0;
         const size_t n = size_t(width) * size_t(height) * 3;
-        a.sum.assign(n, 0.0), a.sum2.assign(n, 0.0), a.normal.assign(n, 0.f);
+        a.sum.assign(n, 0.0), a.sum2.assign(n, 0.0), a.exitance.assign(n, 0.0), a.normal.assign(n, 0.f);
     }
     const int first = a.spp;
     for (size_t i = 0; i < sc.objects.size(); ++i)
@@ -307,6 +309,7 @@ TruthAccumulator accumulate_truth(const Scene& s, const Evaluation& ev, int widt
                 for (int c = 0; c < 3; ++c) {
                     const double L = ps.L[c];
                     a.sum[o + size_t(c)] += L, a.sum2[o + size_t(c)] += L * L;
+                    a.exitance[o + size_t(c)] += ps.exitance[c];
                     if (k == 0) a.normal[o + size_t(c)] = ps.normal[c];
                 }
             }
@@ -322,7 +325,8 @@ TruthAccumulator accumulate_truth(const Scene& s, const Evaluation& ev, int widt
 }
 
 Frame truth_frame(const TruthAccumulator& a) {
-    std::vector<AovDecl> layout = {{"radiance", 3, ""}, {"normal", 3, ""}, {"truth_stderr", 3, "Standard error of the truth's radiance per pixel"}};
+    std::vector<AovDecl> layout = {{"radiance", 3, ""}, {"normal", 3, ""}, {"truth_stderr", 3, "Standard error of the truth's radiance per pixel"},
+                                   {"exitance", 3, "Subsurface exitance where a translucent object is seen (0 elsewhere)"}};
     Frame f = make_frame(layout, a.width, a.height);
     const double n = double(a.spp);
     for (int y = 0; y < a.height; ++y)
@@ -331,10 +335,12 @@ Frame truth_frame(const TruthAccumulator& a) {
             float* r = f.aov("radiance").at(x, y);
             float* nn = f.aov("normal").at(x, y);
             float* e = f.aov("truth_stderr").at(x, y);
+            float* m = f.aov("exitance").at(x, y);
             for (int c = 0; c < 3; ++c) {
                 const double mean = a.sum[o + size_t(c)] / n;
                 const double var = n > 1.0 ? std::max(0.0, (a.sum2[o + size_t(c)] - n * mean * mean) / (n - 1.0)) : 0.0;
                 r[c] = float(mean), nn[c] = a.normal[o + size_t(c)], e[c] = float(std::sqrt(var / n));
+                m[c] = a.exitance.empty() ? 0.f : float(a.exitance[o + size_t(c)] / n);
             }
         }
     return f;

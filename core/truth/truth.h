@@ -81,6 +81,9 @@ public:
     // sample index (the light of sample k comes from the object's k-th independent estimate).
     virtual bool emitter() const { return false; }
     virtual vec3 emitted(const TruthHit& /*h*/, vec3 /*wo*/, uint64_t /*sample*/) const { return vec3(0.f); }
+    // The power per unit area the surface sends out by subsurface transport, before its texture
+    // (the AOV `exitance`); 0 for surfaces without.
+    virtual vec3 exitance(const TruthHit& /*h*/, uint64_t /*sample*/) const { return vec3(0.f); }
 };
 
 class RayScene;
@@ -130,13 +133,15 @@ struct TruthAccumulator {
     int width = 0, height = 0, spp = 0;
     uint64_t seed = 0;
     std::vector<double> sum, sum2;  // 3 per pixel
+    std::vector<double> exitance;   // 3 per pixel: the sum of the first hit's exitance (TruthMaterial::exitance)
     std::vector<float> normal;      // 3 per pixel
     bool continues(int w, int h, uint64_t s, int target_spp) const {
         return width == w && height == h && seed == s && spp > 0 && spp <= target_spp;
     }
 };
 
-// The truth's AOVs: radiance, normal (the first hit's shading normal) and truth_stderr.
+// The truth's AOVs: radiance, normal (the first hit's shading normal), truth_stderr and exitance
+// (where the camera sees a translucent object: its subsurface exitance, as translucency's AOV).
 const std::vector<std::string>& truth_aovs();
 
 // The stages the truth of `s` needs evaluated: the scene's geometry and environment map, and
@@ -161,7 +166,7 @@ void check_truth_request(const Scene& s, int width, int height, const TruthSetti
 TruthAccumulator accumulate_truth(const Scene& s, const Evaluation& ev, int width, int height, const TruthSettings& settings,
                                   const TruthAccumulator* from = nullptr, const std::function<void(const std::string&, double)>& progress = {},
                                   const std::atomic<bool>* cancel = nullptr);
-// The frame of an accumulator: radiance (the mean), normal, truth_stderr.
+// The frame of an accumulator: radiance (the mean), normal, truth_stderr, exitance.
 Frame truth_frame(const TruthAccumulator& a);
 
 // Over the pixels that show an object in the truth (all channels): the RMS of truth_stderr over
