@@ -33,14 +33,7 @@ Scene scene(const std::string& material, const std::string& lights, float env, c
 }
 
 RenderResult render(const Scene& s, Backend backend, int size, int spp, std::vector<std::string> aovs = {}) {
-    Workbench wb;
-    wb.set_truth_cache(TruthCache(""));
-    RenderRequest req;
-    req.backend = backend;
-    req.width = req.height = size;
-    req.truth.spp = spp;
-    req.aovs = std::move(aovs);
-    return wb.render(s, req);
+    return test::render_uncached(s, test::truth_request(backend, size, spp, std::move(aovs)));
 }
 
 using test::shows_object;
@@ -80,17 +73,7 @@ TEST(MicrogeomTruth, AFlatFieldIsLambertsClosedForm) {
     const Scene s = scene(R"("heightfield": "gaussian", "resolution": 16, "height_scale": 0, "albedo": [0.5, 0.25, 0.125])",
                           R"([{"type": "directional", "direction": [60, 30], "intensity": 2, "color": [1, 1, 1]}])", 0.f, "[20, -60]");
     const Frame f = render(s, Backend::Truth, 32, 2).frame;
-    int shown = 0;
-    for (int y = 0; y < 32; ++y)
-        for (int x = 0; x < 32; ++x) {
-            if (!shows_object(f, x, y)) continue;
-            ++shown;
-            const float* L = f.aov("radiance").at(x, y);
-            EXPECT_NEAR(L[0], 0.5f / kPi, 1e-6f);  // E cos θ = 2 x 0.5
-            EXPECT_NEAR(L[1], 0.25f / kPi, 1e-6f);
-            EXPECT_NEAR(L[2], 0.125f / kPi, 1e-6f);
-        }
-    EXPECT_GT(shown, 500);
+    EXPECT_GT(test::expect_object_radiance(f, vec3(0.5f, 0.25f, 0.125f) / kPi, 1e-6f), 500);  // E cos θ = 2 x 0.5
 }
 
 // Furnace: albedo 1 V-grooves and a rough Gaussian field under a uniform sky of radiance 1 give
@@ -115,13 +98,9 @@ TEST(MicrogeomTruth, AWhiteFieldOfAnyShapeUnderAUniformSkyIsOne) {
 // and 100 directions; the page gives it), never back up.
 TEST(MicrogeomTruth, ScatteringConvergesTowardsTheTruthOnAVGroove) {
     Scene s = scene(R"("heightfield": "vgrooves", "resolution": 32, "albedo": [0.8, 0.8, 0.8], "tiling": 1)", "[]", 1.f);
-    Workbench wb;
+    Workbench wb;  // one truth for every depth
     wb.set_truth_cache(TruthCache(""));
-    RenderRequest req;
-    req.backend = Backend::Cpu;
-    req.width = req.height = 48;
-    req.truth.spp = 64;
-    req.aovs = {"truth_error"};
+    const RenderRequest req = test::truth_request(Backend::Cpu, 48, 64, {"truth_error"});
     std::vector<double> err;
     for (int depth : {0, 1, 2, 4}) {
         apply_set(s, "microgeom.depth", std::to_string(depth));

@@ -1,16 +1,57 @@
 #pragma once
 // Helpers for tests of the truth (core/truth/truth.h): which pixels show an object, and the mean
 // radiance over them with its standard error.
+#include "app/truth_cache.h"
+#include "app/workbench.h"
 #include "core/render.h"
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <gtest/gtest.h>
 
 #include <cmath>
 
 namespace mesolab::test {
 
+// A request of `size` x `size` on `backend` with a truth of `spp` samples and `seed`.
+inline RenderRequest truth_request(Backend backend, int size, int spp, std::vector<std::string> aovs = {}, uint64_t seed = 1) {
+    RenderRequest req;
+    req.backend = backend;
+    req.width = req.height = size;
+    req.truth.spp = spp;
+    req.truth.seed = seed;
+    req.aovs = std::move(aovs);
+    return req;
+}
+
+// Renders `s` in a workbench of its own whose truths are rendered every time (no test reads
+// another's truth from the cache).
+inline RenderResult render_uncached(const Scene& s, const RenderRequest& req) {
+    Workbench wb;
+    wb.set_truth_cache(TruthCache(""));
+    return wb.render(s, req);
+}
+
 // Whether the truth's pixel (x, y) shows an object (a first hit's normal; 0 for the background).
 inline bool shows_object(const Frame& f, int x, int y) {
     const float* n = f.aov("normal").at(x, y);
     return n[0] != 0.f || n[1] != 0.f || n[2] != 0.f;
+}
+
+// Expects every pixel that shows an object to have radiance `L` (each channel within `tol`);
+// returns how many do show one.
+inline int expect_object_radiance(const Frame& f, vec3 L, float tol) {
+    int shown = 0;
+    for (int y = 0; y < f.height; ++y)
+        for (int x = 0; x < f.width; ++x) {
+            if (!shows_object(f, x, y)) continue;
+            ++shown;
+            const float* p = f.aov("radiance").at(x, y);
+            for (int c = 0; c < 3; ++c) EXPECT_NEAR(p[c], L[c], tol) << "pixel " << x << "," << y << " channel " << c;
+        }
+    return shown;
 }
 
 // The mean of channel `c` of the truth's radiance over the pixels that show an object, and its

@@ -32,14 +32,7 @@ Scene ball(const std::string& medium, const std::string& lights, float env, cons
 }
 
 Frame truth(const Scene& s, int size, int spp) {
-    Workbench wb;
-    wb.set_truth_cache(TruthCache(""));
-    RenderRequest req;
-    req.backend = Backend::Truth;
-    req.width = req.height = size;
-    req.truth.spp = spp;
-    req.aovs = {"truth_stderr"};
-    return wb.render(s, req).frame;
+    return test::render_uncached(s, test::truth_request(Backend::Truth, size, spp, {"truth_stderr"})).frame;
 }
 }  // namespace
 
@@ -52,14 +45,7 @@ TEST(TranslucencyTruth, ANonAbsorbingIndexMatchedBallInAUniformSkyGlowsAtOne) {
     constexpr int kSeeds = 8;
     std::vector<std::array<double, 3>> means;
     for (int k = 0; k < kSeeds; ++k) {
-        Workbench wb;
-        wb.set_truth_cache(TruthCache(""));
-        RenderRequest req;
-        req.backend = Backend::Truth;
-        req.width = req.height = 32;
-        req.truth.spp = 4;
-        req.truth.seed = uint64_t(10 + k);
-        const Frame f = wb.render(s, req).frame;
+        const Frame f = test::render_uncached(s, test::truth_request(Backend::Truth, 32, 4, {}, uint64_t(10 + k))).frame;
         std::array<double, 3> m{};
         for (int c = 0; c < 3; ++c) m[size_t(c)] = test::object_mean(f, c).mean;
         ASSERT_GT(test::object_mean(f).pixels, 200);

@@ -30,15 +30,7 @@ Scene scene(const std::string& objects, const std::string& lights, float env, co
 }
 
 Frame truth(const Scene& s, int size, int spp, uint64_t seed = 1) {
-    Workbench wb;
-    wb.set_truth_cache(TruthCache(""));  // rendered every time: no test reads another's truth
-    RenderRequest req;
-    req.backend = Backend::Truth;
-    req.width = req.height = size;
-    req.truth.spp = spp;
-    req.truth.seed = seed;
-    req.aovs = {"truth_stderr"};
-    return wb.render(s, req).frame;
+    return test::render_uncached(s, test::truth_request(Backend::Truth, size, spp, {"truth_stderr"}, seed)).frame;
 }
 
 using test::shows_object;
@@ -85,19 +77,8 @@ TEST(TruthLambert, APlaneUnderADirectionalLightIsTheClosedForm) {
         "material": {"technique": "basic", "kd": [0.5, 0.25, 0.125], "ks": [0, 0, 0]}}])",
                           R"([{"type": "directional", "direction": [60, 30], "intensity": 2, "color": [1, 1, 1]}])", 0.f,
                           R"({"mode": "orbit", "distance": 2.0, "orbit": [20, -60], "fov": 30})");
-    const Frame f = truth(s, 32, 2);
-    int shown = 0;
-    for (int y = 0; y < 32; ++y)
-        for (int x = 0; x < 32; ++x) {
-            if (!shows_object(f, x, y)) continue;
-            ++shown;
-            const float* L = f.aov("radiance").at(x, y);
-            const float E = 2.f * 0.5f;  // cos 60°
-            EXPECT_NEAR(L[0], 0.5f / kPi * E, 1e-6f);
-            EXPECT_NEAR(L[1], 0.25f / kPi * E, 1e-6f);
-            EXPECT_NEAR(L[2], 0.125f / kPi * E, 1e-6f);
-        }
-    EXPECT_GT(shown, 500);
+    const float E = 2.f * 0.5f;  // cos 60°
+    EXPECT_GT(test::expect_object_radiance(truth(s, 32, 2), vec3(0.5f, 0.25f, 0.125f) / kPi * E, 1e-6f), 500);
 }
 
 // A black sphere above a white plane, lit straight from above with no sky: a point of the plane
@@ -208,11 +189,7 @@ TEST(TruthError, IsZeroWhereTheRealTimePathIsExactAndShowsTheMissingShadow) {
     const std::string camera = R"({"mode": "orbit", "distance": 14.0, "orbit": [35, -90], "fov": 40})";
     Workbench wb;
     wb.set_truth_cache(TruthCache(""));
-    RenderRequest req;
-    req.backend = Backend::Cpu;
-    req.width = req.height = 48;
-    req.truth.spp = 4;
-    req.aovs = {"truth_error"};
+    const RenderRequest req = test::truth_request(Backend::Cpu, 48, 4, {"truth_error"});
     const RenderResult exact = wb.render(scene("[" + plane + "]", light, 0.f, camera), req);
     ASSERT_TRUE(exact.truth);
     ASSERT_TRUE(exact.frame.has("truth_error"));
@@ -270,14 +247,7 @@ TEST(TruthCache, ContinuesAndReusesTruthsKeyedByWhatTheyRead) {
 // both paths, texel by texel, at the plane's own texture size.
 TEST(TruthTexture, APlanesTexelsAreExactOnBothPaths) {
     const Scene s = load_preset(test::source_path("presets/basic/plane-texture.json"));
-    Workbench wb;
-    wb.set_truth_cache(TruthCache(""));
-    RenderRequest req;
-    req.backend = Backend::Cpu;
-    req.width = req.height = 64;
-    req.truth.spp = 2;
-    req.aovs = {"truth_error"};
-    const RenderResult r = wb.render(s, req);
+    const RenderResult r = test::render_uncached(s, test::truth_request(Backend::Cpu, 64, 2, {"truth_error"}));
     ASSERT_TRUE(r.truth);
     EXPECT_LT(r.truth->rmse_rel, 1e-5);
     int shown = 0;
