@@ -26,9 +26,9 @@ BumpNormals bump_normals_from_material(const Scene& s, const ParamTable& m) {
     return read_normal_map(path, f);
 }
 
-Ndf ndf_from_material(const Scene& s, const ParamTable& m, const BumpNormals* normals) {
+Ndf ndf_from_material(const Scene& s, const ParamTable& m, const BumpNormals* normals, int resolution) {
     const std::string kind = m.get_string("ndf");
-    const int R = int(m.get_int("ndf_resolution"));
+    const int R = resolution > 0 ? resolution : int(m.get_int("ndf_resolution"));
     if (kind == "normal_map" || kind == "heightfield") {
         BumpNormals own;
         if (!normals) own = bump_normals_from_material(s, m), normals = &own;

@@ -9,6 +9,7 @@
 //   bumpsynth.noise_texture  the paper's mip-mapped noise texture (noise = texture only)
 //   bumpsynth.masking        the Smith table of the NDF (masking on only)
 //   bumpsynth.albedo         the albedo map
+//   bumpsynth.truth_ndf      the truth's NDF, table and Smith table at 512^2 cells (truth.cpp)
 // A frame shades every pixel with brdf.h's synthesis at o(d) octaves (d: eye distance; all
 // octaves in camera.mode=texture). AOVs: radiance, normal (the microfacet normal in the surface's
 // tangent frame, blended while an octave fades in), octaves (o at the pixel).
@@ -27,7 +28,8 @@ namespace mesolab::bumpsynth {
 BumpNormals bump_normals_from_material(const Scene& s, const ParamTable& m);
 // The NDF an object's material describes (InputError naming the key for bad values or files). For a
 // bump-map source, `normals` are its normals when already read (else they are read here).
-Ndf ndf_from_material(const Scene& s, const ParamTable& m, const BumpNormals* normals = nullptr);
+// `resolution`: cells per side (0: bumpsynth.ndf_resolution; the truth tabulates at its own).
+Ndf ndf_from_material(const Scene& s, const ParamTable& m, const BumpNormals* normals = nullptr, int resolution = 0);
 NoiseParams noise_from_material(const ParamTable& m);
 ShadingModel shading_from_material(const ParamTable& m);
 

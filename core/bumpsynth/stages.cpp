@@ -89,6 +89,29 @@ void BumpsynthTechnique::declare_stages(StageGraph& g) const {
                   .applies = when(masking),
                   .when_text = "bumpsynth.masking is on",
                   .run = [](StageContext& ctx) { return stage_result(stages::masking, SmithTable::build(*ctx.input(stages::ndf))); }}));
+    g.add(stages::truth_ndf, object({.help = "Tabulate the truth's NDF (512^2 cells; a bump map's histogram at 2 normals per cell or more), its exact inversion, Smith table (masking on) and index texture (index_map on)",
+                  .params = [] {
+                      std::vector<std::string> k;
+                      for (const auto& key : keys(kNdfKeys))
+                          if (key != "bumpsynth.ndf_resolution") k.push_back(key);
+                      k.push_back("bumpsynth.masking");
+                      k.push_back("bumpsynth.index_map");
+                      return k;
+                  }(),
+                  .inputs = {stages::bump_normals},
+                  .memory = [](const StageContext&) {
+                      const double R = kTruthNdfResolution;
+                      return MemoryEstimate{R * R * 4.0 * sizeof(double), "truth NDF: 512^2 cells and their CDFs", {}};
+                  },
+                  .run = [](StageContext& ctx) {
+                      const auto n = ctx.input(stages::bump_normals);
+                      const ParamTable& m = ctx.material();
+                      TruthNdf t{ndf_from_material(ctx.scene, m, n.get(), truth_ndf_resolution(n.get())), {}, {}, {}};
+                      t.lut = build_lut(t.ndf, Lut::kMinSize);
+                      if (m.get_bool("masking")) t.smith = SmithTable::build(t.ndf);
+                      if (n && from_bump_map(ctx.obj()) && m.get_bool("index_map")) t.index_map = make_index_map(*n, t.lut);
+                      return stage_result(stages::truth_ndf, std::move(t));
+                  }}));
     g.add(stages::albedo, object({.help = "Read the object's albedo map",
                   .params = {"bumpsynth.albedo_map"},
                   .run = [](StageContext& ctx) -> std::any {

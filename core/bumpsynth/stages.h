@@ -15,6 +15,7 @@ struct IndexMap;
 struct NoiseCdfs;
 struct NoiseTexture;
 class SmithTable;
+struct TruthNdf;
 
 namespace stages {
 inline constexpr Stage<BumpNormals> bump_normals{"bumpsynth.bump_normals"};
@@ -25,5 +26,6 @@ inline constexpr Stage<NoiseCdfs> noise_cdf{"bumpsynth.noise_cdf"};
 inline constexpr Stage<NoiseTexture> noise_texture{"bumpsynth.noise_texture"};
 inline constexpr Stage<SmithTable> masking{"bumpsynth.masking"};
 inline constexpr Stage<Image> albedo{"bumpsynth.albedo"};
+inline constexpr Stage<TruthNdf> truth_ndf{"bumpsynth.truth_ndf"};
 }  // namespace stages
 }  // namespace mesolab::bumpsynth

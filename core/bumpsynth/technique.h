@@ -10,6 +10,9 @@
 #include "core/bumpsynth/bumpsynth.h"
 #include "core/heightfield/params.h"
 #include "core/technique.h"
+#include <algorithm>
+#include <cmath>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -46,6 +49,27 @@ inline bool noise_inputs_needed(const SceneObject& o) { return !index_mode(o); }
 inline bool texture_noise(const SceneObject& o) { return !index_mode(o) && o.material.get_string("noise") == "texture"; }
 inline bool masking(const SceneObject& o) { return o.material.get_bool("masking"); }
 
+// [SECTION] The truth's surface (truth.cpp)
+// The NDF the truth shades and synthesises with, whatever bumpsynth.ndf_resolution and lut_size:
+// tabulated at kTruthNdfResolution cells per side and inverted exactly (Lut::sample_uniform, no
+// entries); its Smith table with masking on; with index_map on, the bump map's index texture into it.
+// A bump map's histogram is tabulated at the finest resolution (at least 64) that keeps 2 normals per
+// cell of the disk or more: finer, it is a sum of spikes, and a highlight on its flat parts a
+// scatter of sparkles that no number of samples resolves. That is the kernel the truth states for
+// delta lights on near-mirror facets: one cell of its NDF.
+inline constexpr int kTruthNdfResolution = 512;
+inline int truth_ndf_resolution(const BumpNormals* histogram) {
+    if (!histogram) return kTruthNdfResolution;
+    const double r = std::sqrt(double(histogram->m.size()) / (2.0 * 0.785398));
+    return std::clamp(int(r), 64, kTruthNdfResolution);
+}
+struct TruthNdf {
+    Ndf ndf;
+    Lut lut;
+    std::optional<SmithTable> smith;
+    std::optional<IndexMap> index_map;
+};
+
 // [SECTION] The technique
 class BumpsynthTechnique final : public Technique {
 public:
@@ -57,5 +81,9 @@ public:
     std::vector<BenchTable> bench_tables() const override;
     FrameAgreement agreement() const override;
     std::vector<SweepMetricDecl> sweep_metrics() const override;
+    bool has_truth() const override { return true; }
+    TruthObject truth_object(const Scene& s, const Evaluation& ev, int object) const override;
+    std::vector<StageName> truth_stages() const override;
+    std::vector<std::string> truth_params() const override;
 };
 }  // namespace mesolab::bumpsynth

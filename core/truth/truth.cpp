@@ -125,12 +125,40 @@ struct TruthScene {
             if (glm::dot(ns, ns) > 0.f) n = glm::normalize(ns);
         }
         if (!m.uv.empty()) th.uv = w0 * m.uv[i0] + h.u * m.uv[i1] + h.v * m.uv[i2];
+        if (!m.tangent.empty()) th.tangent = glm::mat3(ob.to_world) * (w0 * m.tangent[i0] + h.u * m.tangent[i1] + h.v * m.tangent[i2]);
         th.bary = vec2(h.u, h.v);
         // Two-sided: both normals face the side the ray came from.
         if (glm::dot(th.ng, d) > 0.f) th.ng = -th.ng;
         if (glm::dot(n, th.ng) < 0.f) n = -n;
         th.n = n;
         return th;
+    }
+
+    // The uv step of the hit's triangle for rays d_x, d_y from o (the neighbouring pixels' rays),
+    // met on the hit's tangent plane (zero where the mesh has no uv or a ray misses the plane).
+    void footprint(TruthHit& th, const RayHit& h, vec3 o, vec3 d_x, vec3 d_y) const {
+        const TruthObject& ob = objects[size_t(h.geometry)];
+        const TriMesh& m = *ob.mesh;
+        if (m.uv.empty()) return;
+        const size_t f = size_t(h.triangle);
+        const uint32_t i0 = m.index[3 * f], i1 = m.index[3 * f + 1], i2 = m.index[3 * f + 2];
+        const vec3 p0 = vec3(ob.to_world * vec4(m.position[i0], 1.f));
+        const vec3 e1 = vec3(ob.to_world * vec4(m.position[i1], 1.f)) - p0, e2 = vec3(ob.to_world * vec4(m.position[i2], 1.f)) - p0;
+        const vec2 t1 = m.uv[i1] - m.uv[i0], t2 = m.uv[i2] - m.uv[i0];
+        // dp = a e1 + b e2 in the triangle's plane: the 2x2 normal equations.
+        const float g11 = glm::dot(e1, e1), g12 = glm::dot(e1, e2), g22 = glm::dot(e2, e2), det = g11 * g22 - g12 * g12;
+        if (!(std::fabs(det) > 0.f)) return;
+        auto step = [&](vec3 dir) -> vec2 {
+            const float den = glm::dot(dir, th.ng);
+            if (std::fabs(den) < 1e-8f) return vec2(0.f);
+            const float t = glm::dot(th.p - o, th.ng) / den;
+            if (!(t > 0.f)) return vec2(0.f);
+            const vec3 dp = o + t * dir - th.p;
+            const float r1 = glm::dot(dp, e1), r2 = glm::dot(dp, e2);
+            const float a = (g22 * r1 - g12 * r2) / det, b = (g11 * r2 - g12 * r1) / det;
+            return a * t1 + b * t2;
+        };
+        th.duv_dx = step(d_x), th.duv_dy = step(d_y);
     }
 };
 
@@ -151,6 +179,7 @@ struct Primary {
     bool texture = false;
     vec3 view{0.f};  // texture: the direction towards the viewer
     vec3 dpdx{0.f}, dpdy{0.f};
+    vec3 d_x{0.f}, d_y{0.f};  // orbit: the rays through the next pixel's centre in x and in y
 };
 
 PixelSample trace(const TruthScene& sc, const Lighting& lighting, const Primary& primary, const TruthSettings& st, uint64_t pixel, uint64_t sample) {
@@ -170,9 +199,15 @@ PixelSample trace(const TruthScene& sc, const Lighting& lighting, const Primary&
             break;
         }
         TruthHit th = sc.hit_point(h, o, d);
-        if (depth == 0) out.normal = th.n;
-        th.depth = depth;
         const TruthMaterial& mat = *sc.objects[size_t(h.geometry)].material;
+        if (depth == 0) {
+            out.normal = th.n;
+            if (!primary.texture && mat.footprint()) {
+                sc.footprint(th, h, o, primary.d_x, primary.d_y);
+                th.jitter.x = rng.next(), th.jitter.y = rng.next();
+            }
+        }
+        th.depth = depth;
         const vec3 wo = depth == 0 && primary.texture ? primary.view : -d;
         if (mat.emitter()) {
             out.L += beta * mat.emitted(th, wo, sample);
@@ -187,7 +222,7 @@ PixelSample trace(const TruthScene& sc, const Lighting& lighting, const Primary&
             if (cos_i <= 0.f || glm::dot(th.ng, wi) <= 0.f) continue;
             const float dist = l.point ? glm::length(l.position - p) : 3.4e38f;
             if (sc.rt.occluded(p, wi, 0.f, dist)) continue;
-            out.L += beta * mat.f(th, wo, wi) * E * cos_i;
+            out.L += beta * mat.fcos(th, wo, wi) * E;
         }
         vec3 wi;
         const vec3 w = mat.sample(th, wo, rng, wi);
@@ -303,6 +338,8 @@ TruthAccumulator accumulate_truth(const Scene& s, const Evaluation& ev, int widt
             } else {
                 primary.o = cam.eye;
                 primary.d = cam.ray_dir(x, y);
+                primary.d_x = cam.ray_dir_at(float(x) + 1.5f, float(y) + 0.5f);
+                primary.d_y = cam.ray_dir_at(float(x) + 0.5f, float(y) + 1.5f);
             }
             for (int k = first; k < st.spp; ++k) {
                 const PixelSample ps = trace(sc, lighting, primary, st, pixel, uint64_t(k));

@@ -66,6 +66,15 @@ struct TruthHit {
     int triangle = -1;
     int depth = 0;  // bounces before this hit: 0 where the camera sees it
     vec2 bary{0.f}; // barycentrics of the triangle's vertices 1 and 2
+    vec3 tangent{0.f};  // world dP/du direction where the mesh has tangents (else 0), not orthogonalised
+    // Where the camera sees the surface through a pixel (orbit cameras, depth 0): the pixel's
+    // footprint in uv (the steps of uv across one pixel in x and y, on the hit's tangent plane),
+    // and a point of it drawn for this sample, uniform in [0, 1)^2: a material whose pixel stands
+    // for a footprint (a box filter over detail finer than the pixel) integrates over it at
+    // uv + (jitter.x - 0.5) duv_dx + (jitter.y - 0.5) duv_dy. 0 elsewhere (texture mode draws the
+    // point of the texel's footprint itself).
+    vec2 duv_dx{0.f}, duv_dy{0.f};
+    vec2 jitter{0.5f};
 };
 
 class TruthMaterial {
@@ -73,6 +82,12 @@ public:
     virtual ~TruthMaterial() = default;
     // f_r(wo, wi) in 1/sr, per channel (wo, wi unit, world space).
     virtual vec3 f(const TruthHit& h, vec3 wo, vec3 wi) const = 0;
+    // The radiance towards wo per unit irradiance from wi at normal incidence: f_r times the
+    // cosine the material's own normal makes with wi (the default: f cos θi with the shading
+    // normal h.n). A material shading a facet of its own overrides it with the facet's cosine.
+    virtual vec3 fcos(const TruthHit& h, vec3 wo, vec3 wi) const { return f(h, wo, wi) * std::max(0.f, glm::dot(h.n, wi)); }
+    // Whether the camera's hits need the pixel's footprint (TruthHit::duv_dx, duv_dy, jitter).
+    virtual bool footprint() const { return false; }
     // Samples wi for a continuing path; returns f cos θi / pdf (0 when the path ends). The default
     // samples the cosine-weighted hemisphere around h.n.
     virtual vec3 sample(const TruthHit& h, vec3 wo, TruthRng& rng, vec3& wi) const;
