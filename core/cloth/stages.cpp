@@ -4,6 +4,9 @@
 #include "core/cloth/garment.h"
 #include "core/cloth/samples.h"
 #include "core/cloth/technique.h"
+#include "core/cloth/truth.h"
+#include "core/error.h"
+#include "core/scene_stages.h"
 
 #include <string>
 #include <vector>
@@ -83,6 +86,47 @@ void ClothTechnique::declare_stages(StageGraph& g) const {
            .when_text = "cloth.garment is curtain or sleeve",
            .run = [](StageContext& ctx) -> std::any {
                return stage_result(stages::garment, make_garment(ctx.material().get_string("garment"), int(ctx.material().get_int("garment_resolution"))));
+           }});
+    // The truth (truth.h): the yarns themselves, whatever the acquisition's and the fit's settings.
+    g.add(stages::truth_stitch, {.help = "The truth's tile of yarns: the stitch polygonised at 48 cells per tile side, its centre tile (--backend truth)",
+           .scope = StageScope::Object,
+           .technique = "cloth",
+           .params = {"cloth.stitch", "cloth.yarn_radius", "cloth.loop_height", "cloth.color_a", "cloth.color_b", "cloth.samples"},
+           .run = [](StageContext& ctx) -> std::any {
+               const ParamTable& t = ctx.material();
+               if (!t.get_string("samples").empty())
+                   throw InputError("--backend truth: object '" + ctx.obj().name + "': cloth.samples gives the fabric as samples only; the truth traces the stitch's yarns "
+                                    "(clear cloth.samples to acquire them from cloth.stitch)");
+               StitchParams p;
+               p.stitch = t.get_string("stitch");
+               p.yarn_radius = float(t.get_float("yarn_radius"));
+               p.loop_height = float(t.get_float("loop_height"));
+               p.color_a = t.get_vec3("color_a");
+               p.color_b = t.get_vec3("color_b");
+               return stage_result(stages::truth_stitch, truth_stitch_tile(p));
+           }});
+    g.add(stages::truth_fabric, {.help = "The truth's fabric: the tile of yarns instanced over the garment along its pattern tiles (--backend truth)",
+           .scope = StageScope::Object,
+           .technique = "cloth",
+           .params = {"cloth.repeat"},
+           .inputs = {stages::truth_stitch, stages::garment, mesolab::stages::geometry},
+           .memory = [](const StageContext& ctx) {
+               const auto tile = ctx.input(stages::truth_stitch);
+               const int repeat = int(std::ceil(ctx.material().get_float("repeat")));
+               const double triangles = tile ? truth_fabric_triangles(*tile, repeat) : 0.0;
+               // The mesh (position, normal, uv, colour: ~44 bytes a vertex, about half a vertex a triangle; 12 a
+               // triangle's indices) and Embree's BVH over it (~100 bytes a triangle).
+               return MemoryEstimate{triangles * (22.0 + 12.0 + 100.0), "about " + std::to_string(int64_t(triangles)) + " yarn triangles for the truth",
+                                     {"cloth.repeat"}};
+           },
+           .run = [](StageContext& ctx) -> std::any {
+               const double r = ctx.material().get_float("repeat");
+               if (std::fabs(r - std::round(r)) > 1e-9)
+                   throw InputError("--backend truth: object '" + ctx.obj().name + "': cloth.repeat " + std::to_string(r) +
+                                    " is not a whole number; the truth instances whole tiles of the stitch");
+               auto base = ctx.input(stages::garment);
+               if (!base) base = ctx.input(mesolab::stages::geometry);
+               return stage_result(stages::truth_fabric, truth_fabric(*ctx.input(stages::truth_stitch), *base, int(std::lround(r))));
            }});
 }
 }  // namespace mesolab::cloth
