@@ -157,6 +157,7 @@ public:
         return (1.f - h.bary.x - h.bary.y) * fabric_->color[i[0]] + h.bary.x * fabric_->color[i[1]] + h.bary.y * fabric_->color[i[2]];
     }
     vec3 f(const TruthHit& h, vec3, vec3) const override { return albedo(h) * kInvPi; }
+    bool pixel_filter() const override { return true; }  // stitches finer than a pixel: the real-time mip levels filter them
 
 private:
     std::shared_ptr<const TruthFabric> fabric_;

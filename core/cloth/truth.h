@@ -14,7 +14,9 @@
 // skeletons and s the garment's mean world length per pattern unit (sqrt(world area / uv area) /
 // (repeat sqrt(tile.x tile.y))): x along the garment's tangent (+u), y along +v, z its normal, as the
 // acquisition's frame. Normals follow the same frame. Light passes through the holes between yarns
-// to whatever lies behind.
+// to whatever lies behind. A pixel that sees the fabric stands for its whole square (the camera's
+// rays spread over it: TruthMaterial::pixel_filter), as the real-time mip levels filter the
+// stitches a pixel covers.
 #include "core/cloth/stitch.h"
 #include "core/mesh.h"
 

@@ -192,8 +192,16 @@ PixelSample trace(const TruthScene& sc, const Lighting& lighting, const Primary&
     }
     PixelSample out;
     vec3 beta(1.f);
+    bool spread = false;  // the camera ray spread over the pixel (TruthMaterial::pixel_filter)
     for (int depth = 0; depth < st.max_depth; ++depth) {
         const RayHit h = sc.rt.intersect(o, d, depth == 0 ? 0.f : sc.eps);
+        if (depth == 0 && !spread && !primary.texture && h.hit() && sc.objects[size_t(h.geometry)].material->pixel_filter()) {
+            spread = true;
+            const float jx = rng.next() - 0.5f, jy = rng.next() - 0.5f;
+            d = glm::normalize(primary.d + jx * (primary.d_x - primary.d) + jy * (primary.d_y - primary.d));
+            --depth;  // the camera's ray again, through this sample's point of the pixel
+            continue;
+        }
         if (!h.hit()) {
             if ((depth == 0 && !primary.texture) || (depth > 0 && lighting.env_lighting)) out.L += beta * lighting.env.radiance(d);
             break;

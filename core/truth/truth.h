@@ -3,7 +3,8 @@
 // `--backend truth` renders the explicit geometry of every object with a path tracer on Embree
 // (core/raytrace.h): camera rays through each pixel's centre, as the real-time paths sample
 // them, so that a difference to the truth is one of light transport, not of anti-aliasing
-// on silhouettes (a technique whose pixel stands for a footprint integrates it itself). In texture
+// on silhouettes (a technique whose pixel stands for a footprint integrates it itself: bumpsynth over
+// its bumps' uv, TruthMaterial::footprint; cloth over the pixel's square, TruthMaterial::pixel_filter). In texture
 // mode a pixel is a texel: points of the texel's footprint on the drawn surface (uniform over it,
 // one per sample: at the centre alone a surface of facets has no one normal), carried onto the
 // truth's surface (a ray down the drawn surface's normal from Technique::truth_lift above it), seen
@@ -88,6 +89,10 @@ public:
     virtual vec3 fcos(const TruthHit& h, vec3 wo, vec3 wi) const { return f(h, wo, wi) * std::max(0.f, glm::dot(h.n, wi)); }
     // Whether the camera's hits need the pixel's footprint (TruthHit::duv_dx, duv_dy, jitter).
     virtual bool footprint() const { return false; }
+    // Whether a pixel whose centre sees this material stands for its whole square: its samples'
+    // camera rays are then spread uniformly over the pixel (a box filter over geometry finer than
+    // a pixel, such as yarns, whose real-time counterpart filters it), and may miss the object.
+    virtual bool pixel_filter() const { return false; }
     // Samples wi for a continuing path; returns f cos θi / pdf (0 when the path ends). The default
     // samples the cosine-weighted hemisphere around h.n.
     virtual vec3 sample(const TruthHit& h, vec3 wo, TruthRng& rng, vec3& wi) const;

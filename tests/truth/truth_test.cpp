@@ -159,7 +159,7 @@ TEST(TruthNoise, TheStandardErrorMatchesTheSpreadOverSeeds) {
 }
 
 // Bad input is an error naming what is wrong.
-TEST(TruthErrors, ZeroSamplesAndATechniqueWithoutTruth) {
+TEST(TruthErrors, ZeroSamplesAndAFabricWithoutYarns) {
     const Scene s = scene(kWhiteSphere, "[]", 1.f);
     EXPECT_THROW(truth(s, 8, 0), InputError);
     try {
@@ -167,12 +167,14 @@ TEST(TruthErrors, ZeroSamplesAndATechniqueWithoutTruth) {
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("--spp 0"), std::string::npos) << e.what();
     }
+    // A fabric given only as samples has no yarns for the truth to trace.
     Scene cloth = load_preset(test::source_path("presets/cloth/stitch-knit.json"));
+    apply_set(cloth, "cloth.samples", test::source_path("presets/cloth/stitch-knit.json"));
     try {
         truth(cloth, 8, 1);
-        ADD_FAILURE() << "cloth has no truth yet";
+        ADD_FAILURE() << "a samples-only fabric has no truth";
     } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("technique cloth"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("cloth.samples"), std::string::npos) << e.what();
     }
 }
 
