@@ -41,18 +41,28 @@ std::string fragment_outputs(const Technique& t) {
     return s;
 }
 
+std::string fragment_outputs(const Technique& t, const std::vector<std::string>& bound) {
+    std::string s;
+    for (const AovDecl& o : t.outputs()) {
+        const auto at = std::find(bound.begin(), bound.end(), o.name);
+        if (at != bound.end()) s += "layout(location = " + std::to_string(at - bound.begin()) + ") out vec4 o_" + o.name + ";\n";
+        else s += "vec4 o_" + o.name + ";\n";
+    }
+    return s;
+}
+
 Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
     impl_->background = Program::graphics("shaders/fullscreen.vert", "shaders/background.frag");
     std::map<std::string, PassFactory> factories;
     register_gpu_passes(factories);
     for (const auto& [name, make] : extra_passes()) factories[name] = make;
     for (const Technique* t : Registry::instance().techniques()) {
-        if (int(t->outputs().size()) > max_attachments())
-            throw std::runtime_error("technique " + t->name() + " declares " + std::to_string(t->outputs().size()) + " outputs; this GL draws at most " +
-                                     std::to_string(max_attachments()) + " at once");
         auto f = factories.find(t->name());
         if (f == factories.end()) throw std::logic_error("technique " + t->name() + " has no GPU pass");
         impl_->passes[t->name()] = f->second(*t);
+        if (int(t->outputs().size()) > max_attachments() && !impl_->passes[t->name()]->output_variants())
+            throw std::runtime_error("technique " + t->name() + " declares " + std::to_string(t->outputs().size()) + " outputs; this GL draws at most " +
+                                     std::to_string(max_attachments()) + " at once");
         // The pass implements exactly the technique's frame steps, in their order.
         const std::vector<FrameStepDecl> declared = t->frame_steps();
         const std::vector<GpuFrameStep> bound = impl_->passes[t->name()]->frame_steps();
@@ -300,8 +310,15 @@ void Renderer::render(const Scene& s, const Evaluation& ev, int width, int heigh
         for (const Technique* t : Registry::instance().techniques()) {
             DrawContext ctx = context_for(*t);
             if (ctx.objects.empty()) continue;
-            bind_outputs(t->outputs(), b);
-            impl_->passes.at(t->name())->draw(ctx);
+            TechniquePass& pass = *impl_->passes.at(t->name());
+            // The outputs bound: all the technique's, or with output variants those of this batch.
+            std::vector<AovDecl> bound;
+            for (const AovDecl& o : t->outputs())
+                if (!pass.output_variants() || std::any_of(batches_[b].begin(), batches_[b].end(), [&](const AovDecl& a) { return a.name == o.name; }))
+                    bound.push_back(o);
+            for (const AovDecl& o : bound) ctx.outputs.push_back(o.name);
+            bind_outputs(bound, b);
+            pass.draw(ctx);
         }
     }
     impl_->timer.end();

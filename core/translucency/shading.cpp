@@ -36,7 +36,8 @@ void TranslucencyTechnique::shade_cpu(const ShadeContext& ctx) const {
         b.size = ctx.eval.get(stages::atlas, o)->atlas.size;
     }
     const int out_irr = ctx.out.index("irradiance"), out_rad = ctx.out.index("radiosity"), out_loc = ctx.out.index("local"),
-              out_glo = ctx.out.index("global"), out_ref = ctx.out.index("reference"), out_err = ctx.out.index("error");
+              out_glo = ctx.out.index("global"), out_ref = ctx.out.index("reference"), out_err = ctx.out.index("error"),
+              out_exi = ctx.out.index("exitance");
     // The parts only the displayed response or a requested AOV needs are looked up.
     const bool parts = ctx.out.wanted(out_rad) || ctx.out.wanted(out_loc) || ctx.out.wanted(out_glo) || ctx.out.wanted(out_ref) || ctx.out.wanted(out_err);
     const GBuffer& gb = ctx.gbuffer;
@@ -60,6 +61,8 @@ void TranslucencyTechnique::shade_cpu(const ShadeContext& ctx) const {
             ctx.out.put(AovWriter::kRadiance, x, y, rho * B * (T * kInvPi));
             ctx.out.put(AovWriter::kNormal, x, y, n);
             if (ctx.out.wanted(out_irr)) ctx.out.put(out_irr, x, y, tap(*b.maps, &MapTexel::irradiance));
+            // ∫ L_o cos θo dωo / rho = B (2 ∫ T(μ) μ dμ): the hemispherical mean of T (dipole.h).
+            if (ctx.out.wanted(out_exi)) ctx.out.put(out_exi, x, y, B * float(diffuse_transmittance(b.s.medium.eta)));
             if (!parts) continue;
             ctx.out.put(out_rad, x, y, local + global);
             ctx.out.put(out_loc, x, y, local);

@@ -153,7 +153,9 @@ TranslucencyTechnique::TranslucencyTechnique() : Technique("translucency", "Tran
              {"local", 3, "The local (kernel) part of B"},
              {"global", 3, "The global (vertex factor) part of B"},
              {"reference", 3, "B by brute-force summation (translucency.compare or response = reference; else 0)"},
-             {"error", 3, "radiosity - reference (0 without a reference)"}};
+             {"error", 3, "radiosity - reference (0 without a reference)"},
+             {"exitance", 3, "Power per unit area the model sends out through the boundary: the outgoing radiance integrated over the hemisphere, "
+                             "before rho (the displayed response B x the hemispherical mean of T; the truth's exitance is the same quantity)"}};
 }
 
 std::vector<StageName> TranslucencyTechnique::frame_stages() const {

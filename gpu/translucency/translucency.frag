@@ -19,6 +19,7 @@ uniform sampler2D u_radiosity;    // local + global
 uniform sampler2D u_reference;
 uniform sampler2D u_rho;
 uniform float u_eta;
+uniform float u_t_mean;           // the hemispherical mean of T: exitance = B t_mean (dipole.h diffuse_transmittance)
 
 // Fragment outputs o_<aov> are generated from the technique's declaration (gpu/renderer.h).
 
@@ -37,6 +38,7 @@ void main() {
     float T = fresnel_transmittance(clamp(dot(n, wo), 0.0, 1.0), u_eta);
     o_radiance = vec4(rho * B * (T * INV_PI), 1.0);
     o_normal = vec4(n, 1.0);
+    o_exitance = vec4(B * u_t_mean, 1.0);
 #ifdef NEED_IRRADIANCE
     o_irradiance = vec4(texture(u_irradiance, st).rgb, 1.0);
 #else

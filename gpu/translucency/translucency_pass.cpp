@@ -71,7 +71,10 @@ public:
           combine_parts_(Program::compute("translucency/combine.comp", {"WRITE_PARTS"})),
           reference_(Program::compute("translucency/reference.comp")),
           shadow_(Program::graphics("translucency/shadow.vert", "translucency/shadow.frag")),
-          outputs_(fragment_outputs(t)) {}
+          technique_(t) {}
+
+    // More outputs than one framebuffer takes (exitance is the ninth): a display shader per batch.
+    bool output_variants() const override { return true; }
 
     std::vector<GpuFrameStep> frame_steps() override {
         // Each step runs object by object, with a barrier between objects.
@@ -128,7 +131,7 @@ public:
             if (in_frame("local") || in_frame("global")) need |= kNeedParts;
             if (in_frame("radiosity") || in_frame("error")) need |= kNeedRadiosity;
             if (w.has_reference && (in_frame("reference") || in_frame("error"))) need |= kNeedReference | kNeedRadiosity;
-            const Program& prog = draw_program(need);
+            const Program& prog = draw_program(need, ctx.outputs);
             prog.use();
             ctx.renderer.set_camera_uniforms(prog, ctx.camera, object_to_world(obj));
             const Texture& B = s.response == Response::Local ? w.local_map
@@ -152,6 +155,7 @@ public:
                 prog.bind_texture(7, GL_TEXTURE_2D, rho_tex, "u_rho");
             }
             glUniform1f(prog.uniform("u_eta"), float(s.medium.eta));
+            glUniform1f(prog.uniform("u_t_mean"), float(diffuse_transmittance(s.medium.eta)));
             ctx.renderer.draw_object(ctx.scene, ctx.eval, o);
         }
         glBindVertexArray(0);
@@ -577,8 +581,10 @@ private:
 
     // [SECTION] Display variants, made on first use
     enum : int { kHasRho = 1, kNeedIrradiance = 2, kNeedParts = 4, kNeedRadiosity = 8, kNeedReference = 16 };
-    const Program& draw_program(int need) {
-        auto it = draw_.find(need);
+    const Program& draw_program(int need, const std::vector<std::string>& outputs) {
+        std::string key = std::to_string(need);
+        for (const std::string& o : outputs) key += " " + o;
+        auto it = draw_.find(key);
         if (it != draw_.end()) return it->second;
         std::vector<std::string> defines{"MESOLAB_SNAP_VERTICES"};  // the CPU rasteriser's window positions (mesh.vert)
         if (need & kHasRho) defines.push_back("HAS_RHO");
@@ -586,12 +592,13 @@ private:
         if (need & kNeedParts) defines.push_back("NEED_PARTS");
         if (need & kNeedRadiosity) defines.push_back("NEED_RADIOSITY");
         if (need & kNeedReference) defines.push_back("NEED_REFERENCE");
-        return draw_.emplace(need, Program::graphics("shaders/mesh.vert", "translucency/translucency.frag", defines, outputs_)).first->second;
+        return draw_.emplace(key, Program::graphics("shaders/mesh.vert", "translucency/translucency.frag", defines, fragment_outputs(technique_, outputs)))
+            .first->second;
     }
 
     Program illumination_, vertices_, local_, global_, global_wide_, combine_radiosity_, combine_parts_, reference_, shadow_;
-    std::string outputs_;
-    std::map<int, Program> draw_;
+    const Technique& technique_;
+    std::map<std::string, Program> draw_;  // by need and the batch's outputs
     std::map<int, PerObject> objects_;
 };
 }  // namespace

@@ -16,6 +16,7 @@
 #include <tbb/global_control.h>
 
 #include <array>
+#include <map>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -103,4 +104,73 @@ TEST(TranslucencyTruth, AnOpenSheetIsRefusedAndHolesAreClosed) {
         EXPECT_NE(m.find("closed mesh"), std::string::npos) << m;
         EXPECT_NE(m.find("plane is open"), std::string::npos) << m;
     }
+}
+
+namespace {
+// A closed box of 2 x 2 x 0.5 units, its faces split into squares of 0.05 (welded along the edges):
+// at 20 mm a unit, a slab 40 mm wide and 10 mm thick.
+std::string write_slab(const std::string& dir) {
+    constexpr int N = 40, K = 10;
+    std::map<std::array<int, 3>, int> ids;
+    std::string verts, faces;
+    const auto v = [&](int i, int j, int k) {
+        const auto [it, fresh] = ids.emplace(std::array<int, 3>{i, j, k}, int(ids.size()) + 1);
+        if (fresh) verts += "v " + std::to_string(2.0 * i / N - 1.0) + " " + std::to_string(2.0 * j / N - 1.0) + " " + std::to_string(0.5 * k / K - 0.25) + "\n";
+        return it->second;
+    };
+    const auto quad = [&](int a, int b, int c, int d) {
+        faces += "f " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(c) + "\n";
+        faces += "f " + std::to_string(a) + " " + std::to_string(c) + " " + std::to_string(d) + "\n";
+    };
+    for (int i = 0; i < N; ++i)
+        for (int j = 0; j < N; ++j) {
+            quad(v(i, j, K), v(i + 1, j, K), v(i + 1, j + 1, K), v(i, j + 1, K));
+            quad(v(i, j, 0), v(i, j + 1, 0), v(i + 1, j + 1, 0), v(i + 1, j, 0));
+        }
+    for (int i = 0; i < N; ++i)
+        for (int k = 0; k < K; ++k) {
+            quad(v(i, 0, k), v(i + 1, 0, k), v(i + 1, 0, k + 1), v(i, 0, k + 1));
+            quad(v(i, N, k), v(i, N, k + 1), v(i + 1, N, k + 1), v(i + 1, N, k));
+            quad(v(0, i, k), v(0, i, k + 1), v(0, i + 1, k + 1), v(0, i + 1, k));
+            quad(v(N, i, k), v(N, i + 1, k), v(N, i + 1, k + 1), v(N, i, k + 1));
+        }
+    const std::string path = dir + "/slab.obj";
+    std::FILE* f = std::fopen(path.c_str(), "w");
+    std::fputs(verts.c_str(), f);
+    std::fputs(faces.c_str(), f);
+    std::fclose(f);
+    return path;
+}
+
+// The mean of `aov`'s channel c over the central half of the frame.
+double central_mean(const Frame& f, const char* aov, int c) {
+    const Image& im = f.aov(aov);
+    double sum = 0.0;
+    int n = 0;
+    for (int y = im.height / 4; y < 3 * im.height / 4; ++y)
+        for (int x = im.width / 4; x < 3 * im.width / 4; ++x) sum += im.at(x, y)[c], ++n;
+    return sum / n;
+}
+}  // namespace
+
+// Where the dipole is meant to hold: a large flat slab (40 mm wide, 10 mm thick, 20 diffusion
+// lengths) lit from straight above, albedo α' = 0.8, η = 1.3. The exitance the real-time model sends
+// out (its AOV `exitance`: B times the hemispherical mean of T) against the truth's, over the
+// middle of the top face: measured 0.1805 against 0.1782 (256 spp), the dipole 1.3% high. Within
+// 4% at 64 spp (the truth's noise on that mean is about 0.2%).
+TEST(TranslucencyTruth, TheDipoleOnALargeFlatSlabIsWithinAFewPercentOfTheTruth) {
+    test::TempDir dir("translucency-slab");
+    const std::string mesh = write_slab(dir.path);
+    const std::string text = R"({"schema": 1, "name": "slab", "camera": {"mode": "orbit", "distance": 3.0, "orbit": [1, -90], "fov": 30},
+        "lights": [{"type": "directional", "direction": [0, 0], "intensity": 1, "color": [1, 1, 1]}],
+        "env": {"color": [0, 0, 0], "intensity": 0}, "effects": {"environment": false},
+        "objects": [{"name": "slab", "geometry": {"type": "mesh", "path": ")" + mesh + R"("}, "material": {"technique": "translucency",
+        "material": "custom", "sigma_s": [2, 2, 2], "sigma_a": [0.5, 0.5, 0.5], "eta": 1.3, "mm_per_unit": 20, "vertices": 0}}]})";
+    const Scene s = scene_from_json(nlohmann::json::parse(text), "slab", dir.path);
+    const RenderResult rt = test::render_uncached(s, test::truth_request(Backend::Cpu, 32, 64, {"exitance"}));
+    const Frame t = test::render_uncached(s, test::truth_request(Backend::Truth, 32, 64, {"exitance"})).frame;
+    const double m_rt = central_mean(rt.frame, "exitance", 1), m_truth = central_mean(t, "exitance", 1);
+    std::printf("slab exitance: real-time %.4f, truth %.4f, ratio %.4f\n", m_rt, m_truth, m_rt / m_truth);
+    EXPECT_GT(m_truth, 0.1);
+    EXPECT_NEAR(m_rt / m_truth, 1.0, 0.04);
 }
