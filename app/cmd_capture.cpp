@@ -1,6 +1,7 @@
 // mesolab capture: headless render of presets to PNG + AOV EXRs + a JSON sidecar.
 #include "core/file.h"
 #include "app/commands.h"
+#include "app/gui/truth_view.h"
 #include "app/workbench.h"
 #include "core/error.h"
 #include "core/image.h"
@@ -186,6 +187,13 @@ int run_capture(const CaptureOptions& o) {
         const std::string png = (dir / (s.name + ".png")).string();
         write_png_srgb(png, radiance_rgb(r.frame));
         written.push_back(png);
+        if (r.truth && r.truth_frame) {  // --aov truth_error: the truth and the error beside the frame, as pictures too
+            const std::string tpng = (dir / (s.name + ".truth.png")).string(), epng = (dir / (s.name + ".truth_error.png")).string();
+            write_png_srgb(tpng, radiance_rgb(*r.truth_frame));
+            write_png_srgb(epng, gui::error_figure(r.truth->error, *r.truth_frame));
+            written.push_back(tpng);
+            written.push_back(epng);
+        }
         for (const auto& a : o.aovs) {
             const std::string exr = (dir / (s.name + "." + a + ".exr")).string();
             write_exr(exr, r.frame.aov(a));

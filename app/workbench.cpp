@@ -56,6 +56,7 @@ RenderResult Workbench::render(const Scene& s, const RenderRequest& req) {
     tr.coverage = false;
     const RenderResult t = render_one(s, tr);
     r.truth = compare_to_truth(r.frame, t.frame, req.truth);
+    r.truth_frame = t.frame;
     r.truth_ms = t.render_ms;
     r.frame.layout.push_back({"truth_error", 3, "Real-time radiance minus the truth's"});
     r.frame.aovs["truth_error"] = r.truth->error;

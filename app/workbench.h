@@ -44,6 +44,7 @@ struct RenderResult {
     // When the request asked for the AOV truth_error: the comparison with the truth (whose
     // render time is truth_ms); the frame then holds truth_error.
     std::optional<TruthComparison> truth;
+    std::optional<Frame> truth_frame;  // that truth (radiance, normal, truth_stderr)
     double truth_ms = 0;
     int truth_cached_spp = 0;  // Backend::Truth: samples read from the truth cache (continued to the rest, or all reused)
 };

@@ -1,4 +1,5 @@
 #include "app/gui/truth_view.h"
+#include "app/plot.h"
 #include "core/error.h"
 #include "core/session.h"
 
@@ -153,6 +154,37 @@ Image error_colors(const Image& error, const Frame& truth, float scale) {
             const vec3 c = glm::mix(vec3(1.f), end, std::fabs(t));
             o[0] = c.x, o[1] = c.y, o[2] = c.z;
         }
+    return out;
+}
+
+Image error_figure(const Image& error, const Frame& truth) {
+    const float scale = error_scale(error, truth);
+    const Image colours = error_colors(error, truth, scale);
+    const int text = text_height(1), strip = 3 * text + 16;
+    Image out(error.width, error.height + strip, 3);
+    for (int y = 0; y < error.height; ++y)
+        for (int x = 0; x < error.width; ++x)
+            for (int c = 0; c < 3; ++c) out.at(x, y)[c] = colours.at(x, y)[c];
+    for (int y = error.height; y < out.height; ++y)
+        for (int x = 0; x < out.width; ++x) out.at(x, y)[0] = 0.005f, out.at(x, y)[1] = 0.0055f, out.at(x, y)[2] = 0.0065f;
+    // The ramp, as error_colors draws it, across the middle of the strip's width.
+    const int w = std::max(16, std::min(out.width - 16, 200)), x0 = (out.width - w) / 2, y0 = error.height + text + 8, h = std::max(4, text / 2);
+    for (int x = 0; x < w; ++x) {
+        const float t = 2.f * (float(x) + 0.5f) / float(w) - 1.f;
+        const vec3 end = t < 0.f ? vec3(0.05f, 0.25f, 1.f) : vec3(1.f, 0.1f, 0.05f);
+        const vec3 c = glm::mix(vec3(1.f), end, std::fabs(t));
+        for (int y = y0; y < y0 + h; ++y)
+            for (int k = 0; k < 3; ++k) out.at(x0 + x, y)[k] = c[k];
+    }
+    const float grey = 0.6f;
+    const std::string caption = "real-time - truth (radiance, mean of RGB)";
+    draw_text(out, std::max(2, (out.width - text_width(caption)) / 2), error.height + 4, caption, grey, grey, grey);
+    char lo[32], hi[32];
+    std::snprintf(lo, sizeof lo, "%+.3g", -double(scale));
+    std::snprintf(hi, sizeof hi, "%+.3g", double(scale));
+    draw_text(out, x0, y0 + h + 3, lo, grey, grey, grey);
+    draw_text(out, x0 + w / 2 - text_width("0") / 2, y0 + h + 3, "0", grey, grey, grey);
+    draw_text(out, x0 + w - text_width(hi), y0 + h + 3, hi, grey, grey, grey);
     return out;
 }
 

@@ -90,4 +90,8 @@ Image error_colors(const Image& error, const Frame& truth, float scale);
 // A scale for error_colors: the 99th percentile of |error| (mean over channels) on the object's
 // pixels, rounded up to 1, 2 or 5 times a power of ten; 1 when there are none.
 float error_scale(const Image& error, const Frame& truth);
+// The error as a picture to keep: error_colors at error_scale over the frame, and below it a strip
+// with the legend (the ramp from -scale to +scale and what it shows), in linear RGB (write it with
+// write_png_srgb, as the plots). Throws std::runtime_error when the plot font is missing.
+Image error_figure(const Image& error, const Frame& truth);
 }  // namespace mesolab::gui
