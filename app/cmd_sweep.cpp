@@ -171,10 +171,12 @@ struct Measure {
     double truth_noise = 0, truth_ms = 0;
     int truth_cached_spp = 0;
 
+    // Truths are kept by description and size: in texture mode a knob may change the native size
+    // (bumpsynth's noise texture), and each size has its own truth.
+    static std::string truth_key(const std::string& d, int w, int h) { return d + "@" + std::to_string(w) + "x" + std::to_string(h); }
     const Frame& truth_of(Workbench& wb, const Scene& s, int w, int h) {
         const std::string d = truth_description(s);
-        auto it = truths.find(d);
-        if (it != truths.end()) return it->second;
+        if (auto it = truths.find(truth_key(d, w, h)); it != truths.end()) return it->second;
         RenderRequest tr;
         tr.backend = Backend::Truth;
         tr.width = w, tr.height = h;
@@ -184,12 +186,14 @@ struct Measure {
             if (stage == "truth") std::fprintf(stderr, "\r  truth %3d%%", int(100.0 * f + 0.5));
         };
         RenderResult r = wb.render(s, tr);
+        const std::string k = truth_key(d, r.frame.width, r.frame.height);  // texture mode: the native size, not w x h
+        if (auto it = truths.find(k); it != truths.end()) return it->second;
         std::fprintf(stderr, "\r  truth: %d spp (%d from the cache), noise_rel %.4f, %.0f ms\n", truth_settings.spp, r.truth_cached_spp,
                      truth_noise_rel(r.frame), r.render_ms);
         truth_noise = std::max(truth_noise, truth_noise_rel(r.frame));
         truth_ms += r.render_ms;
         truth_cached_spp = r.truth_cached_spp;
-        return truths.emplace(d, std::move(r.frame)).first->second;
+        return truths.emplace(k, std::move(r.frame)).first->second;
     }
 
     void prepare(const Scene& ref, RenderResult& rr) {
@@ -200,10 +204,10 @@ struct Measure {
             ref_mean = mean(reference);
         }
     }
-    Point measure(const Scene& s, const std::string& key, const std::string& v, RenderResult& res) const {
+    Point measure(Workbench& wb, const Scene& s, const std::string& key, const std::string& v, RenderResult& res) {
         if (metric) return {v, 0, technique.error(s, res.eval), 0};
         if (vs_truth) {
-            const TruthComparison c = compare_to_truth(res.frame, truths.at(truth_description(s)), truth_settings);
+            const TruthComparison c = compare_to_truth(res.frame, truth_of(wb, s, res.frame.width, res.frame.height), truth_settings);
             Point p{v, 0, c.rmse_rel, c.rmse_rel};
             p.below_noise = c.below_noise;
             return p;
@@ -217,7 +221,7 @@ struct Measure {
     }
 };
 
-Point sweep_point(Workbench& wb, const Scene& base, const Knob& k, const std::string& v, const RenderRequest& req, int repeat, const Measure& m) {
+Point sweep_point(Workbench& wb, const Scene& base, const Knob& k, const std::string& v, const RenderRequest& req, int repeat, Measure& m) {
     Scene s = base;
     apply_set(s, k.key, v);
     std::vector<double> times, knob_times;
@@ -228,7 +232,7 @@ Point sweep_point(Workbench& wb, const Scene& base, const Knob& k, const std::st
         times.push_back(res.stages_ms + res.render_ms);
         knob_times.push_back(stages_ms(res.eval, k.stages));
     }
-    Point p = m.measure(s, k.key, v, res);
+    Point p = m.measure(wb, s, k.key, v, res);
     p.ms = median_of(times);
     p.knob_ms = median_of(knob_times);
     return p;

@@ -177,7 +177,12 @@ Image error_figure(const Image& error, const Frame& truth) {
             for (int k = 0; k < 3; ++k) out.at(x0 + x, y)[k] = c[k];
     }
     const float grey = 0.6f;
-    const std::string caption = "real-time - truth (radiance, mean of RGB)";
+    // The longest caption that fits the width.
+    std::string caption;
+    for (const char* c : {"real-time - truth (radiance, mean of RGB)", "real-time - truth", "rt - truth"}) {
+        caption = c;
+        if (text_width(caption) <= out.width - 4) break;
+    }
     draw_text(out, std::max(2, (out.width - text_width(caption)) / 2), error.height + 4, caption, grey, grey, grey);
     char lo[32], hi[32];
     std::snprintf(lo, sizeof lo, "%+.3g", -double(scale));

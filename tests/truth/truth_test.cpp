@@ -1,8 +1,10 @@
 // The truth renderer (core/truth/truth.h) on scenes of the basic technique, whose answers are
 // known: a white furnace, Lambert's closed form, a shadow, determinism at any thread count,
 // honest standard errors, and bad input.
+#include "app/gui/truth_view.h"
 #include "app/workbench.h"
 #include "core/error.h"
+#include "core/image.h"
 #include "core/scene.h"
 #include "core/truth/truth.h"
 #include "support/cli.h"
@@ -207,6 +209,33 @@ TEST(TruthError, IsZeroWhereTheRealTimePathIsExactAndShowsTheMissingShadow) {
     for (float v : shadowed.frame.aov("truth_error").data) most = std::max(most, v), least = std::min(least, v);
     EXPECT_GT(least, -1e-5f);
     EXPECT_GT(most, 0.5f);
+    // As a picture: the error's colours over the frame (red where the real-time path is brighter:
+    // the shadow it misses), the legend in a strip below.
+    ASSERT_TRUE(shadowed.truth_frame);
+    const Image fig = gui::error_figure(shadowed.truth->error, *shadowed.truth_frame);
+    EXPECT_EQ(fig.width, 48);
+    EXPECT_GT(fig.height, 48 + 20);
+    int red = 0;
+    for (int y = 0; y < 48; ++y)
+        for (int x = 0; x < 48; ++x)
+            if (shadowed.frame.aov("truth_error").at(x, y)[1] > 0.5f) {
+                EXPECT_GT(fig.at(x, y)[0], 0.8f) << x << "," << y;
+                EXPECT_LT(fig.at(x, y)[2], 0.5f) << x << "," << y;
+                ++red;
+            }
+    EXPECT_GT(red, 10);
+}
+
+// `capture --aov truth_error` writes the truth and the error as pictures beside the frame.
+TEST(TruthError, CaptureWritesTheTruthAndTheErrorAsPictures) {
+    test::TempDir dir("truth-capture");
+    const test::CliResult r = test::run_mesolab("capture presets/basic/sphere.json --backend cpu --aov truth_error --spp 2 --size 32x32 -o " + dir.path.string());
+    ASSERT_EQ(r.status, 0) << r.err;
+    const Image truth = read_image(dir / "basic-sphere.truth.png"), error = read_image(dir / "basic-sphere.truth_error.png");
+    EXPECT_EQ(truth.width, 32);
+    EXPECT_EQ(truth.height, 32);
+    EXPECT_EQ(error.width, 32);
+    EXPECT_GT(error.height, 32);
 }
 
 // A truth continued from fewer samples is the bytes a fresh one of as many samples is; the cache
