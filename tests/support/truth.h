@@ -4,6 +4,8 @@
 #include "app/truth_cache.h"
 #include "app/workbench.h"
 #include "core/render.h"
+#include "core/scene.h"
+#include "core/truth/truth.h"
 
 #include <string>
 #include <utility>
@@ -32,6 +34,22 @@ inline RenderResult render_uncached(const Scene& s, const RenderRequest& req) {
     Workbench wb;
     wb.set_truth_cache(TruthCache(""));
     return wb.render(s, req);
+}
+
+// The truth's key ignores each KEY=VALUE of `knobs` (accuracy knobs: one truth serves a sweep over
+// them) and follows each of `physical` (what the truth simulates).
+inline void expect_truth_key(const Scene& s, const std::vector<std::string>& knobs, const std::vector<std::string>& physical) {
+    const std::string base = truth_description(s);
+    for (const std::string& a : knobs) {
+        Scene t = s;
+        apply_set(t, a);
+        EXPECT_EQ(truth_description(t), base) << a;
+    }
+    for (const std::string& a : physical) {
+        Scene t = s;
+        apply_set(t, a);
+        EXPECT_NE(truth_description(t), base) << a;
+    }
 }
 
 // Whether the truth's pixel (x, y) shows an object (a first hit's normal; 0 for the background).
