@@ -40,6 +40,7 @@ TruthFabric truth_stitch_tile(const StitchParams& p) {
         q.z -= z_mid;
         t.half_thickness = std::max(t.half_thickness, std::fabs(q.z));
     }
+    t.tile = sm.tile;
     t.mesh.uv.assign(t.mesh.position.size(), vec2(0.f));
     for (size_t v = 0; v < t.mesh.position.size(); ++v) t.mesh.uv[v] = vec2(t.mesh.position[v]) / sm.tile;
     return t;
@@ -97,14 +98,7 @@ TruthFabric truth_fabric(const TruthFabric& tile, const TriMesh& base, int repea
         const vec2 e1 = base.uv[b] - base.uv[a], e2 = base.uv[c] - base.uv[a];
         area_uv += 0.5 * std::fabs(double(e1.x) * e2.y - double(e1.y) * e2.x);
     }
-    // Pattern units per tile: the tile's uv period is 1 in the tile's own uv (truth_stitch_tile);
-    // its size in pattern units is the ratio of positions to uv.
-    vec2 tile_size(1.f);
-    for (size_t v = 0; v < tile.mesh.position.size(); ++v)
-        if (std::fabs(tile.mesh.uv[v].x) > 0.25f && std::fabs(tile.mesh.uv[v].y) > 0.25f) {
-            tile_size = vec2(tile.mesh.position[v]) / tile.mesh.uv[v];
-            break;
-        }
+    const vec2 tile_size = tile.tile;
     const float s = float(std::sqrt(area_w / std::max(area_uv, 1e-30)) / double(repeat) / std::sqrt(double(tile_size.x) * tile_size.y));
     const UvLocator where(base);
     const size_t nv = tile.mesh.position.size(), nt = tile.mesh.index.size();

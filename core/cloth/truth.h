@@ -30,6 +30,7 @@ struct TruthFabric {
     TriMesh mesh;
     std::vector<vec3> color;  // per vertex: the yarn's albedo
     float half_thickness = 0.f;  // the largest |z - z_mid| of a vertex, in the mesh's units
+    vec2 tile{1.f};              // the tile's period in pattern units (truth_stitch_tile)
 };
 
 // The centre tile's yarns (see above); mesh in pattern units, half_thickness about z_mid.
