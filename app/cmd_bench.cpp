@@ -7,6 +7,7 @@
 #include "core/error.h"
 #include "core/profile.h"
 #include "core/technique.h"
+#include "gpu/renderer.h"
 
 #include <cmath>
 #include <cstdlib>
@@ -26,6 +27,9 @@ struct Cell {
     double median = 0, min = 0, max = 0;
     std::optional<double> paper;
     std::string info;  // report columns (BenchColumn::info): the text, no timing
+    // GPU frame cells on a hardware GL: the median of the frame's GPU time (timer queries), beside
+    // its wall time to a finished frame (median).
+    std::optional<double> gpu_time;
 };
 
 std::string fmt_ms(double ms) {
@@ -128,6 +132,33 @@ int run_bench(const BenchOptions& o) {
         }
         tables.push_back(*it);
     }
+    // --row / --column: the cells asked for; a filter that matches nothing is an error, naming what there is.
+    const auto contains_any = [](const std::string& name, const std::vector<std::string>& parts) {
+        return parts.empty() || std::any_of(parts.begin(), parts.end(), [&](const std::string& p) { return name.find(p) != std::string::npos; });
+    };
+    if (!o.rows.empty() || !o.columns.empty()) {
+        if (o.update_pages) throw InputError("--update-pages writes whole tables: it does not take --row or --column");
+        std::string row_names, column_names;
+        for (auto& t : tables) {
+            for (const auto& r : t.rows) row_names += (row_names.empty() ? "'" : ", '") + r.name + "'";
+            for (const auto& c : t.columns) column_names += (column_names.empty() ? "'" : ", '") + c.name + "'";
+            std::erase_if(t.rows, [&](const BenchRow& r) { return !contains_any(r.name, o.rows); });
+            std::vector<BenchColumn> columns;
+            for (size_t ci = 0; ci < t.columns.size(); ++ci)
+                if (contains_any(t.columns[ci].name, o.columns)) columns.push_back(t.columns[ci]);
+            // The paper's figures follow their columns.
+            for (auto& r : t.rows) {
+                std::vector<std::optional<double>> paper;
+                for (size_t ci = 0; ci < t.columns.size(); ++ci)
+                    if (contains_any(t.columns[ci].name, o.columns)) paper.push_back(ci < r.paper_ms.size() ? r.paper_ms[ci] : std::nullopt);
+                r.paper_ms = paper;
+            }
+            t.columns = columns;
+        }
+        std::erase_if(tables, [](const BenchTable& t) { return t.rows.empty() || t.columns.empty(); });
+        if (tables.empty())
+            throw InputError("bench: no cell matches --row/--column; rows: " + row_names + "; columns: " + column_names);
+    }
     if (o.vertices < 0) throw InputError("--vertices: " + std::to_string(o.vertices) + " must be >= 0");
     if (!o.mesh.empty() || o.vertices > 0) {
         if (o.mesh.empty()) throw InputError("--vertices: needs --mesh FILE");
@@ -150,6 +181,7 @@ int run_bench(const BenchOptions& o) {
     if (want_gpu) {
         try {
             gl = wb.gl_renderer();
+            wb.gpu().set_pass_timing(o.profile);  // a software renderer times each pass only when asked
         } catch (const std::exception& e) {
             throw std::runtime_error(std::string("bench needs an OpenGL context for GPU columns (use --backend cpu): ") + e.what());
         }
@@ -171,6 +203,11 @@ int run_bench(const BenchOptions& o) {
         return {};
     };
 
+    // What a GPU frame cell holds on this GL.
+    std::string gpu_note;
+    if (want_gpu)
+        gpu_note = wb.gpu().software() ? " GPU frames: wall time to a finished frame (this GL renders on the CPU; its timer queries do not see that work)."
+                                       : " GPU frames: wall time to a finished frame (a fence), and the GPU time of its steps and passes (timer queries).";
     std::vector<Cell> cells;
     for (const auto& t : tables) {
         for (const auto& row : t.rows) {
@@ -178,13 +215,14 @@ int run_bench(const BenchOptions& o) {
             for (size_t ci = 0; ci < t.columns.size(); ++ci) {
                 const BenchColumn& col = t.columns[ci];
                 const std::optional<double> paper = ci < row.paper_ms.size() ? row.paper_ms[ci] : std::nullopt;
-                auto add = [&](const char* device, const std::vector<double>& v, const std::string& step = "") {
+                auto add = [&](const char* device, const std::vector<double>& v, const std::string& step = "", const std::vector<double>& gpu_times = {}) {
                     if (v.empty()) return;
                     Cell c{t.name, row.name, col.name, device, step, median_of(v), *std::min_element(v.begin(), v.end()), *std::max_element(v.begin(), v.end()),
                            step.empty() ? paper : (row.paper_step_ms.count(step) ? std::optional<double>(row.paper_step_ms.at(step)) : std::nullopt)};
+                    if (!gpu_times.empty()) c.gpu_time = median_of(gpu_times);
                     cells.push_back(c);
-                    std::fprintf(stderr, "  %-10s %-22s %-22s %-4s %s\n", t.name.c_str(), (step.empty() ? row.name : row.name + " / " + step).c_str(), col.name.c_str(),
-                                 device, fmt_ms(c.median).c_str());
+                    std::fprintf(stderr, "  %-10s %-22s %-22s %-4s %s%s\n", t.name.c_str(), (step.empty() ? row.name : row.name + " / " + step).c_str(), col.name.c_str(),
+                                 device, fmt_ms(c.median).c_str(), c.gpu_time ? (" (GPU time " + fmt_ms(*c.gpu_time) + ")").c_str() : "");
                 };
                 if (col.info) {
                     const Evaluation ev = session.evaluate_frame(scene);
@@ -233,16 +271,19 @@ int run_bench(const BenchOptions& o) {
                     // Frame steps (offscreen work before the frame) get rows of their own. They are
                     // timed from scratch in every run: their reuse between frames is disabled here.
                     std::vector<std::pair<std::string, std::vector<double>>> steps;  // in the order they run
-                    add(gpu ? "gpu" : "cpu", time_runs(o.repeat, [&] {
+                    std::vector<double> gpu_times;  // the frames' GPU time (timer queries, hardware GL only)
+                    const std::vector<double> wall = time_runs(o.repeat, [&] {
                         wb.forget_frame_steps();
                         const RenderResult r = wb.render(scene, req);
+                        if (gpu && !r.gpu_ms_is_wall && std::isfinite(r.gpu_ms)) gpu_times.push_back(r.gpu_ms);
                         for (const auto& st : r.frame.steps) {
                             auto it = std::find_if(steps.begin(), steps.end(), [&](const auto& x) { return x.first == st.name; });
                             if (it == steps.end()) it = steps.insert(steps.end(), {st.name, {}});
                             if (std::isfinite(st.ms)) it->second.push_back(st.ms);
                         }
                         return r.render_ms;
-                    }));
+                    });
+                    add(gpu ? "gpu" : "cpu", wall, "", gpu_times);
                     for (const auto& [name, v] : steps) add(gpu ? "gpu" : "cpu", v, name);
                 }
             }
@@ -252,11 +293,12 @@ int run_bench(const BenchOptions& o) {
     // [SECTION] Output
     std::ostringstream out;
     if (o.format == "csv") {
-        out << "table,row,column,device,median_ms,min_ms,max_ms,paper_ms,paper_over_ours\n";
+        out << "table,row,column,device,median_ms,min_ms,max_ms,paper_ms,paper_over_ours,gpu_time_ms\n";
         for (const auto& c : cells)
             if (!c.info.empty()) out << c.table << ",\"" << c.row << "\",\"" << c.column << "\",info,,,,,\"" << c.info << "\"\n";
             else out << c.table << ",\"" << (c.step.empty() ? c.row : c.row + " / step " + c.step) << "\",\"" << c.column << "\"," << c.device << "," << c.median << "," << c.min << "," << c.max << ","
-                << (c.paper ? std::to_string(*c.paper) : "") << "," << (c.paper ? std::to_string(*c.paper / c.median) : "") << "\n";
+                << (c.paper ? std::to_string(*c.paper) : "") << "," << (c.paper ? std::to_string(*c.paper / c.median) : "") << ","
+                << (c.gpu_time ? std::to_string(*c.gpu_time) : "") << "\n";
     } else if (o.format == "json") {
         json j;
         j["machine"] = machine;
@@ -272,6 +314,7 @@ int run_bench(const BenchOptions& o) {
                 continue;
             }
             x["device"] = c.device, x["median_ms"] = c.median, x["min_ms"] = c.min, x["max_ms"] = c.max;
+            if (c.gpu_time) x["gpu_time_ms"] = *c.gpu_time;
             if (c.paper) {
                 x["paper_ms"] = *c.paper;
                 x["paper_over_ours"] = *c.paper / c.median;
@@ -286,7 +329,7 @@ int run_bench(const BenchOptions& o) {
         std::ostringstream md;
         {
             md << "### " << t.title << "\n\n";
-            md << "Ours: " << machine << "; median of " << o.repeat << " runs [min–max] (a stage over " << int(kSlowMs / 1000) << " s: its first run alone)." << (t.paper_machine.empty() ? "" : " Paper: " + t.paper_machine + ".")
+            md << "Ours: " << machine << "; median of " << o.repeat << " runs [min–max] (a stage over " << int(kSlowMs / 1000) << " s: its first run alone)." << (t.paper_machine.empty() ? "" : " Paper: " + t.paper_machine + ".") << (want_gpu ? gpu_note : "")
                 << "\n\n| |";
             for (const auto& c : t.columns) md << " " << c.name << " |";
             md << "\n|---|";
@@ -312,6 +355,7 @@ int run_bench(const BenchOptions& o) {
                             }
                             cell += (cell.empty() ? "" : "<br>") + std::string(c.device == "gpu" ? "GPU " : "CPU ") + fmt_ms(c.median) + " [" + fmt_ms(c.min) +
                                     "–" + fmt_ms(c.max) + "]";
+                            if (c.gpu_time) cell += " (GPU time " + fmt_ms(*c.gpu_time) + ")";
                             paper = c.paper;
                         }
                         if (paper) {

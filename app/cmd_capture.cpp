@@ -125,8 +125,12 @@ void print_profile(const Profiler& profiler) {
     std::fprintf(stderr, "\n%-44s %-4s %10s %10s %10s %10s %6s\n", "scope", "dev", "last ms", "median", "min", "max", "n");
     for (const auto& s : profiler.stats()) {
         // Indent by depth so the hierarchy reads at a glance.
-        const size_t depth = size_t(std::count(s.path.begin(), s.path.end(), '/'));
-        const std::string name = std::string(2 * depth, ' ') + s.path.substr(s.path.rfind('/') == std::string::npos ? 0 : s.path.rfind('/') + 1);
+        // A GPU range "a/b/gpu" reads as "b (GPU)" beside its CPU scope "a/b", which may not exist.
+        std::string path = s.path;
+        bool gpu_range = false;
+        if (path.size() > 4 && path.compare(path.size() - 4, 4, "/gpu") == 0) path.resize(path.size() - 4), gpu_range = true;
+        const size_t depth = size_t(std::count(path.begin(), path.end(), '/'));
+        const std::string name = std::string(2 * depth, ' ') + path.substr(path.rfind('/') == std::string::npos ? 0 : path.rfind('/') + 1) + (gpu_range ? " (GPU)" : "");
         std::fprintf(stderr, "%-44s %-4s %10.3f %10.3f %10.3f %10.3f %6zu\n", name.c_str(), s.device == Device::Gpu ? "gpu" : "cpu", s.last, s.median,
                      s.min, s.max, s.count);
     }

@@ -35,6 +35,7 @@ struct BenchOptions {
     std::string pages_root = ".";    // where README.md and core/*/README.md are
     std::string mesh;                // --mesh FILE: a row for this mesh in the tables that take one
     int vertices = 0;                // --vertices N: simplify it to N vertices (0: the table's choice)
+    std::vector<std::string> rows, columns;  // --row / --column: only the rows and columns whose names contain one of these
 };
 int run_bench(const BenchOptions& o);
 

@@ -1,6 +1,7 @@
 #include "app/workbench.h"
 #include "core/error.h"
 #include "gpu/context.h"
+#include "gpu/gl.h"
 #include "gpu/renderer.h"
 
 #include <epoxy/gl.h>
@@ -110,9 +111,11 @@ RenderResult Workbench::render_one(const Scene& s, const RenderRequest& req) {
         r.renderer = context_->info().renderer;
         t0 = clock::now();
         g.render(s, r.eval, size.x, size.y, req.aovs);
-        glFinish();
+        gpu::wait_for_gpu();  // the frame finished (a fence): its wall time
         r.render_ms = std::chrono::duration<double, std::milli>(clock::now() - t0).count();
+        g.wait_timings();  // answered by now: taking them waits no longer
         r.gpu_ms = g.last_gpu_ms();
+        r.gpu_ms_is_wall = g.software();
         r.frame = g.read_frame();
     }
     if (req.coverage) r.frame.coverage = frame_coverage(s, r.eval, size.x, size.y);

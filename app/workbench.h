@@ -40,7 +40,8 @@ struct RenderResult {
     std::string renderer;   // GL_RENDERER or "cpu"
     double stages_ms = 0;   // evaluation of the stage graph
     double render_ms = 0;   // frame render (GPU: wall time to a finished frame, read-back excluded)
-    double gpu_ms = 0;      // GPU timer query of the frame (GPU backend)
+    double gpu_ms = 0;      // GPU time of the frame: the sum of its steps' and passes' timer queries (GPU backend; NaN without a valid answer)
+    bool gpu_ms_is_wall = false;  // a software GL renderer: gpu_ms is the wall time of that work on the CPU (gpu::GpuTimeline)
     // When the request asked for the AOV truth_error: the comparison with the truth (whose
     // render time is truth_ms); the frame then holds truth_error.
     std::optional<TruthComparison> truth;

@@ -456,4 +456,85 @@ double GpuTimer::elapsed_ms() {
     read_ = true;
     return result_ms_;
 }
+
+// [SECTION] GpuTimeline
+void GpuTimeline::begin() {
+    if (in_range_) throw std::logic_error("GpuTimeline::begin: the previous range is still open (ranges do not nest)");
+    in_range_ = true;
+    if (software_) glFinish();  // what came before is not this range's
+    wall0_ = std::chrono::steady_clock::now();
+    if (software_) return;
+    if (!spare_.empty()) {
+        current_ = std::move(spare_.back());
+        spare_.pop_back();
+    } else {
+        GLuint id = 0;
+        glGenQueries(1, &id);
+        current_ = Query(id);
+    }
+    glBeginQuery(GL_TIME_ELAPSED, current_.get());
+}
+
+void GpuTimeline::end(Done done) {
+    if (!in_range_) throw std::logic_error("GpuTimeline::end: no range is open");
+    in_range_ = false;
+    if (software_) {
+        glFinish();
+        const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - wall0_).count();
+        if (done) done(ms);
+        return;
+    }
+    glEndQuery(GL_TIME_ELAPSED);
+    open_.push_back(Range{std::move(current_), wall0_, std::move(done)});
+}
+
+void GpuTimeline::take(Range& r) {
+    GLuint64 ns = 0;
+    glGetQueryObjectui64v(r.query.get(), GL_QUERY_RESULT, &ns);
+    const double wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - r.wall0).count();
+    const double gpu_ms = double(ns) * 1e-6;
+    spare_.push_back(std::move(r.query));
+    if (r.done) r.done(GpuTimer::plausible(gpu_ms, wall_ms) ? gpu_ms : std::numeric_limits<double>::quiet_NaN());
+}
+
+void GpuTimeline::poll() {
+    // Queries finish in order: stop at the first that is not ready.
+    while (!open_.empty()) {
+        GLint ready = 0;
+        glGetQueryObjectiv(open_.front().query.get(), GL_QUERY_RESULT_AVAILABLE, &ready);
+        if (!ready) return;
+        Range r = std::move(open_.front());
+        open_.pop_front();
+        take(r);
+    }
+}
+
+void GpuTimeline::wait() {
+    while (!open_.empty()) {
+        Range r = std::move(open_.front());
+        open_.pop_front();
+        take(r);
+    }
+}
+
+bool is_software_renderer(const std::string& gl_renderer) {
+    for (const char* name : {"llvmpipe", "softpipe", "SwiftShader", "swrast"})
+        if (gl_renderer.find(name) != std::string::npos) return true;
+    return false;
+}
+
+void wait_for_gpu() {
+    GLsync fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+    if (!fence) {
+        glFinish();
+        return;
+    }
+    GLbitfield flags = GL_SYNC_FLUSH_COMMANDS_BIT;
+    for (;;) {
+        const GLenum r = glClientWaitSync(fence, flags, GLuint64(1000000000));  // 1 s per try
+        if (r == GL_ALREADY_SIGNALED || r == GL_CONDITION_SATISFIED || r == GL_WAIT_FAILED) break;
+        flags = 0;  // flushed once
+    }
+    glDeleteSync(fence);
+}
 }  // namespace mesolab::gpu

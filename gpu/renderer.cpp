@@ -4,6 +4,8 @@
 #include "core/scene_stages.h"
 
 #include <chrono>
+#include <limits>
+#include <memory>
 #include <glm/gtc/type_ptr.hpp>
 #include <algorithm>
 #include <cmath>
@@ -15,7 +17,8 @@ struct Renderer::Impl {
     std::map<std::string, std::unique_ptr<TechniquePass>> passes;
     std::map<std::string, std::function<void(DrawContext&)>> steps;  // each frame step's GPU work, by step name
     FrameStepScheduler scheduler;
-    GpuTimer timer, step_timer;
+    std::unique_ptr<GpuTimeline> timeline;  // made with the renderer: software or hardware timing
+    uint64_t frame = 0;                     // frames rendered so far
     VertexArray empty_vao;  // attribute-less draws (the full-screen triangle)
 
     void draw_fullscreen_triangle() const {
@@ -85,7 +88,13 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
     impl_->background.use();
     impl_->draw_fullscreen_triangle();
     glFinish();
+    const GLubyte* name = glGetString(GL_RENDERER);
+    impl_->timeline = std::make_unique<GpuTimeline>(is_software_renderer(name ? reinterpret_cast<const char*>(name) : ""));
 }
+
+bool Renderer::software() const { return impl_->timeline->software(); }
+void Renderer::poll_timings() { impl_->timeline->poll(); }
+void Renderer::wait_timings() { impl_->timeline->wait(); }
 
 Renderer::~Renderer() = default;
 
@@ -255,30 +264,78 @@ void Renderer::render(const Scene& s, const Evaluation& ev, int width, int heigh
         return ctx;
     };
 
+    // [SECTION] GPU timings of this frame
+    // Every frame step and pass is one range of the timeline (GpuTimeline); their answers arrive
+    // when the GPU has them (at once on a software renderer), each into the profiler, and the
+    // frame's total once all are in. Nothing here waits for the GPU.
+    impl_->timeline->poll();  // earlier frames' answers that are ready
+    struct FrameTimes {
+        uint64_t frame = 0;
+        Profiler* profiler = nullptr;
+        int begun = 0, answered = 0;
+        bool closed = false, valid = true;
+        double sum = 0;
+        std::map<std::string, double> steps;  // step name -> GPU ms
+    };
+    auto ft = std::make_shared<FrameTimes>();
+    ft->frame = ++impl_->frame;
+    ft->profiler = &Profiler::current();
+    last_gpu_ms_ = std::numeric_limits<double>::quiet_NaN();
+    // Copies a frame's step times into last_steps_: this frame's, or an earlier frame's where this
+    // one's are not in yet (the window shows each step's latest answer).
+    const auto show_steps = [this](const FrameTimes& f) {
+        for (FrameStepRun& run : last_steps_) {
+            const auto it = f.steps.find(run.name);
+            if (it != f.steps.end() && run.status == StageStatus::Ran && (f.frame == impl_->frame || !std::isfinite(run.ms))) run.ms = it->second;
+        }
+    };
+    const auto complete = [this, show_steps](FrameTimes& f) {
+        if (!f.closed || f.answered < f.begun) return;
+        if (f.valid) f.profiler->record("frame.gpu/gpu", f.sum, Device::Gpu);
+        if (f.frame == impl_->frame) last_gpu_ms_ = f.valid ? f.sum : std::numeric_limits<double>::quiet_NaN();
+        last_complete_gpu_ms_ = f.valid ? f.sum : last_complete_gpu_ms_;
+        show_steps(f);
+    };
+    // A range recorded under `path` (and, for a step, under its name).
+    const auto range_done = [ft, complete](std::string path, std::string step) {
+        return [ft, complete, path = std::move(path), step = std::move(step)](double ms) {
+            ++ft->answered;
+            if (std::isfinite(ms)) {
+                ft->profiler->record(path, ms, Device::Gpu);
+                ft->sum += ms;
+                if (!step.empty()) ft->steps[step] = ms;
+            } else {
+                ft->valid = false;
+                if (!step.empty()) ft->steps[step] = ms;
+            }
+            complete(*ft);
+        };
+    };
+    const auto begin_range = [&] {
+        ++ft->begun;
+        impl_->timeline->begin();
+    };
+    // Passes get ranges of their own on hardware, and on a software renderer when asked
+    // (set_pass_timing): there each range finishes the GPU's queue, which splits the frame's work.
+    const bool per_pass = !impl_->timeline->software() || pass_timing_;
+
     // Frame steps: offscreen work before the frame, each timed on its own, reused while its inputs hold.
     last_steps_ = impl_->scheduler.run(s, ev, [&](const Technique& t, const FrameStepDecl& d, const std::vector<int>&) {
         PROFILE_SCOPE("step." + d.name);
         DrawContext ctx = context_for(t);
-        // The step's GL timer query, checked against its finished wall time: llvmpipe's queries
-        // do not see compute dispatches (they answer ~0), so where a query reports under 5% of the
-        // wall time, the wall time (the work itself, on a CPU driver) is kept.
-        glFinish();
-        const auto wall0 = std::chrono::steady_clock::now();
-        impl_->step_timer.begin();
+        begin_range();
         impl_->steps.at(d.name)(ctx);
-        impl_->step_timer.end();
-        FrameStepScheduler::Work w;
-        w.ms = impl_->step_timer.elapsed_ms();
-        glFinish();
-        const double wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - wall0).count();
-        if (!(w.ms >= 0.05 * wall_ms)) w.ms = wall_ms;
-        if (std::isfinite(w.ms)) Profiler::current().record("frame.gpu/step." + d.name + "/gpu", w.ms, Device::Gpu);
+        impl_->timeline->end(range_done("frame.gpu/step." + d.name + "/gpu", d.name));
         check_gl(("frame step " + d.name).c_str());
+        FrameStepScheduler::Work w;
+        const auto it = ft->steps.find(d.name);
+        w.ms = it != ft->steps.end() ? it->second : std::numeric_limits<double>::quiet_NaN();  // NaN until the GPU answers
         return w;
     });
 
-    impl_->timer.begin();
+    if (!per_pass) begin_range();
     for (size_t b = 0; b < batches_.size(); ++b) {
+        if (per_pass) begin_range();
         targets_[b].bind();
         glDisable(GL_BLEND);
         glDisable(GL_CULL_FACE);
@@ -305,6 +362,7 @@ void Renderer::render(const Scene& s, const Evaluation& ev, int width, int heigh
                 impl_->draw_fullscreen_triangle();
             }
         }
+        if (per_pass) impl_->timeline->end(range_done("frame.gpu/clear/gpu", ""));
         glEnable(GL_DEPTH_TEST);
         glDepthFunc(GL_LESS);
         for (const Technique* t : Registry::instance().techniques()) {
@@ -318,13 +376,15 @@ void Renderer::render(const Scene& s, const Evaluation& ev, int width, int heigh
                     bound.push_back(o);
             for (const AovDecl& o : bound) ctx.outputs.push_back(o.name);
             bind_outputs(bound, b);
+            if (per_pass) begin_range();
             pass.draw(ctx);
+            if (per_pass) impl_->timeline->end(range_done("frame.gpu/draw." + t->name() + "/gpu", ""));
         }
     }
-    impl_->timer.end();
-    last_gpu_ms_ = impl_->timer.elapsed_ms();
-    // An impossible driver answer (NaN, see GpuTimer) is left out rather than recorded.
-    if (std::isfinite(last_gpu_ms_)) Profiler::current().record("frame.gpu/gpu", last_gpu_ms_, Device::Gpu);
+    if (!per_pass) impl_->timeline->end(range_done("frame.gpu/draw/gpu", ""));
+    ft->closed = true;
+    show_steps(*ft);
+    complete(*ft);
     check_gl("Renderer::render");
 }
 

@@ -25,6 +25,7 @@
 #include "gpu/gl.h"
 #include "gpu/resources.h"
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -104,8 +105,23 @@ public:
     int width() const { return width_; }
     int height() const { return height_; }
     GLuint aov_texture(const std::string& name) const;  // 0 when the last frame does not hold it
+    // GPU time of the last frame: the sum of its steps' and passes' ranges (GpuTimeline). NaN
+    // until the GPU has answered them all (wait_timings() waits; on a software renderer they are
+    // in when render() returns) or where the driver gave an impossible answer.
     double last_gpu_ms() const { return last_gpu_ms_; }
-    // The frame steps of the last frame (GPU time per step; NaN where the driver gave no valid answer).
+    // The GPU time of the latest frame whose timings are all in (NaN before the first).
+    double last_complete_gpu_ms() const { return last_complete_gpu_ms_; }
+    // Hands over the timings the GPU has answered (render() does this first), or waits for all.
+    void poll_timings();
+    void wait_timings();
+    // Whether the GL renderer runs on the CPU (is_software_renderer); its timings are then wall
+    // times between glFinish calls (GpuTimeline).
+    bool software() const;
+    // Every pass timed on its own on a software renderer too (bench --profile). Off by default
+    // there, since each range finishes the queue; hardware always times passes one by one.
+    void set_pass_timing(bool on) { pass_timing_ = on; }
+    // The frame steps of the last frame (GPU time per step; NaN where the driver gave no valid
+    // answer, or until the GPU answers; meanwhile a step that ran shows its previous answer).
     const std::vector<FrameStepRun>& last_steps() const { return last_steps_; }
     // Colour attachments per batch: min(GL_MAX_DRAW_BUFFERS, GL_MAX_COLOR_ATTACHMENTS), or a
     // smaller limit set for tests (0 = the GL's own).
@@ -140,5 +156,7 @@ private:
     int width_ = 0, height_ = 0;
     int max_attachments_override_ = 0;
     double last_gpu_ms_ = 0;
+    double last_complete_gpu_ms_ = std::numeric_limits<double>::quiet_NaN();
+    bool pass_timing_ = false;
 };
 }  // namespace mesolab::gpu

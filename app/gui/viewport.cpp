@@ -243,7 +243,10 @@ void Viewport::render(FrameState& f, const UiState::Viewport& v, const Evaluatio
     for (const auto& a : Registry::instance().aovs(f.scene))
         if (a.name == v.aov) aovs.push_back(a.name);
     renderer_->render(f.scene, eval, size.x, size.y, aovs.empty() ? std::vector<std::string>{"radiance"} : aovs);
-    f.rendered(size, reduced, ms_since(t0));
+    // The frame is not waited for: its cost is what the CPU spent submitting it, or the GPU time
+    // of the latest frame whose timings are in (a frame late), whichever is larger.
+    const double gpu_ms = renderer_->last_complete_gpu_ms();
+    f.rendered(size, reduced, std::isfinite(gpu_ms) ? std::max(ms_since(t0), gpu_ms) : ms_since(t0));
     update_display(f, v);
 }
 

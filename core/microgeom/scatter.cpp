@@ -137,6 +137,10 @@ ScatterResult scatter(const Heightfield& hf, const DirectionSet& dirs, const Vis
         return s.gatherer ? s.gatherer->gather(L_prev, J, primary) : gather(L_prev, J, primary);
     };
     const std::vector<std::vector<int>> J = scatter_subsets(s, N);
+    if (s.gatherer) {
+        out.E_indirect = s.gatherer->bounces(out.direct, hf.albedo, s.env != nullptr, J, K, progress);
+        return out;
+    }
     // Without an environment E^0 is 0 (the light-driven solves): the gather is skipped.
     std::vector<vec3> E = s.env ? run_gather(nullptr, J[0], K == 0) : std::vector<vec3>(T, vec3(0.f));
     for (int k = 1; k <= K; ++k) {
@@ -147,6 +151,19 @@ ScatterResult scatter(const Heightfield& hf, const DirectionSet& dirs, const Vis
     }
     out.E_indirect = std::move(E);
     return out;
+}
+
+std::vector<vec3> Gatherer::bounces(const std::vector<vec3>& direct, const std::vector<vec3>& albedo, bool env, const std::vector<std::vector<int>>& J,
+                                    int K, const std::function<void(double)>& progress) {
+    const size_t T = direct.size();
+    std::vector<vec3> E = env ? gather(nullptr, J[0], K == 0) : std::vector<vec3>(T, vec3(0.f));
+    for (int k = 1; k <= K; ++k) {
+        std::vector<vec3> L(T);
+        for (size_t p = 0; p < T; ++p) L[p] = direct[p] + albedo[p] * kInvPi * E[p];
+        E = gather(&L, J[size_t(k)], k == K);
+        if (progress) progress(double(k) / double(K));
+    }
+    return E;
 }
 
 // [SECTION] Scattering tabulated over light directions (non-planar bases)

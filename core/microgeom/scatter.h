@@ -54,6 +54,12 @@ public:
     virtual void begin(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, const Importance* bent, const std::vector<vec3>& L_env) = 0;
     // L_prev: radiance per texel of the previous bounce (null: environment only); primary: bilinear hit look-ups, else nearest.
     virtual std::vector<vec3> gather(const std::vector<vec3>* L_prev, const std::vector<int>& J, bool primary) = 0;
+    // Every bounce, returning E^K: E^0 gathers the environment (when `env`; else E^0 = 0), and for
+    // k = 1..K, L^{k-1} = direct + albedo / pi * E^{k-1} and E^k gathers L^{k-1} over J[k]; only
+    // the last gather is primary. The default calls gather() per bounce and forms L here; a GPU
+    // keeps E and L on the device between bounces and reads E^K back once.
+    virtual std::vector<vec3> bounces(const std::vector<vec3>& direct, const std::vector<vec3>& albedo, bool env, const std::vector<std::vector<int>>& J,
+                                      int K, const std::function<void(double)>& progress);
 };
 
 struct ScatterSettings;

@@ -7,7 +7,8 @@
 // bounce's radiance at the hit (bilinear for the primary gather, nearest texel for inner ones),
 // 0 below p's plane or in the first gather (environment only).
 // S_i and the bent weights come in chunks of directions [u_j0, u_j1) (gpu/microgeom/chunks.h):
-// one dispatch per chunk accumulates (sum, wsum) in E_out; the last one divides.
+// one dispatch per chunk accumulates (sum, wsum) in E_out; the last one divides and, for the next
+// bounce, forms that bounce's radiance L_next = direct + albedo / pi * E (when u_form_next).
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(std430, binding = 0) readonly buffer Vis { uint S[]; };          // [direction - u_j0][row][column]
@@ -18,11 +19,15 @@ layout(std430, binding = 4) readonly buffer Env { vec4 L_env[]; };       // per 
 layout(std430, binding = 5) readonly buffer Prev { vec4 L_prev[]; };     // per texel
 layout(std430, binding = 6) readonly buffer Subset { int J[]; };
 layout(std430, binding = 7) buffer Out { vec4 E_out[]; };               // (sum, wsum) until the last chunk, then (E, 1)
+layout(std430, binding = 8) readonly buffer Direct { vec4 direct[]; };  // per texel
+layout(std430, binding = 9) readonly buffer Albedo { vec4 albedo[]; };  // per texel
+layout(std430, binding = 10) writeonly buffer Next { vec4 L_next[]; };  // per texel
 
 uniform ivec2 u_size;
-uniform int u_j0, u_j1, u_first, u_last, u_J_count, u_periodic, u_has_bent, u_has_prev, u_primary;
+uniform int u_j0, u_j1, u_first, u_last, u_J_count, u_periodic, u_has_bent, u_has_prev, u_primary, u_form_next;
 
 const float PI = 3.14159265358979323846;
+const float INV_PI = 0.31830988618379067154;
 const uint kNoHit = 0xFFFFFFFFu, kBelow = 0xFFFFFFFEu;
 
 int wrap_index(int i, int n) { return u_periodic != 0 ? ((i % n) + n) % n : clamp(i, 0, n - 1); }
@@ -64,5 +69,11 @@ void main() {
     }
     vec4 acc = vec4(sum, wsum);
     if (u_first == 0) acc += E_out[p];
-    E_out[p] = u_last != 0 ? vec4(acc.w > 0.0 ? PI * acc.xyz / acc.w : vec3(0.0), 1.0) : acc;
+    if (u_last == 0) {
+        E_out[p] = acc;
+        return;
+    }
+    vec3 E = acc.w > 0.0 ? PI * acc.xyz / acc.w : vec3(0.0);
+    E_out[p] = vec4(E, 1.0);
+    if (u_form_next != 0) L_next[p] = vec4(direct[p].xyz + albedo[p].xyz * INV_PI * E, 0.0);
 }

@@ -67,6 +67,7 @@ public:
         glUniform1i(program_->uniform("u_has_bent"), has_bent_ ? 1 : 0);
         glUniform1i(program_->uniform("u_has_prev"), L_prev ? 1 : 0);
         glUniform1i(program_->uniform("u_primary"), primary ? 1 : 0);
+        glUniform1i(program_->uniform("u_form_next"), 0);
         const GLuint buffers[8] = {0, normals_.get(), dirs_.get(), 0, env_.get(), prev_.get(), subset.get(), out_.get()};
         for (GLuint b = 0; b < 8; ++b) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b, buffers[b]);
         // One dispatch per chunk of directions, accumulating; the last divides.
@@ -83,6 +84,76 @@ public:
         check_gl("microgeom.scatter gather");
         std::vector<vec3> E(T);
         for (size_t p = 0; p < T; ++p) E[p] = vec3(E4[p]);
+        return E;
+    }
+
+    // [SECTION] Every bounce on the GPU
+    // E and L stay in GPU buffers from one bounce to the next: each bounce's last dispatch forms
+    // the next bounce's L (scatter.comp, u_form_next), and only E^K is read back.
+    std::vector<vec3> bounces(const std::vector<vec3>& direct, const std::vector<vec3>& albedo, bool env, const std::vector<std::vector<int>>& J, int K,
+                              const std::function<void(double)>& progress) override {
+        const size_t T = size_t(W_) * size_t(H_);
+        std::vector<vec4> packed(T);
+        for (size_t p = 0; p < T; ++p) packed[p] = vec4(direct[p], 0.f);
+        const Buffer direct_buf = make_storage_buffer(packed.data(), T * sizeof(vec4));
+        for (size_t p = 0; p < T; ++p) packed[p] = vec4(albedo[p], 0.f);
+        const Buffer albedo_buf = make_storage_buffer(packed.data(), T * sizeof(vec4));
+        packed = {};
+        // L^{k-1} is read from `prev`, L^k written to `next`; they swap after each bounce.
+        Buffer next = make_storage_buffer(nullptr, T * sizeof(vec4), GL_DYNAMIC_COPY);
+        Buffer prev = std::move(prev_);
+        if (!prev) prev = make_storage_buffer(nullptr, T * sizeof(vec4), GL_DYNAMIC_COPY);
+        GLint previous = 0;
+        glGetIntegerv(GL_CURRENT_PROGRAM, &previous);
+        program_->use();
+        glUniform2i(program_->uniform("u_size"), W_, H_);
+        glUniform1i(program_->uniform("u_periodic"), periodic_ ? 1 : 0);
+        glUniform1i(program_->uniform("u_has_bent"), has_bent_ ? 1 : 0);
+        for (GLuint b : {1u, 2u, 4u, 7u, 8u, 9u})
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b, b == 1 ? normals_.get() : b == 2 ? dirs_.get() : b == 4 ? env_.get() : b == 7 ? out_.get() : b == 8 ? direct_buf.get() : albedo_buf.get());
+        const int none = 0;
+        const auto run = [&](const std::vector<int>& subset_J, bool has_prev, bool primary, bool form_next) {
+            const Buffer subset = subset_J.empty() ? make_storage_buffer(&none, sizeof none) : make_storage_buffer(subset_J.data(), subset_J.size() * sizeof(int));
+            glUniform1i(program_->uniform("u_J_count"), int(subset_J.size()));
+            glUniform1i(program_->uniform("u_has_prev"), has_prev ? 1 : 0);
+            glUniform1i(program_->uniform("u_primary"), primary ? 1 : 0);
+            glUniform1i(program_->uniform("u_form_next"), form_next ? 1 : 0);
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 5, prev.get());
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, subset.get());
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 10, next.get());
+            for_each_chunk(chunks_, *program_, 0, 3, [&] {
+                glDispatchCompute(GLuint((W_ + kLocal - 1) / kLocal), GLuint((H_ + kLocal - 1) / kLocal), 1);
+                glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+            });
+            std::swap(prev, next);  // L^k becomes the next bounce's input
+        };
+        if (env) {
+            run(J[0], false, K == 0, K > 0);
+        } else if (K > 0) {
+            // E^0 = 0: L^0 is the direct light.
+            glBindBuffer(GL_COPY_READ_BUFFER, direct_buf.get());
+            glBindBuffer(GL_COPY_WRITE_BUFFER, prev.get());
+            glCopyBufferSubData(GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER, 0, 0, GLsizeiptr(T * sizeof(vec4)));
+            glBindBuffer(GL_COPY_READ_BUFFER, 0);
+            glBindBuffer(GL_COPY_WRITE_BUFFER, 0);
+            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        }
+        for (int k = 1; k <= K; ++k) {
+            run(J[size_t(k)], true, k == K, k < K);
+            if (progress) progress(double(k) / double(K));
+        }
+        std::vector<vec3> E(T, vec3(0.f));
+        if (env || K > 0) {
+            std::vector<vec4> E4(T);
+            glBindBuffer(GL_SHADER_STORAGE_BUFFER, out_.get());
+            glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(T * sizeof(vec4)), E4.data());
+            glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+            for (size_t p = 0; p < T; ++p) E[p] = vec3(E4[p]);
+        }
+        for (GLuint b = 0; b < 11; ++b) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b, 0);
+        glUseProgram(GLuint(previous));
+        prev_ = std::move(prev);
+        check_gl("microgeom.scatter bounces");
         return E;
     }
 

@@ -319,5 +319,61 @@ TEST(GpuTimerRule, RejectsAnswersLongerThanTheWallClock) {
     EXPECT_FALSE(GpuTimer::plausible(std::numeric_limits<double>::quiet_NaN(), 2.0));
     EXPECT_FALSE(GpuTimer::plausible(-1.0, 2.0));
 }
+
+// [SECTION] GpuTimeline
+// Ranges answered without a wait: each callback runs once, in order, with a plausible time or
+// NaN; a software timeline answers at end(). Ranges never nest.
+TEST_F(GpuTest, GpuTimelineAnswersEachRangeOnceInOrder) {
+    const Program prog = Program::graphics("shaders/test/fullscreen.vert", "shaders/test/solid.frag");
+    RenderTarget rt;
+    rt.resize(64, 64, 1);
+    GLuint vao_id = 0;
+    glGenVertexArrays(1, &vao_id);
+    VertexArray vao(vao_id);
+    rt.bind();
+    prog.use();
+    glBindVertexArray(vao.get());
+    for (bool software : {false, true}) {
+        GpuTimeline timeline(software);
+        std::vector<int> order;
+        std::vector<double> times;
+        const auto t0 = std::chrono::steady_clock::now();
+        for (int i = 0; i < 6; ++i) {
+            timeline.begin();
+            for (int k = 0; k < 20; ++k) glDrawArrays(GL_TRIANGLES, 0, 3);
+            timeline.end([&, i](double ms) {
+                order.push_back(i);
+                times.push_back(ms);
+            });
+            if (software) {
+                EXPECT_EQ(order.size(), size_t(i + 1)) << "a software range answers at end()";
+            }
+            timeline.poll();  // whatever is ready; never more than was begun
+            EXPECT_LE(order.size(), size_t(i + 1));
+        }
+        EXPECT_THROW(timeline.end({}), std::logic_error);
+        timeline.begin();
+        EXPECT_THROW(timeline.begin(), std::logic_error) << "ranges do not nest";
+        timeline.end({});
+        timeline.wait();
+        const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        EXPECT_EQ(timeline.open(), 0u);
+        ASSERT_EQ(order, (std::vector<int>{0, 1, 2, 3, 4, 5})) << "software " << software;
+        for (double ms : times) EXPECT_TRUE(std::isnan(ms) || (ms >= 0.0 && ms <= wall * 1.01 + 1.0)) << ms;
+        if (software) {
+            for (double ms : times) EXPECT_TRUE(std::isfinite(ms)) << "a wall time is always a figure";
+        }
+    }
+    glBindVertexArray(0);
+    check_gl("GpuTimeline");
+}
+
+TEST(GpuTimelineRule, NamesSoftwareRenderers) {
+    EXPECT_TRUE(is_software_renderer("llvmpipe (LLVM 15.0.6, 256 bits)"));
+    EXPECT_TRUE(is_software_renderer("softpipe"));
+    EXPECT_TRUE(is_software_renderer("Google SwiftShader"));
+    EXPECT_FALSE(is_software_renderer("NVIDIA H100 80GB HBM3/PCIe/SSE2"));
+    EXPECT_FALSE(is_software_renderer("AMD Radeon RX 7900 XTX (radeonsi, navi31, LLVM 15.0.6, DRM 3.49, 6.1.0)"));
+}
 }  // namespace
 }  // namespace mesolab::gpu

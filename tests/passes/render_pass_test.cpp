@@ -246,3 +246,64 @@ TEST(FrameSteps, BenchAndTheCaptureSidecarListThem) {
     EXPECT_EQ(side["frame_steps"][0]["status"], "ran");
     EXPECT_TRUE(side["frame_steps"][0].contains("ms"));
 }
+
+// [SECTION] GPU timings
+// A frame's GPU time is the sum of its steps' and passes' ranges; the workbench waits for the
+// frame's fence, then takes them. On a software renderer they are the wall times of that work.
+TEST(GpuTimings, AFramesTimeIsTheSumOfItsStepsAndPasses) {
+    Workbench wb;
+    const Scene s = probe_scene();
+    RenderRequest req;
+    req.width = req.height = 48;
+    req.backend = Backend::Gpu;
+    wb.gpu().set_pass_timing(true);
+    wb.render(s, req);
+    wb.forget_frame_steps();
+    const RenderResult r = wb.render(s, req);
+    ASSERT_TRUE(std::isfinite(r.gpu_ms)) << "the frame's timings were taken after its fence";
+    EXPECT_EQ(r.gpu_ms_is_wall, wb.gpu().software());
+    double steps = 0;
+    for (const FrameStepRun& st : r.frame.steps) {
+        EXPECT_EQ(st.status, StageStatus::Ran) << st.name;
+        EXPECT_TRUE(std::isfinite(st.ms) && st.ms >= 0.0) << st.name << ": " << st.ms;
+        steps += st.ms;
+    }
+    EXPECT_EQ(r.frame.steps.size(), 2u);
+    EXPECT_GE(r.gpu_ms, steps * (1 - 1e-9));
+    // Every range under its own path: the steps, the clear and the technique's draw.
+    TimingStat st;
+    for (const char* path : {"frame.gpu/gpu", "frame.gpu/step.probe.illumination/gpu", "frame.gpu/step.probe.blur/gpu", "frame.gpu/clear/gpu",
+                             "frame.gpu/draw.probe/gpu"})
+        EXPECT_TRUE(wb.session().profiler().find(path, st)) << path;
+    // A frame whose steps are reused adds no step ranges, and its total is still complete.
+    const RenderResult again = wb.render(s, req);
+    EXPECT_TRUE(std::isfinite(again.gpu_ms));
+    for (const FrameStepRun& run : again.frame.steps) EXPECT_EQ(run.status, StageStatus::Cached) << run.name;
+}
+
+// bench --row / --column measure the cells asked for; an unmatched filter names what exists, and
+// --update-pages (whole tables) refuses them.
+TEST(GpuTimings, BenchMeasuresOnlyTheRowsAndColumnsAskedFor) {
+    TempDirForPasses dir;
+    BenchOptions b;
+    b.tables = {"probe"};
+    b.repeat = 1;
+    b.backend = "cpu";
+    b.format = "json";
+    b.rows = {"sphere"};
+    b.out = dir / "bench.json";
+    ASSERT_EQ(run_bench(b), 0);
+    const json j = json::parse(test::slurp(dir / "bench.json"));
+    ASSERT_FALSE(j["cells"].empty());
+    for (const auto& c : j["cells"]) EXPECT_NE(c["row"].get<std::string>().find("sphere"), std::string::npos) << c.dump();
+    b.rows = {"no such row"};
+    try {
+        run_bench(b);
+        ADD_FAILURE() << "an unmatched --row was accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("'sphere'"), std::string::npos) << e.what();
+    }
+    b.rows = {"sphere"};
+    b.update_pages = true;
+    EXPECT_THROW(run_bench(b), InputError);
+}
