@@ -30,7 +30,69 @@ struct Cell {
     // GPU frame cells on a hardware GL: the median of the frame's GPU time (timer queries), beside
     // its wall time to a finished frame (median).
     std::optional<double> gpu_time;
+    std::string label;  // another machine's cells (bench/*.json): its short name, e.g. "H100"; "" for this run's
 };
+
+// [SECTION] Other machines' figures
+// A run on another machine (`bench --format json --label NAME -o bench/NAME.json` there), kept in
+// the repository and merged into the pages by --update-pages, beside this machine's figures.
+struct OtherMachine {
+    std::string file, label, machine;
+    int repeat = 0;
+    std::vector<Cell> cells;
+};
+
+std::vector<OtherMachine> load_other_machines(const std::string& root, const std::string& this_machine) {
+    namespace fs = std::filesystem;
+    std::vector<fs::path> files;
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(fs::path(root) / "bench", ec))
+        if (e.path().extension() == ".json") files.push_back(e.path());
+    std::sort(files.begin(), files.end());
+    std::vector<OtherMachine> out;
+    for (const auto& f : files) {
+        const std::string where = f.string();
+        json j;
+        try {
+            std::ifstream in(f);
+            if (!in) throw InputError(where + ": cannot be read");
+            j = json::parse(in);
+        } catch (const json::exception& e) {
+            throw InputError(where + ": not a bench JSON file (" + e.what() + ")");
+        }
+        const auto need = [&](const json& o, const char* key, json::value_t type, const std::string& at) -> const json& {
+            if (!o.contains(key) || (o[key].type() != type && !(type == json::value_t::number_float && o[key].is_number())))
+                throw InputError(where + ": " + at + "\"" + key + "\" is missing or not a " + (type == json::value_t::string ? "string" : type == json::value_t::array ? "list" : "number"));
+            return o[key];
+        };
+        OtherMachine m;
+        m.file = where;
+        m.machine = need(j, "machine", json::value_t::string, "").get<std::string>();
+        if (m.machine == this_machine) continue;  // this run's figures replace that file's
+        m.label = j.contains("label") && j["label"].is_string() ? j["label"].get<std::string>() : f.stem().string();
+        m.repeat = j.contains("repeat") && j["repeat"].is_number_integer() ? j["repeat"].get<int>() : 0;
+        size_t k = 0;
+        for (const json& c : need(j, "cells", json::value_t::array, "")) {
+            const std::string at = "cells[" + std::to_string(k++) + "]: ";
+            if (c.contains("info")) continue;  // reports (sizes, counts) are the same anywhere
+            Cell x;
+            x.table = need(c, "table", json::value_t::string, at).get<std::string>();
+            x.row = need(c, "row", json::value_t::string, at).get<std::string>();
+            x.column = need(c, "column", json::value_t::string, at).get<std::string>();
+            x.device = need(c, "device", json::value_t::string, at).get<std::string>();
+            if (x.device != "cpu" && x.device != "gpu") throw InputError(where + ": " + at + "\"device\" is '" + x.device + "', expected cpu or gpu");
+            x.step = c.contains("step") && c["step"].is_string() ? c["step"].get<std::string>() : "";
+            x.median = need(c, "median_ms", json::value_t::number_float, at).get<double>();
+            x.min = need(c, "min_ms", json::value_t::number_float, at).get<double>();
+            x.max = need(c, "max_ms", json::value_t::number_float, at).get<double>();
+            if (c.contains("gpu_time_ms") && c["gpu_time_ms"].is_number()) x.gpu_time = c["gpu_time_ms"].get<double>();
+            x.label = m.label;
+            m.cells.push_back(x);
+        }
+        out.push_back(std::move(m));
+    }
+    return out;
+}
 
 std::string fmt_ms(double ms) {
     char b[64];
@@ -302,6 +364,7 @@ int run_bench(const BenchOptions& o) {
     } else if (o.format == "json") {
         json j;
         j["machine"] = machine;
+        if (!o.label.empty()) j["label"] = o.label;
         j["version"] = version_string();
         j["repeat"] = o.repeat;
         j["cells"] = json::array();
@@ -323,14 +386,22 @@ int run_bench(const BenchOptions& o) {
         }
         out << j.dump(2) << "\n";
     }
-    // Markdown, one block per table (also what --update-pages writes into the pages).
+    // Markdown, one block per table (also what --update-pages writes into the pages, with the
+    // figures of other machines kept in bench/*.json beside this run's).
+    std::vector<OtherMachine> others;
+    if (o.update_pages) others = load_other_machines(o.pages_root, machine);
+    const size_t own_cells = cells.size();
+    for (const OtherMachine& m : others) cells.insert(cells.end(), m.cells.begin(), m.cells.end());
     std::map<std::string, std::string> markdown;
     for (const auto& t : tables) {
         std::ostringstream md;
         {
             md << "### " << t.title << "\n\n";
-            md << "Ours: " << machine << "; median of " << o.repeat << " runs [min–max] (a stage over " << int(kSlowMs / 1000) << " s: its first run alone)." << (t.paper_machine.empty() ? "" : " Paper: " + t.paper_machine + ".") << (want_gpu ? gpu_note : "")
-                << "\n\n| |";
+            md << "Ours: " << machine << "; median of " << o.repeat << " runs [min–max] (a stage over " << int(kSlowMs / 1000) << " s: its first run alone)." << (t.paper_machine.empty() ? "" : " Paper: " + t.paper_machine + ".") << (want_gpu ? gpu_note : "");
+            for (const OtherMachine& m : others)
+                if (std::any_of(m.cells.begin(), m.cells.end(), [&](const Cell& c) { return c.table == t.name; }))
+                    md << " **" << m.label << ":** " << m.machine << "; median of " << m.repeat << " runs; GPU frame cells give the wall time to a finished frame, then the GPU time (timer queries); from `" << std::filesystem::path(m.file).filename().string() << "`.";
+            md << "\n\n| |";
             for (const auto& c : t.columns) md << " " << c.name << " |";
             md << "\n|---|";
             for (size_t i = 0; i < t.columns.size(); ++i) md << "---|";
@@ -353,15 +424,15 @@ int run_bench(const BenchOptions& o) {
                                 cell = c.info;
                                 continue;
                             }
-                            cell += (cell.empty() ? "" : "<br>") + std::string(c.device == "gpu" ? "GPU " : "CPU ") + fmt_ms(c.median) + " [" + fmt_ms(c.min) +
-                                    "–" + fmt_ms(c.max) + "]";
+                            cell += (cell.empty() ? "" : "<br>") + (c.label.empty() ? "" : "**" + c.label + "** ") + std::string(c.device == "gpu" ? "GPU " : "CPU ") +
+                                    fmt_ms(c.median) + " [" + fmt_ms(c.min) + "–" + fmt_ms(c.max) + "]";
                             if (c.gpu_time) cell += " (GPU time " + fmt_ms(*c.gpu_time) + ")";
-                            paper = c.paper;
+                            if (c.label.empty()) paper = c.paper;
                         }
                         if (paper) {
                             double best = 1e300;
                             for (const auto& c : cells)
-                                if (c.table == t.name && c.row == row.name && c.column == col.name && c.step == step && c.info.empty())
+                                if (c.table == t.name && c.row == row.name && c.column == col.name && c.step == step && c.info.empty() && c.label.empty())
                                     best = std::min(best, c.median);
                             char r[64];
                             std::snprintf(r, sizeof r, " (×%.3g faster)", *paper / best);
@@ -376,6 +447,7 @@ int run_bench(const BenchOptions& o) {
         }
         markdown[t.name] = md.str();
     }
+    cells.resize(own_cells);
     if (o.format == "md")
         for (const auto& t : tables) out << markdown[t.name];
     if (o.profile) print_profile(session.profiler());

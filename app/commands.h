@@ -36,6 +36,7 @@ struct BenchOptions {
     std::string mesh;                // --mesh FILE: a row for this mesh in the tables that take one
     int vertices = 0;                // --vertices N: simplify it to N vertices (0: the table's choice)
     std::vector<std::string> rows, columns;  // --row / --column: only the rows and columns whose names contain one of these
+    std::string label;               // --label: this machine's short name in the JSON ("H100"), shown in the pages when merged from bench/NAME.json
 };
 int run_bench(const BenchOptions& o);
 

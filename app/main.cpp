@@ -81,6 +81,7 @@ int main(int argc, char** argv) {
     b->add_option("tables", bench.tables, "Table names: " + table_names);
     b->add_option("--format", bench.format, "md, csv or json")->capture_default_str();
     b->add_option("--repeat", bench.repeat, "Runs per cell (median, min, max)")->capture_default_str();
+    b->add_option("--label", bench.label, "With --format json: this machine's short name (e.g. H100); a file bench/NAME.json of such a run is merged into the pages by --update-pages, beside this machine's figures");
     b->add_option("--row", bench.rows, "Only the rows whose names contain TEXT (repeatable), e.g. --row 'Bricks 1024'");
     b->add_option("--column", bench.columns, "Only the columns whose names contain TEXT (repeatable), e.g. --column frame");
     b->add_option("-o,--output", bench.out, "Write to FILE instead of standard output");

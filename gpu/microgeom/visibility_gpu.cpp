@@ -22,8 +22,6 @@ constexpr double kPeriodicReach = 4;  // periodic reach, units of (W + H) texels
 constexpr float kBig = 3.0e38f;       // "infinity" for the shader (never multiplied by 0 there)
 constexpr int kLocal = 8;             // work group: 8 x 8 texels of one direction
 constexpr int kMaxLevels = 16;        // pyramid levels the shader's uniform arrays hold
-constexpr size_t kBatchBytes = size_t(64) << 20;  // output per dispatch, at most
-constexpr size_t kBatchInvocations = size_t(1) << 22;  // invocations per dispatch, at most
 
 // std430 layouts of the shader's structs.
 struct TexelData {
@@ -202,19 +200,22 @@ Prepared prepare(const Heightfield& hf, const DirectionSet& dirs) {
     return P;
 }
 
-// Uploads, then dispatches batches of directions [d0, d1) into one output SSBO ([d - d0][row][col]),
-// calling sink(d0, d1, buffer) after each. Restores the current program.
+// Uploads, then dispatches batches of directions [d0, d1), each into an output SSBO ([d - d0][row][col]),
+// and calls sink(d0, d1, buffer) for each batch, in order. Up to Batching::in_flight_bytes of batches are
+// dispatched before the first sink, each into a buffer of its own, so that a read-back waits only
+// for its own batch while the GPU goes on with the later ones (a buffer is reused once its batch
+// is sunk). Restores the current program.
 template <class Sink>
-void run(const Program& program, const Prepared& P, Sink&& sink) {
+void run(const Program& program, const VisibilityProgram::Batching& batching, const Prepared& P, Sink&& sink) {
     const size_t per_dir = size_t(P.W) * size_t(P.H);
     GLint64 max_block = 0;
     glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
-    const size_t limit = std::min(kBatchBytes, size_t(std::max<GLint64>(max_block, 0)));
+    const size_t limit = std::min(batching.batch_bytes, size_t(std::max<GLint64>(max_block, 0)));
     if (per_dir * sizeof(uint32_t) > size_t(std::max<GLint64>(max_block, 0)) ||
         P.texels.size() * sizeof(TexelData) > size_t(std::max<GLint64>(max_block, 0)))
         throw std::runtime_error("microgeom visibility (GPU): " + std::to_string(P.W) + "x" + std::to_string(P.H) +
                                  " texels exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (" + std::to_string(max_block) + " bytes)");
-    const int batch = int(std::clamp<size_t>(std::min(limit / (per_dir * sizeof(uint32_t)), kBatchInvocations / per_dir), 1, 65535));
+    const int batch = int(std::clamp<size_t>(std::min(limit / (per_dir * sizeof(uint32_t)), batching.invocations / per_dir), 1, 65535));
 
     GLint previous = 0;
     glGetIntegerv(GL_CURRENT_PROGRAM, &previous);
@@ -222,7 +223,10 @@ void run(const Program& program, const Prepared& P, Sink&& sink) {
     const Buffer dirs = make_storage_buffer(P.dirs.data(), P.dirs.size() * sizeof(DirData), GL_STATIC_DRAW);
     const Buffer cells = make_storage_buffer(P.cells.data(), P.cells.size() * sizeof(float), GL_STATIC_DRAW);
     const Buffer mm = make_storage_buffer(P.mm.data(), P.mm.size() * sizeof(float), GL_STATIC_DRAW);
-    const Buffer out = make_storage_buffer(nullptr, size_t(std::min(batch, P.N)) * per_dir * sizeof(uint32_t), GL_STREAM_READ);
+    const size_t batch_bytes = size_t(std::min(batch, P.N)) * per_dir * sizeof(uint32_t);
+    const int batches = (P.N + batch - 1) / batch;
+    std::vector<Buffer> outs(size_t(std::clamp<size_t>(batching.in_flight_bytes / batch_bytes, 1, size_t(batches))));
+    for (Buffer& b : outs) b = make_storage_buffer(nullptr, batch_bytes, GL_STREAM_READ);
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
     check_gl("microgeom.visibility upload");
 
@@ -241,19 +245,24 @@ void run(const Program& program, const Prepared& P, Sink&& sink) {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, dirs.get());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, cells.get());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, mm.get());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, out.get());
     const GLint loc_dir0 = program.uniform("u_dir0"), loc_count = program.uniform("u_dir_count");
     const GLuint gx = GLuint((P.W + kLocal - 1) / kLocal), gy = GLuint((P.H + kLocal - 1) / kLocal);
+    const auto sink_batch = [&](int b) {
+        const int d0 = b * batch, d1 = std::min(P.N, d0 + batch);
+        sink(d0, d1, outs[size_t(b) % outs.size()].get());
+    };
     try {
-        for (int d0 = 0; d0 < P.N; d0 += batch) {
-            const int d1 = std::min(P.N, d0 + batch);
+        for (int b = 0; b < batches; ++b) {
+            if (b >= int(outs.size())) sink_batch(b - int(outs.size()));  // frees the buffer this batch writes
+            const int d0 = b * batch, d1 = std::min(P.N, d0 + batch);
             glUseProgram(id);
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, outs[size_t(b) % outs.size()].get());
             glUniform1i(loc_dir0, d0);
             glUniform1i(loc_count, d1 - d0);
             glDispatchCompute(gx, gy, GLuint(d1 - d0));
             check_gl("microgeom.visibility dispatch");
-            sink(d0, d1, out.get());
         }
+        for (int b = std::max(0, batches - int(outs.size())); b < batches; ++b) sink_batch(b);
     } catch (...) {
         glUseProgram(GLuint(previous));
         throw;
@@ -273,7 +282,7 @@ Visibility VisibilityProgram::compute(const Heightfield& hf, const DirectionSet&
     const Prepared P = prepare(hf, dirs);
     const size_t per_dir = size_t(P.W) * size_t(P.H);
     vis.hit.assign(size_t(P.N) * per_dir, Visibility::kNoHit);
-    run(program_, P, [&](int d0, int d1, GLuint out) {
+    run(program_, batching_, P, [&](int d0, int d1, GLuint out) {
         glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
         glBindBuffer(GL_SHADER_STORAGE_BUFFER, out);
         glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(size_t(d1 - d0) * per_dir * sizeof(uint32_t)),
@@ -303,7 +312,7 @@ Texture VisibilityProgram::compute_texture(const Heightfield& hf, const Directio
     try {
         // Each batch of directions goes from the storage buffer the shader wrote into its layers,
         // on the GPU (the buffer is the pixel-unpack source).
-        run(program_, P, [&](int d0, int d1, GLuint out) {
+        run(program_, batching_, P, [&](int d0, int d1, GLuint out) {
             glMemoryBarrier(GL_PIXEL_BUFFER_BARRIER_BIT);
             glBindBuffer(GL_PIXEL_UNPACK_BUFFER, out);
             glPixelStorei(GL_UNPACK_ALIGNMENT, 4);

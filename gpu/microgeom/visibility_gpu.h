@@ -34,8 +34,21 @@ public:
     // active unit restored to what it was.
     Texture compute_texture(const Heightfield& hf, const microgeom::DirectionSet& dirs) const;
 
+    // How the directions are dispatched: at most `invocations` (texel, direction) pairs and
+    // `batch_bytes` of output per dispatch, and `in_flight_bytes` of dispatched batches ahead of
+    // their read-back (each in a buffer of its own). The defaults suit llvmpipe and hardware alike
+    // (a hardware GPU holds ~2·10^5 invocations at once: 4M per dispatch keep it full); tests make
+    // them small to reuse buffers.
+    struct Batching {
+        size_t invocations = size_t(1) << 22;
+        size_t batch_bytes = size_t(64) << 20;
+        size_t in_flight_bytes = size_t(256) << 20;
+    };
+    void set_batching(const Batching& b) { batching_ = b; }
+
 private:
     Program program_;
+    Batching batching_;
 };
 
 // Needs a current GL context. Same layout and encoding as microgeom::compute_visibility.

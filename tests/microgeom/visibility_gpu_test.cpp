@@ -227,3 +227,23 @@ TEST_F(VisibilityGpu, ReusedProgramGivesIdenticalResultsForEveryDispatch) {
     EXPECT_GT(below, 0u);
 }
 }  // namespace
+
+namespace {
+// Small batches, two in flight: every output buffer is reused several times, and the results
+// (read back, or copied into the texture on the GPU) are those of one batch per field.
+TEST_F(VisibilityGpu, SmallBatchesInFlightGiveTheSameTextures) {
+    const DirectionSet dirs = make_direction_set(40);
+    const Heightfield hf = procedural("bricks", 64);
+    const gpu::VisibilityProgram whole;
+    gpu::VisibilityProgram small;
+    const size_t per_dir = size_t(64) * 64;
+    small.set_batching({.invocations = per_dir * 3, .batch_bytes = per_dir * 4 * 3, .in_flight_bytes = per_dir * 4 * 6});  // 14 batches, 2 buffers
+    const Visibility a = whole.compute(hf, dirs), b = small.compute(hf, dirs);
+    ASSERT_EQ(a.hit.size(), per_dir * size_t(dirs.size()));
+    EXPECT_TRUE(a.hit == b.hit) << "batches in flight changed S_i";
+    const gpu::Texture t = small.compute_texture(hf, dirs);
+    std::vector<uint32_t> layers(a.hit.size());
+    glGetTextureImage(t.get(), 0, GL_RED_INTEGER, GL_UNSIGNED_INT, GLsizei(layers.size() * sizeof(uint32_t)), layers.data());
+    EXPECT_TRUE(layers == a.hit) << "the texture's layers differ from the read-back";
+}
+}  // namespace

@@ -307,3 +307,41 @@ TEST(GpuTimings, BenchMeasuresOnlyTheRowsAndColumnsAskedFor) {
     b.update_pages = true;
     EXPECT_THROW(run_bench(b), InputError);
 }
+
+// Another machine's run (bench/NAME.json) is merged into the pages beside this machine's figures,
+// and a second --update-pages keeps it: this machine never overwrites it. A bad file is an error
+// naming the file and the key.
+TEST(GpuTimings, PagesKeepAnotherMachinesFiguresBesideThisOnes) {
+    TempDirForPasses dir;
+    test::write_file(dir / "README.md", "# page\n\n<!-- bench probe -->\nold\n<!-- /bench -->\n\nafter\n");
+    std::filesystem::create_directories(dir / "bench");
+    test::write_file(dir / "bench/h100.json", R"({"machine": "Intel Xeon, 16 threads; GL: NVIDIA H100 80GB HBM3/PCIe/SSE2", "label": "H100", "repeat": 5,
+        "cells": [{"table": "probe", "row": "sphere", "column": "frame 64x64", "device": "gpu", "median_ms": 0.25, "min_ms": 0.2, "max_ms": 0.3, "gpu_time_ms": 0.05},
+                  {"table": "probe", "row": "sphere", "column": "frame 64x64", "step": "probe.blur", "device": "gpu", "median_ms": 0.01, "min_ms": 0.01, "max_ms": 0.02},
+                  {"table": "elsewhere", "row": "x", "column": "y", "device": "cpu", "median_ms": 1, "min_ms": 1, "max_ms": 1}]})");
+    BenchOptions b;
+    b.tables = {"probe"};
+    b.repeat = 1;
+    b.backend = "cpu";
+    b.update_pages = true;
+    b.pages_root = dir.path.string();
+    for (int run = 0; run < 2; ++run) {
+        ASSERT_EQ(run_bench(b), 0);
+        const std::string md = test::slurp(dir / "README.md");
+        EXPECT_EQ(md.find("old"), std::string::npos) << md;
+        EXPECT_NE(md.find("**H100:** Intel Xeon, 16 threads; GL: NVIDIA H100"), std::string::npos) << md;
+        EXPECT_NE(md.find("CPU "), std::string::npos) << "this machine's figure: " << md;
+        EXPECT_NE(md.find("**H100** GPU 250 µs [200 µs–300 µs] (GPU time 50 µs)"), std::string::npos) << md;
+        EXPECT_NE(md.find("**H100** GPU 10 µs"), std::string::npos) << "the step's row: " << md;
+        EXPECT_NE(md.find("after"), std::string::npos);
+    }
+    test::write_file(dir / "bench/h100.json", R"({"machine": "x", "cells": [{"table": "probe", "row": "sphere", "column": "c", "device": "gpu"}]})");
+    try {
+        run_bench(b);
+        ADD_FAILURE() << "a cell without median_ms was accepted";
+    } catch (const InputError& e) {
+        const std::string m = e.what();
+        EXPECT_NE(m.find("h100.json"), std::string::npos) << m;
+        EXPECT_NE(m.find("cells[0]: \"median_ms\""), std::string::npos) << m;
+    }
+}
