@@ -516,7 +516,7 @@ Visibility compute_visibility(const Heightfield& hf, const DirectionSet& dirs, c
     if (hf.h.size() != size_t(W) * size_t(H))
         throw std::invalid_argument("microgeom visibility: heightfield has " + std::to_string(hf.h.size()) + " heights for " +
                                     std::to_string(W) + "x" + std::to_string(H) + " texels");
-    vis.hit.assign(size_t(N) * size_t(W) * size_t(H), Visibility::kNoHit);
+    vis.hit = hits_filled(size_t(N) * size_t(W) * size_t(H), Visibility::kNoHit);
     const Field F = build_field(hf);
 
     // Per texel: normal and lifted origin (texel space), computed once.
@@ -562,5 +562,15 @@ Visibility compute_visibility(const Heightfield& hf, const DirectionSet& dirs, c
         if (progress) progress(double(d1) / double(N));
     }
     return vis;
+}
+
+HitArray hits_filled(size_t n, uint32_t value) {
+    HitArray h;
+    h.resize(n);  // uninitialised (UninitAllocator)
+    constexpr size_t kBlock = size_t(1) << 20;  // 4 MB per task
+    tbb::parallel_for(size_t(0), (n + kBlock - 1) / kBlock, [&](size_t b) {
+        std::fill(h.begin() + std::ptrdiff_t(b * kBlock), h.begin() + std::ptrdiff_t(std::min(n, (b + 1) * kBlock)), value);
+    });
+    return h;
 }
 }  // namespace mesolab::microgeom

@@ -29,12 +29,22 @@ uniform vec3 u_views[MAX_SHARED_VIEWS];
 // Keeps the four nearest directions by angle (largest cosine c) as ViewTable::at
 // (core/cloth/lafortune.cpp) does: directions come in index order and a later one must be
 // strictly nearer to pass an earlier one, so equal cosines keep the lower index first.
+// Written with constant component indices only: a vector indexed by a loop variable is kept in
+// local memory on some GPUs (NVIDIA), and this runs for every view of every pixel.
 void keep_nearest4(float c, int i, inout ivec4 best, inout vec4 cb) {
-    if (c <= cb[3]) return;
-    int k = 3;
-    while (k > 0 && c > cb[k - 1]) { cb[k] = cb[k - 1]; best[k] = best[k - 1]; --k; }
-    cb[k] = c;
-    best[k] = i;
+    if (c <= cb.w) return;
+    if (!(c > cb.z)) {
+        cb.w = c, best.w = i;
+    } else if (!(c > cb.y)) {
+        cb.w = cb.z, best.w = best.z;
+        cb.z = c, best.z = i;
+    } else if (!(c > cb.x)) {
+        cb.wz = cb.zy, best.wz = best.zy;
+        cb.y = c, best.y = i;
+    } else {
+        cb.wzy = cb.zyx, best.wzy = best.zyx;
+        cb.x = c, best.x = i;
+    }
 }
 
 // Weights of the three nearest (best, with d0..d3 their directions): 1/angle less the fourth

@@ -2,6 +2,7 @@
 // batch's points and lit bits (ellipse_gpu.h, [SECTION] Points), dispatches one work group per
 // texel and reads the ellipses straight into the map (the shader writes Ellipse's layout).
 #include "gpu/microgeom/ellipse_gpu.h"
+#include "core/profile.h"
 
 #include "gpu/context.h"
 #include "gpu/gl.h"
@@ -12,6 +13,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -117,8 +119,12 @@ int bent_batch(const Heightfield& hf, const DirectionSet& dirs, const Visibility
     return int(*std::max_element(B.count.begin(), B.count.end()));
 }
 
-// Texels per dispatch for up to n points per texel.
-int batch_texels(int n) {
+// Texels per dispatch for up to n points per texel: about 0.1 s of work on a software renderer
+// (progress and cancellation stay responsive); on a hardware GPU as many groups as one dispatch
+// takes (kMaxGroups), since a few hundred groups of 64 would leave most of its cores idle and
+// every batch costs a round trip.
+int batch_texels(int n, bool software) {
+    if (!software) return kMaxGroups;
     int M = 2, log_m = 1;
     while (M < n) M <<= 1, ++log_m;
     const double per_texel = double(M) * double(log_m) * double(log_m);
@@ -220,58 +226,79 @@ EllipseMap fit_ellipses_gpu(const Heightfield& hf, const DirectionSet& dirs, con
         B.stride = std::max(1, N);
         B.words = std::max(1, (N + 31) / 32);
     }
-    const int batch = batch_texels(std::min(max_points, kMaxPoints));
+    const int batch = batch_texels(std::min(max_points, kMaxPoints), software);
 
-    // [SECTION] Buffers, sized for the largest batch
+    // [SECTION] Buffers, sized for the largest batch: two sets, so that the CPU prepares and
+    // uploads batch i + 1 while the GPU fits batch i, and a read-back waits for its own batch only.
     const size_t max_batch = size_t(std::min(batch, T));
     const vec2 zero(0.f);
-    const Buffer points = flat ? make_storage_buffer(B.points.empty() ? &zero : B.points.data(), std::max<size_t>(1, B.points.size()) * sizeof(vec2))
-                               : make_storage_buffer(nullptr, max_batch * size_t(B.stride) * sizeof(vec2), GL_DYNAMIC_DRAW);
-    const Buffer lit = make_storage_buffer(nullptr, max_batch * size_t(B.words) * sizeof(uint32_t), GL_DYNAMIC_DRAW);
-    const Buffer counts = make_storage_buffer(nullptr, max_batch * sizeof(uint32_t), GL_DYNAMIC_DRAW);
-    const Buffer out = make_storage_buffer(nullptr, max_batch * sizeof(Ellipse), GL_STREAM_READ);
+    struct Set {
+        Buffer points, lit, counts, out;
+        int t0 = 0, t1 = 0, n = 0;
+    };
+    Set sets[2];
+    for (Set& set : sets) {
+        set.points = flat ? Buffer() : make_storage_buffer(nullptr, max_batch * size_t(B.stride) * sizeof(vec2), GL_DYNAMIC_DRAW);
+        set.lit = make_storage_buffer(nullptr, max_batch * size_t(B.words) * sizeof(uint32_t), GL_DYNAMIC_DRAW);
+        set.counts = make_storage_buffer(nullptr, max_batch * sizeof(uint32_t), GL_DYNAMIC_DRAW);
+        set.out = make_storage_buffer(nullptr, max_batch * sizeof(Ellipse), GL_STREAM_READ);
+    }
+    const Buffer shared_points = flat ? make_storage_buffer(B.points.empty() ? &zero : B.points.data(), std::max<size_t>(1, B.points.size()) * sizeof(vec2)) : Buffer();
     check_gl("microgeom.ellipses upload");
 
     const BindingGuard guard;
-    const GLuint buffers[4] = {points.get(), lit.get(), counts.get(), out.get()};
+    // Reads batch `set` back and checks that every texel of it was written.
+    const auto finish = [&](const Set& set) {
+        const size_t bytes = size_t(set.t1 - set.t0) * sizeof(Ellipse);
+        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, set.out.get());
+        glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(bytes), map.e.data() + set.t0);
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+        check_gl("microgeom.ellipses dispatch");
+        for (int t = set.t0; t < set.t1; ++t)
+            if (const Ellipse& e = map.e[size_t(t)]; !(std::isfinite(e.a) && std::isfinite(e.b) && std::isfinite(e.angle) &&
+                                                      std::isfinite(e.centre.x) && std::isfinite(e.centre.y)))
+                throw std::runtime_error("microgeom ellipses (GPU): texel " + std::to_string(t % W) + ", " + std::to_string(t / W) +
+                                         " came back unfinished (" + std::to_string(set.n) + " points)");
+        if (progress) progress(double(set.t1) / double(T));
+    };
 
     // [SECTION] Batches
-    for (int t0 = 0; t0 < T; t0 += batch) {
-        const int t1 = std::min(T, t0 + batch);
-        int n = max_points;
+    int i = 0;
+    for (int t0 = 0; t0 < T; t0 += batch, ++i) {
+        Set& set = sets[i % 2];
+        set.t0 = t0, set.t1 = std::min(T, t0 + batch);
+        set.n = max_points;
+        std::optional<ProfileScope> prep(std::in_place, "gpu.prepare_batch");  // the lit bits (and bent points) on the CPU
         if (flat) {
-            flat_batch(vis, up, W, t0, t1, B);
+            flat_batch(vis, up, W, set.t0, set.t1, B);
         } else {
-            n = bent_batch(hf, dirs, vis, b, t0, t1, B);
-            if (n > kMaxPoints) throw too_many_points(n);
-            upload(points, B.points.data(), B.points.size() * sizeof(vec2));
+            set.n = bent_batch(hf, dirs, vis, b, set.t0, set.t1, B);
+            if (set.n > kMaxPoints) throw too_many_points(set.n);
+            upload(set.points, B.points.data(), B.points.size() * sizeof(vec2));
         }
-        upload(lit, B.lit.data(), B.lit.size() * sizeof(uint32_t));
-        upload(counts, B.count.data(), B.count.size() * sizeof(uint32_t));
-        const Program& program = program_for(local_size(n, software));
+        upload(set.lit, B.lit.data(), B.lit.size() * sizeof(uint32_t));
+        upload(set.counts, B.count.data(), B.count.size() * sizeof(uint32_t));
+        prep.reset();
+        const Program& program = program_for(local_size(set.n, software));
         program.use();
         glUniform1i(program.uniform("u_point_stride"), B.stride);
         glUniform1i(program.uniform("u_lit_words"), B.words);
         glUniform1f(program.uniform("u_edge"), map.edge);
         // NaN first: a group that stops without writing (a driver's loop limit) cannot pass unseen.
-        const size_t bytes = size_t(t1 - t0) * sizeof(Ellipse);
-        glBindBuffer(GL_SHADER_STORAGE_BUFFER, out.get());
-        glClearBufferSubData(GL_SHADER_STORAGE_BUFFER, GL_R32F, 0, GLsizeiptr(bytes), GL_RED, GL_FLOAT, &kNaN);
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, set.out.get());
+        glClearBufferSubData(GL_SHADER_STORAGE_BUFFER, GL_R32F, 0, GLsizeiptr(size_t(set.t1 - set.t0) * sizeof(Ellipse)), GL_RED, GL_FLOAT, &kNaN);
         glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+        const GLuint buffers[4] = {flat ? shared_points.get() : set.points.get(), set.lit.get(), set.counts.get(), set.out.get()};
         for (GLuint k = 0; k < 4; ++k) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, k, buffers[k]);
-        glDispatchCompute(GLuint(t1 - t0), 1, 1);
-        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-        glBindBuffer(GL_SHADER_STORAGE_BUFFER, out.get());
-        glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(bytes), map.e.data() + t0);
-        glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
-        check_gl("microgeom.ellipses dispatch");
-        for (int t = t0; t < t1; ++t)
-            if (const Ellipse& e = map.e[size_t(t)]; !(std::isfinite(e.a) && std::isfinite(e.b) && std::isfinite(e.angle) &&
-                                                      std::isfinite(e.centre.x) && std::isfinite(e.centre.y)))
-                throw std::runtime_error("microgeom ellipses (GPU): texel " + std::to_string(t % W) + ", " + std::to_string(t / W) +
-                                         " came back unfinished (" + std::to_string(n) + " points)");
-        if (progress) progress(double(t1) / double(T));
+        std::optional<ProfileScope> fit(std::in_place, "gpu.dispatch");
+        glDispatchCompute(GLuint(set.t1 - set.t0), 1, 1);
+        fit.reset();
+        PROFILE_SCOPE("gpu.read_back");  // waits for the previous batch's fit (on llvmpipe: runs it)
+        if (i > 0) finish(sets[(i - 1) % 2]);  // the GPU goes on with this batch meanwhile
     }
+    PROFILE_SCOPE("gpu.read_back");
+    finish(sets[(i - 1) % 2]);
     return map;
 }
 }  // namespace mesolab::gpu

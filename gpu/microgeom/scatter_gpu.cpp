@@ -3,6 +3,7 @@
 #include "gpu/context.h"
 #include "gpu/gl.h"
 #include "gpu/microgeom/chunks.h"
+#include "core/profile.h"
 
 #include <stdexcept>
 #include <string>
@@ -24,6 +25,7 @@ public:
 
     // [SECTION] Upload what every bounce reads
     void begin(const Heightfield& hf, const DirectionSet& dirs, const Visibility& vis, const Importance* bent, const std::vector<vec3>& L_env) override {
+        PROFILE_SCOPE("gpu.upload");  // normals, directions and S_i (the largest: 4 bytes per texel and direction)
         W_ = hf.width;
         H_ = hf.height;
         N_ = dirs.size();
@@ -92,6 +94,7 @@ public:
     // the next bounce's L (scatter.comp, u_form_next), and only E^K is read back.
     std::vector<vec3> bounces(const std::vector<vec3>& direct, const std::vector<vec3>& albedo, bool env, const std::vector<std::vector<int>>& J, int K,
                               const std::function<void(double)>& progress) override {
+        PROFILE_SCOPE("gpu.bounces");  // every dispatch, and E^K read back
         const size_t T = size_t(W_) * size_t(H_);
         std::vector<vec4> packed(T);
         for (size_t p = 0; p < T; ++p) packed[p] = vec4(direct[p], 0.f);

@@ -3,12 +3,15 @@
 // heights, the min/max pyramid, lifted origins, normalised directions), uploads it as SSBOs and
 // dispatches one invocation per (texel, direction) in batches of directions.
 #include "gpu/microgeom/visibility_gpu.h"
+#include "core/profile.h"
 
+#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <array>
 #include <climits>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -151,7 +154,7 @@ Prepared prepare(const Heightfield& hf, const DirectionSet& dirs) {
     // Per texel: normal and lifted origin (texel space, as compute_visibility), relative to the
     // texel: c0 - x, r0 - y and z0 - hs, with hs the texel's height as the cells store it.
     P.texels.resize(size_t(W) * size_t(H));
-    for (int y = 0; y < H; ++y)
+    tbb::parallel_for(0, H, [&](int y) {
         for (int x = 0; x < W; ++x) {
             const size_t k = size_t(y) * size_t(W) + size_t(x);
             const vec3 n = hf.normal(x, y);
@@ -170,6 +173,7 @@ Prepared prepare(const Heightfield& hf, const DirectionSet& dirs) {
                 T.o[0] = T.o[1] = T.o[2] = T.o[3] = 0.f;
             }
         }
+    });
 
     // Per direction (as make_ray_dir): normalised, components below 1e-12 snapped to 0.
     const double reach = kPeriodicReach * double(W + H);
@@ -279,9 +283,14 @@ Visibility VisibilityProgram::compute(const Heightfield& hf, const DirectionSet&
     vis.height = hf.height;
     vis.count = dirs.size();
     if (!check_input(hf, dirs)) return vis;
+    // Scopes: the host's preparation, then the dispatches with their read-backs (on llvmpipe the
+    // dispatches are the CPU's work; on a GPU the read-backs' waits).
+    std::optional<ProfileScope> scope(std::in_place, "gpu.prepare");
     const Prepared P = prepare(hf, dirs);
     const size_t per_dir = size_t(P.W) * size_t(P.H);
-    vis.hit.assign(size_t(P.N) * per_dir, Visibility::kNoHit);
+    scope.emplace("gpu.allocate");  // the result's memory (4 bytes per texel and direction), written by the read-backs
+    vis.hit = microgeom::hits_filled(size_t(P.N) * per_dir, Visibility::kNoHit);
+    scope.emplace("gpu.dispatch_and_read_back");
     run(program_, batching_, P, [&](int d0, int d1, GLuint out) {
         glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
         glBindBuffer(GL_SHADER_STORAGE_BUFFER, out);

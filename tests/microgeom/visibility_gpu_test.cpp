@@ -171,7 +171,7 @@ TEST_F(VisibilityGpu, TextureMatchesReadBack) {
     EXPECT_EQ(h, hf.height);
     EXPECT_EQ(d, dirs.size());
     EXPECT_EQ(format, GL_R32UI);
-    std::vector<uint32_t> texels(vis.hit.size(), 0u);
+    microgeom::HitArray texels(vis.hit.size(), 0u);
     glPixelStorei(GL_PACK_ALIGNMENT, 4);
     glGetTexImage(GL_TEXTURE_2D_ARRAY, 0, GL_RED_INTEGER, GL_UNSIGNED_INT, texels.data());
     EXPECT_NO_THROW(gpu::check_gl("read texture"));
@@ -242,7 +242,7 @@ TEST_F(VisibilityGpu, SmallBatchesInFlightGiveTheSameTextures) {
     ASSERT_EQ(a.hit.size(), per_dir * size_t(dirs.size()));
     EXPECT_TRUE(a.hit == b.hit) << "batches in flight changed S_i";
     const gpu::Texture t = small.compute_texture(hf, dirs);
-    std::vector<uint32_t> layers(a.hit.size());
+    microgeom::HitArray layers(a.hit.size());
     glGetTextureImage(t.get(), 0, GL_RED_INTEGER, GL_UNSIGNED_INT, GLsizei(layers.size() * sizeof(uint32_t)), layers.data());
     EXPECT_TRUE(layers == a.hit) << "the texture's layers differ from the read-back";
 }
