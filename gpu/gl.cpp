@@ -488,6 +488,14 @@ void GpuTimeline::end(Done done) {
     open_.push_back(Range{std::move(current_), wall0_, std::move(done)});
 }
 
+void GpuTimeline::abandon() {
+    if (!in_range_) return;
+    in_range_ = false;
+    if (software_) return;
+    glEndQuery(GL_TIME_ELAPSED);
+    spare_.push_back(std::move(current_));  // its answer is never read; the object is reused
+}
+
 void GpuTimeline::take(Range& r) {
     GLuint64 ns = 0;
     glGetQueryObjectui64v(r.query.get(), GL_QUERY_RESULT, &ns);

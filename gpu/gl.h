@@ -167,6 +167,8 @@ public:
     bool software() const { return software_; }
     void begin();
     void end(Done done);
+    // Closes an open range without an answer (a frame that threw while its range was open).
+    void abandon();
     void poll();  // callbacks of the ranges whose answers are ready, in order
     void wait();  // callbacks of all open ranges (waits for the GPU)
     size_t open() const { return open_.size(); }

@@ -315,6 +315,11 @@ void Renderer::render(const Scene& s, const Evaluation& ev, int width, int heigh
         ++ft->begun;
         impl_->timeline->begin();
     };
+    // A pass that throws (bad input) leaves no range open behind it: the next frame starts clean.
+    struct CloseOnThrow {
+        GpuTimeline& t;
+        ~CloseOnThrow() { t.abandon(); }
+    } close_on_throw{*impl_->timeline};
     // Passes get ranges of their own on hardware, and on a software renderer when asked
     // (set_pass_timing): there each range finishes the GPU's queue, which splits the frame's work.
     const bool per_pass = !impl_->timeline->software() || pass_timing_;

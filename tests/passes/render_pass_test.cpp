@@ -345,3 +345,17 @@ TEST(GpuTimings, PagesKeepAnotherMachinesFiguresBesideThisOnes) {
         EXPECT_NE(m.find("cells[0]: \"median_ms\""), std::string::npos) << m;
     }
 }
+
+// A frame that fails in a pass (more lights than the GPU path takes) leaves no timer range open:
+// the next frame renders and is timed.
+TEST(GpuTimings, AFailedFrameLeavesTheTimelineClean) {
+    Workbench wb;
+    Scene bad = default_scene("basic");
+    while (bad.lights.size() < 9) bad.lights.push_back(bad.lights.front());
+    RenderRequest req;
+    req.width = req.height = 32;
+    req.backend = Backend::Gpu;
+    EXPECT_THROW(wb.render(bad, req), InputError);
+    const RenderResult r = wb.render(default_scene("basic"), req);
+    EXPECT_TRUE(std::isfinite(r.gpu_ms)) << r.gpu_ms;
+}
