@@ -1,6 +1,8 @@
 #include "gpu/gl.h"
+#include "gpu/dispatch_timer.h"
 #include "gpu/shaders.h"
 
+#include <cmath>
 #include <limits>
 
 #include <dlfcn.h>
@@ -544,5 +546,34 @@ void wait_for_gpu() {
         flags = 0;  // flushed once
     }
     glDeleteSync(fence);
+}
+
+// [SECTION] DispatchTimer
+namespace {
+bool current_renderer_is_software() {
+    const GLubyte* name = glGetString(GL_RENDERER);
+    return is_software_renderer(name ? reinterpret_cast<const char*>(name) : "");
+}
+}  // namespace
+
+DispatchTimer::DispatchTimer(const std::string& name)
+    : timeline_(current_renderer_is_software()),
+      path_((ProfileScope::current_path().empty() ? "" : ProfileScope::current_path() + "/") + name + "/gpu"),
+      profiler_(&Profiler::current()) {}
+
+DispatchTimer::~DispatchTimer() {
+    if (timeline_.open() > 0) {
+        try {
+            timeline_.wait();
+        } catch (...) {
+        }
+    }
+    timeline_.abandon();
+}
+
+void DispatchTimer::end() {
+    timeline_.end([path = path_, profiler = profiler_](double ms) {
+        if (std::isfinite(ms)) profiler->record(path, ms, Device::Gpu);
+    });
 }
 }  // namespace mesolab::gpu

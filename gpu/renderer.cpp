@@ -19,6 +19,9 @@ struct Renderer::Impl {
     FrameStepScheduler scheduler;
     std::unique_ptr<GpuTimeline> timeline;  // made with the renderer: software or hardware timing
     uint64_t frame = 0;                     // frames rendered so far
+    // Each step's latest GPU time and the frame it came from: a frame's steps show their own
+    // answers once in, and the previous ones until then (the window reads them a frame late).
+    std::map<std::string, std::pair<uint64_t, double>> latest_steps;
     VertexArray empty_vao;  // attribute-less draws (the full-screen triangle)
 
     void draw_fullscreen_triangle() const {
@@ -94,6 +97,15 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
 
 bool Renderer::software() const { return impl_->timeline->software(); }
 void Renderer::poll_timings() { impl_->timeline->poll(); }
+
+void Renderer::show_step_times() {
+    for (FrameStepRun& run : last_steps_) {
+        if (run.status != StageStatus::Ran) continue;
+        const auto it = impl_->latest_steps.find(run.name);
+        if (it == impl_->latest_steps.end()) continue;
+        if (it->second.first == impl_->frame || !std::isfinite(run.ms)) run.ms = it->second.second;
+    }
+}
 void Renderer::wait_timings() { impl_->timeline->wait(); }
 
 Renderer::~Renderer() = default;
@@ -281,32 +293,27 @@ void Renderer::render(const Scene& s, const Evaluation& ev, int width, int heigh
     ft->frame = ++impl_->frame;
     ft->profiler = &Profiler::current();
     last_gpu_ms_ = std::numeric_limits<double>::quiet_NaN();
-    // Copies a frame's step times into last_steps_: this frame's, or an earlier frame's where this
-    // one's are not in yet (the window shows each step's latest answer).
-    const auto show_steps = [this](const FrameTimes& f) {
-        for (FrameStepRun& run : last_steps_) {
-            const auto it = f.steps.find(run.name);
-            if (it != f.steps.end() && run.status == StageStatus::Ran && (f.frame == impl_->frame || !std::isfinite(run.ms))) run.ms = it->second;
-        }
-    };
-    const auto complete = [this, show_steps](FrameTimes& f) {
+    const auto complete = [this](FrameTimes& f) {
         if (!f.closed || f.answered < f.begun) return;
         if (f.valid) f.profiler->record("frame.gpu/gpu", f.sum, Device::Gpu);
         if (f.frame == impl_->frame) last_gpu_ms_ = f.valid ? f.sum : std::numeric_limits<double>::quiet_NaN();
         last_complete_gpu_ms_ = f.valid ? f.sum : last_complete_gpu_ms_;
-        show_steps(f);
     };
     // A range recorded under `path` (and, for a step, under its name).
-    const auto range_done = [ft, complete](std::string path, std::string step) {
-        return [ft, complete, path = std::move(path), step = std::move(step)](double ms) {
+    const auto range_done = [this, ft, complete](std::string path, std::string step) {
+        return [this, ft, complete, path = std::move(path), step = std::move(step)](double ms) {
             ++ft->answered;
             if (std::isfinite(ms)) {
                 ft->profiler->record(path, ms, Device::Gpu);
                 ft->sum += ms;
-                if (!step.empty()) ft->steps[step] = ms;
             } else {
                 ft->valid = false;
-                if (!step.empty()) ft->steps[step] = ms;
+            }
+            if (!step.empty()) {
+                ft->steps[step] = ms;
+                auto& latest = impl_->latest_steps[step];
+                if (ft->frame >= latest.first) latest = {ft->frame, ms};
+                show_step_times();
             }
             complete(*ft);
         };
@@ -388,7 +395,7 @@ void Renderer::render(const Scene& s, const Evaluation& ev, int width, int heigh
     }
     if (!per_pass) impl_->timeline->end(range_done("frame.gpu/draw/gpu", ""));
     ft->closed = true;
-    show_steps(*ft);
+    show_step_times();
     complete(*ft);
     check_gl("Renderer::render");
 }

@@ -144,6 +144,8 @@ public:
     void set_camera_uniforms(const Program& p, const FrameCamera& cam, const mat4& model) const;
 
 private:
+    // The latest answers in last_steps_: this frame's step times, or the previous ones until they arrive.
+    void show_step_times();
     // Point fragment output k at the current batch's attachment of outputs[k] (or none).
     void bind_outputs(const std::vector<AovDecl>& outputs, size_t batch) const;
     struct Impl;

@@ -446,6 +446,7 @@ void Gui::after_ui() {
     if (state_.doc.take_edits()) attempt([&] { on_scene_changed(); });
     const bool interacting = ImGui::IsAnyItemActive();
     bool display_changed = false;
+    attempt([&] { viewport_.poll_timings(); }, ErrorOrigin::Render);
     if (state_.eval.last && state_.frame.needs_render(state_.ui.viewport.size, interacting)) {
         attempt([&] { viewport_.render(state_.frame, state_.ui.viewport, *state_.eval.last, interacting && !scripted_); }, ErrorOrigin::Render);
         display_changed = true;

@@ -294,6 +294,10 @@ void Viewport::show_truth(const Frame& truth, UiState& ui) {
 
 const std::vector<FrameStepRun>& Viewport::frame_steps() const { return renderer_->last_steps(); }
 
+void Viewport::poll_timings() {
+    if (renderer_) renderer_->poll_timings();
+}
+
 void Viewport::screenshot(const FrameState& f, const std::string& path, const Frame* truth, UiState& ui) {
     if (!f.shown()) throw InputError("screenshot " + path + ": no frame rendered yet");
     if (truth && ui.truth.on_screen) {  // what the viewport shows: the truth, or the error's colours

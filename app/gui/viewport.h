@@ -60,6 +60,9 @@ public:
     void screenshot(const FrameState& f, const std::string& path, const Frame* truth, UiState& ui);
     // The frame steps of the frame on screen (offscreen work before it), for the Timings panel.
     const std::vector<FrameStepRun>& frame_steps() const;
+    // Takes the GPU timings that have arrived since (never waits): called once per window frame,
+    // so that a frame's timings reach the Timings panel while nothing is re-rendered.
+    void poll_timings();
 
 private:
     std::unique_ptr<gpu::Renderer> renderer_;

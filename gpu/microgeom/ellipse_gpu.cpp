@@ -3,6 +3,7 @@
 // texel and reads the ellipses straight into the map (the shader writes Ellipse's layout).
 #include "gpu/microgeom/ellipse_gpu.h"
 #include "core/profile.h"
+#include "gpu/dispatch_timer.h"
 
 #include "gpu/context.h"
 #include "gpu/gl.h"
@@ -247,6 +248,7 @@ EllipseMap fit_ellipses_gpu(const Heightfield& hf, const DirectionSet& dirs, con
     check_gl("microgeom.ellipses upload");
 
     const BindingGuard guard;
+    DispatchTimer timer("dispatch");  // each batch's fit: microgeom.ellipses/dispatch (GPU)
     // Reads batch `set` back and checks that every texel of it was written.
     const auto finish = [&](const Set& set) {
         const size_t bytes = size_t(set.t1 - set.t0) * sizeof(Ellipse);
@@ -292,13 +294,16 @@ EllipseMap fit_ellipses_gpu(const Heightfield& hf, const DirectionSet& dirs, con
         const GLuint buffers[4] = {flat ? shared_points.get() : set.points.get(), set.lit.get(), set.counts.get(), set.out.get()};
         for (GLuint k = 0; k < 4; ++k) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, k, buffers[k]);
         std::optional<ProfileScope> fit(std::in_place, "gpu.dispatch");
+        timer.begin();
         glDispatchCompute(GLuint(set.t1 - set.t0), 1, 1);
+        timer.end();
         fit.reset();
         PROFILE_SCOPE("gpu.read_back");  // waits for the previous batch's fit (on llvmpipe: runs it)
         if (i > 0) finish(sets[(i - 1) % 2]);  // the GPU goes on with this batch meanwhile
     }
     PROFILE_SCOPE("gpu.read_back");
     finish(sets[(i - 1) % 2]);
+    timer.finish();
     return map;
 }
 }  // namespace mesolab::gpu

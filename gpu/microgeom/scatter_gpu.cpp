@@ -4,6 +4,7 @@
 #include "gpu/gl.h"
 #include "gpu/microgeom/chunks.h"
 #include "core/profile.h"
+#include "gpu/dispatch_timer.h"
 
 #include <stdexcept>
 #include <string>
@@ -94,6 +95,7 @@ public:
     // the next bounce's L (scatter.comp, u_form_next), and only E^K is read back.
     std::vector<vec3> bounces(const std::vector<vec3>& direct, const std::vector<vec3>& albedo, bool env, const std::vector<std::vector<int>>& J, int K,
                               const std::function<void(double)>& progress) override {
+        DispatchTimer timer("dispatch");  // each chunk's gather: microgeom.scatter/dispatch (GPU)
         PROFILE_SCOPE("gpu.bounces");  // every dispatch, and E^K read back
         const size_t T = size_t(W_) * size_t(H_);
         std::vector<vec4> packed(T);
@@ -125,8 +127,10 @@ public:
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 6, subset.get());
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 10, next.get());
             for_each_chunk(chunks_, *program_, 0, 3, [&] {
+                timer.begin();
                 glDispatchCompute(GLuint((W_ + kLocal - 1) / kLocal), GLuint((H_ + kLocal - 1) / kLocal), 1);
                 glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+                timer.end();
             });
             std::swap(prev, next);  // L^k becomes the next bounce's input
         };
@@ -156,6 +160,7 @@ public:
         for (GLuint b = 0; b < 11; ++b) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b, 0);
         glUseProgram(GLuint(previous));
         prev_ = std::move(prev);
+        timer.finish();
         check_gl("microgeom.scatter bounces");
         return E;
     }

@@ -4,6 +4,7 @@
 // dispatches one invocation per (texel, direction) in batches of directions.
 #include "gpu/microgeom/visibility_gpu.h"
 #include "core/profile.h"
+#include "gpu/dispatch_timer.h"
 
 #include <tbb/parallel_for.h>
 #include <algorithm>
@@ -210,7 +211,7 @@ Prepared prepare(const Heightfield& hf, const DirectionSet& dirs) {
 // for its own batch while the GPU goes on with the later ones (a buffer is reused once its batch
 // is sunk). Restores the current program.
 template <class Sink>
-void run(const Program& program, const VisibilityProgram::Batching& batching, const Prepared& P, Sink&& sink) {
+void run(const Program& program, const VisibilityProgram::Batching& batching, const Prepared& P, Sink&& sink, DispatchTimer& timer) {
     const size_t per_dir = size_t(P.W) * size_t(P.H);
     GLint64 max_block = 0;
     glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
@@ -263,7 +264,9 @@ void run(const Program& program, const VisibilityProgram::Batching& batching, co
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, outs[size_t(b) % outs.size()].get());
             glUniform1i(loc_dir0, d0);
             glUniform1i(loc_count, d1 - d0);
+            timer.begin();
             glDispatchCompute(gx, gy, GLuint(d1 - d0));
+            timer.end();
             check_gl("microgeom.visibility dispatch");
         }
         for (int b = std::max(0, batches - int(outs.size())); b < batches; ++b) sink_batch(b);
@@ -285,6 +288,7 @@ Visibility VisibilityProgram::compute(const Heightfield& hf, const DirectionSet&
     if (!check_input(hf, dirs)) return vis;
     // Scopes: the host's preparation, then the dispatches with their read-backs (on llvmpipe the
     // dispatches are the CPU's work; on a GPU the read-backs' waits).
+    DispatchTimer timer("dispatch");  // each batch's GPU time: microgeom.visibility/dispatch (GPU)
     std::optional<ProfileScope> scope(std::in_place, "gpu.prepare");
     const Prepared P = prepare(hf, dirs);
     const size_t per_dir = size_t(P.W) * size_t(P.H);
@@ -298,7 +302,8 @@ Visibility VisibilityProgram::compute(const Heightfield& hf, const DirectionSet&
                            vis.hit.data() + size_t(d0) * per_dir);
         glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
         check_gl("microgeom.visibility read-back");
-    });
+    }, timer);
+    timer.finish();
     return vis;
 }
 
@@ -309,6 +314,7 @@ Texture VisibilityProgram::compute_texture(const Heightfield& hf, const Directio
     if (dirs.size() > max_layers)
         throw std::runtime_error("microgeom visibility (GPU): " + std::to_string(dirs.size()) +
                                  " directions exceed GL_MAX_ARRAY_TEXTURE_LAYERS (" + std::to_string(max_layers) + ")");
+    DispatchTimer texture_timer("dispatch");
     const Prepared P = prepare(hf, dirs);
     GLint previous_unpack = 0, previous_align = 4;
     glGetIntegerv(GL_PIXEL_UNPACK_BUFFER_BINDING, &previous_unpack);
@@ -328,7 +334,7 @@ Texture VisibilityProgram::compute_texture(const Heightfield& hf, const Directio
             glTextureSubImage3D(tex.get(), 0, 0, 0, d0, P.W, P.H, d1 - d0, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
             glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
             check_gl("microgeom.visibility texture");
-        });
+        }, texture_timer);
     } catch (...) {
         restore();
         throw;
