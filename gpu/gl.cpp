@@ -533,6 +533,11 @@ bool is_software_renderer(const std::string& gl_renderer) {
     return false;
 }
 
+bool current_renderer_is_software() {
+    const GLubyte* name = glGetString(GL_RENDERER);
+    return is_software_renderer(name ? reinterpret_cast<const char*>(name) : "");
+}
+
 void wait_for_gpu() {
     GLsync fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
     if (!fence) {
@@ -549,12 +554,6 @@ void wait_for_gpu() {
 }
 
 // [SECTION] DispatchTimer
-namespace {
-bool current_renderer_is_software() {
-    const GLubyte* name = glGetString(GL_RENDERER);
-    return is_software_renderer(name ? reinterpret_cast<const char*>(name) : "");
-}
-}  // namespace
 
 DispatchTimer::DispatchTimer(const std::string& name)
     : timeline_(current_renderer_is_software()),

@@ -190,6 +190,8 @@ private:
 
 // Whether a GL_RENDERER string names a renderer that runs on the CPU (llvmpipe, softpipe, SwiftShader).
 bool is_software_renderer(const std::string& gl_renderer);
+// The same for the current context's GL_RENDERER.
+bool current_renderer_is_software();
 
 // Waits until every GL command issued so far has finished, through a fence (glFenceSync and
 // glClientWaitSync, flushing once): what a caller that needs a finished frame waits for.

@@ -91,8 +91,7 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
     impl_->background.use();
     impl_->draw_fullscreen_triangle();
     glFinish();
-    const GLubyte* name = glGetString(GL_RENDERER);
-    impl_->timeline = std::make_unique<GpuTimeline>(is_software_renderer(name ? reinterpret_cast<const char*>(name) : ""));
+    impl_->timeline = std::make_unique<GpuTimeline>(current_renderer_is_software());
 }
 
 bool Renderer::software() const { return impl_->timeline->software(); }

@@ -145,12 +145,6 @@ long loop_iterations(int n, int L) {
     return 120 * evaluation + 2 * (per + 1) + 2 * (long(n) + 1) + log_m + 120 + 16;
 }
 
-bool software_renderer() {
-    const GLubyte* r = glGetString(GL_RENDERER);
-    const std::string renderer = r ? reinterpret_cast<const char*>(r) : "";
-    return renderer.find("llvmpipe") != std::string::npos || renderer.find("softpipe") != std::string::npos ||
-           renderer.find("swrast") != std::string::npos;
-}
 
 int local_size(int n, bool software) {
     int L = software ? kLocalSoftware : kLocalHardware;
@@ -193,7 +187,7 @@ EllipseMap fit_ellipses_gpu(const Heightfield& hf, const DirectionSet& dirs, con
                             const std::function<void(double)>& progress) {
     check_visibility(hf, dirs, vis);
     ComputeScope scope;  // first: current before the buffers exist, released after they are gone
-    const bool software = software_renderer();
+    const bool software = current_renderer_is_software();
 
     const int W = hf.width, H = hf.height, N = dirs.size();
     EllipseMap map;
