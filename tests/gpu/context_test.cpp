@@ -267,19 +267,29 @@ TEST_F(GpuTest, ComputeWritesSsboAndImage) {
 }
 
 // [SECTION] GpuTimer
+// A 64x64 target with `attachments` colour attachments bound, the solid test shader in use and an
+// empty vertex array bound: glDrawArrays(GL_TRIANGLES, 0, 3) fills it.
+struct SolidTriangle {
+    Program prog = Program::graphics("shaders/test/fullscreen.vert", "shaders/test/solid.frag");
+    RenderTarget rt;
+    VertexArray vao;
+    explicit SolidTriangle(int attachments) {
+        rt.resize(64, 64, attachments);
+        GLuint id = 0;
+        glGenVertexArrays(1, &id);
+        vao = VertexArray(id);
+        rt.bind();
+        prog.use();
+        glBindVertexArray(vao.get());
+    }
+    ~SolidTriangle() { glBindVertexArray(0); }
+};
+
 TEST_F(GpuTest, GpuTimerNeverReportsAnImpossibleTime) {
     GpuTimer unused;
     EXPECT_EQ(unused.elapsed_ms(), 0.0);
 
-    const Program prog = Program::graphics("shaders/test/fullscreen.vert", "shaders/test/solid.frag");
-    RenderTarget rt;
-    rt.resize(64, 64, 2);
-    GLuint vao_id = 0;
-    glGenVertexArrays(1, &vao_id);
-    VertexArray vao(vao_id);
-    rt.bind();
-    prog.use();
-    glBindVertexArray(vao.get());
+    const SolidTriangle draw(2);
     glDrawArrays(GL_TRIANGLES, 0, 3);
     glFinish();
     // A valid answer never exceeds the wall-clock time around it; an impossible one (llvmpipe under
@@ -324,15 +334,7 @@ TEST(GpuTimerRule, RejectsAnswersLongerThanTheWallClock) {
 // Ranges answered without a wait: each callback runs once, in order, with a plausible time or
 // NaN; a software timeline answers at end(). Ranges never nest.
 TEST_F(GpuTest, GpuTimelineAnswersEachRangeOnceInOrder) {
-    const Program prog = Program::graphics("shaders/test/fullscreen.vert", "shaders/test/solid.frag");
-    RenderTarget rt;
-    rt.resize(64, 64, 1);
-    GLuint vao_id = 0;
-    glGenVertexArrays(1, &vao_id);
-    VertexArray vao(vao_id);
-    rt.bind();
-    prog.use();
-    glBindVertexArray(vao.get());
+    const SolidTriangle draw(1);
     for (bool software : {false, true}) {
         GpuTimeline timeline(software);
         std::vector<int> order;
@@ -364,7 +366,6 @@ TEST_F(GpuTest, GpuTimelineAnswersEachRangeOnceInOrder) {
             for (double ms : times) EXPECT_TRUE(std::isfinite(ms)) << "a wall time is always a figure";
         }
     }
-    glBindVertexArray(0);
     check_gl("GpuTimeline");
 }
 

@@ -286,24 +286,26 @@ TEST(GpuTimings, AFramesTimeIsTheSumOfItsStepsAndPasses) {
 TEST(GpuTimings, BenchMeasuresOnlyTheRowsAndColumnsAskedFor) {
     TempDirForPasses dir;
     BenchOptions b;
-    b.tables = {"probe"};
+    b.tables = {"basic"};  // three rows (sphere 64, sphere 512, torus 256), three columns
     b.repeat = 1;
     b.backend = "cpu";
     b.format = "json";
-    b.rows = {"sphere"};
+    b.rows = {"sphere 64"};
+    b.columns = {"tessellate"};
     b.out = dir / "bench.json";
     ASSERT_EQ(run_bench(b), 0);
     const json j = json::parse(test::slurp(dir / "bench.json"));
-    ASSERT_FALSE(j["cells"].empty());
-    for (const auto& c : j["cells"]) EXPECT_NE(c["row"].get<std::string>().find("sphere"), std::string::npos) << c.dump();
+    ASSERT_EQ(j["cells"].size(), 1u) << j.dump();
+    EXPECT_EQ(j["cells"][0]["row"], "sphere 64");
+    EXPECT_EQ(j["cells"][0]["column"], "tessellate");
     b.rows = {"no such row"};
     try {
         run_bench(b);
         ADD_FAILURE() << "an unmatched --row was accepted";
     } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("'sphere'"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("'torus 256'"), std::string::npos) << e.what();
     }
-    b.rows = {"sphere"};
+    b.rows = {"sphere 64"};
     b.update_pages = true;
     EXPECT_THROW(run_bench(b), InputError);
 }
