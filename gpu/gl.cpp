@@ -428,37 +428,6 @@ std::vector<float> RenderTarget::read_rgba(int i) const {
     return pixels;
 }
 
-// [SECTION] GpuTimer
-void GpuTimer::begin() {
-    if (!query_) {
-        GLuint id = 0;
-        glGenQueries(1, &id);
-        query_ = Query(id);
-    }
-    begin_wall_ = std::chrono::steady_clock::now();
-    read_ = false;
-    glBeginQuery(GL_TIME_ELAPSED, query_.get());
-}
-
-void GpuTimer::end() {
-    if (!query_) return;
-    glEndQuery(GL_TIME_ELAPSED);
-    pending_ = true;  // a result exists from here on; elapsed_ms() may read it again
-}
-
-double GpuTimer::elapsed_ms() {
-    if (!query_ || !pending_) return 0.0;
-    if (read_) return result_ms_;
-    GLuint64 ns = 0;
-    glGetQueryObjectui64v(query_.get(), GL_QUERY_RESULT, &ns);  // waits for the GPU
-    const double wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - begin_wall_).count();
-    const double gpu_ms = double(ns) * 1e-6;
-    valid_ = plausible(gpu_ms, wall_ms);  // the GPU work happened between begin() and now
-    result_ms_ = valid_ ? gpu_ms : std::numeric_limits<double>::quiet_NaN();
-    read_ = true;
-    return result_ms_;
-}
-
 // [SECTION] GpuTimeline
 void GpuTimeline::begin() {
     if (in_range_) throw std::logic_error("GpuTimeline::begin: the previous range is still open (ranges do not nest)");
@@ -504,7 +473,7 @@ void GpuTimeline::take(Range& r) {
     const double wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - r.wall0).count();
     const double gpu_ms = double(ns) * 1e-6;
     spare_.push_back(std::move(r.query));
-    if (r.done) r.done(GpuTimer::plausible(gpu_ms, wall_ms) ? gpu_ms : std::numeric_limits<double>::quiet_NaN());
+    if (r.done) r.done(plausible(gpu_ms, wall_ms) ? gpu_ms : std::numeric_limits<double>::quiet_NaN());
 }
 
 void GpuTimeline::poll() {

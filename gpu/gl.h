@@ -123,37 +123,16 @@ private:
     Texture depth_;
 };
 
-// GPU timer (GL_TIME_ELAPSED). begin/end around GL work; elapsed_ms() waits for the result.
-// GPU time between begin() and end() from a GL_TIME_ELAPSED query. A driver's answer is checked
-// against the wall-clock time from begin() until the result was read, which bounds it: Mesa 22.3's
-// llvmpipe sometimes loses the start of the query (under load, or before a context's first draw)
-// and reports roughly the system uptime. Such an impossible answer is never passed on: elapsed_ms()
-// then returns NaN and valid() is false, so tables show a gap instead of a wrong figure.
-class GpuTimer {
-public:
-    void begin();
-    void end();
-    double elapsed_ms();  // blocks until available; 0 if never begun; NaN if the driver's value is impossible
-    bool valid() const { return valid_; }
-    // A driver's answer is plausible when it is a number in [0, the wall-clock time around the
-    // query + 1% + 1 ms of clock granularity].
-    static bool plausible(double gpu_ms, double wall_ms) { return gpu_ms >= 0.0 && gpu_ms <= wall_ms * 1.01 + 1.0; }
-private:
-    Query query_;
-    bool pending_ = false;
-    bool read_ = false;
-    bool valid_ = true;
-    double result_ms_ = 0;
-    std::chrono::steady_clock::time_point begin_wall_{};
-};
-
 // [SECTION] GpuTimeline
 // Named GPU time ranges, read without waiting for the GPU: a frame never stalls for its own
 // timings. A range is one GL_TIME_ELAPSED query (ranges follow one another; they never nest).
 // Its answer is taken once the driver has it: poll() hands over whatever is ready now (the window
 // calls it at the start of each frame, so its timings arrive a frame late), wait() everything (for
 // callers that have waited for the frame's fence anyway, such as bench and capture). Each answer
-// is checked as GpuTimer's are (NaN when impossible) and goes to the range's callback.
+// goes to the range's callback, checked against the wall-clock time from begin() until it was
+// read, which bounds it: Mesa 22.3's llvmpipe sometimes loses the start of a query (under load,
+// or before a context's first draw) and reports roughly the system uptime. Such an impossible
+// answer is never passed on: the callback gets NaN, so tables show a gap instead of a wrong figure.
 //
 // Software renderers (is_software_renderer: Mesa's llvmpipe, softpipe) do the work on the CPU,
 // and their timer queries do not see it: llvmpipe 22.3 answers about 3% of a frame's wall time
@@ -164,6 +143,9 @@ class GpuTimeline {
 public:
     using Done = std::function<void(double ms)>;
     explicit GpuTimeline(bool software = false) : software_(software) {}
+    // A driver's answer is plausible when it is a number in [0, the wall-clock time around the
+    // query + 1% + 1 ms of clock granularity].
+    static bool plausible(double gpu_ms, double wall_ms) { return gpu_ms >= 0.0 && gpu_ms <= wall_ms * 1.01 + 1.0; }
     bool software() const { return software_; }
     void begin();
     void end(Done done);
