@@ -17,6 +17,8 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <mutex>
+#include <map>
 #include <optional>
 
 namespace mesolab {
@@ -723,6 +725,33 @@ Bounds bounds(const TriMesh& m) {
         b.lo = glm::min(b.lo, p);
         b.hi = glm::max(b.hi, p);
     }
+    return b;
+}
+
+Bounds bounds(const std::shared_ptr<const TriMesh>& m) {
+    struct Key {
+        std::weak_ptr<const void> owner;
+        const TriMesh* mesh;
+    };
+    struct Less {
+        bool operator()(const Key& a, const Key& b) const {
+            if (a.owner.owner_before(b.owner)) return true;
+            if (b.owner.owner_before(a.owner)) return false;
+            return std::less<const TriMesh*>()(a.mesh, b.mesh);
+        }
+    };
+    static std::mutex mutex;
+    static std::map<Key, Bounds, Less> known;
+    const Key key{m, m.get()};
+    {
+        std::lock_guard lock(mutex);
+        if (auto it = known.find(key); it != known.end()) return it->second;
+    }
+    const Bounds b = bounds(*m);  // outside the lock: other threads' lookups do not wait for the walk
+    std::lock_guard lock(mutex);
+    if (known.size() >= 256)  // forget meshes that are gone
+        std::erase_if(known, [](const auto& kv) { return kv.first.owner.expired(); });
+    known.emplace(key, b);
     return b;
 }
 }  // namespace mesolab

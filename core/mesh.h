@@ -4,6 +4,7 @@
 #include "core/math.h"
 #include <cstdint>
 #include <string>
+#include <memory>
 #include <vector>
 
 namespace mesolab {
@@ -81,4 +82,9 @@ void transform_mesh(TriMesh& m, float scale, vec3 translation);
 // Axis-aligned bounds of positions.
 struct Bounds { vec3 lo{0.f}, hi{0.f}; };
 Bounds bounds(const TriMesh& m);
+// The same for a shared, immutable mesh, walked once: the answer is kept while the mesh lives
+// (keyed by its owner and address, so a new mesh at a freed address is walked anew). Frames ask
+// for every drawn mesh's bounds each frame, and a displaced level of detail has millions of
+// vertices. Thread-safe.
+Bounds bounds(const std::shared_ptr<const TriMesh>& m);
 }  // namespace mesolab

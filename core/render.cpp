@@ -237,7 +237,7 @@ std::vector<Bounds> world_bounds(const Scene& s, const Evaluation& ev) {
     for (size_t i = 0; i < s.objects.size(); ++i) {
         const auto mesh = drawn_mesh(s, ev, int(i));
         if (!mesh) continue;
-        const Bounds b = bounds(*mesh);
+        const Bounds b = bounds(mesh);
         const mat4 m = object_to_world(s.objects[i]);
         Bounds w{vec3(1e30f), vec3(-1e30f)};
         for (int k = 0; k < 8; ++k) {

@@ -360,6 +360,30 @@ TEST(Primitives, TransformAndBounds) {
     EXPECT_EQ(empty.hi, vec3(0.f));
 }
 
+// A shared mesh's bounds are remembered while it lives; a mesh made after it was freed (often at
+// the same address), or another mesh sharing its owner, is walked on its own.
+TEST(Mesh, SharedBoundsBelongToTheirOwnMesh) {
+    for (int round = 0; round < 3; ++round) {
+        auto m = std::make_shared<TriMesh>(make_primitive(Primitive::Sphere, 16));
+        transform_mesh(*m, float(round + 1), vec3(float(round)));
+        const std::shared_ptr<const TriMesh> shared = m;
+        const Bounds walked = bounds(*shared), kept = bounds(shared), again = bounds(shared);
+        EXPECT_EQ(kept.lo, walked.lo);
+        EXPECT_EQ(kept.hi, walked.hi);
+        EXPECT_EQ(again.hi, walked.hi);
+        EXPECT_NEAR(kept.hi.x, float(round) + float(round + 1), 1e-5f);
+    }
+    // Two meshes inside one owner (an aliasing pointer each) keep two answers.
+    struct Pair { TriMesh a, b; };
+    auto pair = std::make_shared<Pair>();
+    pair->a = make_primitive(Primitive::Plane, 4);
+    pair->b = make_primitive(Primitive::Plane, 4);
+    transform_mesh(pair->b, 3.f, vec3(0.f));
+    const std::shared_ptr<const TriMesh> a(pair, &pair->a), b(pair, &pair->b);
+    EXPECT_NEAR(bounds(a).hi.x, 1.f, 1e-6f);
+    EXPECT_NEAR(bounds(b).hi.x, 3.f, 1e-6f);
+}
+
 // [SECTION] Utah teapot
 TEST(Teapot, ClosedEnoughFiniteOutwardNormalsAndAtlasUv) {
     // Counts: 32 patches of n x n cells, n = max(2, resolution / 8).
