@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# mesolab test suite. Installs missing Debian packages, builds, runs every test (GoogleTest
-# under CTest; the GUI smoke test under xvfb-run), then builds and runs the whole suite again
-# with AddressSanitizer + UndefinedBehaviorSanitizer, but for the tests labelled `slow` (every preset
-# rendered on both backends and checked against the gallery: minutes in Release, an hour under the
-# sanitizers). `./test.sh --quick` skips the sanitizer pass.
+# mesolab test suite. Installs missing Debian packages, builds, runs every test under CTest
+# (GoogleTest; pytest for the Python module and examples/; the GUI smoke test under xvfb-run),
+# then builds and runs the whole suite again with AddressSanitizer + UndefinedBehaviorSanitizer,
+# but for the tests labelled `slow` (every preset rendered on both backends and checked against
+# the gallery: minutes in Release, an hour under the sanitizers) and the Python tests (a
+# sanitizer-built module does not load into a plain interpreter). `./test.sh --quick` skips the sanitizer pass.
 set -euo pipefail
 cd "$(dirname "$0")"
 source .ci/setup.sh

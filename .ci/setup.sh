@@ -9,6 +9,7 @@ MESOLAB_PACKAGES=(
   libceres-dev libembree-dev libimath-dev
   libfreetype-dev fonts-dejavu-core
   libgtest-dev libgmock-dev
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib python3-openimageio
   xvfb xauth
 )
 

@@ -168,9 +168,12 @@ std::vector<std::string> update_pages(const std::string& root, const std::map<st
     return changed;
 }  // stage cells slower than this are measured once
 
-std::vector<double> time_runs(int n, const std::function<double()>& once) {
+std::vector<double> time_runs(int n, const std::function<double()>& once, const std::atomic<bool>* cancel) {
     std::vector<double> v;
-    for (int i = 0; i < n; ++i) v.push_back(once());
+    for (int i = 0; i < n; ++i) {
+        if (cancel && cancel->load()) throw Cancelled();
+        v.push_back(once());
+    }
     return v;
 }
 }  // namespace
@@ -271,11 +274,19 @@ int run_bench(const BenchOptions& o) {
         gpu_note = wb.gpu().software() ? " GPU frames: wall time to a finished frame (this GL renders on the CPU; its timer queries do not see that work)."
                                        : " GPU frames: wall time to a finished frame (a fence), and the GPU time of its steps and passes (timer queries).";
     std::vector<Cell> cells;
+    size_t cells_total = 0, cells_done = 0;
+    for (const auto& t : tables) cells_total += t.rows.size() * t.columns.size();
+    const auto stopped = [&] {
+        if (o.cancel && o.cancel->load()) throw Cancelled();
+    };
     for (const auto& t : tables) {
         for (const auto& row : t.rows) {
+            stopped();
             const Scene scene = row.scene();
-            for (size_t ci = 0; ci < t.columns.size(); ++ci) {
+            for (size_t ci = 0; ci < t.columns.size(); ++ci, ++cells_done) {
                 const BenchColumn& col = t.columns[ci];
+                stopped();
+                if (o.progress) o.progress("bench " + t.name + ": " + row.name + " / " + col.name, double(cells_done) / double(std::max<size_t>(1, cells_total)));
                 const std::optional<double> paper = ci < row.paper_ms.size() ? row.paper_ms[ci] : std::nullopt;
                 auto add = [&](const char* device, const std::vector<double>& v, const std::string& step = "", const std::vector<double>& gpu_times = {}) {
                     if (v.empty()) return;
@@ -283,13 +294,14 @@ int run_bench(const BenchOptions& o) {
                            step.empty() ? paper : (row.paper_step_ms.count(step) ? std::optional<double>(row.paper_step_ms.at(step)) : std::nullopt)};
                     if (!gpu_times.empty()) c.gpu_time = median_of(gpu_times);
                     cells.push_back(c);
-                    std::fprintf(stderr, "  %-10s %-22s %-22s %-4s %s%s\n", t.name.c_str(), (step.empty() ? row.name : row.name + " / " + step).c_str(), col.name.c_str(),
+                    if (!o.quiet)
+                        std::fprintf(stderr, "  %-10s %-22s %-22s %-4s %s%s\n", t.name.c_str(), (step.empty() ? row.name : row.name + " / " + step).c_str(), col.name.c_str(),
                                  device, fmt_ms(c.median).c_str(), c.gpu_time ? (" (GPU time " + fmt_ms(*c.gpu_time) + ")").c_str() : "");
                 };
                 if (col.info) {
-                    const Evaluation ev = session.evaluate_frame(scene);
+                    const Evaluation ev = session.evaluate_frame(scene, {}, o.cancel);
                     Cell c{t.name, row.name, col.name, "-", "", 0, 0, 0, std::nullopt, col.info(scene, ev)};
-                    std::fprintf(stderr, "  %-10s %-22s %-22s %s\n", t.name.c_str(), row.name.c_str(), col.name.c_str(), c.info.c_str());
+                    if (!o.quiet) std::fprintf(stderr, "  %-10s %-22s %-22s %s\n", t.name.c_str(), row.name.c_str(), col.name.c_str(), c.info.c_str());
                     cells.push_back(c);
                     continue;
                 }
@@ -301,14 +313,16 @@ int run_bench(const BenchOptions& o) {
                         Scene on = scene;
                         if (gpu) apply_set(on, col.gpu_set);
                         session.cache().invalidate(col.stage);
-                        const Evaluation first = session.evaluate(on, {col.stage});
+                        const Evaluation first = session.evaluate(on, {col.stage}, {}, o.cancel);
                         if (first.runs_of(col.stage).empty() || first.run(col.stage)->status != StageStatus::Ran) {
-                            std::fprintf(stderr, "  %-10s %-22s %-22s %-4s not measured: the stage did not run for this row\n", t.name.c_str(), row.name.c_str(),
+                            if (!o.quiet)
+                                std::fprintf(stderr, "  %-10s %-22s %-22s %-4s not measured: the stage did not run for this row\n", t.name.c_str(), row.name.c_str(),
                                          col.name.c_str(), gpu ? "gpu" : "cpu");
                             continue;
                         }
                         if (gpu && !stage_warning(first, col.stage).empty()) {
-                            std::fprintf(stderr, "  %-10s %-22s %-22s gpu  not measured: %s\n", t.name.c_str(), row.name.c_str(), col.name.c_str(),
+                            if (!o.quiet)
+                                std::fprintf(stderr, "  %-10s %-22s %-22s gpu  not measured: %s\n", t.name.c_str(), row.name.c_str(), col.name.c_str(),
                                          stage_warning(first, col.stage).c_str());
                             continue;
                         }
@@ -316,8 +330,8 @@ int run_bench(const BenchOptions& o) {
                         const double first_ms = stage_ms(first, col.stage);
                         add(gpu ? "gpu" : "cpu", first_ms > kSlowMs ? std::vector<double>{first_ms} : time_runs(o.repeat, [&] {
                             session.cache().invalidate(col.stage);
-                            return stage_ms(session.evaluate(on, {col.stage}), col.stage);
-                        }));
+                            return stage_ms(session.evaluate(on, {col.stage}, {}, o.cancel), col.stage);
+                        }, o.cancel));
                     }
                     continue;
                 }
@@ -329,6 +343,7 @@ int run_bench(const BenchOptions& o) {
                     req.width = col.frame_width;
                     req.height = col.frame_height;
                     req.aovs = {"radiance"};
+                    req.cancel = o.cancel;
                     wb.render(scene, req);  // warm-up: stages cached, GPU resources built
                     // Frame steps (offscreen work before the frame) get rows of their own. They are
                     // timed from scratch in every run: their reuse between frames is disabled here.
@@ -344,7 +359,7 @@ int run_bench(const BenchOptions& o) {
                             if (std::isfinite(st.ms)) it->second.push_back(st.ms);
                         }
                         return r.render_ms;
-                    });
+                    }, o.cancel);
                     add(gpu ? "gpu" : "cpu", wall, "", gpu_times);
                     for (const auto& [name, v] : steps) add(gpu ? "gpu" : "cpu", v, name);
                 }
@@ -453,6 +468,8 @@ int run_bench(const BenchOptions& o) {
     if (o.profile) print_profile(session.profiler());
     if (o.update_pages) {
         for (const auto& page : update_pages(o.pages_root, markdown)) std::fprintf(stderr, "updated %s\n", page.c_str());
+    } else if (o.output) {
+        *o.output = out.str();
     } else if (o.out.empty()) {
         std::fputs(out.str().c_str(), stdout);
     } else {

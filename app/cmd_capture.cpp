@@ -57,7 +57,9 @@ namespace {
 
 Image radiance_rgb(const Frame& f) { return f.aov("radiance"); }
 
-json sidecar(const Scene& s, const std::string& file, const RenderResult& r, const std::vector<std::string>& written, const TruthSettings& req_truth) {
+}  // namespace
+
+json capture_sidecar(const Scene& s, const std::string& file, const RenderResult& r, const std::vector<std::string>& written, const TruthSettings& req_truth) {
     json j;
     j["preset"] = s.name;
     j["file"] = file;
@@ -119,7 +121,31 @@ json sidecar(const Scene& s, const std::string& file, const RenderResult& r, con
     }
     return j;
 }
-}  // namespace
+
+std::vector<std::string> write_capture(const std::string& out_dir, const Scene& s, const std::string& file, const RenderResult& r,
+                                       const std::vector<std::string>& aovs, const TruthSettings& truth) {
+    const fs::path dir = out_dir;
+    std::vector<std::string> written;
+    const std::string png = (dir / (s.name + ".png")).string();
+    write_png_srgb(png, radiance_rgb(r.frame));
+    written.push_back(png);
+    if (r.truth && r.truth_frame) {  // truth_error: the truth and the error beside the frame, as pictures too
+        const std::string tpng = (dir / (s.name + ".truth.png")).string(), epng = (dir / (s.name + ".truth_error.png")).string();
+        write_png_srgb(tpng, radiance_rgb(*r.truth_frame));
+        write_png_srgb(epng, gui::error_figure(r.truth->error, *r.truth_frame));
+        written.push_back(tpng);
+        written.push_back(epng);
+    }
+    for (const auto& a : aovs) {
+        const std::string exr = (dir / (s.name + "." + a + ".exr")).string();
+        write_exr(exr, r.frame.aov(a));
+        written.push_back(exr);
+    }
+    const std::string side = (dir / (s.name + ".json")).string();
+    written.push_back(side);
+    write_text_atomic(side, capture_sidecar(s, file, r, written, truth).dump(2) + "\n");
+    return written;
+}
 
 void print_profile(const Profiler& profiler) {
     std::fprintf(stderr, "\n%-44s %-4s %10s %10s %10s %10s %6s\n", "scope", "dev", "last ms", "median", "min", "max", "n");
@@ -186,26 +212,7 @@ int run_capture(const CaptureOptions& o) {
         const Scene& s = scenes[i];
         RenderResult r = wb.render(s, req);
         tty_progress_done();
-        const fs::path dir = o.out_dir;
-        std::vector<std::string> written;
-        const std::string png = (dir / (s.name + ".png")).string();
-        write_png_srgb(png, radiance_rgb(r.frame));
-        written.push_back(png);
-        if (r.truth && r.truth_frame) {  // --aov truth_error: the truth and the error beside the frame, as pictures too
-            const std::string tpng = (dir / (s.name + ".truth.png")).string(), epng = (dir / (s.name + ".truth_error.png")).string();
-            write_png_srgb(tpng, radiance_rgb(*r.truth_frame));
-            write_png_srgb(epng, gui::error_figure(r.truth->error, *r.truth_frame));
-            written.push_back(tpng);
-            written.push_back(epng);
-        }
-        for (const auto& a : o.aovs) {
-            const std::string exr = (dir / (s.name + "." + a + ".exr")).string();
-            write_exr(exr, r.frame.aov(a));
-            written.push_back(exr);
-        }
-        const std::string side = (dir / (s.name + ".json")).string();
-        written.push_back(side);
-        write_text_atomic(side, sidecar(s, files[i], r, written, req.truth).dump(2) + "\n");
+        const std::string png = write_capture(o.out_dir, s, files[i], r, o.aovs, req.truth).front();
         int ran = 0, cached = 0, skipped = 0;
         for (const auto& run : r.eval.runs)
             for (const auto& w : run.warnings)

@@ -81,24 +81,38 @@ int run_preset_show(const std::string& file, const std::vector<std::string>& set
 }
 
 // [SECTION] info
-int run_info() {
-    std::printf("mesolab %s\n", version_string());
-    std::printf("cpu threads       %u\n", std::thread::hardware_concurrency());
-    std::printf("techniques        ");
-    for (const auto& t : Registry::instance().technique_names()) std::printf("%s ", t.c_str());
-    std::printf("\n");
+std::vector<std::pair<std::string, std::string>> info_fields() {
+    std::vector<std::pair<std::string, std::string>> r;
+    r.emplace_back("version", version_string());
+    r.emplace_back("cpu threads", std::to_string(std::thread::hardware_concurrency()));
+    std::string techniques;
+    for (const auto& t : Registry::instance().technique_names()) techniques += (techniques.empty() ? "" : " ") + t;
+    r.emplace_back("techniques", techniques);
     try {
         auto ctx = gpu::HeadlessContext::create();
         const auto& i = ctx->info();
-        std::printf("gl platform       %s\ngl vendor         %s\ngl renderer       %s\ngl version        %s\nglsl version      %s\n", i.platform.c_str(),
-                    i.vendor.c_str(), i.renderer.c_str(), i.version.c_str(), i.glsl_version.c_str());
+        r.emplace_back("gl platform", i.platform);
+        r.emplace_back("gl vendor", i.vendor);
+        r.emplace_back("gl renderer", i.renderer);
+        r.emplace_back("gl version", i.version);
+        r.emplace_back("glsl version", i.glsl_version);
     } catch (const std::exception& e) {
-        std::printf("gl                unavailable: %s\n", e.what());
+        r.emplace_back("gl", std::string("unavailable: ") + e.what());
     }
     int maj = 0, min = 0, rev = 0;
     glfwGetVersion(&maj, &min, &rev);
-    std::printf("glfw              %d.%d.%d\nimgui             %s\nopenimageio       %s\ntbb               %d.%d\n", maj, min, rev, IMGUI_VERSION,
-                OIIO_VERSION_STRING, TBB_VERSION_MAJOR, TBB_VERSION_MINOR);
+    r.emplace_back("glfw", std::to_string(maj) + "." + std::to_string(min) + "." + std::to_string(rev));
+    r.emplace_back("imgui", IMGUI_VERSION);
+    r.emplace_back("openimageio", OIIO_VERSION_STRING);
+    r.emplace_back("tbb", std::to_string(TBB_VERSION_MAJOR) + "." + std::to_string(TBB_VERSION_MINOR));
+    return r;
+}
+
+int run_info() {
+    for (const auto& [name, value] : info_fields()) {
+        if (name == "version") std::printf("mesolab %s\n", value.c_str());
+        else std::printf("%-17s %s\n", name.c_str(), value.c_str());
+    }
     return 0;
 }
 }  // namespace mesolab

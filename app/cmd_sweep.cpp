@@ -142,13 +142,7 @@ Scene reference_scene(const Scene& base, const Knob& k, const std::vector<std::s
 }
 
 // [SECTION] Measuring
-struct Point {
-    std::string value;
-    double ms, err, rel;
-    double knob_ms = 0;  // of ms: the stages the knob controls
-    bool below_noise = false;  // --metric truth: the truth cannot resolve the error
-    std::string by;            // --by: the second knob's value
-};
+using Point = SweepPoint;
 
 double stages_ms(const Evaluation& ev, const std::vector<std::string>& names) {
     double ms = 0;
@@ -170,6 +164,8 @@ struct Measure {
     std::map<std::string, Frame> truths;
     double truth_noise = 0, truth_ms = 0;
     int truth_cached_spp = 0;
+    const std::atomic<bool>* cancel = nullptr;
+    bool quiet = false;
 
     // Truths are kept by description and size: in texture mode a knob may change the native size
     // (bumpsynth's noise texture), and each size has its own truth.
@@ -182,14 +178,17 @@ struct Measure {
         tr.width = w, tr.height = h;
         tr.truth = truth_settings;
         tr.aovs = {"truth_stderr"};
-        tr.progress = [](const std::string& stage, double f) {
-            if (stage == "truth") std::fprintf(stderr, "\r  truth %3d%%", int(100.0 * f + 0.5));
-        };
+        tr.cancel = cancel;
+        if (!quiet)
+            tr.progress = [](const std::string& stage, double f) {
+                if (stage == "truth") std::fprintf(stderr, "\r  truth %3d%%", int(100.0 * f + 0.5));
+            };
         RenderResult r = wb.render(s, tr);
         const std::string k = truth_key(d, r.frame.width, r.frame.height);  // texture mode: the native size, not w x h
         if (auto it = truths.find(k); it != truths.end()) return it->second;
-        std::fprintf(stderr, "\r  truth: %d spp (%d from the cache), noise_rel %.4f, %.0f ms\n", truth_settings.spp, r.truth_cached_spp,
-                     truth_noise_rel(r.frame), r.render_ms);
+        if (!quiet)
+            std::fprintf(stderr, "\r  truth: %d spp (%d from the cache), noise_rel %.4f, %.0f ms\n", truth_settings.spp, r.truth_cached_spp,
+                         truth_noise_rel(r.frame), r.render_ms);
         truth_noise = std::max(truth_noise, truth_noise_rel(r.frame));
         truth_ms += r.render_ms;
         truth_cached_spp = r.truth_cached_spp;
@@ -205,10 +204,10 @@ struct Measure {
         }
     }
     Point measure(Workbench& wb, const Scene& s, const std::string& key, const std::string& v, RenderResult& res) {
-        if (metric) return {v, 0, technique.error(s, res.eval), 0};
+        if (metric) return {v, 0, technique.error(s, res.eval), 0, 0, false, ""};
         if (vs_truth) {
             const TruthComparison c = compare_to_truth(res.frame, truth_of(wb, s, res.frame.width, res.frame.height), truth_settings);
-            Point p{v, 0, c.rmse_rel, c.rmse_rel};
+            Point p{v, 0, c.rmse_rel, c.rmse_rel, 0, false, ""};
             p.below_noise = c.below_noise;
             return p;
         }
@@ -217,7 +216,7 @@ struct Measure {
             throw InputError("--knob " + key + "=" + v + ": the frame size changed (" + std::to_string(img.width) + "x" + std::to_string(img.height) +
                              "), so it cannot be compared with the reference");
         const double e = rmse(img, reference);
-        return {v, 0, e, ref_mean > 0 ? e / ref_mean : 0};
+        return {v, 0, e, ref_mean > 0 ? e / ref_mean : 0, 0, false, ""};
     }
 };
 
@@ -227,6 +226,7 @@ Point sweep_point(Workbench& wb, const Scene& base, const Knob& k, const std::st
     std::vector<double> times, knob_times;
     RenderResult res = wb.render(s, req);  // untimed warm-up: first-touch allocations, GPU resources
     for (int r = 0; r < repeat; ++r) {
+        if (req.cancel && req.cancel->load()) throw Cancelled();
         wb.session().cache().clear();  // the cost of this setting includes its stages
         res = wb.render(s, req);
         times.push_back(res.stages_ms + res.render_ms);
@@ -335,19 +335,30 @@ std::string sweep_metric_names() {
 }
 
 int run_sweep(const SweepOptions& o) {
+    Scene base = load_preset(o.preset);
+    apply_sets(base, o.sets);
+    const SweepResult r = sweep_scene(base, o, true);
+    std::printf("%s", r.markdown.c_str());
+    std::printf("\nwrote");
+    for (size_t i = 0; i < r.written.size(); ++i) std::printf("%s %s", i ? "," : "", r.written[i].c_str());
+    std::printf("\n");
+    return 0;
+}
+
+SweepResult sweep_scene(const Scene& base, const SweepOptions& o, bool write_files) {
     int w = 0, h = 0;
     parse_size(o.size, w, h);
     if (o.repeat < 1 || o.repeat > 100) throw InputError("--repeat: " + std::to_string(o.repeat) + " is out of range [1, 100]");
-    plot_font();  // the plot's font (fonts-dejavu-core): an error now rather than after the measurements
+    if (write_files) plot_font();  // the plot's font (fonts-dejavu-core): an error now rather than after the measurements
     Measure m;
+    m.cancel = o.cancel;
+    m.quiet = o.quiet;
     m.metric = find_metric(o.metric);
-    Scene base = load_preset(o.preset);
-    apply_sets(base, o.sets);
     if (m.metric) {
         try {
             m.metric->check(base);
         } catch (const InputError& e) {
-            throw InputError("--metric " + m.metric->name + ": " + o.preset + ": " + e.what());
+            throw InputError("--metric " + m.metric->name + ": " + (o.preset.empty() ? base.name : o.preset) + ": " + e.what());
         }
     }
     m.vs_truth = o.metric == kTruthMetric;
@@ -370,16 +381,18 @@ int run_sweep(const SweepOptions& o) {
     req.backend = parse_backend(o.backend);
     req.width = w;
     req.height = h;
+    req.cancel = o.cancel;
     if (m.vs_truth && req.backend == Backend::Truth) throw InputError("--metric truth: compares a real-time backend (cpu or gpu) with the truth; --backend truth measures against a reference truth with --metric rmse");
     if (req.backend == Backend::Truth) req.truth = m.truth_settings;
     if (!m.vs_truth) {
         const Scene ref = reference_scene(base, k, o.reference, ref_text);
-        std::fprintf(stderr, "reference: %s\n", ref_text.c_str());
+        if (!o.quiet) std::fprintf(stderr, "reference: %s\n", ref_text.c_str());
         RenderResult rr = wb.render(ref, req);
         m.prepare(ref, rr);
     }
 
     std::vector<Point> points;
+    const size_t total = (by ? by->values.size() : 1) * k.values.size();
     const std::string err_name = m.metric ? m.metric->name : m.vs_truth ? "rmse_rel" : "rmse";
     for (const std::string& b : by ? by->values : std::vector<std::string>{""}) {
         Scene sb = base;
@@ -395,25 +408,29 @@ int run_sweep(const SweepOptions& o) {
             }
         }
         for (const auto& v : k.values) {
+            if (o.progress) o.progress("sweep " + k.key + "=" + v + (by ? " " + by->key + "=" + b : ""), double(points.size()) / double(total));
             points.push_back(sweep_point(wb, sb, k, v, req, o.repeat, m));
             points.back().by = b;
-            std::fprintf(stderr, "  %s=%-10s%s %10.3f ms  %s %.3e%s\n", k.key.c_str(), v.c_str(), by ? (" " + by->key + "=" + b).c_str() : "", points.back().ms,
+            if (!o.quiet)
+                std::fprintf(stderr, "  %s=%-10s%s %10.3f ms  %s %.3e%s\n", k.key.c_str(), v.c_str(), by ? (" " + by->key + "=" + b).c_str() : "", points.back().ms,
                          err_name.c_str(), points.back().err, points.back().below_noise ? " (below the truth's noise)" : "");
         }
     }
-    if (m.vs_truth && m.truths.size() > 1) std::fprintf(stderr, "  %zu truths: the knobs change what the truth reads\n", m.truths.size());
+    if (m.vs_truth && m.truths.size() > 1 && !o.quiet) std::fprintf(stderr, "  %zu truths: the knobs change what the truth reads\n", m.truths.size());
 
     // A technique metric's outputs are named after it too, so they do not replace the RMSE sweep's.
     const std::string metric_suffix = m.metric ? "." + m.metric->name : m.vs_truth ? std::string(".truth") : std::string();
     const std::string stem =
         (fs::path(o.out_dir) / (base.name + "." + k.key + (by ? "." + by->key : "") + metric_suffix)).string();
     const Report r = report(o, base, k, ref_text, w, h, m, points);
-    write_text_atomic(stem + ".csv", r.csv);
-    write_text_atomic(stem + ".md", r.md);
-    write_png_srgb(stem + ".png", render_plot(r.plot));
-    write_text_atomic(stem + ".svg", render_plot_svg(r.plot));
-    std::printf("%s", r.md.c_str());
-    std::printf("\nwrote %s.csv, %s.md, %s.png, %s.svg\n", stem.c_str(), stem.c_str(), stem.c_str(), stem.c_str());
-    return 0;
+    SweepResult result{points, err_name, ref_text, r.md, {}};
+    if (write_files) {
+        write_text_atomic(stem + ".csv", r.csv);
+        write_text_atomic(stem + ".md", r.md);
+        write_png_srgb(stem + ".png", render_plot(r.plot));
+        write_text_atomic(stem + ".svg", render_plot_svg(r.plot));
+        result.written = {stem + ".csv", stem + ".md", stem + ".png", stem + ".svg"};
+    }
+    return result;
 }
 }  // namespace mesolab

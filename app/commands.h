@@ -1,13 +1,17 @@
 #pragma once
 // Subcommands of `mesolab`. Each returns the process exit status: 0 success, 2 bad input,
 // 1 internal failure (main() maps exceptions: InputError -> 2, anything else -> 1).
+#include <atomic>
 #include <cstdint>
+#include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace mesolab {
 
 class Profiler;
+struct Scene;
 
 struct CaptureOptions {
     std::string memory_limit;  // --memory-limit: a stage above it stops with exit status 2 (empty: the available memory)
@@ -37,6 +41,13 @@ struct BenchOptions {
     int vertices = 0;                // --vertices N: simplify it to N vertices (0: the table's choice)
     std::vector<std::string> rows, columns;  // --row / --column: only the rows and columns whose names contain one of these
     std::string label;               // --label: this machine's short name in the JSON ("H100"), shown in the pages when merged from bench/NAME.json
+    // In-process callers (the Python module): progress per cell ("bench TABLE: ROW / COLUMN",
+    // fraction of cells done), a flag that stops between runs (Cancelled), no per-cell lines on
+    // stderr, and the output in *output instead of standard output or a file.
+    std::function<void(const std::string&, double)> progress;
+    const std::atomic<bool>* cancel = nullptr;
+    bool quiet = false;
+    std::string* output = nullptr;
 };
 int run_bench(const BenchOptions& o);
 
@@ -54,8 +65,33 @@ struct SweepOptions {
     std::string by;                       // --by KEY=V1,V2,...: a second knob (a grid; --metric truth)
     int spp = 64;                         // the truth's samples per pixel (--metric truth, --backend truth)
     uint64_t seed = 1;
+    // In-process callers (the Python module), as BenchOptions.
+    std::function<void(const std::string&, double)> progress;
+    const std::atomic<bool>* cancel = nullptr;
+    bool quiet = false;
 };
 int run_sweep(const SweepOptions& o);
+
+// One measured setting of a sweep.
+struct SweepPoint {
+    std::string value;
+    double ms = 0;       // median time per frame including its stages, from a cold cache
+    double err = 0;      // the metric's error (rmse: radiance RMSE; truth: rmse_rel; a technique's metric)
+    double rel = 0;      // relative RMSE (rmse, truth)
+    double knob_ms = 0;  // of ms: the stages the knob controls
+    bool below_noise = false;  // --metric truth: the truth cannot resolve the error
+    std::string by;            // --by: the second knob's value
+};
+struct SweepResult {
+    std::vector<SweepPoint> points;
+    std::string metric;      // the error's name: rmse, rmse_rel or the technique metric's
+    std::string reference;   // what the errors are measured against ("camera.x=..." or "the truth")
+    std::string markdown;    // the table `mesolab sweep` prints
+    std::vector<std::string> written;  // files written (with out_dir): CSV, Markdown, PNG and SVG plot
+};
+// The sweep of `base` (o.preset and o.sets are not read: the caller loaded and set the scene);
+// the files go to o.out_dir only when write_files.
+SweepResult sweep_scene(const Scene& base, const SweepOptions& o, bool write_files);
 std::string sweep_metric_names();  // "rmse (default: ...), bumpsynth.ndf_histogram" for help texts and errors
 
 struct ExportOptions {
@@ -73,6 +109,10 @@ int run_preset_validate(const std::vector<std::string>& files);
 int run_preset_schema(const std::string& technique, bool as_json);
 int run_preset_show(const std::string& file, const std::vector<std::string>& sets);
 int run_info();
+// What `mesolab info` prints, as (name, value) pairs in its order: version, cpu threads, techniques,
+// the headless GL context's platform, vendor, renderer and versions (or "gl": why there is none),
+// library versions.
+std::vector<std::pair<std::string, std::string>> info_fields();
 std::string export_names();  // "btf (microgeom), ..." for help texts
 
 struct GuiOptions {

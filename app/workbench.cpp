@@ -69,7 +69,7 @@ RenderResult Workbench::render_one(const Scene& s, const RenderRequest& req) {
     RenderResult r;
     auto t0 = clock::now();
     if (req.backend == Backend::Truth) {  // only the physical description's stages
-        r.eval = session_.evaluate(s, truth_stages(s), req.progress);
+        r.eval = session_.evaluate(s, truth_stages(s), req.progress, req.cancel);
         r.stages_ms = std::chrono::duration<double, std::milli>(clock::now() - t0).count();
         const ivec2 size = frame_size(s, r.eval, {req.width, req.height});  // texture mode: the techniques' native size, as the real-time frame
         session_.check_memory("a " + std::to_string(size.x) + "x" + std::to_string(size.y) + " truth",
@@ -83,7 +83,7 @@ RenderResult Workbench::render_one(const Scene& s, const RenderRequest& req) {
         r.truth_cached_spp = cached ? cached->spp : 0;
         TruthAccumulator a = r.truth_cached_spp == req.truth.spp
                                  ? std::move(*cached)
-                                 : accumulate_truth(s, r.eval, size.x, size.y, req.truth, cached ? &*cached : nullptr, req.progress);
+                                 : accumulate_truth(s, r.eval, size.x, size.y, req.truth, cached ? &*cached : nullptr, req.progress, req.cancel);
         if (r.truth_cached_spp != req.truth.spp && !keep_file) truth_cache_.store(key, a);
         r.frame = truth_frame(a);
         r.render_ms = std::chrono::duration<double, std::milli>(clock::now() - t0).count();
@@ -91,7 +91,7 @@ RenderResult Workbench::render_one(const Scene& s, const RenderRequest& req) {
         if (req.coverage) r.frame.coverage = frame_coverage(s, r.eval, size.x, size.y);
         return r;
     }
-    r.eval = session_.evaluate_frame(s, req.progress);
+    r.eval = session_.evaluate_frame(s, req.progress, req.cancel);
     ProfilerBinding bind(session_.profiler());
     r.stages_ms = std::chrono::duration<double, std::milli>(clock::now() - t0).count();
     const ivec2 size = frame_size(s, r.eval, {req.width, req.height});

@@ -8,6 +8,7 @@
 #include "core/render.h"
 #include "core/session.h"
 #include "core/stage.h"
+#include <atomic>
 #include <memory>
 #include <optional>
 #include <string>
@@ -32,6 +33,9 @@ struct RenderRequest {
     bool coverage = false;          // also fill Frame::coverage (untimed; either backend)
     TruthSettings truth;            // Backend::Truth: samples per pixel and seed
     ProgressFn progress;
+    // Set from another thread to stop: the stages (and the truth's samples) stop at their next
+    // check with Cancelled, and the session stays usable (what finished stays cached).
+    const std::atomic<bool>* cancel = nullptr;
 };
 
 struct RenderResult {
@@ -77,6 +81,14 @@ private:
     std::unique_ptr<gpu::HeadlessContext> context_;
     std::unique_ptr<gpu::Renderer> renderer_;
 };
+
+// What `mesolab capture` writes for one rendered scene, into `out_dir`: NAME.png (8-bit sRGB
+// radiance), NAME.<aov>.exr for each of `aovs` (32-bit float), with truth_error NAME.truth.png and
+// NAME.truth_error.png, and the sidecar NAME.json (capture_sidecar: parameters, renderer, timings,
+// stages, version; `file` is the preset it came from). Returns the paths written, the PNG first.
+json capture_sidecar(const Scene& s, const std::string& file, const RenderResult& r, const std::vector<std::string>& written, const TruthSettings& truth);
+std::vector<std::string> write_capture(const std::string& out_dir, const Scene& s, const std::string& file, const RenderResult& r,
+                                       const std::vector<std::string>& aovs, const TruthSettings& truth);
 
 // Progress printer for the CLI: a single updating line on a TTY (stderr), nothing otherwise.
 ProgressFn tty_progress();

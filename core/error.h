@@ -11,6 +11,13 @@ struct InputError : std::runtime_error {
     using std::runtime_error::runtime_error;
 };
 
+// Bad input of one kind: work whose memory estimate is above the session's budget (the machine's
+// available memory or --memory-limit; core/session.h). The message names the work, the figure and
+// the parameters to lower.
+struct MemoryBudgetError : InputError {
+    using InputError::InputError;
+};
+
 // Thrown by a stage when its computation was cancelled.
 struct Cancelled : std::runtime_error {
     Cancelled() : std::runtime_error("cancelled") {}

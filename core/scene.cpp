@@ -371,6 +371,13 @@ std::string get_public(const Scene& s, const std::string& key) {
     return value_to_text(d, t.tables.front()->get(d.name));
 }
 
+Value get_public_value(const Scene& s, const std::string& key) {
+    Scene copy = s;
+    Target t = resolve_key(copy, key);
+    const ParamDecl& d = decl_of(s, key);
+    return t.tables.front()->get(d.name);
+}
+
 std::vector<std::string> public_keys(const Scene& s) {
     std::vector<std::string> r;
     for (const ParamGroup* g : Registry::instance().groups())

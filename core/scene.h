@@ -72,6 +72,8 @@ void apply_sets(Scene& s, const std::vector<std::string>& assignments);
 void check_set_used(const Scene& s, const std::string& key);
 // Read a public key ("camera.distance", "basic.kd", ...) as text, for display and sweeps.
 std::string get_public(const Scene& s, const std::string& key);
+// The same as its stored value (TECHNIQUE.*: the first object using the technique).
+Value get_public_value(const Scene& s, const std::string& key);
 // The declaration behind a public key (throws InputError with a suggestion if unknown).
 const ParamDecl& decl_of(const Scene& s, const std::string& key);
 // Every public key valid for this scene, for suggestions and listings.

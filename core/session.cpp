@@ -144,7 +144,7 @@ void Session::check_memory(const std::string& what, const MemoryEstimate& e) con
     if (budget <= 0 || e.bytes <= budget) return;
     std::string lower;
     for (size_t i = 0; i < e.lower.size(); ++i) lower += (i ? (i + 1 == e.lower.size() ? " or " : ", ") : "") + e.lower[i];
-    throw InputError(what + " would allocate about " + format_bytes(e.bytes) + (e.what.empty() ? "" : " (" + e.what + ")") + ", more than " +
+    throw MemoryBudgetError(what + " would allocate about " + format_bytes(e.bytes) + (e.what.empty() ? "" : " (" + e.what + ")") + ", more than " +
                      (limited ? "the --memory-limit of " + format_bytes(budget) : "the " + format_bytes(budget) + " of memory available") +
                      (lower.empty() ? std::string() : "; lower " + lower));
 }
@@ -245,6 +245,7 @@ Evaluation Session::evaluate(const Scene& scene, const std::vector<StageName>& t
             const std::string msg = e.what();
             // Bad input stays exit status 2; a message that already names the stage keeps its words.
             if (msg.rfind("stage " + d.name, 0) == 0) throw;
+            if (dynamic_cast<const MemoryBudgetError*>(&e)) throw MemoryBudgetError("stage " + run.label(scene) + ": " + msg);
             throw InputError("stage " + run.label(scene) + ": " + msg);
         } catch (const std::exception& e) {
             run.status = StageStatus::Failed;

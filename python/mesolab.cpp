@@ -1,0 +1,749 @@
+// `import mesolab`: the Python face of mesolab's core (python/README.md). Everything here calls
+// what the command line calls, so a frame rendered through Python equals `mesolab capture` of the
+// same scene and settings, and an error carries the same words as the CLI's.
+//
+// [SECTION] index
+//   Errors          InputError (a ValueError), MemoryBudgetError (an InputError), Cancelled
+//   Worker          long work on a thread of its own; the caller's thread polls for Ctrl-C
+//   Values          Python values <-> parameter values (the --set text, typed values back)
+//   Scene           presets: load, set/get keys (object=), JSON, atomic save
+//   Frame           a rendered frame: numpy views of its AOVs, stages, timings, save, PNG
+//   Workbench       one session (stage cache, memory budget, GL context) on one worker thread
+//   Module          __version__, info, schema, load_preset, bench, sweep
+#include "app/commands.h"
+#include "app/workbench.h"
+#include "core/error.h"
+#include "core/image.h"
+#include "core/scene.h"
+#include "core/session.h"
+#include "core/strings.h"
+#include "core/technique.h"
+#include "core/truth/truth.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdio>
+#include <deque>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <future>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <sstream>
+#include <thread>
+#include <unistd.h>
+
+namespace py = pybind11;
+namespace fs = std::filesystem;
+using namespace mesolab;
+
+namespace {
+
+// [SECTION] Values
+// A path argument: str or os.PathLike.
+std::string path_arg(const py::object& p) { return py::str(py::module_::import("os").attr("fspath")(p)).cast<std::string>(); }
+
+std::string join(const std::vector<std::string>& parts, const std::string& sep) {
+    std::string r;
+    for (size_t i = 0; i < parts.size(); ++i) r += (i ? sep : "") + parts[i];
+    return r;
+}
+
+py::object from_json(const json& j) { return py::module_::import("json").attr("loads")(j.dump()); }
+
+// A Python value as `--set` text, so that Python and the command line check it alike.
+std::string to_set_text(const std::string& key, const py::handle& h) {
+    const auto v = py::reinterpret_borrow<py::object>(h);
+    if (py::isinstance<py::bool_>(v)) return v.cast<bool>() ? "true" : "false";
+    if (py::isinstance<py::str>(v)) return v.cast<std::string>();
+    if (py::hasattr(v, "__fspath__")) return py::str(py::module_::import("os").attr("fspath")(v)).cast<std::string>();
+    const py::module_ np = py::module_::import("numpy");
+    if (py::isinstance(v, np.attr("bool_"))) return v.cast<bool>() ? "true" : "false";
+    if (py::isinstance<py::int_>(v) || py::isinstance(v, np.attr("integer"))) return py::str(py::int_(v)).cast<std::string>();
+    if (py::isinstance<py::float_>(v) || py::isinstance(v, np.attr("floating"))) return py::repr(py::float_(v)).cast<std::string>();
+    if (py::isinstance<py::sequence>(v) || py::isinstance(v, np.attr("ndarray"))) {
+        std::string r;
+        for (const py::handle& e : py::iter(v)) {
+            if (!(py::isinstance<py::int_>(e) || py::isinstance<py::float_>(e) || py::isinstance(e, np.attr("number"))) || py::isinstance<py::bool_>(e))
+                throw InputError(key + ": expected numbers in the sequence, got " + py::repr(e).cast<std::string>());
+            r += (r.empty() ? "" : ",") + to_set_text(key, e);
+        }
+        return r;
+    }
+    throw InputError(key + ": expected a bool, a number, a string or a sequence of numbers, got " + py::repr(v).cast<std::string>());
+}
+
+py::object to_python(const Value& v) {
+    return std::visit(
+        [](const auto& x) -> py::object {
+            using T = std::decay_t<decltype(x)>;
+            if constexpr (std::is_same_v<T, std::array<double, 2>>) return py::make_tuple(x[0], x[1]);
+            else if constexpr (std::is_same_v<T, std::array<double, 3>>) return py::make_tuple(x[0], x[1], x[2]);
+            else return py::cast(x);
+        },
+        v);
+}
+
+// [SECTION] Arrays as image files
+// An image given as a numpy array is written once, under a name made from its contents, into
+// $MESOLAB_CACHE_DIR/arrays (else $XDG_CACHE_HOME/mesolab/arrays, else ~/.cache/mesolab/arrays),
+// and the key names that file. The loaders then read it as they read any file, and the stage
+// cache keys follow the contents: the same array again reuses the stages, another recomputes.
+// float arrays become float EXR (linear values, as an EXR holds); uint8 and uint16 arrays PNG
+// (what an 8/16-bit file means, e.g. sRGB for albedo maps).
+std::string arrays_folder() {
+    if (const char* d = std::getenv("MESOLAB_CACHE_DIR"); d && *d) return std::string(d) + "/arrays";
+    if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x) return std::string(x) + "/mesolab/arrays";
+    if (const char* home = std::getenv("HOME"); home && *home) return std::string(home) + "/.cache/mesolab/arrays";
+    throw std::runtime_error("no folder for arrays given as images: set MESOLAB_CACHE_DIR (or HOME)");
+}
+
+std::string store_array(const std::string& key, const py::array& given) {
+    if (given.ndim() != 2 && given.ndim() != 3)
+        throw InputError(key + ": expected an image array of shape (H, W) or (H, W, C), got " + std::to_string(given.ndim()) + " dimensions");
+    const char kind = given.dtype().kind();
+    const size_t item = size_t(given.dtype().itemsize());
+    OIIO::TypeDesc type;
+    py::array a;
+    if (kind == 'f') {
+        a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(given);
+        type = OIIO::TypeDesc::FLOAT;
+        const py::module_ np = py::module_::import("numpy");
+        if (!np.attr("isfinite")(a).attr("all")().cast<bool>()) throw InputError(key + ": the array holds non-finite values (NaN or infinity)");
+    } else if (kind == 'u' && item == 1) {
+        a = py::array_t<uint8_t, py::array::c_style | py::array::forcecast>::ensure(given);
+        type = OIIO::TypeDesc::UINT8;
+    } else if (kind == 'u' && item == 2) {
+        a = py::array_t<uint16_t, py::array::c_style | py::array::forcecast>::ensure(given);
+        type = OIIO::TypeDesc::UINT16;
+    } else {
+        throw InputError(key + ": expected a float, uint8 or uint16 image array, got dtype " + py::str(given.dtype()).cast<std::string>());
+    }
+    const int h = int(a.shape(0)), w = int(a.shape(1)), c = a.ndim() == 3 ? int(a.shape(2)) : 1;
+    if (w < 1 || h < 1 || c < 1 || c > 4) throw InputError(key + ": expected an image of 1 to 4 channels and at least 1x1 pixels, got shape " + py::str(py::tuple(given.attr("shape"))).cast<std::string>());
+    const size_t bytes = size_t(w) * size_t(h) * size_t(c) * type.size();
+    const std::string header = strprintf("%dx%dx%d %s;", w, h, c, type.c_str());
+    std::string content = header;
+    content.append(static_cast<const char*>(a.data()), bytes);
+    const std::string name = strprintf("%016llx-%dx%dx%d", static_cast<unsigned long long>(StageGraph::hash(content)), w, h, c) +
+                             (type == OIIO::TypeDesc::FLOAT ? ".exr" : ".png");
+    const fs::path folder = arrays_folder(), path = folder / name;
+    std::error_code ec;
+    if (fs::is_regular_file(path, ec)) return path.string();
+    fs::create_directories(folder, ec);
+    if (ec) throw InputError(key + ": could not create " + folder.string() + " for the array (" + ec.message() + ")");
+    // Written beside its final name, then renamed: a reader never sees half a file.
+    const std::string tmp = (folder / (name + ".tmp" + std::to_string(::getpid()) + path.extension().string())).string();
+    auto out = OIIO::ImageOutput::create(tmp);
+    if (!out || !out->open(tmp, OIIO::ImageSpec(w, h, c, type)) || !out->write_image(type, a.data()) || !out->close()) {
+        const std::string why = out ? out->geterror() : OIIO::geterror();
+        std::remove(tmp.c_str());
+        throw std::runtime_error(key + ": could not write the array to " + tmp + ": " + why);
+    }
+    fs::rename(tmp, path, ec);
+    if (ec) throw std::runtime_error(key + ": could not rename " + tmp + " to " + path.string() + ": " + ec.message());
+    return path.string();
+}
+
+// "basic.kd" for one object (index or name): objects.N.material.kd; "geometry.X": objects.N.geometry.X.
+std::string object_key(const Scene& s, const std::string& key, const py::object& object) {
+    if (object.is_none()) return key;
+    int index = -1;
+    if (py::isinstance<py::str>(object)) {
+        const std::string name = object.cast<std::string>();
+        std::vector<std::string> names;
+        for (size_t i = 0; i < s.objects.size(); ++i) {
+            if (s.objects[i].name == name) index = int(i);
+            names.push_back(s.objects[i].name);
+        }
+        if (index < 0) throw InputError(key + ": object '" + name + "' is not in the scene; its objects are: " + join(names, ", "));
+    } else if (py::isinstance<py::int_>(object)) {
+        index = object.cast<int>();
+        if (index < 0 || size_t(index) >= s.objects.size())
+            throw InputError(key + ": object " + std::to_string(index) + " is out of range (the scene has " + std::to_string(s.objects.size()) + " objects)");
+    } else {
+        throw InputError(key + ": object= takes an index or a name, got " + py::repr(object).cast<std::string>());
+    }
+    const auto dot = key.find('.');
+    const std::string group = key.substr(0, dot), param = dot == std::string::npos ? "" : key.substr(dot + 1);
+    if (dot == std::string::npos || param.find('.') != std::string::npos || param.empty())
+        throw InputError(key + ": object= applies to geometry.* and TECHNIQUE.* keys (e.g. basic.kd)");
+    const SceneObject& o = s.objects[size_t(index)];
+    if (group == "geometry") return "objects." + std::to_string(index) + ".geometry." + param;
+    if (!Registry::instance().technique(group)) throw InputError(key + ": object= applies to geometry.* and TECHNIQUE.* keys (e.g. basic.kd)");
+    if (o.technique != group)
+        throw InputError(key + ": object " + std::to_string(index) + " ('" + o.name + "') uses technique '" + o.technique + "', not '" + group + "'");
+    return "objects." + std::to_string(index) + ".material." + param;
+}
+
+std::pair<int, int> frame_size_arg(const py::object& size) {
+    if (py::isinstance<py::str>(size)) {
+        int w = 0, h = 0;
+        parse_size(size.cast<std::string>(), w, h);
+        return {w, h};
+    }
+    try {
+        const auto t = size.cast<std::pair<int, int>>();
+        if (t.first < 1 || t.second < 1 || t.first > 16384 || t.second > 16384)
+            throw InputError("size: (" + std::to_string(t.first) + ", " + std::to_string(t.second) + ") is out of range (1..16384 per side)");
+        return t;
+    } catch (const py::cast_error&) {
+        throw InputError("size: expected (width, height) or 'WxH', got " + py::repr(size).cast<std::string>());
+    }
+}
+
+uint64_t memory_limit_arg(const py::object& limit) {
+    if (limit.is_none()) return 0;
+    if (py::isinstance<py::int_>(limit)) {
+        const long long b = limit.cast<long long>();
+        if (b <= 0) throw InputError("memory_limit: " + std::to_string(b) + " bytes; expected a positive size");
+        return uint64_t(b);
+    }
+    return parse_memory_size(limit.cast<std::string>());
+}
+
+// [SECTION] Worker
+// A thread that runs one task after another. A Workbench owns one: its GL context is current on
+// that thread only, and every call for it runs there.
+class Worker {
+public:
+    Worker() : thread_([this] { loop(); }) {}
+    ~Worker() {
+        {
+            std::lock_guard lock(mutex_);
+            stop_ = true;
+        }
+        cv_.notify_all();
+        thread_.join();
+    }
+    void post(std::function<void()> task) {
+        {
+            std::lock_guard lock(mutex_);
+            tasks_.push_back(std::move(task));
+        }
+        cv_.notify_all();
+    }
+
+private:
+    void loop() {
+        for (;;) {
+            std::function<void()> task;
+            {
+                std::unique_lock lock(mutex_);
+                cv_.wait(lock, [&] { return stop_ || !tasks_.empty(); });
+                if (tasks_.empty()) return;
+                task = std::move(tasks_.front());
+                tasks_.pop_front();
+            }
+            task();
+        }
+    }
+    std::mutex mutex_;
+    std::condition_variable cv_;
+    std::deque<std::function<void()>> tasks_;
+    bool stop_ = false;
+    std::thread thread_;  // last: starts once the rest exists
+};
+
+// The latest progress report of a task, handed from its thread to the caller's.
+struct Progress {
+    std::mutex mutex;
+    std::string stage;
+    double fraction = 0;
+    bool fresh = false;
+    ProgressFn fn() {
+        return [this](const std::string& s, double f) {
+            std::lock_guard lock(mutex);
+            stage = s, fraction = f, fresh = true;
+        };
+    }
+};
+
+// Runs work(progress, cancel) on `worker` while this thread, without the GIL, waits for it and
+// every 50 ms takes the GIL to pass on progress and to check for signals. Ctrl-C (or a progress
+// callback that raises) sets the cancel flag; the work stops at its next check, and the exception
+// is raised here once it has. The task never outlives this call.
+template <class R>
+R run_on(Worker& worker, const py::object& progress_cb, const std::function<R(const ProgressFn&, const std::atomic<bool>*)>& work) {
+    Progress progress;
+    std::atomic<bool> cancel{false};
+    std::promise<R> promise;
+    std::future<R> result = promise.get_future();
+    const ProgressFn fn = progress.fn();
+    worker.post([&] {
+        try {
+            promise.set_value(work(progress_cb.is_none() ? ProgressFn{} : fn, &cancel));
+        } catch (...) {
+            promise.set_exception(std::current_exception());
+        }
+    });
+    const auto stop_and_wait = [&] {
+        cancel = true;
+        py::gil_scoped_release nogil;
+        result.wait();
+    };
+    for (;;) {
+        bool ready = false;
+        {
+            py::gil_scoped_release nogil;
+            ready = result.wait_for(std::chrono::milliseconds(50)) == std::future_status::ready;
+        }
+        if (!progress_cb.is_none()) {
+            std::string stage;
+            double fraction = 0;
+            bool fresh = false;
+            {
+                std::lock_guard lock(progress.mutex);
+                std::swap(fresh, progress.fresh);
+                stage = progress.stage, fraction = progress.fraction;
+            }
+            if (fresh) {
+                try {
+                    progress_cb(stage, fraction);
+                } catch (...) {
+                    stop_and_wait();
+                    throw;
+                }
+            }
+        }
+        if (ready) break;
+        if (PyErr_CheckSignals() != 0) {
+            py::error_already_set interrupted;  // takes the pending KeyboardInterrupt
+            stop_and_wait();
+            throw interrupted;
+        }
+    }
+    return result.get();
+}
+
+// Work on a worker of its own (module functions: bench and sweep make their own session).
+template <class R>
+R run_alone(const py::object& progress_cb, const std::function<R(const ProgressFn&, const std::atomic<bool>*)>& work) {
+    Worker worker;
+    return run_on<R>(worker, progress_cb, work);
+}
+
+// [SECTION] Scene
+struct PyScene {
+    Scene scene;
+    std::vector<std::string> set_keys;  // keys set since loading: each must be used when rendered (as --set)
+
+    void set(const std::string& key, const py::object& value, const py::object& object) {
+        const std::string k = object_key(scene, key, object);
+        // An image as an array, for a key that names a file: stored by its contents (store_array).
+        if (py::isinstance<py::array>(value) && py::array(value).ndim() >= 2 && decl_of(scene, k).type == ParamType::Path)
+            apply_set(scene, k, store_array(k, value));
+        else
+            apply_set(scene, k, to_set_text(k, value));
+        if (std::find(set_keys.begin(), set_keys.end(), k) == set_keys.end()) set_keys.push_back(k);
+    }
+    py::object get(const std::string& key, const py::object& object) const { return to_python(get_public_value(scene, object_key(scene, key, object))); }
+    // What --set checks once every setting is made: a key the final settings do not use.
+    void check_used() const {
+        for (const auto& k : set_keys) check_set_used(scene, k);
+    }
+};
+
+// [SECTION] Frame
+struct PyFrame {
+    std::shared_ptr<const RenderResult> r;
+    Scene scene;
+    TruthSettings truth;
+
+    const Image& image(const std::string& name) const {
+        if (!r->frame.has(name)) {
+            std::vector<std::string> names;
+            for (const auto& a : r->frame.layout) names.push_back(a.name);
+            throw py::key_error("frame has no AOV '" + name + "'; it holds " + join(names, ", ") + " (ask for more with aovs=[...])");
+        }
+        return r->frame.aov(name);
+    }
+    // A read-only (H, W, C) float32 view that keeps the frame's data alive.
+    py::array array(const std::string& name) const {
+        const Image& img = image(name);
+        auto* keep = new std::shared_ptr<const RenderResult>(r);
+        py::capsule owner(keep, [](void* p) { delete static_cast<std::shared_ptr<const RenderResult>*>(p); });
+        const auto c = py::ssize_t(img.channels), w = py::ssize_t(img.width);
+        py::array a(py::dtype::of<float>(), {py::ssize_t(img.height), w, c},
+                    {py::ssize_t(sizeof(float)) * w * c, py::ssize_t(sizeof(float)) * c, py::ssize_t(sizeof(float))}, img.data.data(), owner);
+        a.attr("setflags")(py::arg("write") = false);
+        return a;
+    }
+    std::vector<std::string> aov_names() const {
+        std::vector<std::string> names;
+        for (const auto& a : r->frame.layout) names.push_back(a.name);
+        return names;
+    }
+    json sidecar(const std::vector<std::string>& written = {}) const { return capture_sidecar(scene, "", *r, written, truth); }
+    py::list save(const py::object& where) const {
+        const std::string dir = path_arg(where);
+        std::error_code ec;
+        fs::create_directories(dir, ec);
+        if (ec) throw InputError(dir + ": could not create the folder (" + ec.message() + ")");
+        std::vector<std::string> aovs;
+        for (const auto& a : r->frame.layout)
+            if (a.name != "truth_error") aovs.push_back(a.name);
+        py::list out;
+        for (const auto& p : write_capture(dir, scene, "", *r, aovs, truth)) out.append(p);
+        return out;
+    }
+    py::bytes png() const {
+        char name[] = "/tmp/mesolab-frame-XXXXXX.png";
+        const int fd = ::mkstemps(name, 4);
+        if (fd < 0) throw std::runtime_error("could not create a temporary file for the frame's PNG");
+        ::close(fd);
+        std::string bytes;
+        try {
+            write_png_srgb(name, r->frame.aov("radiance"));
+            std::ifstream f(name, std::ios::binary);
+            bytes.assign(std::istreambuf_iterator<char>(f), {});
+        } catch (...) {
+            std::remove(name);
+            throw;
+        }
+        std::remove(name);
+        return py::bytes(bytes);
+    }
+    std::string repr() const {
+        return strprintf("<mesolab.Frame %dx%d %s of '%s': %s; stages %.1f ms, render %.1f ms>", r->frame.width, r->frame.height, r->renderer.c_str(),
+                         scene.name.c_str(), join(aov_names(), ", ").c_str(), r->stages_ms, r->render_ms);
+    }
+};
+
+// [SECTION] Workbench
+class PyWorkbench {
+public:
+    explicit PyWorkbench(const py::object& memory_limit) : limit_(memory_limit_arg(memory_limit)) {
+        run_on<int>(worker_, py::none(), [this](const ProgressFn&, const std::atomic<bool>*) {
+            wb_ = std::make_unique<Workbench>();
+            wb_->session().set_memory_limit(limit_);
+            return 0;
+        });
+    }
+    ~PyWorkbench() {
+        // GL objects and the context go on the thread they were made on.
+        py::gil_scoped_release nogil;
+        std::promise<void> done;
+        worker_.post([&] {
+            wb_.reset();
+            done.set_value();
+        });
+        done.get_future().wait();
+    }
+
+    PyFrame render(const PyScene& ps, const py::object& size, const std::string& backend, const std::vector<std::string>& aovs, int spp, uint64_t seed,
+                   const py::object& progress) {
+        ps.check_used();
+        const auto [w, h] = frame_size_arg(size);
+        RenderRequest req;
+        req.backend = parse_backend(backend);
+        req.width = w, req.height = h;
+        req.aovs = aovs.empty() ? std::vector<std::string>{"radiance"} : aovs;
+        req.truth.spp = spp;
+        req.truth.seed = seed;
+        if (req.backend == Backend::Truth && spp < 1) throw InputError("spp " + std::to_string(spp) + ": expected at least 1 sample per pixel");
+        PyFrame f{nullptr, ps.scene, req.truth};
+        f.r = run_on<std::shared_ptr<const RenderResult>>(worker_, progress, [&](const ProgressFn& p, const std::atomic<bool>* cancel) {
+            RenderRequest rq = req;
+            rq.progress = p;
+            rq.cancel = cancel;
+            return std::make_shared<const RenderResult>(wb_->render(ps.scene, rq));
+        });
+        return f;
+    }
+
+    std::string gl_renderer() {
+        return run_on<std::string>(worker_, py::none(), [this](const ProgressFn&, const std::atomic<bool>*) { return wb_->gl_renderer(); });
+    }
+    void clear_cache() {
+        run_on<int>(worker_, py::none(), [this](const ProgressFn&, const std::atomic<bool>*) {
+            wb_->session().cache().clear();
+            wb_->forget_frame_steps();
+            return 0;
+        });
+    }
+    size_t cache_entries() {
+        return run_on<size_t>(worker_, py::none(), [this](const ProgressFn&, const std::atomic<bool>*) { return wb_->session().cache().entries(); });
+    }
+    uint64_t memory_limit() const { return limit_; }
+
+private:
+    uint64_t limit_ = 0;
+    Worker worker_;
+    std::unique_ptr<Workbench> wb_;  // made and destroyed on worker_'s thread
+};
+
+// [SECTION] Module
+py::dict schema_dict(const std::string& technique) {
+    const Registry& reg = Registry::instance();
+    std::vector<const ParamGroup*> groups;
+    if (technique.empty()) {
+        groups = reg.groups();
+    } else if (const ParamGroup* g = reg.group(technique)) {
+        groups.push_back(g);
+    } else {
+        std::vector<std::string> names;
+        for (auto* gg : reg.groups()) names.push_back(gg->name());
+        const std::string hint = nearest_key(technique, names);
+        throw InputError("schema: unknown technique or group '" + technique + "'" + (hint.empty() ? "" : " (did you mean '" + hint + "'?)"));
+    }
+    json all = json::object();
+    for (const ParamGroup* g : groups) {
+        const json group = group_schema(*g);
+        for (json p : group["params"]) {
+            const std::string key = p["key"];
+            p.erase("key");
+            json range = nullptr;
+            if (p.contains("choices")) range = p["choices"];
+            else if (p.contains("min") || p.contains("max")) range = json::array({p.value("min", json(nullptr)), p.value("max", json(nullptr))});
+            p["range"] = range;
+            if (!p.contains("unit")) p["unit"] = "";
+            all[key] = p;
+        }
+    }
+    return from_json(all);
+}
+}  // namespace
+
+PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
+    m.doc() = "mesolab: meso-scale appearance (micro-geometry, bump synthesis, translucency, cloth) from Python. See python/README.md.";
+    m.attr("__version__") = version_string();
+
+    // [SECTION] Errors (the translators run newest first: the subclass before its base)
+    static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);
+    static py::exception<MemoryBudgetError> memory_error(m, "MemoryBudgetError", input_error.ptr());
+    py::register_exception_translator([](std::exception_ptr p) {
+        try {
+            if (p) std::rethrow_exception(p);
+        } catch (const MemoryBudgetError& e) {
+            memory_error(e.what());
+        } catch (const InputError& e) {
+            input_error(e.what());
+        } catch (const Cancelled&) {
+            PyErr_SetString(PyExc_KeyboardInterrupt, "cancelled");
+        } catch (const std::bad_alloc&) {
+            memory_error("out of memory: the settings need more memory than this machine has; lower the resolutions, direction counts or frame size (mesolab.schema() lists them)");
+        }
+    });
+
+    // [SECTION] Scene
+    py::class_<PyScene>(m, "Scene", "A scene: every parameter of a preset, checked as `--set` checks it.")
+        .def(py::init([](const std::string& technique) {
+                 if (!Registry::instance().technique(technique)) {
+                     const std::string hint = nearest_key(technique, Registry::instance().technique_names());
+                     throw InputError("Scene: unknown technique '" + technique + "'" + (hint.empty() ? "" : " (did you mean '" + hint + "'?)") +
+                                      "; techniques: " + join(Registry::instance().technique_names(), ", "));
+                 }
+                 return PyScene{default_scene(technique), {}};
+             }),
+             py::arg("technique") = "basic", "One sphere with `technique`, one directional light and a grey environment.")
+        .def_static(
+            "from_json",
+            [](const std::string& text, const std::string& base_dir) {
+                json j;
+                try {
+                    j = json::parse(text);
+                } catch (const json::parse_error& e) {
+                    throw InputError(std::string("scene JSON: ") + e.what());
+                }
+                return PyScene{scene_from_json(j, "scene JSON", fs::absolute(base_dir).lexically_normal().string()), {}};
+            },
+            py::arg("text"), py::arg("base_dir") = ".", "A scene from preset JSON text; relative paths in it are relative to base_dir.")
+        .def("to_json", [](const PyScene& s) { return scene_to_text(s.scene); }, "The preset JSON (every used parameter, declaration order).")
+        .def(
+            "save",
+            [](const PyScene& s, const py::object& path) {
+                s.check_used();
+                save_preset(s.scene, path_arg(path));
+            },
+            py::arg("path"), "Write the preset through a temporary file renamed over `path`: the old file survives any failure.")
+        .def("set", &PyScene::set, py::arg("key"), py::arg("value"), py::arg("object") = py::none(),
+             "Set a public key (as --set KEY=VALUE): type and range are checked at once. TECHNIQUE.* and geometry.* keys "
+             "address every object of that technique (the first object) unless object= names an index or a name.")
+        .def("get", &PyScene::get, py::arg("key"), py::arg("object") = py::none(),
+             "A key's value as a plain Python value (bool, int, float, str, tuple).")
+        .def("__setitem__", [](PyScene& s, const std::string& key, const py::object& value) { s.set(key, value, py::none()); })
+        .def("__getitem__", [](const PyScene& s, const std::string& key) { return s.get(key, py::none()); })
+        .def("__contains__", [](const PyScene& s, const std::string& key) {
+            try {
+                decl_of(s.scene, key);
+                return true;
+            } catch (const InputError&) {
+                return false;
+            }
+        })
+        .def("keys", [](const PyScene& s) { return public_keys(s.scene); }, "Every public key of this scene.")
+        .def("copy", [](const PyScene& s) { return s; })
+        .def("__copy__", [](const PyScene& s) { return s; })
+        .def("__deepcopy__", [](const PyScene& s, const py::dict&) { return s; }, py::arg("memo"))
+        .def("__eq__", [](const PyScene& a, const PyScene& b) { return a.scene == b.scene; })
+        .def_property(
+            "name", [](const PyScene& s) { return s.scene.name; }, [](PyScene& s, const std::string& n) { s.scene.name = n; },
+            "The preset's name (capture file names).")
+        .def_property(
+            "description", [](const PyScene& s) { return s.scene.description; }, [](PyScene& s, const std::string& d) { s.scene.description = d; })
+        .def_property_readonly("base_dir", [](const PyScene& s) { return s.scene.base_dir; })
+        .def_property_readonly(
+            "objects",
+            [](const PyScene& s) {
+                py::list l;
+                for (const auto& o : s.scene.objects) l.append(py::dict(py::arg("name") = o.name, py::arg("technique") = o.technique));
+                return l;
+            },
+            "The scene's objects: [{name, technique}], in index order.")
+        .def("__repr__", [](const PyScene& s) {
+            std::vector<std::string> objects;
+            for (const auto& o : s.scene.objects) objects.push_back(o.name + " (" + o.technique + ")");
+            return "<mesolab.Scene '" + s.scene.name + "': " + join(objects, ", ") + ">";
+        });
+
+    m.def(
+        "load_preset",
+        [](const py::object& path) { return PyScene{load_preset(path_arg(path)), {}}; },
+        py::arg("path"), "Load a preset file: every key is checked, errors name the file and the key.");
+
+    // [SECTION] Frame
+    py::class_<PyFrame>(m, "Frame", "A rendered frame. Arrays are read-only float32 views (H, W, C) of the frame's linear values.")
+        .def("__getitem__", &PyFrame::array, py::arg("aov"))
+        .def("__contains__", [](const PyFrame& f, const std::string& a) { return f.r->frame.has(a); })
+        .def_property_readonly("aovs", &PyFrame::aov_names, "The AOVs the frame holds (radiance first).")
+        .def_property_readonly("width", [](const PyFrame& f) { return f.r->frame.width; })
+        .def_property_readonly("height", [](const PyFrame& f) { return f.r->frame.height; })
+        .def_property_readonly("size", [](const PyFrame& f) { return py::make_tuple(f.r->frame.width, f.r->frame.height); })
+        .def_property_readonly("renderer", [](const PyFrame& f) { return f.r->renderer; }, "'cpu', 'truth' or the GL renderer.")
+        .def_property_readonly("stages", [](const PyFrame& f) { return from_json(f.sidecar()["stages"]); },
+                               "The stages of the evaluation, as the capture's sidecar: [{name, status, ms, ...}].")
+        .def_property_readonly("frame_steps", [](const PyFrame& f) { return from_json(f.sidecar()["frame_steps"]); })
+        .def_property_readonly("timings", [](const PyFrame& f) { return from_json(f.sidecar()["timings"]); },
+                               "{stages_ms, render_ms[, gpu_ms]} as the capture's sidecar.")
+        .def_property_readonly(
+            "truth",
+            [](const PyFrame& f) -> py::object {
+                json j = f.sidecar();
+                return j.contains("truth") ? from_json(j["truth"]) : py::none();
+            },
+            "With aovs=['truth_error'] or backend='truth': the truth's settings and the comparison, else None.")
+        .def("sidecar", [](const PyFrame& f) { return from_json(f.sidecar()); }, "What the capture's JSON sidecar holds.")
+        .def("save", &PyFrame::save, py::arg("dir"),
+             "Write the capture's files into dir: NAME.png, NAME.<aov>.exr for every AOV, NAME.json. Returns the paths.")
+        .def("_repr_png_", &PyFrame::png)
+        .def("__repr__", &PyFrame::repr);
+
+    // [SECTION] Workbench
+    py::class_<PyWorkbench>(m, "Workbench",
+                            "One session: the stage cache, the memory budget and a headless GL context, on a thread of its own. "
+                            "Two workbenches share nothing and may render from two Python threads at once.")
+        .def(py::init<const py::object&>(), py::arg("memory_limit") = py::none(),
+             "memory_limit: '2G', '512M' or bytes (default: the machine's available memory).")
+        .def("render", &PyWorkbench::render, py::arg("scene"), py::kw_only(), py::arg("size") = py::make_tuple(512, 512), py::arg("backend") = "gpu",
+             py::arg("aovs") = std::vector<std::string>{}, py::arg("spp") = 64, py::arg("seed") = 1, py::arg("progress") = py::none(),
+             "Render a frame: backend 'gpu' (the CLI's default), 'cpu' or 'truth' (spp, seed). aovs beside radiance; "
+             "'truth_error' also renders the truth. progress(stage, fraction) is called from this thread; Ctrl-C stops the work.")
+        .def_property_readonly("gl_renderer", &PyWorkbench::gl_renderer)
+        .def_property_readonly("memory_limit", &PyWorkbench::memory_limit, "In bytes; 0: the machine's available memory.")
+        .def("clear_cache", &PyWorkbench::clear_cache, "Forget every cached stage result and frame step.")
+        .def_property_readonly("cache_entries", &PyWorkbench::cache_entries);
+
+    // [SECTION] Module functions
+    m.def(
+        "info",
+        [] {
+            std::vector<std::pair<std::string, std::string>> fields;
+            {
+                py::gil_scoped_release nogil;
+                fields = info_fields();
+            }
+            py::dict d;
+            for (auto [k, v] : fields) {
+                std::replace(k.begin(), k.end(), ' ', '_');  // "gl renderer" -> gl_renderer
+                d[py::str(k)] = v;
+            }
+            return d;
+        },
+        "What `mesolab info` prints, as a dict.");
+    m.def("schema", &schema_dict, py::arg("technique") = "",
+          "Every parameter: {key: {type, default, range, unit, help, cost, ...}}; technique= (or a group: camera, light, env, geometry, effects) narrows it.");
+    m.def(
+        "bench",
+        [](const py::object& tables, int repeat, const std::string& backend, const std::vector<std::string>& rows, const std::vector<std::string>& columns,
+           const py::object& memory_limit, const py::object& progress) {
+            BenchOptions o;
+            if (py::isinstance<py::str>(tables)) o.tables = {tables.cast<std::string>()};
+            else if (!tables.is_none()) o.tables = tables.cast<std::vector<std::string>>();
+            o.repeat = repeat, o.backend = backend, o.rows = rows, o.columns = columns, o.format = "json", o.quiet = true;
+            if (!memory_limit.is_none()) o.memory_limit = std::to_string(memory_limit_arg(memory_limit));
+            const std::string text = run_alone<std::string>(progress, [&](const ProgressFn& p, const std::atomic<bool>* cancel) {
+                BenchOptions run = o;
+                std::string out;
+                run.output = &out, run.progress = p, run.cancel = cancel;
+                run_bench(run);
+                return out;
+            });
+            return from_json(json::parse(text)["cells"]);
+        },
+        py::arg("tables") = py::none(), py::kw_only(), py::arg("repeat") = 5, py::arg("backend") = "both", py::arg("rows") = std::vector<std::string>{},
+        py::arg("columns") = std::vector<std::string>{}, py::arg("memory_limit") = py::none(), py::arg("progress") = py::none(),
+        "Measure timing tables (all when none named) as `mesolab bench --format json`: a list of its cells "
+        "({table, row, column, device, median_ms, min_ms, max_ms, ...}).");
+    m.def(
+        "sweep",
+        [](const PyScene& scene, const std::string& knob, const py::sequence& values, const py::object& size, const std::string& metric,
+           const std::string& backend, int repeat, const py::object& reference, const py::object& by, const py::object& by_values, int spp, uint64_t seed,
+           const py::object& out_dir, const py::object& memory_limit, const py::object& progress) {
+            scene.check_used();
+            const auto [w, h] = frame_size_arg(size);
+            SweepOptions o;
+            std::vector<std::string> texts;
+            for (const py::handle& v : values) texts.push_back(to_set_text(knob, v));
+            if (texts.empty()) throw InputError("sweep: values is empty; give the knob's settings, e.g. values=[8, 16, 32]");
+            o.knob = knob + "=" + join(texts, ",");
+            o.size = std::to_string(w) + "x" + std::to_string(h);
+            o.metric = metric, o.backend = backend, o.repeat = repeat, o.spp = spp, o.seed = seed, o.quiet = true;
+            if (!reference.is_none())
+                for (const auto& [k, v] : reference.cast<py::dict>()) o.reference.push_back(k.cast<std::string>() + "=" + to_set_text(k.cast<std::string>(), v));
+            std::vector<py::object> by_list;
+            if (!by.is_none()) {
+                if (by_values.is_none()) throw InputError("sweep: by= needs by_values=[...]");
+                std::vector<std::string> bt;
+                for (const py::handle& v : by_values.cast<py::sequence>()) bt.push_back(to_set_text(by.cast<std::string>(), v)), by_list.push_back(py::reinterpret_borrow<py::object>(v));
+                o.by = by.cast<std::string>() + "=" + join(bt, ",");
+            }
+            if (!memory_limit.is_none()) o.memory_limit = std::to_string(memory_limit_arg(memory_limit));
+            if (!out_dir.is_none()) o.out_dir = path_arg(out_dir);
+            const SweepResult r = run_alone<SweepResult>(progress, [&](const ProgressFn& p, const std::atomic<bool>* cancel) {
+                SweepOptions run = o;
+                run.progress = p, run.cancel = cancel;
+                return sweep_scene(scene.scene, run, !out_dir.is_none());
+            });
+            py::list out;
+            for (size_t i = 0; i < r.points.size(); ++i) {
+                const SweepPoint& p = r.points[i];
+                const size_t n = texts.size();
+                py::dict d;
+                d["value"] = values[i % n];
+                if (!by_list.empty()) d["by"] = by_list[i / n];
+                d["ms"] = p.ms;
+                d["error"] = p.err;
+                if (metric == "rmse" || metric == "truth") d["relative_error"] = p.rel;
+                d["knob_ms"] = p.knob_ms;
+                if (metric == "truth") d["below_noise"] = p.below_noise;
+                out.append(d);
+            }
+            return out;
+        },
+        py::arg("scene"), py::kw_only(), py::arg("knob"), py::arg("values"), py::arg("size") = py::make_tuple(256, 256), py::arg("metric") = "rmse",
+        py::arg("backend") = "cpu", py::arg("repeat") = 3, py::arg("reference") = py::none(), py::arg("by") = py::none(), py::arg("by_values") = py::none(),
+        py::arg("spp") = 64, py::arg("seed") = 1, py::arg("out_dir") = py::none(), py::arg("memory_limit") = py::none(), py::arg("progress") = py::none(),
+        "Accuracy vs time, as `mesolab sweep`: each value of the knob rendered from a cold cache, timed (median of repeat) and "
+        "measured against the reference (metric 'rmse'), the truth ('truth') or a technique's metric. Returns "
+        "[{value, ms, error, ...}]; writes the CSV, Markdown and plot only with out_dir=.");
+}
