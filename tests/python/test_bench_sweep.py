@@ -36,3 +36,21 @@ def test_sweep_returns_points_and_writes_files_only_when_asked(mesolab, tmp_path
         mesolab.sweep(s, knob="geometry.resolutoin", values=[4, 8])
     with pytest.raises(mesolab.InputError, match="values is empty"):
         mesolab.sweep(s, knob="geometry.resolution", values=[])
+
+
+def test_a_raising_progress_callback_stops_bench_and_sweep(mesolab):
+    class Stop(Exception):
+        pass
+
+    calls = []
+
+    def stop(stage, f):
+        calls.append(stage)
+        raise Stop(stage)
+
+    with pytest.raises(Stop, match="bench basic"):
+        mesolab.bench("basic", repeat=50, backend="cpu", progress=stop)
+    s = mesolab.load_preset(PRESETS / "basic" / "sphere.json")
+    with pytest.raises(Stop, match="sweep geometry.resolution"):
+        mesolab.sweep(s, knob="geometry.resolution", values=[8, 512], size=(64, 64), repeat=20, progress=stop)
+    assert len(calls) == 2
