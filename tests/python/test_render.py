@@ -171,3 +171,19 @@ def test_two_workbenches_render_in_two_threads(mesolab):
     assert not errors
     assert np.array_equal(out[0], alone[0])
     assert np.allclose(out[1], alone[1], atol=1e-6)
+
+
+def test_the_gil_is_released_while_rendering(mesolab):
+    w = mesolab.Workbench()
+    s = mesolab.load_preset(SHADOWS)
+    s["microgeom.resolution"] = 256
+    s["microgeom.directions"] = 100
+    done = threading.Event()
+    t = threading.Thread(target=lambda: (w.render(s, size=(16, 16), backend="cpu"), done.set()))
+    t.start()
+    spins = 0
+    while not done.is_set() and t.is_alive():
+        spins += 1  # Python runs here only while the render does not hold the GIL
+        time.sleep(0.001)
+    t.join()
+    assert done.is_set() and spins > 20
