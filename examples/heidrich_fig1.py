@@ -30,7 +30,7 @@ for name, title in (("fig1a-no-scattering", "(a) without scattering"), ("fig1b-s
     frame = wb.render(scene, size=(args.size, args.size), backend=args.backend)
     stages = sum(s["ms"] for s in frame.stages if s["status"] == "ran")
     srgb = np.clip(frame["radiance"], 0, 1) ** (1 / 2.2)  # display only; the arrays are linear
-    panels.append((srgb, f"{title}\nstages {stages:.0f} ms, frame {frame.timings['render_ms']:.1f} ms"))
+    panels.append((srgb, f"{title}\nstages not cached before: {stages:.0f} ms; frame {frame.timings['render_ms']:.1f} ms"))
 
 fig, axes = plt.subplots(1, 2, figsize=(8, 4.4))
 for ax, (image, title) in zip(axes, panels):
