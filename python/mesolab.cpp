@@ -429,7 +429,10 @@ public:
             return 0;
         });
     }
-    ~PyWorkbench() {
+    ~PyWorkbench() { close(); }
+
+    // Frees the session's caches and its GL context now (not when Python collects the object).
+    void close() {
         // GL objects and the context go on the thread they were made on.
         py::gil_scoped_release nogil;
         std::promise<void> done;
@@ -439,9 +442,14 @@ public:
         });
         done.get_future().wait();
     }
+    Workbench& open() const {
+        if (!wb_) throw InputError("Workbench: closed; make a new one");
+        return *wb_;
+    }
 
     PyFrame render(const PyScene& ps, const py::object& size, const std::string& backend, const std::vector<std::string>& aovs, int spp, uint64_t seed,
                    const py::object& progress) {
+        open();
         ps.check_used();
         const auto [w, h] = frame_size_arg(size);
         RenderRequest req;
@@ -456,23 +464,23 @@ public:
             RenderRequest rq = req;
             rq.progress = p;
             rq.cancel = cancel;
-            return std::make_shared<const RenderResult>(wb_->render(ps.scene, rq));
+            return std::make_shared<const RenderResult>(open().render(ps.scene, rq));
         });
         return f;
     }
 
     std::string gl_renderer() {
-        return run_on<std::string>(worker_, py::none(), [this](const ProgressFn&, const std::atomic<bool>*) { return wb_->gl_renderer(); });
+        return run_on<std::string>(worker_, py::none(), [this](const ProgressFn&, const std::atomic<bool>*) { return open().gl_renderer(); });
     }
     void clear_cache() {
         run_on<int>(worker_, py::none(), [this](const ProgressFn&, const std::atomic<bool>*) {
-            wb_->session().cache().clear();
-            wb_->forget_frame_steps();
+            open().session().cache().clear();
+            open().forget_frame_steps();
             return 0;
         });
     }
     size_t cache_entries() {
-        return run_on<size_t>(worker_, py::none(), [this](const ProgressFn&, const std::atomic<bool>*) { return wb_->session().cache().entries(); });
+        return run_on<size_t>(worker_, py::none(), [this](const ProgressFn&, const std::atomic<bool>*) { return open().session().cache().entries(); });
     }
     uint64_t memory_limit() const { return limit_; }
 
@@ -569,6 +577,12 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
         .def("set", &PyScene::set, py::arg("key"), py::arg("value"), py::arg("object") = py::none(),
              "Set a public key (as --set KEY=VALUE): type and range are checked at once. TECHNIQUE.* and geometry.* keys "
              "address every object of that technique (the first object) unless object= names an index or a name.")
+        .def(
+            "update",
+            [](PyScene& s, const py::dict& values, const py::object& object) {
+                for (const auto& [k, v] : values) s.set(k.cast<std::string>(), py::reinterpret_borrow<py::object>(v), object);
+            },
+            py::arg("values"), py::arg("object") = py::none(), "set() for each key of a dict, in its order.")
         .def("get", &PyScene::get, py::arg("key"), py::arg("object") = py::none(),
              "A key's value as a plain Python value (bool, int, float, str, tuple).")
         .def("__setitem__", [](PyScene& s, const std::string& key, const py::object& value) { s.set(key, value, py::none()); })
@@ -651,6 +665,9 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
         .def_property_readonly("gl_renderer", &PyWorkbench::gl_renderer)
         .def_property_readonly("memory_limit", &PyWorkbench::memory_limit, "In bytes; 0: the machine's available memory.")
         .def("clear_cache", &PyWorkbench::clear_cache, "Forget every cached stage result and frame step.")
+        .def("close", &PyWorkbench::close, "Free the caches and the GL context now; the workbench cannot render afterwards.")
+        .def("__enter__", [](py::object self) { return self; })
+        .def("__exit__", [](PyWorkbench& w, const py::args&) { w.close(); })
         .def_property_readonly("cache_entries", &PyWorkbench::cache_entries);
 
     // [SECTION] Module functions

@@ -187,3 +187,12 @@ def test_the_gil_is_released_while_rendering(mesolab):
         time.sleep(0.001)
     t.join()
     assert done.is_set() and spins > 20
+
+
+def test_a_closed_workbench_says_so(mesolab):
+    s = mesolab.load_preset(SPHERE)
+    with mesolab.Workbench() as w:
+        assert w.render(s, size=(8, 8), backend="gpu")["radiance"].shape == (8, 8, 3)
+    with pytest.raises(mesolab.InputError, match="closed"):
+        w.render(s, size=(8, 8), backend="cpu")
+    w.close()  # twice is harmless

@@ -119,3 +119,11 @@ def test_version_and_info(mesolab):
     assert "basic" in info["techniques"].split()
     assert "gl_renderer" in info or "gl" in info
     assert int(info["cpu_threads"]) >= 1
+
+
+def test_update_sets_several_keys_with_the_same_checks(mesolab):
+    s = mesolab.load_preset(SPHERE)
+    s.update({"basic.kd": (0.1, 0.2, 0.3), "camera.distance": 5})
+    assert s["basic.kd"] == (0.1, 0.2, 0.3) and s["camera.distance"] == 5.0
+    with pytest.raises(mesolab.InputError, match="camera.distanse"):
+        s.update({"camera.distanse": 4})
