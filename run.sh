@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # mesolab main job. Installs missing Debian packages, builds, then opens the GUI when a display
 # is available; otherwise runs the headless showcase (a few minutes on 2 cores once built): the GL
-# context, a capture of every preset in presets/ into build/showcase/ and three short timing tables.
+# context, a capture of every preset in presets/ into build/showcase/, a figure made through the
+# Python module (examples/heidrich_fig1.py) and three short timing tables.
 # The clone's tracked files stay as they are (the gallery in screenshots/ is refreshed on purpose,
 # with `build/mesolab capture presets -o screenshots`).
 # The full timing tables live in the technique pages (core/*/README.md); regenerate them with
@@ -23,6 +24,10 @@ echo "== no display: headless showcase"
 ./build/mesolab info
 ./build/mesolab capture presets -o build/showcase
 echo "== captures (PNG and a JSON sidecar each): build/showcase/"
+if [ -e build/python ] && ls build/python/mesolab*.so >/dev/null 2>&1; then
+  echo "== Python (import mesolab): Heidrich et al. 2000, Fig. 1 as a matplotlib figure"
+  PYTHONPATH=build/python PYTHONDONTWRITEBYTECODE=1 MPLBACKEND=Agg /usr/bin/python3 examples/heidrich_fig1.py build/showcase
+fi
 echo "== short bench: three fast tables, median of 3 runs per cell"
 ./build/mesolab bench basic microgeom-geometry bumpsynth-frame --repeat 3
 echo "== full timing tables: core/basic/README.md, core/microgeom/README.md, core/bumpsynth/README.md, core/translucency/README.md, core/cloth/README.md"
