@@ -38,19 +38,18 @@ int run_preset_validate(const std::vector<std::string>& args) {
 }
 
 // [SECTION] preset schema
-int run_preset_schema(const std::string& technique, bool as_json) {
+std::vector<const ParamGroup*> schema_groups(const std::string& technique, const std::string& what) {
     const Registry& reg = Registry::instance();
-    std::vector<const ParamGroup*> groups;
-    if (technique.empty()) {
-        groups = reg.groups();
-    } else if (const ParamGroup* g = reg.group(technique)) {
-        groups.push_back(g);
-    } else {
-        std::vector<std::string> names;
-        for (auto* gg : reg.groups()) names.push_back(gg->name());
-        const std::string hint = nearest_key(technique, names);
-        throw InputError("preset schema: unknown technique or group '" + technique + "'" + (hint.empty() ? "" : " (did you mean '" + hint + "'?)"));
-    }
+    if (technique.empty()) return reg.groups();
+    if (const ParamGroup* g = reg.group(technique)) return {g};
+    std::vector<std::string> names;
+    for (auto* gg : reg.groups()) names.push_back(gg->name());
+    const std::string hint = nearest_key(technique, names);
+    throw InputError(what + ": unknown technique or group '" + technique + "'" + (hint.empty() ? "" : " (did you mean '" + hint + "'?)"));
+}
+
+int run_preset_schema(const std::string& technique, bool as_json) {
+    const std::vector<const ParamGroup*> groups = schema_groups(technique, "preset schema");
     if (as_json) {
         json j;
         j["schema"] = kPresetSchema;

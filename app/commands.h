@@ -11,6 +11,7 @@
 namespace mesolab {
 
 class Profiler;
+class ParamGroup;
 struct Scene;
 
 struct CaptureOptions {
@@ -107,6 +108,9 @@ int run_export(const ExportOptions& o);
 
 int run_preset_validate(const std::vector<std::string>& files);
 int run_preset_schema(const std::string& technique, bool as_json);
+// The parameter groups `preset schema TECHNIQUE` lists: all for "", else the technique's or the
+// scene group's (camera, light, env, geometry, effects); InputError starting with `what` otherwise.
+std::vector<const ParamGroup*> schema_groups(const std::string& technique, const std::string& what);
 int run_preset_show(const std::string& file, const std::vector<std::string>& sets);
 int run_info();
 // What `mesolab info` prints, as (name, value) pairs in its order: version, cpu threads, techniques,

@@ -492,18 +492,7 @@ private:
 
 // [SECTION] Module
 py::dict schema_dict(const std::string& technique) {
-    const Registry& reg = Registry::instance();
-    std::vector<const ParamGroup*> groups;
-    if (technique.empty()) {
-        groups = reg.groups();
-    } else if (const ParamGroup* g = reg.group(technique)) {
-        groups.push_back(g);
-    } else {
-        std::vector<std::string> names;
-        for (auto* gg : reg.groups()) names.push_back(gg->name());
-        const std::string hint = nearest_key(technique, names);
-        throw InputError("schema: unknown technique or group '" + technique + "'" + (hint.empty() ? "" : " (did you mean '" + hint + "'?)"));
-    }
+    const std::vector<const ParamGroup*> groups = schema_groups(technique, "schema");
     json all = json::object();
     for (const ParamGroup* g : groups) {
         const json group = group_schema(*g);
