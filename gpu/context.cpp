@@ -273,7 +273,10 @@ struct ComputeShared {
     std::mutex mutex;
     std::unique_ptr<HeadlessContext> context;
     std::string failure;
+    std::mutex pending_mutex;    // guards pending (taken without `mutex`: any thread may add)
+    std::vector<GLuint> pending;  // buffers to delete at the next scope's start
 };
+thread_local bool t_in_compute_scope = false;
 ComputeShared& compute_shared() {
     static ComputeShared* shared = new ComputeShared();  // kept until exit: no destruction-order issues with EGL
     return *shared;
@@ -305,9 +308,17 @@ ComputeScope::ComputeScope() : saved_(std::make_unique<Saved>()) {
         cs.failure = e.what();
         throw;
     }
+    t_in_compute_scope = true;
+    std::vector<GLuint> doomed;
+    {
+        const std::lock_guard<std::mutex> pending_lock(cs.pending_mutex);
+        doomed.swap(cs.pending);
+    }
+    if (!doomed.empty()) glDeleteBuffers(GLsizei(doomed.size()), doomed.data());
 }
 
 ComputeScope::~ComputeScope() {
+    t_in_compute_scope = false;
     glFinish();
     if (saved_->context != EGL_NO_CONTEXT) {
         eglMakeCurrent(saved_->display, saved_->draw, saved_->read, saved_->context);
@@ -317,4 +328,17 @@ ComputeScope::~ComputeScope() {
 }
 
 const GlInfo& ComputeScope::info() const { return compute_shared().context->info(); }
+
+bool in_compute_scope() { return t_in_compute_scope; }
+
+void delete_compute_buffers(const std::vector<GLuint>& buffers) {
+    if (buffers.empty()) return;
+    if (t_in_compute_scope) {
+        glDeleteBuffers(GLsizei(buffers.size()), buffers.data());
+        return;
+    }
+    ComputeShared& cs = compute_shared();
+    const std::lock_guard<std::mutex> pending_lock(cs.pending_mutex);
+    cs.pending.insert(cs.pending.end(), buffers.begin(), buffers.end());
+}
 }  // namespace mesolab::gpu

@@ -5,6 +5,7 @@
 // core context, falling back to 4.3. GL entry points come through libepoxy.
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace mesolab::gpu {
 
@@ -56,4 +57,12 @@ private:
     struct Saved;
     std::unique_ptr<Saved> saved_;
 };
+
+// Whether the calling thread holds a ComputeScope (the compute context is current on it).
+bool in_compute_scope();
+
+// Deletes buffers made on the compute context: at once when the calling thread holds a
+// ComputeScope, else when the next scope starts. For GPU copies owned by results that may be
+// released on any thread (a stage cache's eviction, a Python object's collection).
+void delete_compute_buffers(const std::vector<unsigned>& buffers);
 }  // namespace mesolab::gpu

@@ -507,6 +507,15 @@ bool current_renderer_is_software() {
     return is_software_renderer(name ? reinterpret_cast<const char*>(name) : "");
 }
 
+namespace {
+std::atomic<GpuTuning> g_tuning{GpuTuning::Automatic};
+}
+void set_gpu_tuning(GpuTuning t) { g_tuning = t; }
+bool tuned_for_hardware() {
+    const GpuTuning t = g_tuning;
+    return t == GpuTuning::Automatic ? !current_renderer_is_software() : t == GpuTuning::Hardware;
+}
+
 void wait_for_gpu() {
     GLsync fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
     if (!fence) {

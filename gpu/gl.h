@@ -175,6 +175,16 @@ bool is_software_renderer(const std::string& gl_renderer);
 // The same for the current context's GL_RENDERER.
 bool current_renderer_is_software();
 
+// Where the best layout of a pass differs between a renderer that runs on the CPU (llvmpipe:
+// SIMD lanes of 8, no caches to coalesce into) and a hardware GPU (warps of 32, hundreds of
+// thousands of invocations in flight), the pass asks tuned_for_hardware() when it dispatches:
+// !current_renderer_is_software(), unless set_gpu_tuning forced one (the tests run the
+// hardware layouts on llvmpipe to check their results). Which passes choose: the main README's
+// "GPU timings".
+enum class GpuTuning { Automatic, Software, Hardware };
+void set_gpu_tuning(GpuTuning t);
+bool tuned_for_hardware();
+
 // Waits until every GL command issued so far has finished, through a fence (glFenceSync and
 // glClientWaitSync, flushing once): what a caller that needs a finished frame waits for.
 void wait_for_gpu();

@@ -52,8 +52,17 @@ struct Visibility {
     int width = 0, height = 0, count = 0;            // texels and directions
     HitArray hit;                                    // [direction][row][column]
 
+    // A copy of `hit` that the device which computed it keeps (gpu/microgeom/chunks.h), so that
+    // later passes on that device read S_i where it already is instead of uploading it again.
+    // Copies of this Visibility share it; code that changes `hit` afterwards must reset it.
+    struct DeviceCopy {
+        virtual ~DeviceCopy() = default;
+        virtual size_t host_bytes() const = 0;  // what it holds in the host's memory (a renderer on the CPU)
+    };
+    std::shared_ptr<const DeviceCopy> device;
+
     uint32_t at(int dir, int x, int y) const { return hit[(size_t(dir) * size_t(height) + size_t(y)) * size_t(width) + size_t(x)]; }
-    size_t bytes() const { return hit.size() * sizeof(uint32_t); }
+    size_t bytes() const { return hit.size() * sizeof(uint32_t) + (device ? device->host_bytes() : 0); }
 
     // Hits are stored as continuous texel coordinates (c, r) of the hit point, with texel
     // centres at integer values (texel (x, y) is at (x, y)), wrapped into [0, W) x [0, H) for

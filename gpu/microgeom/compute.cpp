@@ -15,7 +15,9 @@ void install_microgeom_gpu_compute() {
         ComputeScope scope;
         // Compiled once, on the compute context, and kept (that context lives until exit).
         static const VisibilityProgram* program = new VisibilityProgram();
-        return program->compute(hf, dirs);
+        const KeepOnGpu k = keep_visibility_on_gpu();
+        const bool keep = k == KeepOnGpu::Always || (k == KeepOnGpu::Automatic && !current_renderer_is_software());
+        return program->compute(hf, dirs, keep);
     };
     g.gatherer = [] { return make_gpu_gatherer(); };
     g.light_solver = [](const Heightfield& hf, const microgeom::DirectionSet& dirs, const microgeom::Visibility& vis, const microgeom::ScatterSettings& s) {

@@ -187,7 +187,7 @@ EllipseMap fit_ellipses_gpu(const Heightfield& hf, const DirectionSet& dirs, con
                             const std::function<void(double)>& progress) {
     check_visibility(hf, dirs, vis);
     ComputeScope scope;  // first: current before the buffers exist, released after they are gone
-    const bool software = current_renderer_is_software();
+    const bool software = !tuned_for_hardware();
 
     const int W = hf.width, H = hf.height, N = dirs.size();
     EllipseMap map;

@@ -6,6 +6,7 @@
 
 #include "gpu/context.h"
 #include "gpu/gl.h"
+#include "gpu/microgeom/chunks.h"
 
 #include <algorithm>
 #include <cstdint>
@@ -110,17 +111,31 @@ Importance compute_importance_gpu(const Heightfield& hf, const DirectionSet& dir
     const GLuint buffers[kBindings] = {vis_buf.get(), normal_buf.get(), dir_buf.get(), tri_buf.get(), I_buf.get(), w_buf.get(), folded_buf.get(), bent_buf.get()};
     for (GLuint k = 0; k < kBindings; ++k) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, k, buffers[k]);
 
-    // [SECTION] One batch of rows: upload its S_i and normals, dispatch, read back
+    // [SECTION] One batch of rows: its S_i and normals, dispatch, read back
+    // S_i kept on the GPU since it was computed (chunks.h) is copied there; else it is uploaded.
+    const auto kept = std::dynamic_pointer_cast<const ResidentHits>(vis.device);
     std::vector<vec4> normals(batch_texels);
     std::vector<uint32_t> folded(batch_texels);
     for (int y0 = 0; y0 < H; y0 += rows_per_batch) {
         const int y1 = std::min(H, y0 + rows_per_batch), rows = y1 - y0;
         const size_t texels = size_t(rows) * size_t(W), first = size_t(y0) * size_t(W);
         // S_j of rows [y0, y1) for every j, packed as [j][row - y0][column].
-        glBindBuffer(GL_SHADER_STORAGE_BUFFER, vis_buf.get());
-        for (int j = 0; j < N; ++j)
-            glBufferSubData(GL_SHADER_STORAGE_BUFFER, GLintptr(size_t(j) * texels * sizeof(uint32_t)), GLsizeiptr(texels * sizeof(uint32_t)),
-                            vis.hit.data() + size_t(j) * T + first);
+        if (kept) {
+            glBindBuffer(GL_COPY_WRITE_BUFFER, vis_buf.get());
+            for (int j = 0; j < N; ++j) {
+                const auto [source, offset] = kept->direction(j);
+                glBindBuffer(GL_COPY_READ_BUFFER, source);
+                glCopyBufferSubData(GL_COPY_READ_BUFFER, GL_COPY_WRITE_BUFFER, GLintptr(offset + first * sizeof(uint32_t)),
+                                    GLintptr(size_t(j) * texels * sizeof(uint32_t)), GLsizeiptr(texels * sizeof(uint32_t)));
+            }
+            glBindBuffer(GL_COPY_READ_BUFFER, 0);
+            glBindBuffer(GL_COPY_WRITE_BUFFER, 0);
+        } else {
+            glBindBuffer(GL_SHADER_STORAGE_BUFFER, vis_buf.get());
+            for (int j = 0; j < N; ++j)
+                glBufferSubData(GL_SHADER_STORAGE_BUFFER, GLintptr(size_t(j) * texels * sizeof(uint32_t)), GLsizeiptr(texels * sizeof(uint32_t)),
+                                vis.hit.data() + size_t(j) * T + first);
+        }
         for (int y = y0; y < y1; ++y)
             for (int x = 0; x < W; ++x) normals[size_t(y - y0) * size_t(W) + size_t(x)] = vec4(hf.normal(x, y), 0.f);
         glBindBuffer(GL_SHADER_STORAGE_BUFFER, normal_buf.get());

@@ -3,14 +3,18 @@
 // heights, the min/max pyramid, lifted origins, normalised directions), uploads it as SSBOs and
 // dispatches one invocation per (texel, direction) in batches of directions.
 #include "gpu/microgeom/visibility_gpu.h"
+
+#include "gpu/microgeom/chunks.h"
 #include "core/profile.h"
 #include "gpu/dispatch_timer.h"
 
 #include <tbb/parallel_for.h>
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <climits>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <optional>
 #include <stdexcept>
@@ -276,11 +280,33 @@ void run(const Program& program, const VisibilityProgram::Batching& batching, co
     }
     glUseProgram(GLuint(previous));
 }
+
+// Copies the first `bytes` of buffer b into dst through a read mapping, in blocks on every core:
+// the copy is also the first touch of dst's fresh pages, which costs more than the copy (a
+// driver's glGetBufferSubData copies on one thread, and the pages had to be touched before).
+void read_back(GLuint b, size_t bytes, void* dst) {
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, b);
+    const void* src = glMapBufferRange(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(bytes), GL_MAP_READ_BIT);
+    if (!src) {
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+        check_gl("microgeom.visibility read-back");
+        throw std::runtime_error("microgeom visibility (GPU): the driver could not map a batch of " + std::to_string(bytes) + " bytes for reading");
+    }
+    constexpr size_t kBlock = size_t(4) << 20;
+    tbb::parallel_for(size_t(0), (bytes + kBlock - 1) / kBlock, [&](size_t k) {
+        const size_t at = k * kBlock;
+        std::memcpy(static_cast<char*>(dst) + at, static_cast<const char*>(src) + at, std::min(kBlock, bytes - at));
+    });
+    const GLboolean intact = glUnmapBuffer(GL_SHADER_STORAGE_BUFFER);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+    check_gl("microgeom.visibility read-back");
+    if (!intact) throw std::runtime_error("microgeom visibility (GPU): a batch's storage was lost while it was read (GL_FALSE from glUnmapBuffer)");
+}
 }  // namespace
 
 VisibilityProgram::VisibilityProgram() : program_(Program::compute("microgeom/visibility.comp")) {}
 
-Visibility VisibilityProgram::compute(const Heightfield& hf, const DirectionSet& dirs) const {
+Visibility VisibilityProgram::compute(const Heightfield& hf, const DirectionSet& dirs, bool keep_on_gpu) const {
     Visibility vis;
     vis.width = hf.width;
     vis.height = hf.height;
@@ -292,18 +318,27 @@ Visibility VisibilityProgram::compute(const Heightfield& hf, const DirectionSet&
     std::optional<ProfileScope> scope(std::in_place, "gpu.prepare");
     const Prepared P = prepare(hf, dirs);
     const size_t per_dir = size_t(P.W) * size_t(P.H);
-    scope.emplace("gpu.allocate");  // the result's memory (4 bytes per texel and direction), written by the read-backs
-    vis.hit = microgeom::hits_filled(size_t(P.N) * per_dir, Visibility::kNoHit);
+    // The result's memory (4 bytes per texel and direction), left uninitialised: each batch's
+    // read-back is the first to touch its pages, on every core (read_back).
+    scope.emplace("gpu.allocate");
+    vis.hit.resize(size_t(P.N) * per_dir);
+    std::shared_ptr<ResidentHits> resident;  // the copy kept on the GPU, filled batch by batch there
+    if (keep_on_gpu && P.N > 0 && per_dir > 0 && ResidentHits::room_for(size_t(P.N) * per_dir * sizeof(uint32_t))) {
+        scope.emplace("gpu.allocate_kept");
+        try {
+            resident = std::make_shared<ResidentHits>(P.W, P.H, P.N, batching_.kept_chunk_bytes);
+        } catch (const std::runtime_error&) {
+            // No room on the GPU: S_i is not kept, and the passes that read it upload it.
+        }
+    }
     scope.emplace("gpu.dispatch_and_read_back");
     run(program_, batching_, P, [&](int d0, int d1, GLuint out) {
         glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-        glBindBuffer(GL_SHADER_STORAGE_BUFFER, out);
-        glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(size_t(d1 - d0) * per_dir * sizeof(uint32_t)),
-                           vis.hit.data() + size_t(d0) * per_dir);
-        glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
-        check_gl("microgeom.visibility read-back");
+        if (resident) resident->fill(out, d0, d1);  // queued before the read-back waits
+        read_back(out, size_t(d1 - d0) * per_dir * sizeof(uint32_t), vis.hit.data() + size_t(d0) * per_dir);
     }, timer);
     timer.finish();
+    vis.device = std::move(resident);
     return vis;
 }
 
@@ -343,6 +378,12 @@ Texture VisibilityProgram::compute_texture(const Heightfield& hf, const Directio
     check_gl("microgeom.visibility texture");
     return tex;
 }
+
+namespace {
+std::atomic<KeepOnGpu> g_keep{KeepOnGpu::Automatic};
+}
+void set_keep_visibility_on_gpu(KeepOnGpu k) { g_keep = k; }
+KeepOnGpu keep_visibility_on_gpu() { return g_keep; }
 
 Visibility compute_visibility_gpu(const Heightfield& hf, const DirectionSet& dirs) { return VisibilityProgram().compute(hf, dirs); }
 }  // namespace mesolab::gpu

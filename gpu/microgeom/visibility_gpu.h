@@ -25,7 +25,10 @@ public:
 
     // All N textures, read back: same layout and encoding as microgeom::compute_visibility.
     // Throws std::invalid_argument for a heightfield whose h has the wrong size (as the CPU does).
-    microgeom::Visibility compute(const Heightfield& hf, const microgeom::DirectionSet& dirs) const;
+    // keep_on_gpu: the result also keeps them in this context's buffers (Visibility::device, a
+    // ResidentHits: gpu/microgeom/chunks.h) for the passes that read them next; only on the
+    // compute context (gpu/context.h), where those passes run.
+    microgeom::Visibility compute(const Heightfield& hf, const microgeom::DirectionSet& dirs, bool keep_on_gpu = false) const;
 
     // All N textures as a new R32UI GL_TEXTURE_2D_ARRAY (width x height x N, layer = direction,
     // nearest filtering), as gpu/microgeom/microgeom_pass.cpp uploads S_i, filled on the GPU with
@@ -43,6 +46,7 @@ public:
         size_t invocations = size_t(1) << 22;
         size_t batch_bytes = size_t(64) << 20;
         size_t in_flight_bytes = size_t(256) << 20;
+        size_t kept_chunk_bytes = 0;  // with keep_on_gpu: the kept copy's chunks (plan_direction_chunks; 0: the limit)
     };
     void set_batching(const Batching& b) { batching_ = b; }
 
@@ -50,6 +54,15 @@ private:
     Program program_;
     Batching batching_;
 };
+
+// Whether microgeom's S_i stage on the GPU (microgeom.device = gpu) keeps S_i on the compute
+// context for the passes that read it next (VisibilityProgram::compute's keep_on_gpu).
+// Automatic: on a hardware GPU, where the scattering and the light images then skip their upload
+// of S_i over the host link; not on a renderer that runs on the CPU (llvmpipe), where the kept
+// copy is as large again in the host's memory and costs about what the upload it saves costs.
+enum class KeepOnGpu { Automatic, Always, Never };
+void set_keep_visibility_on_gpu(KeepOnGpu k);
+KeepOnGpu keep_visibility_on_gpu();
 
 // Needs a current GL context. Same layout and encoding as microgeom::compute_visibility.
 // Compiles the program for each call (~tens of ms on llvmpipe); use VisibilityProgram to reuse it.

@@ -14,6 +14,7 @@
 #include <cstring>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <vector>
 
 namespace mesolab::gpu {
@@ -65,8 +66,6 @@ public:
         : illumination_(Program::compute("translucency/illumination.comp")),
           vertices_(Program::compute("translucency/vertices.comp")),
           local_(Program::compute("translucency/local.comp")),
-          global_(Program::compute("translucency/global.comp")),
-          global_wide_(Program::compute("translucency/global.comp", {"WIDE_COLUMNS"})),
           combine_radiosity_(Program::compute("translucency/combine.comp")),
           combine_parts_(Program::compute("translucency/combine.comp", {"WRITE_PARTS"})),
           reference_(Program::compute("translucency/reference.comp")),
@@ -448,9 +447,26 @@ private:
         });
     }
 
+    // The product's program: columns of 16 or 32 bits, and the layout for this renderer (global.comp:
+    // 8 lanes x 8 rows on llvmpipe, 32 x 2 on a hardware GPU), compiled when first used.
+    struct GlobalLayout {
+        int lanes, rows;
+    };
+    static GlobalLayout global_layout() { return tuned_for_hardware() ? GlobalLayout{32, 2} : GlobalLayout{8, 8}; }
+    Program& global_program(bool wide, GlobalLayout l) {
+        std::optional<Program>& p = global_[wide ? 1 : 0][l.lanes == 8 ? 0 : 1];
+        if (!p) {
+            std::vector<std::string> defines = {"LANES=" + std::to_string(l.lanes), "ROWS=" + std::to_string(l.rows)};
+            if (wide) defines.push_back("WIDE_COLUMNS");
+            p.emplace(Program::compute("translucency/global.comp", defines));
+        }
+        return *p;
+    }
+
     void global_step(DrawContext& ctx, int /*o*/, const In& in, PerObject& w) {
         const GpuFactors& F = factors(ctx, in);
-        Program& prog = F.wide ? global_wide_ : global_;
+        const GlobalLayout layout = global_layout();
+        Program& prog = global_program(F.wide, layout);
         prog.use();
         bind(0, F.outer);
         bind(6, w.D);
@@ -462,7 +478,7 @@ private:
             glUniform1i(prog.uniform("u_row0"), p.rows.r0);
             glUniform1i(prog.uniform("u_row1"), p.rows.r1);
             glUniform1i(prog.uniform("u_base"), int(p.rows.base));
-            glDispatchCompute(GLuint((p.rows.r1 - p.rows.r0 + 7) / 8), 1, 1);
+            glDispatchCompute(GLuint((p.rows.r1 - p.rows.r0 + layout.rows - 1) / layout.rows), 1, 1);
         }
     }
 
@@ -596,7 +612,8 @@ private:
             .first->second;
     }
 
-    Program illumination_, vertices_, local_, global_, global_wide_, combine_radiosity_, combine_parts_, reference_, shadow_;
+    Program illumination_, vertices_, local_, combine_radiosity_, combine_parts_, reference_, shadow_;
+    std::optional<Program> global_[2][2];  // [wide columns][hardware layout]
     const Technique& technique_;
     std::map<std::string, Program> draw_;  // by need and the batch's outputs
     std::map<int, PerObject> objects_;

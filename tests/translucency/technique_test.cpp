@@ -6,6 +6,7 @@
 #include "core/error.h"
 #include "core/scene.h"
 #include "core/translucency/translucency.h"
+#include "gpu/gl.h"
 #include "support/cli.h"
 #include "support/frames.h"
 
@@ -152,6 +153,32 @@ TEST(TranslucencyCpuGpu, AgreeAboveSixtyFiveThousandVertices) {
     req.backend = Backend::Gpu;
     const Frame gpu = wb.render(s, req).frame;
     test::expect_frames_agree(cpu.frame, gpu, {"radiance", "global"}, test::agreement_of("translucency"));
+}
+
+// The factor product's layout for a hardware GPU (a warp of 32 lanes a row, gpu/gl.h
+// tuned_for_hardware), run on llvmpipe: it agrees with the CPU as the llvmpipe layout does, with
+// 16- and 32-bit columns.
+TEST(TranslucencyCpuGpu, AgreeWithTheHardwareGpuLayouts) {
+    struct Tuning {
+        Tuning() { gpu::set_gpu_tuning(gpu::GpuTuning::Hardware); }
+        ~Tuning() { gpu::set_gpu_tuning(gpu::GpuTuning::Automatic); }
+    } tuning;
+    {
+        Workbench wb;
+        Scene s = small_sphere();
+        const auto [cpu, gpu] = test::render_cpu_and_gpu(wb, s, 160, 120, {"radiance", "global", "radiosity"});
+        EXPECT_GT(max_value(cpu.aov("global")), 0.0);
+        test::expect_frames_agree(cpu, gpu, {"radiance", "global", "radiosity"}, test::agreement_of("translucency"));
+    }
+    Workbench wb;
+    Scene s = small_sphere();
+    apply_set(s, "geometry.resolution", "370");  // 68,082 vertices: 32-bit columns
+    apply_set(s, "translucency.vertices", "0");
+    apply_set(s, "translucency.mm_per_unit", "2000");
+    apply_set(s, "translucency.atlas_size", "256");
+    const auto [cpu, gpu] = test::render_cpu_and_gpu(wb, s, 160, 120, {"radiance", "global"});
+    EXPECT_GT(max_value(cpu.aov("global")), 0.0);
+    test::expect_frames_agree(cpu, gpu, {"radiance", "global"}, test::agreement_of("translucency"));
 }
 
 // The GPU writes the irradiance, local and global maps only for frames that show them: a frame
