@@ -377,31 +377,38 @@ private:
     // [SECTION] translucency.local
     void local_step(DrawContext& ctx, int /*o*/, const In& in, PerObject& w) {
         const LocalKernels& K = in.K();
-        local_.use();
-        glUniform1i(local_.uniform("u_count"), int(K.texel.size()));
-        glUniform1i(local_.uniform("u_K"), K.K);
-        glUniform1i(local_.uniform("u_size"), K.size);
+        // The weights kernel by kernel on llvmpipe, tap by tap on a hardware GPU (local.comp).
+        const bool tap_major = tuned_for_hardware();
+        if (tap_major && !local_tap_major_) local_tap_major_.emplace(Program::compute("translucency/local.comp", {"TAP_MAJOR"}));
+        Program& prog = tap_major ? *local_tap_major_ : local_;
+        prog.use();
+        glUniform1i(prog.uniform("u_count"), int(K.texel.size()));
+        glUniform1i(prog.uniform("u_K"), K.K);
+        glUniform1i(prog.uniform("u_size"), K.size);
         auto weights = [&] {
-            // K² taps per kernel, row-major in (dy, dx), one vec4 (RGB) each.
+            // K² taps per kernel, row-major in (dy, dx), one vec4 (RGB) each: [texel][tap] or [tap][texel].
             const int h = (K.K - 1) / 2;
-            std::vector<vec4> v;
-            v.reserve(K.texel.size() * size_t(K.K) * size_t(K.K));
-            for (size_t k = 0; k < K.texel.size(); ++k)
+            const size_t n = K.texel.size(), taps = size_t(K.K) * size_t(K.K);
+            std::vector<vec4> v(n * taps);
+            for (size_t k = 0; k < n; ++k) {
+                size_t tap = 0;
                 for (int dy = -h; dy <= h; ++dy)
-                    for (int dx = -h; dx <= h; ++dx) {
-                        const float* w = K.w.data() + K.at(k, dx, dy);
-                        v.push_back(vec4(w[0], w[1], w[2], 0.f));
+                    for (int dx = -h; dx <= h; ++dx, ++tap) {
+                        const float* wk = K.w.data() + K.at(k, dx, dy);
+                        v[tap_major ? tap * n + k : k * taps + tap] = vec4(wk[0], wk[1], wk[2], 0.f);
                     }
+            }
             return v;
         };
+        const char* weights_key = tap_major ? "kernel_w_tap_major" : "kernel_w";
         if (in.blended) {
-            local_.bind_texture(0, GL_TEXTURE_BUFFER, table(ctx, in.blended, "kernel_texel", GL_R32I, [&] { return K.texel; }), "u_texel");
-            local_.bind_texture(1, GL_TEXTURE_BUFFER, table(ctx, in.blended, "kernel_w", GL_RGBA32F, weights), "u_w");
+            prog.bind_texture(0, GL_TEXTURE_BUFFER, table(ctx, in.blended, "kernel_texel", GL_R32I, [&] { return K.texel; }), "u_texel");
+            prog.bind_texture(1, GL_TEXTURE_BUFFER, table(ctx, in.blended, weights_key, GL_RGBA32F, weights), "u_w");
         } else {
-            local_.bind_texture(0, GL_TEXTURE_BUFFER, table(ctx, in.kernels, "kernel_texel", GL_R32I, [&] { return K.texel; }), "u_texel");
-            local_.bind_texture(1, GL_TEXTURE_BUFFER, table(ctx, in.kernels, "kernel_w", GL_RGBA32F, weights), "u_w");
+            prog.bind_texture(0, GL_TEXTURE_BUFFER, table(ctx, in.kernels, "kernel_texel", GL_R32I, [&] { return K.texel; }), "u_texel");
+            prog.bind_texture(1, GL_TEXTURE_BUFFER, table(ctx, in.kernels, weights_key, GL_RGBA32F, weights), "u_w");
         }
-        local_.bind_texture(2, GL_TEXTURE_BUFFER, w.E_tex.get(), "u_E");
+        prog.bind_texture(2, GL_TEXTURE_BUFFER, w.E_tex.get(), "u_E");
         clear(w.local);
         bind(3, w.local);
         glDispatchCompute(groups(K.texel.size()), 1, 1);
@@ -613,6 +620,7 @@ private:
     }
 
     Program illumination_, vertices_, local_, combine_radiosity_, combine_parts_, reference_, shadow_;
+    std::optional<Program> local_tap_major_;  // compiled when first used
     std::optional<Program> global_[2][2];  // [wide columns][hardware layout]
     const Technique& technique_;
     std::map<std::string, Program> draw_;  // by need and the batch's outputs

@@ -155,9 +155,9 @@ TEST(TranslucencyCpuGpu, AgreeAboveSixtyFiveThousandVertices) {
     test::expect_frames_agree(cpu.frame, gpu, {"radiance", "global"}, test::agreement_of("translucency"));
 }
 
-// The factor product's layout for a hardware GPU (a warp of 32 lanes a row, gpu/gl.h
-// tuned_for_hardware), run on llvmpipe: it agrees with the CPU as the llvmpipe layout does, with
-// 16- and 32-bit columns.
+// The layouts for a hardware GPU (gpu/gl.h tuned_for_hardware: the factor product a warp of 32
+// lanes a row, the local kernels' weights tap by tap), run on llvmpipe: they agree with the CPU as
+// llvmpipe's layouts do, with 16- and 32-bit columns.
 TEST(TranslucencyCpuGpu, AgreeWithTheHardwareGpuLayouts) {
     struct Tuning {
         Tuning() { gpu::set_gpu_tuning(gpu::GpuTuning::Hardware); }
@@ -166,9 +166,10 @@ TEST(TranslucencyCpuGpu, AgreeWithTheHardwareGpuLayouts) {
     {
         Workbench wb;
         Scene s = small_sphere();
-        const auto [cpu, gpu] = test::render_cpu_and_gpu(wb, s, 160, 120, {"radiance", "global", "radiosity"});
+        const auto [cpu, gpu] = test::render_cpu_and_gpu(wb, s, 160, 120, {"radiance", "local", "global", "radiosity"});
+        EXPECT_GT(max_value(cpu.aov("local")), 0.0);
         EXPECT_GT(max_value(cpu.aov("global")), 0.0);
-        test::expect_frames_agree(cpu, gpu, {"radiance", "global", "radiosity"}, test::agreement_of("translucency"));
+        test::expect_frames_agree(cpu, gpu, {"radiance", "local", "global", "radiosity"}, test::agreement_of("translucency"));
     }
     Workbench wb;
     Scene s = small_sphere();
