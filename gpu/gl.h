@@ -43,6 +43,15 @@ using Query = GlName<delete_query>;
 
 // A new shader storage buffer holding `bytes` (data may be null); leaves GL_SHADER_STORAGE_BUFFER unbound.
 Buffer make_storage_buffer(const void* data, size_t bytes, GLenum usage = GL_STATIC_DRAW);
+// A new shader storage buffer of `bytes`, written in place by fill(dst) through a write mapping:
+// no host copy of the data is made first (for tens of MB, a fresh copy's page faults cost more
+// than the writes), and fill may use every core. Mapped ranges over host memory on a discrete GPU
+// are written sequentially, as fill should. Throws std::runtime_error naming `what` when the
+// driver cannot map the buffer or loses its contents.
+Buffer make_storage_buffer_filled(size_t bytes, const std::function<void(void* dst)>& fill, const std::string& what, GLenum usage = GL_STATIC_DRAW);
+// The first `bytes` of buffer b, given to read(src) through a read mapping (waits for the GPU's
+// writes to it); read may use every core. Throws like make_storage_buffer_filled.
+void read_storage_buffer(GLuint b, size_t bytes, const std::function<void(const void* src)>& read, const std::string& what);
 
 // A buffer texture (GL_TEXTURE_BUFFER, read with texelFetch) over `bytes` of `b` from `offset`
 // (all of it when bytes is 0), whose texels have `format` (GL_RGBA32F, GL_RG32UI, ...). Shaders

@@ -12,7 +12,7 @@
 namespace mesolab {
 
 // [SECTION] Heightfield queries
-float Heightfield::at(int x, int y) const {
+float Heightfield::at_outside(int x, int y) const {
     if (periodic) {
         x = ((x % width) + width) % width;
         y = ((y % height) + height) % height;
@@ -24,6 +24,13 @@ float Heightfield::at(int x, int y) const {
 }
 
 vec3 Heightfield::normal(int x, int y) const {
+    if (x > 0 && y > 0 && x < width - 1 && y < height - 1) {
+        // Inside the field: central differences, the same operations as below without the wrap.
+        const float* c = h.data() + index(x, y);
+        const float dhdx = (c[1] - c[-1]) / (2.f * texel_size);
+        const float dhdy = (c[-ptrdiff_t(width)] - c[width]) / (2.f * texel_size);
+        return glm::normalize(vec3(-dhdx, -dhdy, 1.f));
+    }
     // Slope along one axis at texel i of n: central difference, or one-sided at a non-periodic
     // border (zero for a single texel). `h_prev`/`h_next` are the neighbours at i-1 and i+1.
     auto slope = [&](int i, int n, float h_prev, float h_here, float h_next) {

@@ -33,14 +33,21 @@ struct Heightfield {
     std::vector<vec3> albedo;   // linear RGB per texel
 
     size_t index(int x, int y) const { return size_t(y) * size_t(width) + size_t(x); }
-    // Height with wrap-around (periodic) or clamping at the borders.
-    float at(int x, int y) const;
+    // Height with wrap-around (periodic) or clamping at the borders. Inline, with the wrap only
+    // outside the field: precomputations call it several times per texel.
+    float at(int x, int y) const {
+        if (unsigned(x) < unsigned(width) && unsigned(y) < unsigned(height)) return h[index(x, y)];
+        return at_outside(x, y);
+    }
     // Local-frame position of texel (x, y)'s centre.
     vec3 position(int x, int y) const { return {(float(x) + 0.5f) * texel_size, (float(height - y) - 0.5f) * texel_size, at(x, y)}; }
     // Unit normal from central differences (one-sided at non-periodic borders), local frame.
     vec3 normal(int x, int y) const;
     float min_height() const;
     float max_height() const;
+
+private:
+    float at_outside(int x, int y) const;
 };
 
 // Bilinear, wrapping (periodic) or clamped look-up of a per-texel quantity (heights, albedo, any

@@ -86,11 +86,13 @@ ScatterResult scatter(const Heightfield& hf, const DirectionSet& dirs, const Vis
                  : s.ellipses             ? ellipse_visibility_texture(*s.ellipses, hf, s.light_dir)
                                           : visibility_texture(hf, dirs, vis, s.light_dir);
     out.direct.assign(T, vec3(0.f));
-    for (size_t p = 0; p < T; ++p) {
-        const float cos_l = std::max(0.f, glm::dot(n[p], s.light_dir));
-        if (cos_l <= 0.f) out.shadow[p] = 0.f;
-        if (has_light) out.direct[p] = hf.albedo[p] * kInvPi * s.light_E * cos_l * out.shadow[p];
-    }
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, T, 16384), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t p = r.begin(); p < r.end(); ++p) {
+            const float cos_l = std::max(0.f, glm::dot(n[p], s.light_dir));
+            if (cos_l <= 0.f) out.shadow[p] = 0.f;
+            if (has_light) out.direct[p] = hf.albedo[p] * kInvPi * s.light_E * cos_l * out.shadow[p];
+        }
+    });
 
     // Environment radiance per direction (constant across texels: the dependent tests).
     std::vector<vec3> L_env(size_t(N), vec3(0.f));

@@ -71,17 +71,24 @@ struct Batch {
     std::vector<uint32_t> lit, count;
 };
 
-// Flat base: lit bits of the upper directions `up` for texels [t0, t1).
-void flat_batch(const Visibility& vis, const std::vector<int>& up, int W, int t0, int t1, Batch& B) {
-    const size_t T = size_t(t1 - t0);
-    B.lit.assign(T * size_t(B.words), 0u);
+// Flat base: lit bits of the upper directions `up` for texels [t0, t1). Direction by direction
+// over blocks of texels: each S_i plane is read contiguously (texel by texel within a direction
+// would stride 4 bytes per texel across every plane), and a block's bits stay in cache.
+void flat_batch(const Visibility& vis, const std::vector<int>& up, int t0, int t1, Batch& B) {
+    constexpr int kBlock = 4096;  // texels: 4096 x words x 4 B of bits
+    const size_t T = size_t(t1 - t0), plane = size_t(vis.width) * size_t(vis.height);
+    const size_t words = size_t(B.words);
+    B.lit.assign(T * words, 0u);
     B.count.assign(T, uint32_t(up.size()));
-    tbb::parallel_for(tbb::blocked_range<int>(t0, t1, std::max(1, W)), [&](const tbb::blocked_range<int>& r) {
-        for (int t = r.begin(); t < r.end(); ++t) {
-            const int x = t % W, y = t / W;
-            uint32_t* bits = B.lit.data() + size_t(t - t0) * size_t(B.words);
-            for (size_t j = 0; j < up.size(); ++j)
-                if (vis.at(up[j], x, y) == Visibility::kNoHit) bits[j >> 5] |= 1u << (j & 31u);
+    tbb::parallel_for(tbb::blocked_range<int>(t0, t1, kBlock), [&](const tbb::blocked_range<int>& r) {
+        uint32_t* bits = B.lit.data() + size_t(r.begin() - t0) * words;
+        for (size_t j = 0; j < up.size(); ++j) {
+            const uint32_t* hit = vis.hit.data() + size_t(up[j]) * plane + size_t(r.begin());
+            const uint32_t bit = 1u << (j & 31u);
+            uint32_t* word = bits + (j >> 5);
+            const size_t n = r.size();
+            for (size_t k = 0; k < n; ++k)
+                if (hit[k] == Visibility::kNoHit) word[k * words] |= bit;
         }
     });
 }
@@ -267,7 +274,7 @@ EllipseMap fit_ellipses_gpu(const Heightfield& hf, const DirectionSet& dirs, con
         set.n = max_points;
         std::optional<ProfileScope> prep(std::in_place, "gpu.prepare_batch");  // the lit bits (and bent points) on the CPU
         if (flat) {
-            flat_batch(vis, up, W, set.t0, set.t1, B);
+            flat_batch(vis, up, set.t0, set.t1, B);
         } else {
             set.n = bent_batch(hf, dirs, vis, b, set.t0, set.t1, B);
             if (set.n > kMaxPoints) throw too_many_points(set.n);

@@ -6,6 +6,8 @@
 #include "core/profile.h"
 #include "gpu/dispatch_timer.h"
 
+#include <tbb/parallel_for.h>
+
 #include <stdexcept>
 #include <string>
 
@@ -13,6 +15,28 @@ namespace mesolab::gpu {
 namespace {
 using namespace mesolab::microgeom;
 constexpr int kLocal = 8;
+
+// A storage buffer of one vec4 per texel, (v[p], 0), written in place on every core.
+Buffer upload_vec4(const std::vector<vec3>& v, GLenum usage, const char* what) {
+    return make_storage_buffer_filled(v.size() * sizeof(vec4), [&](void* dst) {
+        vec4* out = static_cast<vec4*>(dst);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, v.size(), 16384), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t p = r.begin(); p < r.end(); ++p) out[p] = vec4(v[p], 0.f);
+        });
+    }, what, usage);
+}
+
+// The xyz of T vec4 in buffer b, on every core.
+std::vector<vec3> read_vec3(GLuint b, size_t T, const char* what) {
+    std::vector<vec3> out(T);
+    read_storage_buffer(b, T * sizeof(vec4), [&](const void* src) {
+        const vec4* in = static_cast<const vec4*>(src);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, T, 16384), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t p = r.begin(); p < r.end(); ++p) out[p] = vec3(in[p]);
+        });
+    }, what);
+    return out;
+}
 
 class GpuGatherer final : public Gatherer {
 public:
@@ -33,15 +57,18 @@ public:
         periodic_ = hf.periodic;
         has_bent_ = bent && !bent->empty();
         const size_t T = size_t(W_) * size_t(H_);
-        std::vector<vec4> n(T), d(static_cast<size_t>(N_)), env(static_cast<size_t>(N_));
-        for (int y = 0; y < H_; ++y)
-            for (int x = 0; x < W_; ++x) n[hf.index(x, y)] = vec4(hf.normal(x, y), 0.f);
+        std::vector<vec4> d(static_cast<size_t>(N_)), env(static_cast<size_t>(N_));
         for (int j = 0; j < N_; ++j) {
             d[size_t(j)] = vec4(dirs.d[size_t(j)], dirs.solid_angle[size_t(j)]);
             env[size_t(j)] = vec4(L_env[size_t(j)], 0.f);
         }
         chunks_ = upload_direction_chunks(vis, has_bent_ ? bent : nullptr, max_chunk_bytes_, "microgeom scattering (GPU)");
-        normals_ = make_storage_buffer(n.data(), n.size() * sizeof(vec4));
+        normals_ = make_storage_buffer_filled(T * sizeof(vec4), [&](void* dst) {
+            vec4* n = static_cast<vec4*>(dst);
+            tbb::parallel_for(0, H_, [&](int y) {
+                for (int x = 0; x < W_; ++x) n[hf.index(x, y)] = vec4(hf.normal(x, y), 0.f);
+            });
+        }, "microgeom scattering (GPU): normals");
         dirs_ = make_storage_buffer(d.data(), d.size() * sizeof(vec4));
         env_ = make_storage_buffer(env.data(), env.size() * sizeof(vec4));
         prev_ = make_storage_buffer(nullptr, T * sizeof(vec4), GL_DYNAMIC_DRAW);
@@ -52,13 +79,7 @@ public:
     // [SECTION] One bounce
     std::vector<vec3> gather(const std::vector<vec3>* L_prev, const std::vector<int>& J, bool primary) override {
         const size_t T = size_t(W_) * size_t(H_);
-        if (L_prev) {
-            std::vector<vec4> prev(T);
-            for (size_t p = 0; p < T; ++p) prev[p] = vec4((*L_prev)[p], 0.f);
-            glBindBuffer(GL_SHADER_STORAGE_BUFFER, prev_.get());
-            glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(T * sizeof(vec4)), prev.data());
-            glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
-        }
+        if (L_prev) prev_ = upload_vec4(*L_prev, GL_DYNAMIC_DRAW, "microgeom scattering (GPU): L");
         const int none = 0;
         const Buffer subset = J.empty() ? make_storage_buffer(&none, sizeof none) : make_storage_buffer(J.data(), J.size() * sizeof(int));
         GLint previous = 0;
@@ -78,16 +99,10 @@ public:
             glDispatchCompute(GLuint((W_ + kLocal - 1) / kLocal), GLuint((H_ + kLocal - 1) / kLocal), 1);
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
         });
-        std::vector<vec4> E4(T);
-        glBindBuffer(GL_SHADER_STORAGE_BUFFER, out_.get());
-        glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(T * sizeof(vec4)), E4.data());
-        glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
         for (GLuint b = 0; b < 8; ++b) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b, 0);
         glUseProgram(GLuint(previous));
         check_gl("microgeom.scatter gather");
-        std::vector<vec3> E(T);
-        for (size_t p = 0; p < T; ++p) E[p] = vec3(E4[p]);
-        return E;
+        return read_vec3(out_.get(), T, "microgeom scattering (GPU): E");
     }
 
     // [SECTION] Every bounce on the GPU
@@ -98,12 +113,8 @@ public:
         DispatchTimer timer("dispatch");  // each chunk's gather: microgeom.scatter/dispatch (GPU)
         PROFILE_SCOPE("gpu.bounces");  // every dispatch, and E^K read back
         const size_t T = size_t(W_) * size_t(H_);
-        std::vector<vec4> packed(T);
-        for (size_t p = 0; p < T; ++p) packed[p] = vec4(direct[p], 0.f);
-        const Buffer direct_buf = make_storage_buffer(packed.data(), T * sizeof(vec4));
-        for (size_t p = 0; p < T; ++p) packed[p] = vec4(albedo[p], 0.f);
-        const Buffer albedo_buf = make_storage_buffer(packed.data(), T * sizeof(vec4));
-        packed = {};
+        const Buffer direct_buf = upload_vec4(direct, GL_STATIC_DRAW, "microgeom scattering (GPU): direct light");
+        const Buffer albedo_buf = upload_vec4(albedo, GL_STATIC_DRAW, "microgeom scattering (GPU): albedo");
         // L^{k-1} is read from `prev`, L^k written to `next`; they swap after each bounce.
         Buffer next = make_storage_buffer(nullptr, T * sizeof(vec4), GL_DYNAMIC_COPY);
         Buffer prev = std::move(prev_);
@@ -149,15 +160,8 @@ public:
             run(J[size_t(k)], true, k == K, k < K);
             if (progress) progress(double(k) / double(K));
         }
-        std::vector<vec3> E(T, vec3(0.f));
-        if (env || K > 0) {
-            std::vector<vec4> E4(T);
-            glBindBuffer(GL_SHADER_STORAGE_BUFFER, out_.get());
-            glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(T * sizeof(vec4)), E4.data());
-            glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
-            for (size_t p = 0; p < T; ++p) E[p] = vec3(E4[p]);
-        }
         for (GLuint b = 0; b < 11; ++b) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, b, 0);
+        std::vector<vec3> E = env || K > 0 ? read_vec3(out_.get(), T, "microgeom scattering (GPU): E") : std::vector<vec3>(T, vec3(0.f));
         glUseProgram(GLuint(previous));
         prev_ = std::move(prev);
         timer.finish();

@@ -285,22 +285,13 @@ void run(const Program& program, const VisibilityProgram::Batching& batching, co
 // the copy is also the first touch of dst's fresh pages, which costs more than the copy (a
 // driver's glGetBufferSubData copies on one thread, and the pages had to be touched before).
 void read_back(GLuint b, size_t bytes, void* dst) {
-    glBindBuffer(GL_SHADER_STORAGE_BUFFER, b);
-    const void* src = glMapBufferRange(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(bytes), GL_MAP_READ_BIT);
-    if (!src) {
-        glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
-        check_gl("microgeom.visibility read-back");
-        throw std::runtime_error("microgeom visibility (GPU): the driver could not map a batch of " + std::to_string(bytes) + " bytes for reading");
-    }
-    constexpr size_t kBlock = size_t(4) << 20;
-    tbb::parallel_for(size_t(0), (bytes + kBlock - 1) / kBlock, [&](size_t k) {
-        const size_t at = k * kBlock;
-        std::memcpy(static_cast<char*>(dst) + at, static_cast<const char*>(src) + at, std::min(kBlock, bytes - at));
-    });
-    const GLboolean intact = glUnmapBuffer(GL_SHADER_STORAGE_BUFFER);
-    glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
-    check_gl("microgeom.visibility read-back");
-    if (!intact) throw std::runtime_error("microgeom visibility (GPU): a batch's storage was lost while it was read (GL_FALSE from glUnmapBuffer)");
+    read_storage_buffer(b, bytes, [&](const void* src) {
+        constexpr size_t kBlock = size_t(4) << 20;
+        tbb::parallel_for(size_t(0), (bytes + kBlock - 1) / kBlock, [&](size_t k) {
+            const size_t at = k * kBlock;
+            std::memcpy(static_cast<char*>(dst) + at, static_cast<const char*>(src) + at, std::min(kBlock, bytes - at));
+        });
+    }, "microgeom visibility (GPU) read-back");
 }
 }  // namespace
 
