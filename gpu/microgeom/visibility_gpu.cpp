@@ -81,10 +81,15 @@ void prepare_field(const Heightfield& hf, Prepared& P) {
         P.steps = 1;
         return;
     }
+    // Heights in texel units, each converted once (a cell reads four), on every core.
+    std::vector<float> hs(size_t(W) * size_t(H));
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, hs.size(), 16384), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t k = r.begin(); k < r.end(); ++k) hs[k] = float(double(hf.h[k]) / s);
+    });
     auto h = [&](int x, int y) {
         if (x >= W) x -= W;
         if (y >= H) y -= H;
-        return float(double(hf.h[size_t(y) * size_t(W) + size_t(x)]) / s);
+        return hs[size_t(y) * size_t(W) + size_t(x)];
     };
     const int Wc = P.Wc, Hc = P.Hc;
     std::array<size_t, 64> off{};
@@ -110,24 +115,29 @@ void prepare_field(const Heightfield& hf, Prepared& P) {
     }
     P.cells.resize(size_t(Wc) * size_t(Hc) * 4);
     P.mm.resize(total * 2);
-    float gmin = std::numeric_limits<float>::infinity(), gmax = -gmin;
-    for (int y = 0; y < Hc; ++y)
+    // Level 0 and each level above it, row by row on every core; the field's range from the rows'.
+    std::vector<float> row_min(static_cast<size_t>(Hc)), row_max(static_cast<size_t>(Hc));
+    tbb::parallel_for(0, Hc, [&](int y) {
+        float lo = std::numeric_limits<float>::infinity(), hi = -lo;
         for (int x = 0; x < Wc; ++x) {
             const float c[4] = {h(x, y), h(x + 1, y), h(x, y + 1), h(x + 1, y + 1)};
             const size_t k = size_t(y) * size_t(Wc) + size_t(x);
             std::copy(c, c + 4, P.cells.begin() + std::ptrdiff_t(k * 4));
             P.mm[2 * k] = std::min(std::min(c[0], c[1]), std::min(c[2], c[3]));
             P.mm[2 * k + 1] = std::max(std::max(c[0], c[1]), std::max(c[2], c[3]));
-            gmin = std::min(gmin, P.mm[2 * k]);
-            gmax = std::max(gmax, P.mm[2 * k + 1]);
+            lo = std::min(lo, P.mm[2 * k]);
+            hi = std::max(hi, P.mm[2 * k + 1]);
         }
-    P.gmin = gmin;
-    P.gmax = gmax;
+        row_min[size_t(y)] = lo;
+        row_max[size_t(y)] = hi;
+    });
+    P.gmin = *std::min_element(row_min.begin(), row_min.end());
+    P.gmax = *std::max_element(row_max.begin(), row_max.end());
     for (int L = 1; L <= P.top; ++L) {
         const float* p = P.mm.data() + 2 * off[size_t(L) - 1];
         float* q = P.mm.data() + 2 * off[size_t(L)];
         const int pw = lw[size_t(L) - 1], ph = lh[size_t(L) - 1], w = lw[size_t(L)], hh = lh[size_t(L)];
-        for (int y = 0; y < hh; ++y)
+        tbb::parallel_for(0, hh, [&](int y) {
             for (int x = 0; x < w; ++x) {
                 float lo = std::numeric_limits<float>::infinity(), hi = -lo;
                 for (int py = 2 * y; py < std::min(2 * y + 2, ph); ++py)
@@ -140,6 +150,7 @@ void prepare_field(const Heightfield& hf, Prepared& P) {
                 q[2 * e] = lo;
                 q[2 * e + 1] = hi;
             }
+        });
     }
     const double reach = kPeriodicReach * double(W + H);
     const double cells = P.periodic ? 1.5 * reach + 4 : double(Wc + Hc) + 4;
