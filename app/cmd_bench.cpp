@@ -4,6 +4,7 @@
 #include "app/commands.h"
 #include "app/workbench.h"
 #include "core/bench.h"
+#include "core/truth/truth.h"
 #include "core/error.h"
 #include "core/profile.h"
 #include "core/technique.h"
@@ -196,6 +197,16 @@ int run_bench(const BenchOptions& o) {
             throw InputError("bench: unknown table '" + name + "'" + (hint.empty() ? "" : " (did you mean '" + hint + "'?)") + "; tables: " + list);
         }
         tables.push_back(*it);
+    }
+    // --noise: the truth table measures each preset's time to that noise.
+    if (o.noise != 0.0 || !o.time_limit.empty()) {
+        if (o.noise == 0.0) throw InputError("--time-limit: with bench it bounds the truth table's --noise runs; add --noise");
+        TruthSettings st;
+        truth_sampling(o.noise, o.time_limit.empty() ? "600" : o.time_limit, 1, false, st);
+        bool found = false;
+        for (auto& t : tables)
+            if (t.name == "truth") t = truth_bench_table(st.noise, st.time_limit_s), found = true;
+        if (!found) throw InputError("--noise: only the table truth takes it (mesolab bench truth --noise 0.01)");
     }
     // --row / --column: the cells asked for; a filter that matches nothing is an error, naming what there is.
     const auto contains_any = [](const std::string& name, const std::vector<std::string>& parts) {

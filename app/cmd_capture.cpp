@@ -7,9 +7,12 @@
 #include "core/image.h"
 #include "core/profile.h"
 #include "core/scene.h"
+#include "core/strings.h"
 #include "core/technique.h"
+#include "core/truth/truth.h"
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -52,6 +55,52 @@ std::vector<std::string> expand_presets(const std::vector<std::string>& args) {
 }
 
 uint64_t memory_limit_bytes(const std::string& text) { return text.empty() ? 0 : parse_memory_size(text); }
+
+double parse_duration_s(const std::string& text, const std::string& option) {
+    double scale = 1.0;
+    std::string number = text;
+    if (!number.empty() && (number.back() == 's' || number.back() == 'm' || number.back() == 'h')) {
+        scale = number.back() == 'h' ? 3600.0 : number.back() == 'm' ? 60.0 : 1.0;
+        number.pop_back();
+    }
+    double v = 0.0;
+    size_t used = 0;
+    try {
+        v = std::stod(number, &used);
+    } catch (const std::exception&) {
+        used = 0;
+    }
+    if (number.empty() || used != number.size() || !std::isfinite(v) || v <= 0.0)
+        throw InputError(option + " " + text + ": expected a duration above 0: seconds, or a number with s, m or h (600, 90s, 10m, 1.5h)");
+    return v * scale;
+}
+
+void truth_sampling(double noise, const std::string& time_limit, int spp, bool spp_given, TruthSettings& st) {
+    if (noise != 0.0 && !(noise > 0.0 && noise < 1.0))
+        throw InputError("--noise " + strprintf("%g", noise) + ": expected a relative noise between 0 and 1 (e.g. 0.01 for 1%)");
+    st.noise = noise;
+    st.time_limit_s = time_limit.empty() ? 0.0 : parse_duration_s(time_limit, "--time-limit");
+    if (spp < 1) throw InputError("--spp " + std::to_string(spp) + ": expected at least 1 sample per pixel");
+    // With a noise target or a time limit, --spp bounds the samples only when it is given.
+    st.spp = (noise > 0.0 || st.time_limit_s > 0.0) && !spp_given ? std::numeric_limits<int>::max() / 2 : spp;
+}
+
+namespace {
+// --samples A:B
+void parse_samples(const std::string& text, int& first, int& end) {
+    const auto colon = text.find(':');
+    try {
+        size_t a = 0, b = 0;
+        if (colon == std::string::npos) throw std::invalid_argument("");
+        first = std::stoi(text.substr(0, colon), &a);
+        end = std::stoi(text.substr(colon + 1), &b);
+        if (a != colon || b != text.size() - colon - 1) throw std::invalid_argument("");
+    } catch (const std::exception&) {
+        throw InputError("--samples: expected A:B, the samples [A, B) of the truth (e.g. 0:256), got '" + text + "'");
+    }
+    if (first < 0 || end <= first) throw InputError("--samples " + text + ": expected 0 <= A < B");
+}
+}  // namespace
 
 namespace {
 
@@ -104,10 +153,13 @@ json capture_sidecar(const Scene& s, const std::string& file, const RenderResult
     j["outputs"] = written;
     if (r.renderer == "truth") {
         json tr;
-        tr["spp"] = req_truth.spp;
+        tr["spp"] = r.truth_spp;
         tr["seed"] = req_truth.seed;
         tr["noise_rel"] = truth_noise_rel(r.frame);
         tr["cached_spp"] = r.truth_cached_spp;  // samples read from the truth cache (all of them: nothing rendered)
+        if (req_truth.noise > 0.0) tr["noise_target"] = req_truth.noise;
+        if (req_truth.time_limit_s > 0.0) tr["time_limit_s"] = req_truth.time_limit_s;
+        tr["ended"] = to_string(r.truth_ended);  // samples, noise or time limit: what ended the sampling
         j["truth"] = tr;
     } else if (r.truth) {  // the frame against its truth (--aov truth_error)
         json tr;
@@ -117,6 +169,10 @@ json capture_sidecar(const Scene& s, const std::string& file, const RenderResult
         tr["rmse_rel"] = r.truth->rmse_rel;
         tr["below_noise"] = r.truth->below_noise;
         tr["ms"] = r.truth_ms;
+        tr["cached_spp"] = r.truth_cached_spp;
+        if (req_truth.noise > 0.0) tr["noise_target"] = req_truth.noise;
+        if (req_truth.time_limit_s > 0.0) tr["time_limit_s"] = req_truth.time_limit_s;
+        tr["ended"] = to_string(r.truth_ended);
         j["truth"] = tr;
     }
     return j;
@@ -147,6 +203,59 @@ std::vector<std::string> write_capture(const std::string& out_dir, const Scene& 
     return written;
 }
 
+// [SECTION] truth merge
+int run_truth_merge(const MergeOptions& o) {
+    if (o.parts.empty()) throw InputError("truth merge: name the partial truths to join (NAME.samples-A-B.truth)");
+    for (const std::string& a : o.aovs)
+        if (std::find(truth_aovs().begin(), truth_aovs().end(), a) == truth_aovs().end())
+            throw InputError("--aov " + a + ": the truth does not write it (it writes radiance, normal, truth_stderr, exitance, irradiance)");
+    std::vector<std::pair<std::string, TruthPart>> parts;
+    for (const std::string& f : o.parts) parts.emplace_back(f, read_truth_part(f));
+    const TruthPart merged = merge_truth_parts(parts);
+    const std::string here = truth_build(version_string());
+    if (merged.build != here)
+        std::fprintf(stderr, "mesolab: note: the parts were made by another build (%s); this one is %s. The merged sums are theirs.\n", merged.build.c_str(), here.c_str());
+    const TruthAccumulator& a = merged.sums;
+    fs::create_directories(o.out_dir);
+    const fs::path dir = o.out_dir;
+    const std::string name = merged.scene;
+    const std::string part = (dir / (name + ".samples-" + std::to_string(a.first) + "-" + std::to_string(a.spp) + ".truth")).string();
+    write_truth_part(part, merged);
+    const Frame f = truth_frame(a);
+    std::vector<std::string> written = {(dir / (name + ".png")).string()};
+    write_png_srgb(written.back(), f.aov("radiance"));
+    for (const std::string& aov : o.aovs) {
+        written.push_back((dir / (name + "." + aov + ".exr")).string());
+        write_exr(written.back(), f.aov(aov));
+    }
+    written.push_back(part);
+    // A merged truth from sample 0 is kept in the truth cache too: a capture of the same scene, size
+    // and seed reads it, or continues it.
+    bool cached = false;
+    if (a.first == 0 && merged.build == here) cached = TruthCache().store(merged.key, a);
+    json j;
+    j["preset"] = name;
+    j["version"] = version_string();
+    j["renderer"] = "truth";
+    j["size"] = json::array({a.width, a.height});
+    json tr;
+    tr["spp"] = a.samples();
+    tr["samples"] = json::array({a.first, a.spp});
+    tr["seed"] = a.seed;
+    tr["noise_rel"] = truth_noise_rel(f);
+    tr["build"] = merged.build;
+    tr["key"] = merged.key;
+    tr["parts"] = o.parts;
+    tr["kept_in_cache"] = cached;
+    j["truth"] = tr;
+    j["outputs"] = written;
+    const std::string side = (dir / (name + ".json")).string();
+    write_text_atomic(side, j.dump(2) + "\n");
+    std::printf("%s: %d parts, samples %d:%d (%d spp), noise_rel %.4f -> %s%s\n", name.c_str(), int(parts.size()), a.first, a.spp, a.samples(),
+                truth_noise_rel(f), written.front().c_str(), cached ? " (and the truth cache)" : "");
+    return 0;
+}
+
 void print_profile(const Profiler& profiler) {
     std::fprintf(stderr, "\n%-44s %-4s %10s %10s %10s %10s %6s\n", "scope", "dev", "last ms", "median", "min", "max", "n");
     for (const auto& s : profiler.stats()) {
@@ -172,9 +281,14 @@ int run_capture(const CaptureOptions& o) {
     req.height = h;
     req.progress = tty_progress();
     req.aovs = o.aovs.empty() ? std::vector<std::string>{"radiance"} : o.aovs;  // radiance and the requested AOVs only
-    req.truth.spp = o.spp;
     req.truth.seed = o.seed;
-    if (req.backend == Backend::Truth && o.spp < 1) throw InputError("--spp " + std::to_string(o.spp) + ": expected at least 1 sample per pixel");
+    truth_sampling(o.noise, o.time_limit, o.spp, o.spp_given, req.truth);
+    if (!o.samples.empty()) {
+        if (req.backend != Backend::Truth) throw InputError("--samples " + o.samples + ": a partial truth needs --backend truth");
+        if (o.noise > 0.0 || !o.time_limit.empty()) throw InputError("--samples: a partial truth renders exactly its samples; leave out --noise and --time-limit");
+        parse_samples(o.samples, req.truth.first, req.truth.spp);
+        req.truth_part = true;
+    }
     const auto files = expand_presets(o.presets);
     // Validate everything first, so that bad input fails before any work.
     std::vector<Scene> scenes;
@@ -212,6 +326,13 @@ int run_capture(const CaptureOptions& o) {
         const Scene& s = scenes[i];
         RenderResult r = wb.render(s, req);
         tty_progress_done();
+        if (req.truth_part) {  // the part's sums, to be joined by `mesolab truth merge`
+            const std::string path = (fs::path(o.out_dir) / (s.name + ".samples-" + std::to_string(req.truth.first) + "-" + std::to_string(req.truth.spp) + ".truth")).string();
+            write_truth_part(path, TruthPart{s.name, r.truth_key, truth_build(version_string()), *r.truth_sums});
+            std::printf("%-28s %4dx%-4d truth  samples %d:%d  noise_rel %.4f  render %7.2f ms  -> %s\n", s.name.c_str(), r.frame.width, r.frame.height,
+                        req.truth.first, req.truth.spp, truth_noise_rel(r.frame), r.render_ms, path.c_str());
+            continue;
+        }
         const std::string png = write_capture(o.out_dir, s, files[i], r, o.aovs, req.truth).front();
         int ran = 0, cached = 0, skipped = 0;
         for (const auto& run : r.eval.runs)
@@ -224,6 +345,9 @@ int run_capture(const CaptureOptions& o) {
         }
         std::printf("%-28s %4dx%-4d %-6s stages %7.2f ms (%d ran, %d cached, %d skipped)  render %7.2f ms  -> %s\n", s.name.c_str(), r.frame.width,
                     r.frame.height, req.backend == Backend::Cpu ? "cpu" : req.backend == Backend::Gpu ? "gpu" : "truth", r.stages_ms, ran, cached, skipped, r.render_ms, png.c_str());
+        if (req.backend == Backend::Truth)
+            std::printf("%-28s truth: %d spp (%d from the cache), noise_rel %.4f, ended by %s\n", "", r.truth_spp, r.truth_cached_spp,
+                        truth_noise_rel(r.frame), to_string(r.truth_ended));
     }
     if (o.profile) print_profile(wb.session().profiler());
     return 0;

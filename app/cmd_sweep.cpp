@@ -163,7 +163,7 @@ struct Measure {
     TruthSettings truth_settings;
     std::map<std::string, Frame> truths;
     double truth_noise = 0, truth_ms = 0;
-    int truth_cached_spp = 0;
+    int truth_cached_spp = 0, truth_spp = 0;
     const std::atomic<bool>* cancel = nullptr;
     bool quiet = false;
 
@@ -181,17 +181,18 @@ struct Measure {
         tr.cancel = cancel;
         if (!quiet)
             tr.progress = [](const std::string& stage, double f) {
-                if (stage == "truth") std::fprintf(stderr, "\r  truth %3d%%", int(100.0 * f + 0.5));
+                if (stage.rfind("truth", 0) == 0) std::fprintf(stderr, "\r  %-72s %3d%%", stage.c_str(), int(100.0 * f + 0.5));
             };
         RenderResult r = wb.render(s, tr);
         const std::string k = truth_key(d, r.frame.width, r.frame.height);  // texture mode: the native size, not w x h
         if (auto it = truths.find(k); it != truths.end()) return it->second;
         if (!quiet)
-            std::fprintf(stderr, "\r  truth: %d spp (%d from the cache), noise_rel %.4f, %.0f ms\n", truth_settings.spp, r.truth_cached_spp,
-                         truth_noise_rel(r.frame), r.render_ms);
+            std::fprintf(stderr, "\r  truth: %d spp (%d from the cache), noise_rel %.4f, %.0f ms, ended by %s%30s\n", r.truth_spp, r.truth_cached_spp,
+                         truth_noise_rel(r.frame), r.render_ms, to_string(r.truth_ended), "");
         truth_noise = std::max(truth_noise, truth_noise_rel(r.frame));
         truth_ms += r.render_ms;
         truth_cached_spp = r.truth_cached_spp;
+        truth_spp = std::max(truth_spp, r.truth_spp);
         return truths.emplace(k, std::move(r.frame)).first->second;
     }
 
@@ -248,7 +249,7 @@ std::string header_md(const SweepOptions& o, const Scene& base, const Knob& k, c
     std::ostringstream md;
     if (m.vs_truth) {
         md << "Sweep of `" << k.key << "`" << (o.by.empty() ? "" : " by `" + o.by.substr(0, o.by.find('=')) + "`") << " on `" << base.name << "` (" << o.backend << ", " << w
-           << "x" << h << ", median of " << o.repeat << " cold-cache runs) against the truth (" << m.truth_settings.spp << " spp, seed " << m.truth_settings.seed
+           << "x" << h << ", median of " << o.repeat << " cold-cache runs) against the truth (" << m.truth_spp << " spp, seed " << m.truth_settings.seed
            << ", noise_rel " << strprintf("%.4f", m.truth_noise) << "). Error: `rmse_rel`, the RMS of the real-time radiance minus the truth's over the object's "
               "pixels, over the truth's mean there; an error within twice the truth's noise is reported as unresolved, not as a number.\n\n| "
            << k.key << (o.by.empty() ? "" : " | " + o.by.substr(0, o.by.find('='))) << " | time (ms) | rmse_rel vs truth |\n|---|" << (o.by.empty() ? "" : "---|")
@@ -363,8 +364,7 @@ SweepResult sweep_scene(const Scene& base, const SweepOptions& o, bool write_fil
     }
     m.vs_truth = o.metric == kTruthMetric;
     if (!o.by.empty() && !m.vs_truth) throw InputError("--by: a sweep over two knobs measures against the truth; add --metric truth");
-    if (o.spp < 1) throw InputError("--spp " + std::to_string(o.spp) + ": expected at least 1 sample per pixel");
-    m.truth_settings.spp = o.spp;
+    truth_sampling(o.noise, o.time_limit, o.spp, o.spp_given, m.truth_settings);
     m.truth_settings.seed = o.seed;
     const Knob k = parse_knob(base, o.knob);
     std::optional<Knob> by;

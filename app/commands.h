@@ -13,6 +13,7 @@ namespace mesolab {
 class Profiler;
 class ParamGroup;
 struct Scene;
+struct TruthSettings;
 
 struct CaptureOptions {
     std::string memory_limit;  // --memory-limit: a stage above it stops with exit status 2 (empty: the available memory)
@@ -24,9 +25,25 @@ struct CaptureOptions {
     std::vector<std::string> aovs;
     bool profile = false;
     int spp = 64;        // --backend truth: samples per pixel
+    bool spp_given = false;  // --spp was given (with --noise: the most samples; else unlimited)
     uint64_t seed = 1;   // --backend truth: the random streams' seed
+    std::string samples;     // --samples A:B: a partial truth of samples [A, B), written as NAME.samples-A-B.truth
+    double noise = 0;        // --noise: sample until the truth's noise_rel reaches it
+    std::string time_limit;  // --time-limit: stop sampling after this long (600, 90s, 10m, 1.5h)
 };
 int run_capture(const CaptureOptions& o);
+
+// The truth's sampling options shared by capture, sweep and bench: `noise` (0: none), `time_limit`
+// (text, as --time-limit), `spp` and whether it was given, into `st`; InputError naming the option.
+void truth_sampling(double noise, const std::string& time_limit, int spp, bool spp_given, TruthSettings& st);
+double parse_duration_s(const std::string& text, const std::string& option);  // "600", "90s", "10m", "1.5h"
+
+struct MergeOptions {
+    std::vector<std::string> parts;  // partial truths (NAME.samples-A-B.truth)
+    std::string out_dir = ".";
+    std::vector<std::string> aovs;
+};
+int run_truth_merge(const MergeOptions& o);
 
 struct BenchOptions {
     std::string memory_limit;  // --memory-limit: a stage above it stops with exit status 2 (empty: the available memory)
@@ -40,6 +57,8 @@ struct BenchOptions {
     std::string pages_root = ".";    // where README.md and core/*/README.md are
     std::string mesh;                // --mesh FILE: a row for this mesh in the tables that take one
     int vertices = 0;                // --vertices N: simplify it to N vertices (0: the table's choice)
+    double noise = 0;                // table truth: measure the time to this noise_rel (0: a pilot, extrapolated)
+    std::string time_limit;          // table truth with noise: the most time per preset
     std::vector<std::string> rows, columns;  // --row / --column: only the rows and columns whose names contain one of these
     std::string label;               // --label: this machine's short name in the JSON ("H100"), shown in the pages when merged from bench/NAME.json
     // In-process callers (the Python module): progress per cell ("bench TABLE: ROW / COLUMN",
@@ -65,7 +84,10 @@ struct SweepOptions {
     std::string metric = "rmse";          // rmse, truth or a technique's (Technique::sweep_metrics)
     std::string by;                       // --by KEY=V1,V2,...: a second knob (a grid; --metric truth)
     int spp = 64;                         // the truth's samples per pixel (--metric truth, --backend truth)
+    bool spp_given = false;               // with noise: --spp is the most samples
     uint64_t seed = 1;
+    double noise = 0;                     // --noise: the truth samples until its noise_rel reaches it
+    std::string time_limit;               // --time-limit for the truth
     // In-process callers (the Python module), as BenchOptions.
     std::function<void(const std::string&, double)> progress;
     const std::atomic<bool>* cancel = nullptr;

@@ -22,7 +22,7 @@ using namespace mesolab;
 int main(int argc, char** argv) {
     mesolab::gpu::install_gpu_compute();  // stages may run their GPU variants (e.g. microgeom.device=gpu)
     // `mesolab PRESET` and `mesolab` alone mean `mesolab gui ...`.
-    std::vector<std::string> commands = {"gui", "capture", "bench", "sweep", "preset", "info", "export", "-h", "--help", "--version"};
+    std::vector<std::string> commands = {"gui", "capture", "bench", "sweep", "preset", "truth", "info", "export", "-h", "--help", "--version"};
     for (const Technique* t : Registry::instance().techniques())
         if (!t->commands().empty()) commands.push_back(t->name());
     std::vector<char*> args(argv, argv + argc);
@@ -56,7 +56,10 @@ int main(int argc, char** argv) {
     c->add_option("-o,--output", cap.out_dir, "Output folder")->capture_default_str();
     c->add_option("--size", cap.size, "Frame size WxH (texture mode may use the technique's native size)")->capture_default_str();
     c->add_option("--backend", cap.backend, "gpu (EGL, headless), cpu, or truth (the Monte-Carlo reference of the explicit geometry)")->capture_default_str();
-    c->add_option("--spp", cap.spp, "--backend truth: samples per pixel")->capture_default_str();
+    auto* cap_spp = c->add_option("--spp", cap.spp, "--backend truth: samples per pixel (with --noise or --time-limit: the most, unlimited when not given)")->capture_default_str();
+    c->add_option("--noise", cap.noise, "--backend truth: sample until the truth's noise_rel reaches this (e.g. 0.01), continuing the cached truth; the sidecar says what ended it");
+    c->add_option("--time-limit", cap.time_limit, "--backend truth: stop sampling after this long (600, 90s, 10m, 1.5h); the samples done are kept");
+    c->add_option("--samples", cap.samples, "--backend truth: render samples A:B only, as a partial truth DIR/NAME.samples-A-B.truth (join parts with `mesolab truth merge`)");
     c->add_option("--seed", cap.seed, "--backend truth: seed of the random streams (the same seed gives the same bytes)")->capture_default_str();
     c->add_option("--set", cap.sets, "Override a parameter: KEY=VALUE (repeatable), e.g. camera.distance=4");
     c->add_flag("--profile", cap.profile, "Print the scoped CPU/GPU timing hierarchy at the end");
@@ -92,6 +95,8 @@ int main(int argc, char** argv) {
     b->add_option("--pages-root", bench.pages_root, "With --update-pages: the repository's root")->capture_default_str();
     b->add_option("--mesh", bench.mesh, "A mesh file (OBJ, PLY, OFF, STL, OM) measured as its own row by the tables that take one (translucency)");
     b->add_option("--vertices", bench.vertices, "With --mesh: simplify it to N vertices first (0: the table's default)");
+    b->add_option("--noise", bench.noise, "Table truth: measure each preset's time to this noise_rel (e.g. 0.01) instead of extrapolating a 32-sample pilot");
+    b->add_option("--time-limit", bench.time_limit, "Table truth with --noise: give up on a preset after this long (600, 90s, 10m, 1.5h; default 10m)");
     add_memory_limit(b, bench.memory_limit);
 
     SweepOptions sweep;
@@ -106,7 +111,9 @@ int main(int argc, char** argv) {
     s->add_option("--repeat", sweep.repeat, "Timed runs per value (median)")->capture_default_str();
     s->add_option("--metric", sweep.metric, "Error measure: " + sweep_metric_names())->capture_default_str();
     s->add_option("--by", sweep.by, "KEY=V1,V2,...: a second knob, one curve per value (a grid; with --metric truth)");
-    s->add_option("--spp", sweep.spp, "The truth's samples per pixel (--metric truth, --backend truth)")->capture_default_str();
+    auto* sweep_spp = s->add_option("--spp", sweep.spp, "The truth's samples per pixel (--metric truth, --backend truth; with --noise: the most)")->capture_default_str();
+    s->add_option("--noise", sweep.noise, "The truth samples until its noise_rel reaches this (e.g. 0.01)");
+    s->add_option("--time-limit", sweep.time_limit, "The truth stops sampling after this long (600, 90s, 10m, 1.5h)");
     s->add_option("--seed", sweep.seed, "The truth's seed")->capture_default_str();
     add_memory_limit(s, sweep.memory_limit);
 
@@ -125,6 +132,15 @@ int main(int argc, char** argv) {
     auto* psh = p->add_subcommand("show", "Print the fully resolved preset JSON");
     psh->add_option("file", show_file, "Preset file")->required();
     psh->add_option("--set", show_sets, "Override a parameter: KEY=VALUE (repeatable)");
+
+    auto* tr = app.add_subcommand("truth", "Partial truths (capture --backend truth --samples A:B): merge");
+    tr->require_subcommand(1);
+    MergeOptions merge;
+    auto* tm = tr->add_subcommand("merge", "Join partial truths of one scene, size, seed and build into one: DIR/NAME.png, NAME.json, NAME.<aov>.exr and the "
+                                           "joined NAME.samples-A-B.truth (from sample 0: also kept in the truth cache)");
+    tm->add_option("parts", merge.parts, "Partial truths (NAME.samples-A-B.truth), in any order")->required();
+    tm->add_option("-o,--output", merge.out_dir, "Output folder")->required();
+    tm->add_option("--aov", merge.aovs, "Also write this AOV as 32-bit float EXR (repeatable): normal, truth_stderr, exitance, irradiance");
 
     auto* info = app.add_subcommand("info", "GL vendor/renderer/version of the headless context, CPU threads, versions");
 
@@ -173,9 +189,16 @@ int main(int argc, char** argv) {
 
     try {
         if (g->parsed()) return run_gui(gui);
-        if (c->parsed()) return run_capture(cap);
+        if (c->parsed()) {
+            cap.spp_given = cap_spp->count() > 0;
+            return run_capture(cap);
+        }
+        if (tm->parsed()) return run_truth_merge(merge);
         if (b->parsed()) return run_bench(bench);
-        if (s->parsed()) return run_sweep(sweep);
+        if (s->parsed()) {
+            sweep.spp_given = sweep_spp->count() > 0;
+            return run_sweep(sweep);
+        }
         if (pv->parsed()) return run_preset_validate(validate_files);
         if (ps->parsed()) return run_preset_schema(schema_tech, schema_json);
         if (psh->parsed()) return run_preset_show(show_file, show_sets);

@@ -4,8 +4,9 @@
 // Folder: $MESOLAB_CACHE_DIR, else $XDG_CACHE_HOME/mesolab/truth, else ~/.cache/mesolab/truth.
 // A truth is keyed by a hash of the program version, what the truth reads (truth_description: the
 // physical description, with the contents of the files it names, never an accuracy knob, so
-// one truth serves a whole sweep), the frame size and the seed; a file that cannot be read back is
-// ignored and rendered again.
+// one truth serves a whole sweep), the frame size and the seed; a file that cannot be read back, or
+// that another build or instruction set made (truth_build), is ignored and rendered again. The
+// files are partial truths of samples [0, spp) (core/truth/truth.h, TruthPart).
 #include "core/scene.h"
 #include "core/truth/truth.h"
 

@@ -57,8 +57,10 @@ RenderResult Workbench::render(const Scene& s, const RenderRequest& req) {
     tr.coverage = false;
     const RenderResult t = render_one(s, tr);
     r.truth = compare_to_truth(r.frame, t.frame, req.truth);
+    r.truth->spp = t.truth_spp;
     r.truth_frame = t.frame;
     r.truth_ms = t.render_ms;
+    r.truth_spp = t.truth_spp, r.truth_ended = t.truth_ended, r.truth_cached_spp = t.truth_cached_spp, r.truth_key = t.truth_key;
     r.frame.layout.push_back({"truth_error", 3, "Real-time radiance minus the truth's"});
     r.frame.aovs["truth_error"] = r.truth->error;
     return r;
@@ -72,22 +74,27 @@ RenderResult Workbench::render_one(const Scene& s, const RenderRequest& req) {
         r.eval = session_.evaluate(s, truth_stages(s), req.progress, req.cancel);
         r.stages_ms = std::chrono::duration<double, std::milli>(clock::now() - t0).count();
         const ivec2 size = frame_size(s, r.eval, {req.width, req.height});  // texture mode: the techniques' native size, as the real-time frame
+        // The exact sums (radiance, its square, exitance, irradiance: 16 bytes a channel), the
+        // normals and the frame's five AOVs.
         session_.check_memory("a " + std::to_string(size.x) + "x" + std::to_string(size.y) + " truth",
-                              {double(size.x) * double(size.y) * 9.0 * sizeof(float), "3 AOVs", {"--size"}});
+                              {double(size.x) * double(size.y) * (4.0 * 3.0 * 16.0 + 3.0 * sizeof(float) + 15.0 * sizeof(float)), "its sums and 5 AOVs", {"--size"}});
         t0 = clock::now();
         check_truth_request(s, size.x, size.y, req.truth, req.aovs);
-        const std::string key = truth_cache_.key(s, size.x, size.y, req.truth.seed);
-        std::optional<TruthAccumulator> cached = truth_cache_.load(key);
+        r.truth_key = truth_cache_.key(s, size.x, size.y, req.truth.seed);
+        std::optional<TruthAccumulator> cached;
+        if (!req.truth_part) cached = truth_cache_.load(r.truth_key);
         const bool keep_file = cached && cached->spp > req.truth.spp;  // a truth of more samples than asked stays on disk
-        if (cached && !cached->continues(size.x, size.y, req.truth.seed, req.truth.spp)) cached.reset();
+        if (cached && !cached->continues(size.x, size.y, req.truth.seed, req.truth.first, req.truth.spp)) cached.reset();
         r.truth_cached_spp = cached ? cached->spp : 0;
-        TruthAccumulator a = r.truth_cached_spp == req.truth.spp
-                                 ? std::move(*cached)
-                                 : accumulate_truth(s, r.eval, size.x, size.y, req.truth, cached ? &*cached : nullptr, req.progress, req.cancel);
-        if (r.truth_cached_spp != req.truth.spp && !keep_file) truth_cache_.store(key, a);
+        TruthAccumulator a = accumulate_truth(s, r.eval, size.x, size.y, req.truth, cached ? &*cached : nullptr, req.progress, req.cancel);
+        if (a.ended == TruthEnd::Cancelled) throw Cancelled();
+        if (!req.truth_part && a.spp != r.truth_cached_spp && !keep_file) truth_cache_.store(r.truth_key, a);
         r.frame = truth_frame(a);
         r.render_ms = std::chrono::duration<double, std::milli>(clock::now() - t0).count();
         r.renderer = "truth";
+        r.truth_spp = a.samples();
+        r.truth_ended = a.ended;
+        if (req.truth_part) r.truth_sums = std::make_shared<const TruthAccumulator>(std::move(a));
         if (req.coverage) r.frame.coverage = frame_coverage(s, r.eval, size.x, size.y);
         return r;
     }

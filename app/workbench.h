@@ -31,7 +31,10 @@ struct RenderRequest {
     int width = 512, height = 512;
     std::vector<std::string> aovs;  // besides radiance (frame_layout); empty = every AOV of the scene
     bool coverage = false;          // also fill Frame::coverage (untimed; either backend)
-    TruthSettings truth;            // Backend::Truth: samples per pixel and seed
+    TruthSettings truth;            // Backend::Truth: samples per pixel, seed, noise target, time limit, sample range
+    // Backend::Truth: render samples [truth.first, truth.spp) as a part of a truth (--samples A:B):
+    // neither read from nor kept in the truth cache; RenderResult::truth_sums holds its sums.
+    bool truth_part = false;
     ProgressFn progress;
     // Set from another thread to stop: the stages (and the truth's samples) stop at their next
     // check with Cancelled, and the session stays usable (what finished stays cached).
@@ -52,6 +55,12 @@ struct RenderResult {
     std::optional<Frame> truth_frame;  // that truth (radiance, normal, truth_stderr)
     double truth_ms = 0;
     int truth_cached_spp = 0;  // Backend::Truth: samples read from the truth cache (continued to the rest, or all reused)
+    // Backend::Truth: the samples the truth holds, why it stopped, its sums (a part: always; else
+    // when kept) and its cache key.
+    int truth_spp = 0;
+    TruthEnd truth_ended = TruthEnd::Samples;
+    std::shared_ptr<const TruthAccumulator> truth_sums;
+    std::string truth_key;
 };
 
 class Workbench {

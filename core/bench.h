@@ -46,6 +46,10 @@ struct BenchTable {
     std::function<BenchRow(const std::string& mesh, int vertices)> mesh_row;
 };
 
-// Tables registered by techniques (see Technique::bench_tables).
+// Tables registered by techniques (see Technique::bench_tables), and the truth's.
 std::vector<BenchTable> bench_tables();
+// The truth's table: every preset the truth renders, at 512 x 512. With noise = 0, a 32-sample pilot
+// and the time to 1% noise extrapolated by the estimator's 1/√n law; with noise > 0, each preset's
+// truth sampled until its noise_rel reaches `noise` or `time_limit_s` passes, the time measured.
+BenchTable truth_bench_table(double noise = 0, double time_limit_s = 600);
 }  // namespace mesolab

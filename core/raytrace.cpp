@@ -2,6 +2,7 @@
 
 #include <embree3/rtcore.h>
 #include <stdexcept>
+#include <vector>
 
 namespace mesolab {
 
@@ -9,6 +10,7 @@ struct RayScene::Impl {
     RTCDevice device = nullptr;
     RTCScene scene = nullptr;
     int count = 0;
+    std::vector<size_t> triangles;  // per geometry
 };
 
 RayScene::RayScene() : impl_(std::make_unique<Impl>()) {
@@ -35,6 +37,7 @@ int RayScene::add(const TriMesh& m, const mat4& to_world) {
     const unsigned id = rtcAttachGeometry(impl_->scene, g);
     rtcReleaseGeometry(g);
     if (int(id) != impl_->count) throw std::logic_error("RayScene: Embree numbered the geometries out of order");
+    impl_->triangles.push_back(m.triangle_count());
     return impl_->count++;
 }
 
@@ -59,6 +62,19 @@ RayHit RayScene::intersect(vec3 o, vec3 d, float tnear, float tfar) const {
     h.u = rh.hit.u, h.v = rh.hit.v, h.t = rh.ray.tfar;
     h.ng = vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
     return h;
+}
+
+int RayScene::geometry_count() const { return impl_->count; }
+size_t RayScene::triangle_count(int geometry) const { return impl_->triangles.at(size_t(geometry)); }
+
+void RayScene::triangle(int geometry, size_t t, vec3& a, vec3& b, vec3& c) const {
+    RTCGeometry g = rtcGetGeometry(impl_->scene, unsigned(geometry));
+    const auto* v = static_cast<const float*>(rtcGetGeometryBufferData(g, RTC_BUFFER_TYPE_VERTEX, 0));
+    const auto* ix = static_cast<const unsigned*>(rtcGetGeometryBufferData(g, RTC_BUFFER_TYPE_INDEX, 0));
+    const unsigned* f = ix + 3 * t;
+    a = vec3(v[3 * f[0]], v[3 * f[0] + 1], v[3 * f[0] + 2]);
+    b = vec3(v[3 * f[1]], v[3 * f[1] + 1], v[3 * f[1] + 2]);
+    c = vec3(v[3 * f[2]], v[3 * f[2] + 1], v[3 * f[2] + 2]);
 }
 
 bool RayScene::occluded(vec3 o, vec3 d, float tnear, float tfar) const {

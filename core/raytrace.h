@@ -34,6 +34,12 @@ public:
     // Whether anything lies along o + t d for t in (tnear, tfar).
     bool occluded(vec3 o, vec3 d, float tnear = 0.f, float tfar = 3.4e38f) const;
 
+    // The meshes as placed: how many were added, a mesh's triangle count, and a triangle's corners
+    // in world space (read from Embree's own buffers: nothing is kept twice).
+    int geometry_count() const;
+    size_t triangle_count(int geometry) const;
+    void triangle(int geometry, size_t t, vec3& a, vec3& b, vec3& c) const;
+
 private:
     struct Impl;
     std::unique_ptr<Impl> impl_;

@@ -163,8 +163,6 @@ std::vector<AovDecl> Registry::aovs(const Scene& s) const {
     return r;
 }
 
-BenchTable truth_bench_table();  // core/truth/bench.cpp
-
 std::vector<BenchTable> bench_tables() {
     std::vector<BenchTable> r;
     for (const Technique* t : Registry::instance().techniques())

@@ -27,6 +27,8 @@
 #include <pybind11/stl.h>
 
 #include <atomic>
+#include <cmath>
+#include <limits>
 #include <chrono>
 #include <condition_variable>
 #include <cstdio>
@@ -183,6 +185,24 @@ std::string object_key(const Scene& s, const std::string& key, const py::object&
     if (o.technique != group)
         throw InputError(key + ": object " + std::to_string(index) + " ('" + o.name + "') uses technique '" + o.technique + "', not '" + group + "'");
     return "objects." + std::to_string(index) + ".material." + param;
+}
+
+// spp=, noise=, time_limit= (seconds) of a truth, checked with their Python names: spp None is 64,
+// or unlimited with a noise target or a time limit.
+void truth_sampling_arg(const py::object& spp, const py::object& noise, const py::object& time_limit, TruthSettings& st) {
+    st.noise = 0.0, st.time_limit_s = 0.0;
+    if (!noise.is_none()) {
+        st.noise = noise.cast<double>();
+        if (!(st.noise > 0.0 && st.noise < 1.0)) throw InputError("noise=" + strprintf("%g", st.noise) + ": expected a relative noise between 0 and 1 (e.g. 0.01 for 1%)");
+    }
+    if (!time_limit.is_none()) {
+        st.time_limit_s = time_limit.cast<double>();
+        if (!(st.time_limit_s > 0.0) || !std::isfinite(st.time_limit_s))
+            throw InputError("time_limit=" + strprintf("%g", st.time_limit_s) + ": expected seconds above 0");
+    }
+    const bool open_ended = st.noise > 0.0 || st.time_limit_s > 0.0;
+    st.spp = spp.is_none() ? (open_ended ? std::numeric_limits<int>::max() / 2 : 64) : spp.cast<int>();
+    if (st.spp < 1) throw InputError("spp=" + std::to_string(st.spp) + ": expected at least 1 sample per pixel");
 }
 
 std::pair<int, int> frame_size_arg(const py::object& size) {
@@ -447,8 +467,8 @@ public:
         return *wb_;
     }
 
-    PyFrame render(const PyScene& ps, const py::object& size, const std::string& backend, const std::vector<std::string>& aovs, int spp, uint64_t seed,
-                   const py::object& progress) {
+    PyFrame render(const PyScene& ps, const py::object& size, const std::string& backend, const std::vector<std::string>& aovs, const py::object& spp,
+                   uint64_t seed, const py::object& noise, const py::object& time_limit, const py::object& progress) {
         open();
         ps.check_used();
         const auto [w, h] = frame_size_arg(size);
@@ -456,9 +476,8 @@ public:
         req.backend = parse_backend(backend);
         req.width = w, req.height = h;
         req.aovs = aovs.empty() ? std::vector<std::string>{"radiance"} : aovs;
-        req.truth.spp = spp;
         req.truth.seed = seed;
-        if (req.backend == Backend::Truth && spp < 1) throw InputError("spp " + std::to_string(spp) + ": expected at least 1 sample per pixel");
+        truth_sampling_arg(spp, noise, time_limit, req.truth);
         PyFrame f{nullptr, ps.scene, req.truth};
         f.r = run_on<std::shared_ptr<const RenderResult>>(worker_, progress, [&](const ProgressFn& p, const std::atomic<bool>* cancel) {
             RenderRequest rq = req;
@@ -648,9 +667,12 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
         .def(py::init<const py::object&>(), py::arg("memory_limit") = py::none(),
              "memory_limit: '2G', '512M' or bytes (default: the machine's available memory).")
         .def("render", &PyWorkbench::render, py::arg("scene"), py::kw_only(), py::arg("size") = py::make_tuple(512, 512), py::arg("backend") = "gpu",
-             py::arg("aovs") = std::vector<std::string>{}, py::arg("spp") = 64, py::arg("seed") = 1, py::arg("progress") = py::none(),
-             "Render a frame: backend 'gpu' (the CLI's default), 'cpu' or 'truth' (spp, seed). aovs beside radiance; "
-             "'truth_error' also renders the truth. progress(stage, fraction) is called from this thread; Ctrl-C stops the work.")
+             py::arg("aovs") = std::vector<std::string>{}, py::arg("spp") = py::none(), py::arg("seed") = 1, py::arg("noise") = py::none(),
+             py::arg("time_limit") = py::none(), py::arg("progress") = py::none(),
+             "Render a frame: backend 'gpu' (the CLI's default), 'cpu' or 'truth' (spp: 64 by default; seed). The truth samples until its "
+             "noise_rel reaches noise= (e.g. 0.01) or time_limit= seconds pass, continuing the cached truth (spp is then the most samples, "
+             "unlimited when not given); frame.truth['ended'] says which. aovs beside radiance; 'truth_error' also renders the truth. "
+             "progress(stage, fraction) is called from this thread; Ctrl-C stops the work.")
         .def_property_readonly("gl_renderer", &PyWorkbench::gl_renderer)
         .def_property_readonly("memory_limit", &PyWorkbench::memory_limit, "In bytes; 0: the machine's available memory.")
         .def("clear_cache", &PyWorkbench::clear_cache, "Forget every cached stage result and frame step.")
@@ -681,8 +703,16 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
     m.def(
         "bench",
         [](const py::object& tables, int repeat, const std::string& backend, const std::vector<std::string>& rows, const std::vector<std::string>& columns,
-           const py::object& memory_limit, const py::object& progress) {
+           const py::object& noise, const py::object& time_limit, const py::object& memory_limit, const py::object& progress) {
             BenchOptions o;
+            if (!noise.is_none()) {
+                TruthSettings st;
+                truth_sampling_arg(py::none(), noise, time_limit.is_none() ? py::float_(600.0) : time_limit, st);
+                o.noise = st.noise;
+                o.time_limit = strprintf("%.17g", st.time_limit_s);
+            } else if (!time_limit.is_none()) {
+                throw InputError("bench: time_limit= bounds the truth table's noise= runs; add noise=");
+            }
             if (py::isinstance<py::str>(tables)) o.tables = {tables.cast<std::string>()};
             else if (!tables.is_none()) o.tables = tables.cast<std::vector<std::string>>();
             o.repeat = repeat, o.backend = backend, o.rows = rows, o.columns = columns, o.format = "json", o.quiet = true;
@@ -697,14 +727,17 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
             return from_json(json::parse(text)["cells"]);
         },
         py::arg("tables") = py::none(), py::kw_only(), py::arg("repeat") = 5, py::arg("backend") = "both", py::arg("rows") = std::vector<std::string>{},
-        py::arg("columns") = std::vector<std::string>{}, py::arg("memory_limit") = py::none(), py::arg("progress") = py::none(),
+        py::arg("columns") = std::vector<std::string>{}, py::arg("noise") = py::none(), py::arg("time_limit") = py::none(), py::arg("memory_limit") = py::none(),
+        py::arg("progress") = py::none(),
         "Measure timing tables (all when none named) as `mesolab bench --format json`: a list of its cells "
-        "({table, row, column, device, median_ms, min_ms, max_ms, ...}).");
+        "({table, row, column, device, median_ms, min_ms, max_ms, ...}). noise= (table 'truth'): each preset's time to that noise_rel, "
+        "measured, giving up after time_limit= seconds (600 by default).");
     m.def(
         "sweep",
         [](const PyScene& scene, const std::string& knob, const py::sequence& values, const py::object& size, const std::string& metric,
-           const std::string& backend, int repeat, const py::object& reference, const py::object& by, const py::object& by_values, int spp, uint64_t seed,
-           const py::object& out_dir, const py::object& memory_limit, const py::object& progress) {
+           const std::string& backend, int repeat, const py::object& reference, const py::object& by, const py::object& by_values, const py::object& spp,
+           uint64_t seed, const py::object& noise, const py::object& time_limit, const py::object& out_dir, const py::object& memory_limit,
+           const py::object& progress) {
             scene.check_used();
             const auto [w, h] = frame_size_arg(size);
             SweepOptions o;
@@ -713,7 +746,13 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
             if (texts.empty()) throw InputError("sweep: values is empty; give the knob's settings, e.g. values=[8, 16, 32]");
             o.knob = knob + "=" + join(texts, ",");
             o.size = std::to_string(w) + "x" + std::to_string(h);
-            o.metric = metric, o.backend = backend, o.repeat = repeat, o.spp = spp, o.seed = seed, o.quiet = true;
+            o.metric = metric, o.backend = backend, o.repeat = repeat, o.seed = seed, o.quiet = true;
+            TruthSettings st;
+            truth_sampling_arg(spp, noise, time_limit, st);  // checked here, with the Python names
+            o.spp = spp.is_none() ? 64 : spp.cast<int>();
+            o.spp_given = !spp.is_none();
+            o.noise = st.noise;
+            if (st.time_limit_s > 0.0) o.time_limit = strprintf("%.17g", st.time_limit_s);
             if (!reference.is_none())
                 for (const auto& [k, v] : reference.cast<py::dict>()) o.reference.push_back(k.cast<std::string>() + "=" + to_set_text(k.cast<std::string>(), v));
             std::vector<py::object> by_list;
@@ -748,8 +787,9 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
         },
         py::arg("scene"), py::kw_only(), py::arg("knob"), py::arg("values"), py::arg("size") = py::make_tuple(256, 256), py::arg("metric") = "rmse",
         py::arg("backend") = "cpu", py::arg("repeat") = 3, py::arg("reference") = py::none(), py::arg("by") = py::none(), py::arg("by_values") = py::none(),
-        py::arg("spp") = 64, py::arg("seed") = 1, py::arg("out_dir") = py::none(), py::arg("memory_limit") = py::none(), py::arg("progress") = py::none(),
+        py::arg("spp") = py::none(), py::arg("seed") = 1, py::arg("noise") = py::none(), py::arg("time_limit") = py::none(), py::arg("out_dir") = py::none(),
+        py::arg("memory_limit") = py::none(), py::arg("progress") = py::none(),
         "Accuracy vs time, as `mesolab sweep`: each value of the knob rendered from a cold cache, timed (median of repeat) and "
-        "measured against the reference (metric 'rmse'), the truth ('truth') or a technique's metric. Returns "
+        "measured against the reference (metric 'rmse'), the truth ('truth': spp, seed, noise, time_limit as for render) or a technique's metric. Returns "
         "[{value, ms, error, ...}]; writes the CSV, Markdown and plot only with out_dir=.");
 }

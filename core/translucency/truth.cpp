@@ -7,17 +7,24 @@
 // a pinhole camera): photons from a disc covering the object (directional lights, environment) or
 // from the point light towards it, shadowed by everything in the scene, enter with the Fresnel
 // transmittance, walk (free paths of mean 1/σt, albedo σs′/σt per step, Russian roulette below a
-// fifth of the weight) and, where they leave, add their power to the three vertices of the
-// triangle (barycentric weights): the exitance M per vertex is that power over a third of the
-// area of the vertex's triangles. Each sample of the truth is an independent batch of photons
-// (N = 32 x vertices, within [32768, 2^21], split evenly over the lights and the environment, one
-// colour channel per photon), so the spread over samples is the exitance's standard error.
+// fifth of the weight) and, where they leave, are kept in a photon map with their power, the
+// point and the facet they crossed. Each sample of the truth is an independent batch of photons
+// (8 per gather disc of the surface, within [2^16, 2^20], split evenly over the lights and the
+// environment, one colour channel per photon), so the spread over samples is the exitance's
+// standard error; batches are traced a block of samples at a time, so that memory stays bounded.
+//
+// The exitance at a point the camera sees is the gather of truth.h: the power of the photons that
+// left within the radius r (exitance_radius_mm: a quarter of the smallest mean free path) over
+// π r². Nothing of the mesh's tessellation enters it. A photon's free path shorter than the
+// distance to the nearest triangle (DistanceBound) moves without a ray cast: the same result as
+// casting it, sooner.
 //
 // The camera sees M as radiance with the real-time display's angular distribution and texture:
 // L = ρ(x) T(cos θo) M / (π t̄), t̄ = 2 ∫ T(μ) μ dμ over [0, 1] with the paper's Schlick T, so that
 // the power leaving is M. That step is a model (as the display's is); the exitance is not. Light
 // reflected at the surface, and light other objects reflect onto it, are left out, as on the
-// real-time path.
+// real-time path. The AOV irradiance is the power per unit area entering the medium: the lights'
+// irradiance on the facet with the exact Fresnel transmittance, shadowed, and the sky's.
 #include "core/basic/basic.h"
 #include "core/error.h"
 #include "core/raytrace.h"
@@ -25,6 +32,11 @@
 #include "core/scene_stages.h"
 #include "core/translucency/technique.h"
 #include "core/translucency/translucency.h"
+#include "core/translucency/truth.h"
+
+#include <array>
+#include <cstring>
+#include <cstdlib>
 
 #include <tbb/parallel_for.h>
 #include <algorithm>
@@ -122,70 +134,289 @@ TriMesh closed_mesh(const TriMesh& m, const std::string& what, int& filled) {
     return out;
 }
 
+// The distance from q to the triangle (a, b, c).
+float triangle_distance(vec3 q, vec3 a, vec3 b, vec3 c) {
+    // Ericson's closest point on a triangle, by the Voronoi regions of its vertices, edges and face.
+    const vec3 ab = b - a, ac = c - a, ap = q - a;
+    const float d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+    if (d1 <= 0.f && d2 <= 0.f) return glm::length(q - a);
+    const vec3 bp = q - b;
+    const float d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
+    if (d3 >= 0.f && d4 <= d3) return glm::length(q - b);
+    const float vc = d1 * d4 - d3 * d2;
+    if (vc <= 0.f && d1 >= 0.f && d3 <= 0.f) return glm::length(q - (a + ab * (d1 / (d1 - d3))));
+    const vec3 cp = q - c;
+    const float d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
+    if (d6 >= 0.f && d5 <= d6) return glm::length(q - c);
+    const float vb = d5 * d2 - d1 * d6;
+    if (vb <= 0.f && d2 >= 0.f && d6 <= 0.f) return glm::length(q - (a + ac * (d2 / (d2 - d6))));
+    const float va = d3 * d6 - d5 * d4;
+    if (va <= 0.f && (d4 - d3) >= 0.f && (d5 - d6) >= 0.f) return glm::length(q - (b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)))));
+    const float den = 1.f / (va + vb + vc);
+    return glm::length(q - (a + ab * (vb * den) + ac * (vc * den)));
+}
+
+// The mean curvature of each triangle, world units: H = tr(S) / 2, S the shape operator of the
+// normals the mesh interpolates (dN = S dP along the triangle's edges, in its plane), positive where
+// the outward normals spread (a convex bump). 0 for a mesh without normals.
+std::vector<float> facet_mean_curvature(const TriMesh& m, const mat4& to_world) {
+    std::vector<float> H(m.triangle_count(), 0.f);
+    if (m.normal.size() != m.vertex_count()) return H;
+    const glm::mat3 nm = glm::transpose(glm::inverse(glm::mat3(to_world)));
+    for (size_t f = 0; f < m.triangle_count(); ++f) {
+        const uint32_t i0 = m.index[3 * f], i1 = m.index[3 * f + 1], i2 = m.index[3 * f + 2];
+        const vec3 p0 = vec3(to_world * vec4(m.position[i0], 1.f)), p1 = vec3(to_world * vec4(m.position[i1], 1.f)), p2 = vec3(to_world * vec4(m.position[i2], 1.f));
+        const vec3 e1 = p1 - p0, e2 = p2 - p0;
+        vec3 ng = glm::cross(e1, e2);
+        const float len = glm::length(ng);
+        if (!(len > 0.f)) continue;
+        ng /= len;
+        vec3 n0 = nm * m.normal[i0], n1 = nm * m.normal[i1], n2 = nm * m.normal[i2];
+        if (!(glm::dot(n0, n0) > 0.f) || !(glm::dot(n1, n1) > 0.f) || !(glm::dot(n2, n2) > 0.f)) continue;
+        n0 = glm::normalize(n0), n1 = glm::normalize(n1), n2 = glm::normalize(n2);
+        const float orient = glm::dot(n0 + n1 + n2, ng) < 0.f ? -1.f : 1.f;  // normals facing out as the winding, or not
+        // In the triangle's plane: the edges' coordinates and the normals' changes along them.
+        const vec3 t = glm::normalize(e1), b = glm::cross(ng, t);
+        const glm::mat2 P(glm::dot(e1, t), glm::dot(e1, b), glm::dot(e2, t), glm::dot(e2, b));  // columns: the edges
+        const vec3 d1 = (n1 - n0) * orient, d2 = (n2 - n0) * orient;
+        const glm::mat2 D(glm::dot(d1, t), glm::dot(d1, b), glm::dot(d2, t), glm::dot(d2, b));
+        const float det = glm::determinant(P);
+        if (!(std::fabs(det) > 0.f)) continue;
+        const glm::mat2 S = D * glm::inverse(P);
+        H[f] = 0.5f * (S[0][0] + S[1][1]);
+    }
+    return H;
+}
+
+// Per sample, per channel: the photons' exits (those the events do not account for) and their
+// scattering events near the surface.
+struct Batch {
+    std::array<CellMap<PhotonExit>, 3> exits;      // cells of 2 r_c
+    std::array<CellMap<ScatterVertex>, 3> events;  // cells of 2 r_c
+};
+
 class TranslucentTruth final : public TruthMaterial {
 public:
-    TranslucentTruth(std::shared_ptr<const TriMesh> mesh, mat4 to_world, Settings s, double mm_per_world, std::optional<Image> map)
+    TranslucentTruth(std::shared_ptr<const TriMesh> mesh, mat4 to_world, Settings s, double mm_per_world, std::optional<Image> map, dvec3 radius_mm)
         : mesh_(std::move(mesh)), to_world_(to_world), from_world_(glm::inverse(to_world)), s_(std::move(s)), mm_per_world_(mm_per_world),
           map_(std::move(map)) {
         t_bar_ = diffuse_transmittance(s_.medium.eta);
-        // A third of each vertex's triangles' world area.
-        area_.assign(mesh_->vertex_count(), 0.0);
-        for (size_t f = 0; f < mesh_->triangle_count(); ++f) {
-            const uint32_t a = mesh_->index[3 * f], b = mesh_->index[3 * f + 1], c = mesh_->index[3 * f + 2];
-            const vec3 pa = vec3(to_world_ * vec4(mesh_->position[a], 1.f)), pb = vec3(to_world_ * vec4(mesh_->position[b], 1.f)),
-                       pc = vec3(to_world_ * vec4(mesh_->position[c], 1.f));
-            const double third = double(glm::length(glm::cross(pb - pa, pc - pa))) / 6.0;
-            area_[a] += third, area_[b] += third, area_[c] += third;
+        lo_ = vec3(1e30f), hi_ = vec3(-1e30f);
+        for (const vec3& q : mesh_->position) {
+            const vec3 w = vec3(to_world_ * vec4(q, 1.f));
+            lo_ = glm::min(lo_, w), hi_ = glm::max(hi_, w);
         }
+        double area = 0.0;  // world units²
+        for (size_t f = 0; f < mesh_->triangle_count(); ++f) {
+            const vec3 pa = vec3(to_world_ * vec4(mesh_->position[mesh_->index[3 * f]], 1.f)), pb = vec3(to_world_ * vec4(mesh_->position[mesh_->index[3 * f + 1]], 1.f)),
+                       pc = vec3(to_world_ * vec4(mesh_->position[mesh_->index[3 * f + 2]], 1.f));
+            area += 0.5 * double(glm::length(glm::cross(pb - pa, pc - pa)));
+        }
+        mean_curvature_ = facet_mean_curvature(*mesh_, to_world_);
+        double smallest = double(glm::length(hi_ - lo_));  // mean free path, world units
+        for (int c = 0; c < 3; ++c) {
+            radius_[c] = float(radius_mm[c] / mm_per_world_);
+            disc_[c] = std::numbers::pi * double(radius_[c]) * double(radius_[c]);
+            ball_[c] = 4.0 / 3.0 * disc_[c] * double(radius_[c]);
+            sigma_t_[c] = (s_.medium.sigma_s[c] + s_.medium.sigma_a[c]) * mm_per_world_;
+            // Events deeper than kDepth mean free paths are not kept: the light they send straight
+            // out is below e^-kDepth of it.
+            depth_[c] = float(sigma_t_[c] > 0.0 ? kDepth / sigma_t_[c] : 3.4e38);
+            if (sigma_t_[c] > 0.0) smallest = std::min(smallest, 1.0 / sigma_t_[c]);
+        }
+        longest_ = glm::length(hi_ - lo_) * 1.01f;
+        // Photons per sample: kPhotonsPerPatch per square of the smallest mean free path's side of
+        // the surface, within [2^14, 2^20].
+        photons_ = int(std::clamp(photons_per_patch() * area / (smallest * smallest), double(1 << 14), double(1 << 20)));
     }
+
+    int photons_per_sample() const { return photons_; }
+    dvec3 radius_mm() const { return dvec3(radius_[0], radius_[1], radius_[2]) * mm_per_world_; }
 
     vec3 f(const TruthHit&, vec3, vec3) const override { return vec3(0.f); }
     bool emitter() const override { return true; }
+    bool medium() const override { return true; }
+    float transmittance(const TruthHit& h, vec3 wi) const override {
+        double cos_t = 0.0;
+        return float(1.0 - fresnel(std::fabs(double(glm::dot(h.ng, wi))), s_.medium.eta, cos_t));
+    }
     vec3 exitance(const TruthHit& h, uint64_t sample) const override {
         if (sample < uint64_t(first_) || sample - uint64_t(first_) >= batches_.size()) return vec3(0.f);
-        const std::vector<vec3>& M = batches_[size_t(sample - uint64_t(first_))];
-        const size_t f = size_t(h.triangle);
-        return (1.f - h.bary.x - h.bary.y) * M[mesh_->index[3 * f]] + h.bary.x * M[mesh_->index[3 * f + 1]] + h.bary.y * M[mesh_->index[3 * f + 2]];
+        const float H = h.triangle >= 0 && size_t(h.triangle) < mean_curvature_.size() ? mean_curvature_[size_t(h.triangle)] : 0.f;
+        return exitance_at(batches_[size_t(sample - uint64_t(first_))], h.p, h.ng, H, sample);
     }
     vec3 emitted(const TruthHit& h, vec3 wo, uint64_t sample) const override {
         const float T = float(fresnel_transmittance(std::fabs(glm::dot(h.n, wo)), s_.medium.eta));
         return rho(h) * T * exitance(h, sample) / float(kPi * t_bar_);
     }
 
-    // The photon batches of samples [first, spp).
+    // The photon batches of samples [first, end): each traced in chunks on every core, its exits
+    // and scattering events in the photons' order.
     void prepare(const TruthPrep& p) {
+        if (bound_.empty()) bound_ = DistanceBound(p.rt, lo_, hi_, std::getenv("MLGRID") ? std::atoi(std::getenv("MLGRID")) : 128);
         first_ = p.first;
-        batches_.assign(size_t(p.spp - p.first), {});
-        // The object's bounding sphere, world.
-        vec3 lo(1e30f), hi(-1e30f);
-        for (const vec3& q : mesh_->position) {
-            const vec3 w = vec3(to_world_ * vec4(q, 1.f));
-            lo = glm::min(lo, w), hi = glm::max(hi, w);
-        }
-        const vec3 centre = 0.5f * (lo + hi);
-        const float radius = 0.5f * glm::length(hi - lo) * 1.001f + p.eps;
-        const size_t nv = mesh_->vertex_count();
-        const int photons = int(std::clamp<size_t>(32 * nv, 32768, size_t(1) << 21));
+        seed_ = p.seed;
+        rt_ = &p.rt;
+        eps_ = p.eps;
+        batches_.clear();
+        const vec3 centre = 0.5f * (lo_ + hi_);
+        const float radius = 0.5f * glm::length(hi_ - lo_) * 1.001f + p.eps;
         const int sources = int(p.lighting.lights.size()) + (p.lighting.env_lighting ? 1 : 0);
-        constexpr int kChunks = 16;
-        for (int k = p.first; k < p.spp; ++k) {
+        const int samples = p.end - p.first;
+        batches_.resize(size_t(std::max(0, samples)));
+        if (sources == 0 || samples <= 0) return;
+        constexpr int kChunks = 64;
+        std::vector<Walks> chunks(size_t(samples) * kChunks);
+        tbb::parallel_for(0, samples * kChunks, [&](int job) {
             if (p.cancel && p.cancel->load()) return;
-            std::vector<std::vector<dvec3>> chunk(kChunks, std::vector<dvec3>(sources ? nv : 0, dvec3(0.0)));
-            if (sources > 0)
-                tbb::parallel_for(0, kChunks, [&](int c) {
-                    for (int i = c; i < photons; i += kChunks) trace_photon(p, centre, radius, sources, photons, k, i, chunk[size_t(c)]);
-                });
-            std::vector<vec3>& M = batches_[size_t(k - p.first)];
-            M.assign(nv, vec3(0.f));
-            for (size_t v = 0; v < nv; ++v) {
-                dvec3 sum(0.0);
-                for (const auto& ch : chunk) sum += ch.empty() ? dvec3(0.0) : ch[v];  // in chunk order: the same bytes at any thread count
-                if (area_[v] > 0.0) M[v] = vec3(sum / area_[v]);
+            const int k = p.first + job / kChunks, c = job % kChunks;
+            for (int i = c; i < photons_; i += kChunks) trace_photon(p, centre, radius, sources, k, i, chunks[size_t(job)]);
+        });
+        tbb::parallel_for(0, 6 * samples, [&](int job) {
+            const int j = job / 6, c = (job / 2) % 3;
+            const vec3 origin = lo_ - vec3(4.f * radius_[c]);
+            if (job % 2 == 0) {
+                std::vector<PhotonExit> exits;
+                for (int q = 0; q < kChunks; ++q) {  // in chunk order: the same bytes at any thread count
+                    auto& ch = chunks[size_t(j) * kChunks + size_t(q)].exits[size_t(c)];
+                    exits.insert(exits.end(), ch.begin(), ch.end());
+                    std::vector<PhotonExit>().swap(ch);
+                }
+                batches_[size_t(j)].exits[size_t(c)] = CellMap<PhotonExit>(std::move(exits), 2.f * radius_[c], origin);
+            } else {
+                std::vector<ScatterVertex> events;
+                for (int q = 0; q < kChunks; ++q) {
+                    auto& ch = chunks[size_t(j) * kChunks + size_t(q)].events[size_t(c)];
+                    events.insert(events.end(), ch.begin(), ch.end());
+                    std::vector<ScatterVertex>().swap(ch);
+                }
+                batches_[size_t(j)].events[size_t(c)] = CellMap<ScatterVertex>(std::move(events), 2.f * radius_[c], origin);
+            }
+        });
+    }
+
+    // The exitance at x (world; n: the facet's outward unit normal) from batch b, per channel c.
+    vec3 exitance_at(const Batch& b, vec3 x, vec3 n, float H, uint64_t sample) const {
+        // [Events] The light that leaves at x straight from a scattering event (the photons'
+        // weight w as they leave an event, isotropic; ρ_c the events' density of w per unit volume):
+        //   M_d(x) = ∫ over ω into the medium ∫_0^t_b  ρ_c(x + t ω) e^(-σt t) / (4π) T(θ) cos θ  dt dω,
+        // θ between -ω and n, t_b where ω meets the boundary, T the exact Fresnel transmittance
+        // out (0 beyond the critical angle). kDirections directions ∝ cos θ (stratified), and on
+        // each kDistances distances ∝ σt e^(-σt t) (stratified): each point z before t_b adds
+        //   T ρ_c(z) / (4 σt),
+        // ρ_c(z) the events within r_c of z over the ball's volume inside the medium (less the cap
+        // beyond x's facet plane). Nothing grows without bound as z nears x: the 1/t² of the
+        // solid angle is the t² of the volume the directions sweep.
+        TruthRng rng(seed_ ^ 0x726576657273ull, position_bits(x), sample);
+        vec3 t_axis, b_axis;
+        basis(-n, t_axis, b_axis);
+        dvec3 M(0.0);
+        const int directions = directions_per_point();
+        const int side = std::max(1, int(std::lround(std::sqrt(double(directions)))));
+        const float ox = rng.next(), oy = rng.next();  // Cranley-Patterson shift of the direction grid
+        for (int k = 0; k < directions; ++k) {
+            // A stratified point of the unit square (a side x side grid, wrapped) -> cosine-weighted.
+            const float u1 = std::fmod((float(k % side) + ox) / float(side) + 0.f, 1.f);
+            const float u2 = std::fmod((float((k / side) % side) + oy) / float(side) + rng.next() / float(side), 1.f);
+            const float rr = std::sqrt(u1), phi = 2.f * kPi * u2, cos_theta = std::sqrt(std::max(0.f, 1.f - u1));
+            if (!(cos_theta > 1e-4f)) continue;
+            const double T = transmittance_out(cos_theta);
+            if (!(T > 0.0)) continue;
+            const vec3 w = glm::normalize(rr * std::cos(phi) * t_axis + rr * std::sin(phi) * b_axis - cos_theta * n);
+            const vec3 o = x - eps_ * n;
+            const RayHit wall = rt_->intersect(o, w, 0.f, longest_);
+            const double t_b = wall.hit() ? double(wall.t) : double(longest_);
+            // The wall's plane across the ray: a point t along it lies (t_b - t) cos_w from it.
+            const double cos_w = wall.hit() ? std::fabs(double(glm::dot(glm::normalize(wall.ng), w))) : 0.0;
+            const float shift = rng.next();
+            for (int c = 0; c < 3; ++c) {
+                if (!(sigma_t_[c] > 0.0) || !(radius_[c] > 0.f)) continue;
+                double sum = 0.0;
+                for (int j = 0; j < kDistances; ++j) {
+                    const double u = (double(j) + double(shift)) / double(kDistances);
+                    const double t = -std::log(1.0 - u) / sigma_t_[c];
+                    if (!(t < t_b)) break;  // the boundary comes first: nothing beyond it sends light straight to x
+                    const vec3 z = o + float(t) * w;
+                    // The ball: r_c, or as far as the wall the ray meets (at least r_c / 4), so that
+                    // only x's facet plane cuts it as a rule.
+                    const double hw = wall.hit() ? (t_b - t) * cos_w : 3.4e38;  // distance to the wall's plane
+                    const double rd = std::clamp(hw, 0.25 * double(radius_[c]), double(radius_[c]));
+                    const float r2 = float(rd * rd);
+                    double found = 0.0;
+                    b.events[size_t(c)].for_each_near(z, float(rd), [&](const ScatterVertex& v) {
+                        const vec3 d = v.p - z;
+                        if (glm::dot(d, d) <= r2) found += double(v.weight);
+                    });
+                    if (!(found > 0.0)) continue;
+                    // Its volume inside the medium: less the cap beyond x's facet plane and, to first
+                    // order, the sliver between that plane and the surface bending away by its mean
+                    // curvature H (∫ over the cap's base, radius a, of (κ1 x² + κ2 y²) / 2 = H π a⁴ / 4);
+                    // less the cap beyond the wall where the ball still reaches it.
+                    const double h = t * double(cos_theta);  // depth below x's facet plane
+                    double volume = 4.0 / 3.0 * std::numbers::pi * rd * rd * rd;
+                    if (h < rd) {
+                        const double a2 = rd * rd - h * h;
+                        volume -= std::numbers::pi * (rd - h) * (rd - h) * (2.0 * rd + h) / 3.0 + double(H) * std::numbers::pi * a2 * a2 / 4.0;
+                    }
+                    if (hw < rd) volume -= std::numbers::pi * (rd - hw) * (rd - hw) * (2.0 * rd + hw) / 3.0;
+                    sum += found / std::max(volume, 0.05 * rd * rd * rd);
+                }
+                M[c] += T * sum / (4.0 * sigma_t_[c] * double(kDistances));
             }
         }
+        M /= double(directions);
+        // [Exits] The light that left after a reflection since its last event, or without any:
+        // the exits within r_c on a facet not turned away from n by more than 120°, their power
+        // over π r_c².
+        for (int c = 0; c < 3; ++c) {
+            const float r2 = radius_[c] * radius_[c];
+            double sum = 0.0;
+            b.exits[size_t(c)].for_each_near(x, radius_[c], [&](const PhotonExit& e) {
+                const vec3 d = e.p - x;
+                if (glm::dot(d, d) > r2) return;
+                if (float(e.n[0]) * n.x + float(e.n[1]) * n.y + float(e.n[2]) * n.z < -0.5f * 127.f) return;  // the far side of a sheet
+                sum += double(e.power);
+            });
+            if (sum > 0.0) M[c] += sum / disc_[c];
+        }
+        return vec3(M);
     }
 
 private:
+    static constexpr double kDepth = 8.0;  // events kept within this many mean free paths of the surface
+    static constexpr double kPhotonsPerPatch = 16.0;
+    static constexpr int kDirections = 16;  // directions from a point per sample
+    static constexpr int kDistances = 4;    // points on each direction per channel
+    static double photons_per_patch() {
+        static const double v = std::getenv("MLPP") ? std::atof(std::getenv("MLPP")) : kPhotonsPerPatch;
+        return v;
+    }
+    static double deep_survival() {
+        static const double v = std::getenv("MLDEEP") ? std::atof(std::getenv("MLDEEP")) : 1.0;
+        return v;
+    }
+    static int directions_per_point() {
+        static const int v = std::getenv("MLREV") ? std::atoi(std::getenv("MLREV")) : kDirections;
+        return v;
+    }
+
+    // What a chunk of photons left: per channel, their exits and their events near the surface.
+    struct Walks {
+        std::array<std::vector<PhotonExit>, 3> exits;
+        std::array<std::vector<ScatterVertex>, 3> events;
+    };
+
+    static uint64_t position_bits(vec3 x) {
+        uint32_t b[3];
+        std::memcpy(b, &x, sizeof b);
+        return (uint64_t(b[0]) * 0x9e3779b97f4a7c15ull) ^ (uint64_t(b[1]) << 21) ^ (uint64_t(b[2]) * 0xc2b2ae3d27d4eb4full);
+    }
+    // The exact Fresnel transmittance from inside at cos θ (0 beyond the critical angle).
+    double transmittance_out(float cos_theta) const {
+        double ct = 0.0;
+        return 1.0 - fresnel(double(cos_theta), 1.0 / s_.medium.eta, ct);
+    }
+
     vec3 rho(const TruthHit& h) const {
         vec3 r(1.f);
         if (map_) r = basic::sample_albedo(*map_, h.uv);
@@ -195,11 +426,12 @@ private:
     }
 
     // Photon i of batch k: its source (lights in order, then the environment), its channel
-    // (i mod 3, weight x 3), then the walk.
-    void trace_photon(const TruthPrep& p, vec3 centre, float radius, int sources, int photons, int k, int i, std::vector<dvec3>& out) const {
+    // (i mod 3, weight x 3), then the walk: its scattering events near the surface and, where it
+    // leaves after a reflection or without scattering, its exit.
+    void trace_photon(const TruthPrep& p, vec3 centre, float radius, int sources, int k, int i, Walks& out) const {
         TruthRng rng(p.seed ^ 0x7472616e736c75ull, uint64_t(p.geometry) << 32 | uint64_t(i), uint64_t(k));
         const int source = i % sources, channel = (i / sources) % 3;
-        const double per_source = double(photons) / double(sources);
+        const double per_source = double(photons_) / double(sources);
         vec3 o, d;
         double power = 0.0;
         const float u1 = rng.next(), u2 = rng.next(), u3 = rng.next(), u4 = rng.next();
@@ -245,12 +477,15 @@ private:
         weight *= 1.0 - fresnel(cos_i, eta, cos_t);
         vec3 x = o + in.t * d - n * p.eps;  // just inside
         d = refract(d, n, eta, cos_i, cos_t);
-        const double sigma_t = (s_.medium.sigma_s[channel] + s_.medium.sigma_a[channel]) * mm_per_world_;  // 1 / world unit
+        const double sigma_t = sigma_t_[channel];  // 1 / world unit
         const double albedo = (s_.medium.sigma_s[channel] + s_.medium.sigma_a[channel]) > 0.0
                                   ? s_.medium.sigma_s[channel] / (s_.medium.sigma_s[channel] + s_.medium.sigma_a[channel]) : 0.0;
+        bool scattered = false, reflected = false;  // since the last scattering event
+        bool deep = false;
         for (int step = 0; step < 1000000; ++step) {
             const double free = sigma_t > 0.0 ? -std::log(1.0 - double(rng.next())) / sigma_t : 3.4e38;
-            const RayHit h = p.rt.intersect(x, d, 0.f, float(std::min(free, 3.4e38)));
+            // Nothing within `free`: the ray cast would find nothing, so it is not cast.
+            const RayHit h = free < double(bound_.at(x)) ? RayHit{} : p.rt.intersect(x, d, 0.f, float(std::min(free, 3.4e38)));
             if (h.hit()) {
                 if (h.geometry != p.geometry) return;  // another object inside this one: absorbed there
                 vec3 m = glm::normalize(h.ng);
@@ -261,19 +496,34 @@ private:
                 if (double(rng.next()) < F) {  // reflected back in (always beyond the critical angle)
                     d = glm::normalize(d + float(2.0 * ci) * m);
                     x = at + m * p.eps;
+                    reflected = true;
                     continue;
                 }
-                // Out: the power goes to the triangle's vertices by barycentric weight.
-                const size_t f = size_t(h.triangle);
-                const double w0 = 1.0 - double(h.u) - double(h.v);
-                out[mesh_->index[3 * f]][channel] += weight * w0;
-                out[mesh_->index[3 * f + 1]][channel] += weight * double(h.u);
-                out[mesh_->index[3 * f + 2]][channel] += weight * double(h.v);
+                // Out. Straight from an event: the events account for it. Otherwise kept.
+                if (!scattered || reflected) {
+                    PhotonExit e;
+                    e.p = at;
+                    e.power = float(weight);
+                    for (int c = 0; c < 3; ++c) e.n[c] = int8_t(std::lround(-127.f * m[c]));
+                    out.exits[size_t(channel)].push_back(e);
+                }
                 return;
             }
             x += float(free) * d;
             weight *= albedo;
             if (!(weight > 0.0)) return;
+            // A scattering event: its light reaches the surface points in view of it.
+            const float bx = bound_.at(x);
+            if (bx < depth_[channel]) {
+                out.events[size_t(channel)].push_back({x, float(weight)});
+                deep = false;
+            } else if (!deep && deep_survival() < 1.0) {
+                // Deeper than the events kept: Russian roulette once, on the way down.
+                deep = true;
+                if (double(rng.next()) >= deep_survival()) return;
+                weight /= deep_survival();
+            }
+            scattered = true, reflected = false;
             if (weight < 0.2 * 3.0 * power / per_source) {  // Russian roulette below a fifth of the start
                 if (rng.next() < 0.5f) return;
                 weight *= 2.0;
@@ -288,13 +538,124 @@ private:
     double mm_per_world_;
     std::optional<Image> map_;
     double t_bar_ = 1.0;
-    std::vector<double> area_;
+    vec3 lo_{0.f}, hi_{0.f};  // the object's world bounds
+    // Per channel, world units: the radius r_c, π r_c², the ball's volume, σt, the events' depth.
+    float radius_[3] = {0.f, 0.f, 0.f};
+    double disc_[3] = {0.0, 0.0, 0.0}, ball_[3] = {0.0, 0.0, 0.0}, sigma_t_[3] = {0.0, 0.0, 0.0};
+    float depth_[3] = {0.f, 0.f, 0.f};
+    float longest_ = 1.f;  // the bounding box's diagonal
+    std::vector<float> mean_curvature_;  // per triangle, 1 / world unit (positive where the surface bends away from its outside)
+    int photons_ = 0;  // per sample
+    DistanceBound bound_;
+    const RayScene* rt_ = nullptr;  // the scene of the last prepare (it outlives the samples)
+    float eps_ = 1e-4f;
+    uint64_t seed_ = 0;
     int first_ = 0;
-    std::vector<std::vector<vec3>> batches_;
+    std::vector<Batch> batches_;  // samples [first_, first_ + size)
 };
 }  // namespace
 
-TruthObject TranslucencyTechnique::truth_object(const Scene& s, const Evaluation& ev, int object) const {
+// [SECTION] The gather's radius, the distance bound and the photon map
+dvec3 exitance_radius_mm(const Medium& medium, double bound_radius_mm) {
+    dvec3 r;
+    for (int c = 0; c < 3; ++c) {
+        const double sigma_t = medium.sigma_s[c] + medium.sigma_a[c];
+        r[c] = bound_radius_mm / 64.0;
+        if (sigma_t > 0.0) r[c] = std::min(r[c], 0.25 / sigma_t);
+        r[c] = std::max(r[c], bound_radius_mm * 0x1p-20);
+    }
+    return r;
+}
+
+DistanceBound::DistanceBound(const RayScene& rt, vec3 lo, vec3 hi, int cells_per_side) {
+    const vec3 ext = hi - lo;
+    const float longest = std::max({ext.x, ext.y, ext.z});
+    if (!(longest > 0.f) || cells_per_side < 1) return;
+    cell_ = longest / float(cells_per_side);
+    inv_cell_ = 1.f / cell_;
+    lo_ = lo - vec3(cell_);
+    n_ = glm::ivec3(glm::ceil(ext * inv_cell_)) + glm::ivec3(2);
+    n_ = glm::max(n_, glm::ivec3(1));
+    const size_t count = size_t(n_.x) * size_t(n_.y) * size_t(n_.z);
+    auto index = [&](int x, int y, int z) { return (size_t(z) * size_t(n_.y) + size_t(y)) * size_t(n_.x) + size_t(x); };
+    std::vector<uint8_t> touched(count, 0);
+    const vec3 box_hi = lo_ + vec3(n_) * cell_;
+    const float half_diagonal = 0.5f * std::sqrt(3.f) * cell_ * 1.0001f;
+    // Every point of a triangle lies in a cell whose centre is within half a diagonal of it: those
+    // cells are touched.
+    for (int g = 0; g < rt.geometry_count(); ++g) {
+        const size_t triangles = rt.triangle_count(g);
+        std::vector<std::vector<size_t>> marks(std::max<size_t>(1, std::min<size_t>(64, triangles)));
+        tbb::parallel_for(size_t(0), marks.size(), [&](size_t part) {
+            for (size_t t = part; t < triangles; t += marks.size()) {
+                vec3 a, b, c;
+                rt.triangle(g, t, a, b, c);
+                const vec3 tlo = glm::min(a, glm::min(b, c)), thi = glm::max(a, glm::max(b, c));
+                if (glm::any(glm::lessThan(thi, lo_)) || glm::any(glm::greaterThan(tlo, box_hi))) continue;
+                const glm::ivec3 c0 = glm::clamp(glm::ivec3(glm::floor((tlo - lo_) * inv_cell_)), glm::ivec3(0), n_ - 1);
+                const glm::ivec3 c1 = glm::clamp(glm::ivec3(glm::floor((thi - lo_) * inv_cell_)), glm::ivec3(0), n_ - 1);
+                const vec3 nrm = glm::cross(b - a, c - a);
+                const float len = glm::length(nrm);
+                const bool small = (c1.x - c0.x + 1) * (c1.y - c0.y + 1) * (c1.z - c0.z + 1) <= 8;
+                for (int z = c0.z; z <= c1.z; ++z)
+                    for (int y = c0.y; y <= c1.y; ++y)
+                        for (int x = c0.x; x <= c1.x; ++x) {
+                            if (!small) {
+                                const vec3 q = lo_ + (vec3(x, y, z) + 0.5f) * cell_;
+                                if (len > 0.f && std::fabs(glm::dot(q - a, nrm)) > half_diagonal * len) continue;
+                                if (triangle_distance(q, a, b, c) > half_diagonal) continue;
+                            }
+                            marks[part].push_back(index(x, y, z));
+                        }
+            }
+        });
+        for (const auto& m : marks)
+            for (size_t i : m) touched[i] = 1;
+    }
+    // The Chebyshev distance to a touched cell: two sweeps over the 26 neighbours.
+    d_.assign(count, 255);
+    for (size_t i = 0; i < count; ++i)
+        if (touched[i]) d_[i] = 0;
+    auto sweep = [&](int dir) {
+        const int zb = dir > 0 ? 0 : n_.z - 1, ze = dir > 0 ? n_.z : -1;
+        const int yb = dir > 0 ? 0 : n_.y - 1, ye = dir > 0 ? n_.y : -1;
+        const int xb = dir > 0 ? 0 : n_.x - 1, xe = dir > 0 ? n_.x : -1;
+        for (int z = zb; z != ze; z += dir)
+            for (int y = yb; y != ye; y += dir)
+                for (int x = xb; x != xe; x += dir) {
+                    uint8_t& v = d_[index(x, y, z)];
+                    if (v == 0) continue;
+                    int best = v;
+                    for (int dz = -1; dz <= 1; ++dz)
+                        for (int dy = -1; dy <= 1; ++dy)
+                            for (int dx = -1; dx <= 1; ++dx) {
+                                // Only the neighbours the sweep has passed: before (x, y, z) in its order.
+                                const int before = dir * (dz != 0 ? dz : dy != 0 ? dy : dx);
+                                if (before >= 0) continue;
+                                const int xx = x + dx, yy = y + dy, zz = z + dz;
+                                if (xx < 0 || yy < 0 || zz < 0 || xx >= n_.x || yy >= n_.y || zz >= n_.z) continue;
+                                best = std::min(best, int(d_[index(xx, yy, zz)]) + 1);
+                            }
+                    v = uint8_t(std::min(best, 255));
+                }
+    };
+    sweep(1);
+    sweep(-1);
+}
+
+float DistanceBound::at(vec3 p) const {
+    if (d_.empty()) return 0.f;
+    const vec3 f = (p - lo_) * inv_cell_;
+    if (!(f.x >= 0.f && f.y >= 0.f && f.z >= 0.f)) return 0.f;
+    const int x = int(f.x), y = int(f.y), z = int(f.z);
+    if (x >= n_.x || y >= n_.y || z >= n_.z) return 0.f;
+    const int d = d_[(size_t(z) * size_t(n_.y) + size_t(y)) * size_t(n_.x) + size_t(x)];
+    return d >= 2 ? float(d - 1) * cell_ * 0.999f : 0.f;
+}
+
+namespace {
+// The truth's object for object `object`, its estimators' radius times radius_scale.
+TruthObject make_truth_object(const Scene& s, const Evaluation& ev, int object, double radius_scale, std::shared_ptr<TranslucentTruth>* out = nullptr) {
     const SceneObject& o = s.objects.at(size_t(object));
     const auto mesh = ev.get(mesolab::stages::geometry, object);
     if (!mesh) throw std::logic_error("translucency truth: scene.geometry was not evaluated");
@@ -314,10 +675,59 @@ TruthObject TranslucencyTechnique::truth_object(const Scene& s, const Evaluation
     TruthObject t;
     t.mesh = closed;
     t.to_world = object_to_world(o);
-    auto material = std::make_shared<TranslucentTruth>(closed, t.to_world, st, o.material.get_float("mm_per_unit"), std::move(map));
+    const double mm_per_world = o.material.get_float("mm_per_unit");
+    vec3 lo(1e30f), hi(-1e30f);
+    for (const vec3& q : closed->position) {
+        const vec3 w = vec3(t.to_world * vec4(q, 1.f));
+        lo = glm::min(lo, w), hi = glm::max(hi, w);
+    }
+    const dvec3 radius_mm = exitance_radius_mm(st.medium, 0.5 * double(glm::length(hi - lo)) * mm_per_world) * radius_scale;
+    auto material = std::make_shared<TranslucentTruth>(closed, t.to_world, st, mm_per_world, std::move(map), radius_mm);
     t.material = material;
     t.prepare = [material](const TruthPrep& p) { material->prepare(p); };
+    t.samples_per_block = 1;  // a batch's events and exits: some 10 to 100 MB
+    if (out) *out = material;
     return t;
+}
+}  // namespace
+
+TruthObject TranslucencyTechnique::truth_object(const Scene& s, const Evaluation& ev, int object) const { return make_truth_object(s, ev, object, 1.0); }
+
+ExitanceEstimate truth_exitance(const Scene& s, const Evaluation& ev, int object, const std::vector<vec3>& points, const std::vector<vec3>& normals,
+                                int samples, uint64_t seed, double radius_scale) {
+    if (points.size() != normals.size()) throw std::invalid_argument("truth_exitance: as many normals as points");
+    std::shared_ptr<TranslucentTruth> material;
+    const TruthObject t = make_truth_object(s, ev, object, radius_scale, &material);
+    RayScene rt;
+    rt.add(*t.mesh, t.to_world);
+    rt.commit();
+    const Lighting lighting = make_lighting(s, ev);
+    vec3 lo(1e30f), hi(-1e30f);
+    for (const vec3& q : t.mesh->position) {
+        const vec3 w = vec3(t.to_world * vec4(q, 1.f));
+        lo = glm::min(lo, w), hi = glm::max(hi, w);
+    }
+    const float eps = std::max(1e-6f, 1e-5f * glm::length(hi - lo));
+    std::vector<dvec3> sum(points.size(), dvec3(0.0)), sum2(points.size(), dvec3(0.0));
+    for (int k = 0; k < samples; ++k) {
+        t.prepare(TruthPrep{rt, 0, lighting, k, k + 1, seed, eps, 0.5f * (lo + hi), 0.5f * glm::length(hi - lo), nullptr});
+        tbb::parallel_for(size_t(0), points.size(), [&](size_t i) {
+            TruthHit h;
+            h.p = points[i], h.ng = h.n = glm::normalize(normals[i]);
+            const dvec3 M = dvec3(material->exitance(h, uint64_t(k)));
+            sum[i] += M, sum2[i] += M * M;
+        });
+    }
+    ExitanceEstimate e;
+    const double n = double(samples);
+    for (size_t i = 0; i < points.size(); ++i) {
+        const dvec3 mean = sum[i] / n, var = n > 1.0 ? glm::max(dvec3(0.0), (sum2[i] - n * mean * mean) / (n - 1.0)) : dvec3(0.0);
+        e.mean.push_back(vec3(mean));
+        e.stderr_.push_back(vec3(glm::sqrt(var / n)));
+    }
+    e.photons_per_sample = material->photons_per_sample();
+    e.radius_mm = material->radius_mm();
+    return e;
 }
 
 std::vector<StageName> TranslucencyTechnique::truth_stages() const { return {}; }

@@ -5,9 +5,15 @@
 #include "core/render.h"
 #include "core/scene.h"
 #include "core/scene_stages.h"
+#include "core/file.h"
+#include "core/strings.h"
 #include "core/technique.h"
 
 #include <tbb/parallel_for.h>
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -50,7 +56,7 @@ vec3 TruthMaterial::sample(const TruthHit& h, vec3 wo, TruthRng& rng, vec3& wi) 
 
 // [SECTION] Setting up
 const std::vector<std::string>& truth_aovs() {
-    static const std::vector<std::string> names = {"radiance", "normal", "truth_stderr", "exitance"};
+    static const std::vector<std::string> names = {"radiance", "normal", "truth_stderr", "exitance", "irradiance"};
     return names;
 }
 
@@ -116,6 +122,7 @@ struct TruthScene {
         const uint32_t i0 = m.index[3 * f], i1 = m.index[3 * f + 1], i2 = m.index[3 * f + 2];
         const float w0 = 1.f - h.u - h.v;
         TruthHit th;
+        th.geometry = h.geometry;
         th.triangle = h.triangle;
         th.p = o + h.t * d;
         th.ng = glm::normalize(h.ng);
@@ -166,6 +173,7 @@ struct PixelSample {
     vec3 L{0.f};
     vec3 normal{0.f};
     vec3 exitance{0.f};
+    vec3 irradiance{0.f};
 };
 
 // The first ray of a pixel's paths: through the pixel's centre from the eye (orbit), or, for a
@@ -181,6 +189,34 @@ struct Primary {
     vec3 dpdx{0.f}, dpdy{0.f};
     vec3 d_x{0.f}, d_y{0.f};  // orbit: the rays through the next pixel's centre in x and in y
 };
+
+// The power per unit area entering a medium at a camera's hit (the AOV irradiance): each light's
+// irradiance on the facet, shadowed, through the material's transmittance, and the sky's by one
+// cosine-weighted direction about the facet's normal per sample (its estimate's mean is exact).
+vec3 entering_irradiance(const TruthScene& sc, const Lighting& lighting, const TruthHit& th, TruthRng& rng) {
+    const TruthMaterial& mat = *sc.objects[size_t(th.geometry)].material;
+    const vec3 p = th.p + sc.eps * th.ng;
+    vec3 E(0.f);
+    for (const Light& l : lighting.lights) {
+        vec3 wi, El;
+        l.sample(th.p, wi, El);
+        const float cos_i = glm::dot(th.ng, wi);
+        if (cos_i <= 0.f) continue;
+        const float dist = l.point ? glm::length(l.position - p) : 3.4e38f;
+        if (sc.rt.occluded(p, wi, 0.f, dist)) continue;
+        E += El * cos_i * mat.transmittance(th, wi);
+    }
+    if (lighting.env_lighting) {
+        const float u1 = rng.next(), u2 = rng.next();
+        const float r = std::sqrt(u1), phi = 2.f * kPi * u2;
+        const vec3 n = th.ng;
+        const vec3 t = std::fabs(n.x) > 0.9f ? glm::normalize(glm::cross(vec3(0.f, 1.f, 0.f), n)) : glm::normalize(glm::cross(vec3(1.f, 0.f, 0.f), n));
+        const vec3 b = glm::cross(n, t);
+        const vec3 wi = glm::normalize(r * std::cos(phi) * t + r * std::sin(phi) * b + std::sqrt(std::max(0.f, 1.f - u1)) * n);
+        if (!sc.rt.occluded(p, wi)) E += kPi * lighting.env.radiance(wi) * mat.transmittance(th, wi);  // cos θ / pdf = π
+    }
+    return E;
+}
 
 PixelSample trace(const TruthScene& sc, const Lighting& lighting, const Primary& primary, const TruthSettings& st, uint64_t pixel, uint64_t sample) {
     TruthRng rng(st.seed, pixel, sample);
@@ -217,6 +253,7 @@ PixelSample trace(const TruthScene& sc, const Lighting& lighting, const Primary&
         }
         th.depth = depth;
         const vec3 wo = depth == 0 && primary.texture ? primary.view : -d;
+        if (depth == 0 && mat.medium()) out.irradiance = entering_irradiance(sc, lighting, th, rng);
         if (mat.emitter()) {
             out.L += beta * mat.emitted(th, wo, sample);
             if (depth == 0) out.exitance = mat.exitance(th, sample);
@@ -251,25 +288,149 @@ PixelSample trace(const TruthScene& sc, const Lighting& lighting, const Primary&
 }
 }  // namespace
 
+// [SECTION] Exact sums and the build
+namespace {
+constexpr double kFixedScale = 0x1p64, kFixedMax = 0x1p62;
+}
+
+TruthFixed to_fixed(double x) {
+    if (!(x == x)) return 0;  // NaN
+    x = std::clamp(x, -kFixedMax, kFixedMax);
+    return TruthFixed(std::nearbyint(x * kFixedScale));
+}
+
+double from_fixed(TruthFixed f) { return double(f) / kFixedScale; }
+
+std::string truth_build(const std::string& version) {
+    std::string isa = "x86-64";
+#if defined(__x86_64__) || defined(__i386__)
+    __builtin_cpu_init();
+    if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq"))
+        isa += " avx512";
+    else if (__builtin_cpu_supports("avx2")) isa += " avx2";
+    else if (__builtin_cpu_supports("avx")) isa += " avx";
+    else if (__builtin_cpu_supports("sse4.2")) isa += " sse4.2";
+    else isa += " sse2";
+    if (__builtin_cpu_supports("fma")) isa += " fma";
+#else
+    isa = "non-x86";
+#endif
+#if defined(__clang__)
+    const std::string compiler = "Clang " __clang_version__;
+#elif defined(__GNUC__)
+    const std::string compiler = "GCC " __VERSION__;
+#else
+    const std::string compiler = "unknown compiler";
+#endif
+    return version + "; " + compiler + "; " + isa;
+}
+
+const char* to_string(TruthEnd e) {
+    switch (e) {
+        case TruthEnd::Samples: return "samples";
+        case TruthEnd::Noise: return "noise";
+        case TruthEnd::TimeLimit: return "time limit";
+        case TruthEnd::Cancelled: return "cancelled";
+    }
+    return "?";
+}
+
+// [SECTION] Sampling
 void check_truth_request(const Scene& s, int width, int height, const TruthSettings& st, const std::vector<std::string>& aovs) {
     if (st.spp < 1) throw InputError("--spp " + std::to_string(st.spp) + ": expected at least 1 sample per pixel");
+    if (st.first < 0 || st.first >= st.spp)
+        throw InputError("--samples " + std::to_string(st.first) + ":" + std::to_string(st.spp) + ": expected a range A:B of samples with 0 <= A < B");
+    if (st.noise != 0.0 && !(st.noise > 0.0 && st.noise < 1.0))
+        throw InputError("--noise " + strprintf("%g", st.noise) + ": expected a relative noise between 0 and 1 (e.g. 0.01 for 1%)");
+    if (!(st.time_limit_s >= 0.0) || !std::isfinite(st.time_limit_s))
+        throw InputError("--time-limit " + strprintf("%g", st.time_limit_s) + ": expected a number of seconds, 0 or more");
     if (width < 1 || height < 1 || width > 16384 || height > 16384)
         throw InputError("frame size " + std::to_string(width) + "x" + std::to_string(height) + " is out of range (1..16384 per side)");
     for (const std::string& a : aovs)
         if (std::find(truth_aovs().begin(), truth_aovs().end(), a) == truth_aovs().end())
-            throw InputError("--aov " + a + ": the truth does not write it (it writes radiance, normal, truth_stderr, exitance)");
+            throw InputError("--aov " + a + ": the truth does not write it (it writes radiance, normal, truth_stderr, exitance, irradiance)");
     for (size_t i = 0; i < s.objects.size(); ++i) technique_with_truth(s, i);
 }
 
+namespace {
+std::string duration_text(double s) {
+    if (s < 90.0) return strprintf("%.0f s", std::max(1.0, s));
+    if (s < 5400.0) return strprintf("%.0f min", s / 60.0);
+    return strprintf("%.1f h", s / 3600.0);
+}
+
+// One pass over the pixels for the samples [k0, k1): each pixel's samples summed exactly and added
+// to the accumulator. Rows stop early when `cancel` is set (the block is then incomplete).
+void sample_block(const TruthScene& sc, const Lighting& lighting, const FrameCamera& cam, const GBuffer& gb, const std::vector<float>& lift,
+                  const TruthSettings& st, int k0, int k1, TruthAccumulator& a, const std::atomic<bool>* cancel) {
+    const int width = a.width, height = a.height;
+    const bool media = !a.exitance.empty();
+    tbb::parallel_for(0, height, [&](int y) {
+        if (cancel && cancel->load()) return;
+        for (int x = 0; x < width; ++x) {
+            const uint64_t pixel = uint64_t(y) * uint64_t(width) + uint64_t(x);
+            const size_t o = 3 * size_t(pixel);
+            Primary primary;
+            if (cam.texture_mode) {
+                const size_t g = gb.index(x, y);
+                if (gb.object[g] < 0) continue;  // no surface at this texel: left 0, as the real-time paths leave it
+                const vec3 n = gb.normal[g];
+                primary.texture = true;
+                primary.view = cam.view_dir;
+                primary.o = gb.position[g] + lift[size_t(gb.object[g])] * n;
+                primary.d = -n;
+                // The footprint: central differences of the drawn positions (one-sided at the object's edge).
+                auto step = [&](int dx, int dy) {
+                    auto at = [&](int xx, int yy) -> const vec3* {
+                        if (xx < 0 || yy < 0 || xx >= width || yy >= height || gb.object[gb.index(xx, yy)] != gb.object[g]) return nullptr;
+                        return &gb.position[gb.index(xx, yy)];
+                    };
+                    const vec3 *p = at(x - dx, y - dy), *q = at(x + dx, y + dy);
+                    if (p && q) return 0.5f * (*q - *p);
+                    if (q) return *q - gb.position[g];
+                    if (p) return gb.position[g] - *p;
+                    return vec3(0.f);
+                };
+                primary.dpdx = step(1, 0), primary.dpdy = step(0, 1);
+            } else {
+                primary.o = cam.eye;
+                primary.d = cam.ray_dir(x, y);
+                primary.d_x = cam.ray_dir_at(float(x) + 1.5f, float(y) + 0.5f);
+                primary.d_y = cam.ray_dir_at(float(x) + 0.5f, float(y) + 1.5f);
+            }
+            TruthFixed sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0}, exit[3] = {0, 0, 0}, irr[3] = {0, 0, 0};
+            for (int k = k0; k < k1; ++k) {
+                const PixelSample ps = trace(sc, lighting, primary, st, pixel, uint64_t(k));
+                for (int c = 0; c < 3; ++c) {
+                    const double L = ps.L[c];
+                    sum[c] += to_fixed(L), sum2[c] += to_fixed(L * L);
+                    if (media) exit[c] += to_fixed(ps.exitance[c]), irr[c] += to_fixed(ps.irradiance[c]);
+                    if (k == a.first) a.normal[o + size_t(c)] = ps.normal[c];
+                }
+            }
+            for (int c = 0; c < 3; ++c) {
+                a.sum[o + size_t(c)] += sum[c], a.sum2[o + size_t(c)] += sum2[c];
+                if (media) a.exitance[o + size_t(c)] += exit[c], a.irradiance[o + size_t(c)] += irr[c];
+            }
+        }
+    });
+}
+}  // namespace
+
 TruthAccumulator accumulate_truth(const Scene& s, const Evaluation& ev, int width, int height, const TruthSettings& st, const TruthAccumulator* from,
                                   const std::function<void(const std::string&, double)>& progress, const std::atomic<bool>* cancel) {
+    using clock = std::chrono::steady_clock;
     check_truth_request(s, width, height, st, {});
     TruthScene sc;
     Bounds all{vec3(1e30f), vec3(-1e30f)};
+    bool media = false;
+    int block = kTruthBlock;
     for (size_t i = 0; i < s.objects.size(); ++i) {
         const Technique& t = technique_with_truth(s, i);
         TruthObject ob = t.truth_object(s, ev, int(i));
         if (!ob.mesh || !ob.material) throw std::logic_error("truth: technique " + t.name() + " gave no mesh or material for object " + std::to_string(i));
+        media = media || ob.material->medium();
+        block = std::clamp(ob.samples_per_block, 1, block);
         sc.rt.add(*ob.mesh, ob.to_world);
         sc.normal_to_world.push_back(glm::transpose(glm::inverse(glm::mat3(ob.to_world))));
         const Bounds b = bounds(*ob.mesh);
@@ -301,100 +462,272 @@ TruthAccumulator accumulate_truth(const Scene& s, const Evaluation& ev, int widt
         rasterize(items, cam.raster, gb);
     }
     TruthAccumulator a;
-    if (from && from->continues(width, height, st.seed, st.spp)) a = *from;
-    else {
-        a.width = width, a.height = height, a.seed = st.seed, a.spp = 0;
+    if (from && from->continues(width, height, st.seed, st.first, st.spp) && !from->exitance.empty() == media) {
+        a = *from;
+    } else {
+        a.width = width, a.height = height, a.seed = st.seed, a.first = a.spp = st.first;
         const size_t n = size_t(width) * size_t(height) * 3;
-        a.sum.assign(n, 0.0), a.sum2.assign(n, 0.0), a.exitance.assign(n, 0.0), a.normal.assign(n, 0.f);
+        a.sum.assign(n, 0), a.sum2.assign(n, 0), a.normal.assign(n, 0.f);
+        if (media) a.exitance.assign(n, 0), a.irradiance.assign(n, 0);
     }
-    const int first = a.spp;
-    for (size_t i = 0; i < sc.objects.size(); ++i)
-        if (sc.objects[i].prepare && first < st.spp) {
-            if (progress) progress("truth: " + s.objects[i].name, 0.0);
-            sc.objects[i].prepare(TruthPrep{sc.rt, int(i), lighting, first, st.spp, st.seed, sc.eps, 0.5f * (all.lo + all.hi),
-                                            0.5f * glm::length(all.hi - all.lo), cancel});
+    a.ended = TruthEnd::Samples;
+    a.seconds = 0;
+    const auto t0 = clock::now();
+    const int start = a.spp;
+    auto noise_reached = [&] { return st.noise > 0.0 && a.samples() >= kNoiseMinSpp && truth_noise_rel(a) <= st.noise; };
+    if (noise_reached()) a.ended = TruthEnd::Noise;
+    while (a.ended == TruthEnd::Samples && a.spp < st.spp) {
+        if (cancel && cancel->load()) {
+            a.ended = TruthEnd::Cancelled;
+            break;
         }
-    std::atomic<int> rows_done{0};
-    std::mutex progress_mutex;
-    tbb::parallel_for(0, height, [&](int y) {
-        if (cancel && cancel->load()) return;
-        for (int x = 0; x < width; ++x) {
-            const uint64_t pixel = uint64_t(y) * uint64_t(width) + uint64_t(x);
-            const size_t o = 3 * size_t(pixel);
-            Primary primary;
-            if (cam.texture_mode) {
-                const size_t g = gb.index(x, y);
-                if (gb.object[g] < 0) continue;  // no surface at this texel: left 0, as the real-time paths leave it
-                const vec3 n = gb.normal[g];
-                primary.texture = true;
-                primary.view = cam.view_dir;
-                primary.o = gb.position[g] + lift[size_t(gb.object[g])] * n;
-                primary.d = -n;
-                // The footprint: central differences of the drawn positions (one-sided at the object's edge).
-                auto step = [&](int dx, int dy) {
-                    auto at = [&](int xx, int yy) -> const vec3* {
-                        if (xx < 0 || yy < 0 || xx >= width || yy >= height || gb.object[gb.index(xx, yy)] != gb.object[g]) return nullptr;
-                        return &gb.position[gb.index(xx, yy)];
-                    };
-                    const vec3 *a = at(x - dx, y - dy), *b = at(x + dx, y + dy);
-                    if (a && b) return 0.5f * (*b - *a);
-                    if (b) return *b - gb.position[g];
-                    if (a) return gb.position[g] - *a;
-                    return vec3(0.f);
-                };
-                primary.dpdx = step(1, 0), primary.dpdy = step(0, 1);
-            } else {
-                primary.o = cam.eye;
-                primary.d = cam.ray_dir(x, y);
-                primary.d_x = cam.ray_dir_at(float(x) + 1.5f, float(y) + 0.5f);
-                primary.d_y = cam.ray_dir_at(float(x) + 0.5f, float(y) + 1.5f);
+        const int k0 = a.spp, k1 = std::min(st.spp, (k0 / block + 1) * block);
+        for (size_t i = 0; i < sc.objects.size(); ++i)
+            if (sc.objects[i].prepare)
+                sc.objects[i].prepare(TruthPrep{sc.rt, int(i), lighting, k0, k1, st.seed, sc.eps, 0.5f * (all.lo + all.hi),
+                                                0.5f * glm::length(all.hi - all.lo), cancel});
+        sample_block(sc, lighting, cam, gb, lift, st, k0, k1, a, cancel);
+        if (cancel && cancel->load()) {
+            a.ended = TruthEnd::Cancelled;
+            break;
+        }
+        a.spp = k1;
+        const double elapsed = std::chrono::duration<double>(clock::now() - t0).count();
+        const double per_sample = elapsed / double(a.spp - start);
+        const double noise = st.noise > 0.0 || progress ? truth_noise_rel(a) : 0.0;
+        if (st.noise > 0.0 && a.samples() >= kNoiseMinSpp && noise <= st.noise) a.ended = TruthEnd::Noise;
+        else if (st.time_limit_s > 0.0 && elapsed >= st.time_limit_s && a.spp < st.spp) a.ended = TruthEnd::TimeLimit;
+        if (progress) {
+            // Samples still to go: to the end of the range, or, for a noise target, what the
+            // estimator's 1/√n law asks for from the noise reached (capped by the range).
+            double left = double(st.spp - a.spp), fraction = double(a.spp - a.first) / double(st.spp - a.first);
+            std::string what = "truth: " + std::to_string(a.samples()) + " spp, noise " + strprintf("%.2f%%", 100.0 * noise);
+            if (st.noise > 0.0 && noise > 0.0) {
+                const double needed = std::max(double(kNoiseMinSpp), double(a.samples()) * (noise / st.noise) * (noise / st.noise));
+                left = std::min(left, std::max(0.0, needed - double(a.samples())));
+                fraction = std::max(fraction, double(a.samples()) / (double(a.samples()) + left));
+                what += " (target " + strprintf("%.2f%%", 100.0 * st.noise) + ")";
             }
-            for (int k = first; k < st.spp; ++k) {
-                const PixelSample ps = trace(sc, lighting, primary, st, pixel, uint64_t(k));
-                for (int c = 0; c < 3; ++c) {
-                    const double L = ps.L[c];
-                    a.sum[o + size_t(c)] += L, a.sum2[o + size_t(c)] += L * L;
-                    a.exitance[o + size_t(c)] += ps.exitance[c];
-                    if (k == 0) a.normal[o + size_t(c)] = ps.normal[c];
-                }
-            }
+            if (st.time_limit_s > 0.0) fraction = std::max(fraction, elapsed / st.time_limit_s);
+            double eta = left * per_sample;
+            if (st.time_limit_s > 0.0) eta = std::min(eta, std::max(0.0, st.time_limit_s - elapsed));
+            if (a.ended == TruthEnd::Samples && a.spp < st.spp) what += ", about " + duration_text(eta) + " left";
+            progress(what, a.ended != TruthEnd::Samples || a.spp >= st.spp ? 1.0 : std::min(1.0, fraction));
         }
-        const int done = ++rows_done;
-        if (progress && (done % 8 == 0 || done == height)) {
-            std::lock_guard<std::mutex> lock(progress_mutex);
-            progress("truth", double(done) / double(height));
-        }
-    });
-    a.spp = st.spp;
+    }
+    a.seconds = std::chrono::duration<double>(clock::now() - t0).count();
     return a;
 }
 
 Frame truth_frame(const TruthAccumulator& a) {
     std::vector<AovDecl> layout = {{"radiance", 3, ""}, {"normal", 3, ""}, {"truth_stderr", 3, "Standard error of the truth's radiance per pixel"},
-                                   {"exitance", 3, "Subsurface exitance where a translucent object is seen (0 elsewhere)"}};
+                                   {"exitance", 3, "Subsurface exitance where a translucent object is seen (0 elsewhere)"},
+                                   {"irradiance", 3, "Power per unit area entering a translucent object where one is seen (0 elsewhere)"}};
     Frame f = make_frame(layout, a.width, a.height);
-    const double n = double(a.spp);
-    for (int y = 0; y < a.height; ++y)
+    const double n = double(a.samples());
+    if (!(n > 0.0)) return f;
+    Image& radiance = f.aov("radiance");
+    Image& normal = f.aov("normal");
+    Image& stderr_ = f.aov("truth_stderr");
+    Image& exitance = f.aov("exitance");
+    Image& irradiance = f.aov("irradiance");
+    tbb::parallel_for(0, a.height, [&](int y) {
         for (int x = 0; x < a.width; ++x) {
             const size_t o = 3 * (size_t(y) * size_t(a.width) + size_t(x));
-            float* r = f.aov("radiance").at(x, y);
-            float* nn = f.aov("normal").at(x, y);
-            float* e = f.aov("truth_stderr").at(x, y);
-            float* m = f.aov("exitance").at(x, y);
+            float* r = radiance.at(x, y);
+            float* nn = normal.at(x, y);
+            float* e = stderr_.at(x, y);
             for (int c = 0; c < 3; ++c) {
-                const double mean = a.sum[o + size_t(c)] / n;
-                const double var = n > 1.0 ? std::max(0.0, (a.sum2[o + size_t(c)] - n * mean * mean) / (n - 1.0)) : 0.0;
+                const double mean = from_fixed(a.sum[o + size_t(c)]) / n;
+                const double var = n > 1.0 ? std::max(0.0, (from_fixed(a.sum2[o + size_t(c)]) - n * mean * mean) / (n - 1.0)) : 0.0;
                 r[c] = float(mean), nn[c] = a.normal[o + size_t(c)], e[c] = float(std::sqrt(var / n));
-                m[c] = a.exitance.empty() ? 0.f : float(a.exitance[o + size_t(c)] / n);
+                if (!a.exitance.empty()) {
+                    exitance.at(x, y)[c] = float(from_fixed(a.exitance[o + size_t(c)]) / n);
+                    irradiance.at(x, y)[c] = float(from_fixed(a.irradiance[o + size_t(c)]) / n);
+                }
             }
         }
+    });
     return f;
+}
+
+double truth_noise_rel(const TruthAccumulator& a) {
+    const double n = double(a.samples());
+    if (!(n > 1.0)) return 0.0;
+    const size_t pixels = size_t(a.width) * size_t(a.height);
+    struct Part {
+        double sum = 0, se2 = 0;
+        size_t count = 0;
+    };
+    // Rows summed in order, whatever the threads: the same figure every time.
+    std::vector<Part> rows(size_t(a.height));
+    tbb::parallel_for(0, a.height, [&](int y) {
+        Part& p = rows[size_t(y)];
+        for (size_t i = size_t(y) * size_t(a.width); i < size_t(y + 1) * size_t(a.width) && i < pixels; ++i) {
+            const float* nn = &a.normal[3 * i];
+            if (nn[0] == 0.f && nn[1] == 0.f && nn[2] == 0.f) continue;  // background
+            for (int c = 0; c < 3; ++c) {
+                const double mean = from_fixed(a.sum[3 * i + size_t(c)]) / n;
+                const double var = std::max(0.0, (from_fixed(a.sum2[3 * i + size_t(c)]) - n * mean * mean) / (n - 1.0));
+                // As truth_frame rounds them: the same figure as truth_noise_rel(truth_frame(a)).
+                const double m = double(float(mean)), se = double(float(std::sqrt(var / n)));
+                p.sum += m, p.se2 += se * se;
+            }
+            p.count += 3;
+        }
+    });
+    Part t;
+    for (const Part& p : rows) t.sum += p.sum, t.se2 += p.se2, t.count += p.count;
+    if (!t.count || !(t.sum > 0.0)) return 0.0;
+    return std::sqrt(t.se2 / double(t.count)) / (t.sum / double(t.count));
 }
 
 Frame render_truth(const Scene& s, const Evaluation& ev, int width, int height, const TruthSettings& st, const std::vector<std::string>& aovs,
                    const std::function<void(const std::string&, double)>& progress, const std::atomic<bool>* cancel) {
     check_truth_request(s, width, height, st, aovs);
-    return truth_frame(accumulate_truth(s, ev, width, height, st, nullptr, progress, cancel));
+    const TruthAccumulator a = accumulate_truth(s, ev, width, height, st, nullptr, progress, cancel);
+    if (a.ended == TruthEnd::Cancelled) throw Cancelled();
+    return truth_frame(a);
+}
+
+// [SECTION] Partial truths
+namespace {
+constexpr char kPartMagic[8] = {'M', 'L', 'T', 'P', 'A', 'R', 'T', '1'};
+
+void put_string(std::string& out, const std::string& v) {
+    const uint64_t n = v.size();
+    out.append(reinterpret_cast<const char*>(&n), sizeof n);
+    out += v;
+}
+template <class T>
+void put(std::string& out, const T& v) {
+    out.append(reinterpret_cast<const char*>(&v), sizeof v);
+}
+template <class T>
+void put_vector(std::string& out, const std::vector<T>& v) {
+    put(out, uint64_t(v.size()));
+    out.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+}
+
+struct Reader {
+    std::ifstream in;
+    std::string path;
+    uint64_t left = 0;  // bytes left in the file
+    [[noreturn]] void fail(const std::string& what) const { throw InputError(path + ": " + what); }
+    void bytes(void* p, uint64_t n, const char* what) {
+        if (n > left || !in.read(static_cast<char*>(p), std::streamsize(n))) fail(std::string("truncated (in its ") + what + ")");
+        left -= n;
+    }
+    template <class T>
+    T get(const char* what) {
+        T v;
+        bytes(&v, sizeof v, what);
+        return v;
+    }
+    std::string string(const char* what) {
+        const uint64_t n = get<uint64_t>(what);
+        if (n > 1 << 20 || n > left) fail(std::string("truncated or not a partial truth (a ") + what + " of " + std::to_string(n) + " bytes)");
+        std::string v(n, '\0');
+        bytes(v.data(), n, what);
+        return v;
+    }
+    template <class T>
+    void vector(std::vector<T>& v, uint64_t expected, const char* what) {
+        const uint64_t n = get<uint64_t>(what);
+        if (n != expected) fail(std::string("its ") + what + " holds " + std::to_string(n) + " values where its size asks for " + std::to_string(expected));
+        if (n * sizeof(T) > left) fail(std::string("truncated (in its ") + what + ")");
+        v.resize(n);
+        bytes(v.data(), n * sizeof(T), what);
+    }
+};
+}  // namespace
+
+void write_truth_part(const std::string& path, const TruthPart& p) {
+    const TruthAccumulator& a = p.sums;
+    std::string out(kPartMagic, 8);
+    put_string(out, p.scene);
+    put_string(out, p.key);
+    put_string(out, p.build);
+    put(out, int32_t(a.width)), put(out, int32_t(a.height)), put(out, int32_t(a.first)), put(out, int32_t(a.spp)), put(out, a.seed);
+    put_vector(out, a.sum), put_vector(out, a.sum2), put_vector(out, a.exitance), put_vector(out, a.irradiance), put_vector(out, a.normal);
+    write_text_atomic(path, out);
+}
+
+TruthPart read_truth_part(const std::string& path) {
+    Reader r;
+    r.path = path;
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    if (ec) throw InputError(path + ": cannot read it (" + ec.message() + ")");
+    r.left = size;
+    r.in.open(path, std::ios::binary);
+    if (!r.in) throw InputError(path + ": cannot open it");
+    char magic[8];
+    if (size < 8 || !r.in.read(magic, 8) || std::memcmp(magic, kPartMagic, 8) != 0)
+        r.fail("not a partial truth (written by `mesolab capture --backend truth --samples A:B`)");
+    r.left -= 8;
+    TruthPart p;
+    p.scene = r.string("scene name");
+    p.key = r.string("key");
+    p.build = r.string("build");
+    TruthAccumulator& a = p.sums;
+    a.width = r.get<int32_t>("size"), a.height = r.get<int32_t>("size");
+    a.first = r.get<int32_t>("sample range"), a.spp = r.get<int32_t>("sample range");
+    a.seed = r.get<uint64_t>("seed");
+    if (a.width < 1 || a.height < 1 || a.width > 16384 || a.height > 16384)
+        r.fail("its size " + std::to_string(a.width) + "x" + std::to_string(a.height) + " is out of range");
+    if (a.first < 0 || a.spp <= a.first) r.fail("its sample range " + std::to_string(a.first) + ":" + std::to_string(a.spp) + " is empty");
+    const uint64_t n = uint64_t(a.width) * uint64_t(a.height) * 3;
+    r.vector(a.sum, n, "sums");
+    r.vector(a.sum2, n, "sums of squares");
+    const uint64_t m = r.get<uint64_t>("exitance");
+    if (m != 0 && m != n) r.fail("its exitance holds " + std::to_string(m) + " values where its size asks for " + std::to_string(n));
+    if (m * sizeof(TruthFixed) > r.left) r.fail("truncated (in its exitance)");
+    a.exitance.resize(m);
+    r.bytes(a.exitance.data(), m * sizeof(TruthFixed), "exitance");
+    r.vector(a.irradiance, m, "irradiance");
+    r.vector(a.normal, n, "normals");
+    if (r.left != 0) r.fail(std::to_string(r.left) + " bytes follow the end of the partial truth");
+    return p;
+}
+
+TruthPart merge_truth_parts(const std::vector<std::pair<std::string, TruthPart>>& named) {
+    if (named.empty()) throw InputError("truth merge: no partial truths given");
+    std::vector<const std::pair<std::string, TruthPart>*> order;
+    for (const auto& p : named) order.push_back(&p);
+    std::stable_sort(order.begin(), order.end(), [](auto* x, auto* y) { return x->second.sums.first < y->second.sums.first; });
+    const auto& [name0, p0] = *order.front();
+    auto range = [](const TruthPart& p) { return "samples " + std::to_string(p.sums.first) + ":" + std::to_string(p.sums.spp); };
+    for (size_t i = 1; i < order.size(); ++i) {
+        const auto& [name, p] = *order[i];
+        auto differ = [&](const std::string& what, const std::string& a, const std::string& b) {
+            throw InputError(name + ": " + what + " differs from " + name0 + "'s (" + b + " against " + a + "): the parts are not of one truth");
+        };
+        if (p.scene != p0.scene) differ("the scene", p0.scene, p.scene);
+        if (p.build != p0.build)
+            differ("the build", p0.build, p.build + "; parts made by another build or instruction set round some rays differently");
+        if (p.sums.width != p0.sums.width || p.sums.height != p0.sums.height)
+            differ("the size", std::to_string(p0.sums.width) + "x" + std::to_string(p0.sums.height), std::to_string(p.sums.width) + "x" + std::to_string(p.sums.height));
+        if (p.sums.seed != p0.sums.seed) differ("the seed", std::to_string(p0.sums.seed), std::to_string(p.sums.seed));
+        if (p.key != p0.key) differ("what the truth reads (its key)", p0.key, p.key + "; another scene description, size or seed");
+        if (p.sums.exitance.empty() != p0.sums.exitance.empty()) differ("the AOVs summed", "", "");
+        const auto& [prev_name, prev] = *order[i - 1];
+        if (p.sums.first < prev.sums.spp)
+            throw InputError(name + " (" + range(p) + ") overlaps " + prev_name + " (" + range(prev) + "): each sample may be merged once");
+        if (p.sums.first > prev.sums.spp)
+            throw InputError(prev_name + " (" + range(prev) + ") and " + name + " (" + range(p) + ") leave a gap: samples " +
+                             std::to_string(prev.sums.spp) + ":" + std::to_string(p.sums.first) + " are missing");
+    }
+    TruthPart out = p0;
+    TruthAccumulator& a = out.sums;
+    for (size_t i = 1; i < order.size(); ++i) {
+        const TruthAccumulator& b = order[i]->second.sums;
+        for (size_t j = 0; j < a.sum.size(); ++j) a.sum[j] += b.sum[j], a.sum2[j] += b.sum2[j];
+        for (size_t j = 0; j < a.exitance.size(); ++j) a.exitance[j] += b.exitance[j], a.irradiance[j] += b.irradiance[j];
+        a.spp = b.spp;
+    }
+    a.ended = TruthEnd::Samples;
+    return out;
 }
 
 TruthComparison compare_to_truth(const Frame& rt, const Frame& truth, const TruthSettings& st) {

@@ -64,6 +64,7 @@ struct TruthHit {
     vec3 n{0.f};   // shading normal, unit, on the side of wo
     vec3 ng{0.f};  // geometric normal, unit, on the side of wo
     vec2 uv{0.f};
+    int geometry = -1;  // the object's index in the truth's scene
     int triangle = -1;
     int depth = 0;  // bounces before this hit: 0 where the camera sees it
     vec2 bary{0.f}; // barycentrics of the triangle's vertices 1 and 2
@@ -104,17 +105,31 @@ public:
     // The power per unit area the surface sends out by subsurface transport, before its texture
     // (the AOV `exitance`); 0 for surfaces without.
     virtual vec3 exitance(const TruthHit& /*h*/, uint64_t /*sample*/) const { return vec3(0.f); }
+    // A surface in front of a medium (a translucent object): the truth then writes, where the
+    // camera sees it, the AOVs exitance and irradiance, the power per unit area entering the medium
+    // (the lights' and the sky's irradiance through `transmittance`, shadowed, one sky direction per
+    // sample).
+    virtual bool medium() const { return false; }
+    // The fraction of the light arriving from wi (unit, world) that enters the medium: the
+    // boundary's Fresnel transmittance at the facet the hit lies on (h.ng).
+    virtual float transmittance(const TruthHit& /*h*/, vec3 /*wi*/) const { return 0.f; }
 };
+
+// Samples are rendered in blocks of at most this many (aligned on the sample index), each block's
+// photon batches or other preparation made once for all pixels; noise, time limit and progress are
+// checked between blocks.
+constexpr int kTruthBlock = 4;
 
 class RayScene;
 struct Lighting;
 // What TruthObject::prepare gets: the whole scene to trace in (its object is geometry `geometry`),
-// the lights, the samples to prepare [first, spp), the seed and the ray offset.
+// the lights, the block of samples to prepare [first, end) (what was prepared for the block before
+// may be dropped), the seed and the ray offset.
 struct TruthPrep {
     const RayScene& rt;
     int geometry = 0;
     const Lighting& lighting;
-    int first = 0, spp = 0;
+    int first = 0, end = 0;
     uint64_t seed = 0;
     float eps = 1e-4f;
     vec3 centre{0.f};   // the scene's bounding sphere
@@ -127,9 +142,11 @@ struct TruthObject {
     std::shared_ptr<const TriMesh> mesh;
     mat4 to_world{1.f};
     std::shared_ptr<const TruthMaterial> material;
-    // Work before the pixels' paths, once the scene is built (a translucent object's light
+    // Work before the pixels' paths, for each block of samples (a translucent object's light
     // tracing); none for most.
     std::function<void(const TruthPrep&)> prepare;
+    // The most samples a block may hold (what `prepare` keeps for a block is in memory at once).
+    int samples_per_block = kTruthBlock;
 };
 
 // What the truth of `s` depends on, as canonical text: the program's physical description only.
@@ -139,29 +156,65 @@ struct TruthObject {
 // accuracy knobs are not in it, so one truth serves a sweep over them. InputError as truth_stages.
 std::string truth_description(const Scene& s);
 
+// [SECTION] Exact sums
+// A truth's sums are kept exactly: each sample's value is rounded once to a multiple of 2^-64
+// (values beyond ±2^62 are clamped, a NaN counts as 0) and the multiples are added as 128-bit
+// integers. Integer addition does not depend on its order, so a truth rendered in blocks of samples,
+// in parts on several processes or machines, continued from the cache or merged in any order is
+// the same bytes as one rendered at once, for the same build and instruction set (truth_build()).
+__extension__ typedef __int128 TruthFixed;
+TruthFixed to_fixed(double x);
+double from_fixed(TruthFixed f);
+
+// The build a truth's samples come from: the program's `version`, the compiler and the instruction
+// set the path tracer runs with here (Embree's and the maths library's choice follows the CPU), e.g.
+// "0.1.0-bf44e1e; GCC 12.2.0; x86-64 avx2 fma". Two parts merge only when these are equal: another
+// build or instruction set rounds some rays differently, and the bytes would differ.
+std::string truth_build(const std::string& version);
+
 // [SECTION] Rendering
+// Why a truth stopped sampling.
+enum class TruthEnd {
+    Samples,    // it reached the samples asked for (--spp, or the end of --samples A:B)
+    Noise,      // noise_rel reached --noise
+    TimeLimit,  // --time-limit passed first (the samples done are kept)
+    Cancelled,  // stopped by the caller's flag: the samples of the block under way are not complete
+};
+const char* to_string(TruthEnd e);
+
 struct TruthSettings {
-    int spp = 64;        // samples per pixel (--spp)
+    int spp = 64;        // samples per pixel (--spp): with noise > 0, the most samples
     uint64_t seed = 1;   // --seed
     int max_depth = 64;  // bounces at most (Russian roulette ends most paths far sooner)
+    int first = 0;       // the first sample: a partial truth of samples [first, spp) (--samples A:B)
+    double noise = 0;         // > 0: sample until truth_noise_rel reaches it (--noise), from kNoiseMinSpp samples on
+    double time_limit_s = 0;  // > 0: stop after this many seconds of sampling (--time-limit)
 };
+// The fewest samples a noise target is judged on: below that the spread over samples is itself too
+// uncertain to stop on.
+constexpr int kNoiseMinSpp = 16;
 
-// The samples of a truth so far, per pixel and channel: their sum and sum of squares, summed in
-// sample order, so that continuing it to more samples gives the bytes a fresh render of as many
-// would. `normal` is the first sample's first hit (0 for the background).
+// The samples [first, spp) of a truth, per pixel and channel: exact sums (TruthFixed) of the
+// radiance and its square, of the first hit's exitance and irradiance (where a material writes
+// them; else empty), and the first hit's shading normal of sample `first` (0 for the background).
 struct TruthAccumulator {
-    int width = 0, height = 0, spp = 0;
+    int width = 0, height = 0;
+    int first = 0, spp = 0;  // samples [first, spp)
     uint64_t seed = 0;
-    std::vector<double> sum, sum2;  // 3 per pixel
-    std::vector<double> exitance;   // 3 per pixel: the sum of the first hit's exitance (TruthMaterial::exitance)
-    std::vector<float> normal;      // 3 per pixel
-    bool continues(int w, int h, uint64_t s, int target_spp) const {
-        return width == w && height == h && seed == s && spp > 0 && spp <= target_spp;
+    std::vector<TruthFixed> sum, sum2;            // 3 per pixel
+    std::vector<TruthFixed> exitance, irradiance;  // 3 per pixel, or empty
+    std::vector<float> normal;                     // 3 per pixel
+    TruthEnd ended = TruthEnd::Samples;
+    double seconds = 0;  // time spent sampling in the call that made it (not counting samples it continued)
+    int samples() const { return spp - first; }
+    bool continues(int w, int h, uint64_t s, int first_sample, int target_spp) const {
+        return width == w && height == h && seed == s && first == first_sample && spp > first && spp <= target_spp;
     }
 };
 
-// The truth's AOVs: radiance, normal (the first hit's shading normal), truth_stderr and exitance
-// (where the camera sees a translucent object: its subsurface exitance, as translucency's AOV).
+// The truth's AOVs: radiance, normal (the first hit's shading normal), truth_stderr, exitance and
+// irradiance (where the camera sees a translucent object: its subsurface exitance, and the power
+// per unit area entering it, as translucency's AOVs).
 const std::vector<std::string>& truth_aovs();
 
 // The stages the truth of `s` needs evaluated: the scene's geometry and environment map, and
@@ -169,29 +222,56 @@ const std::vector<std::string>& truth_aovs();
 // technique when one has no truth.
 std::vector<StageName> truth_stages(const Scene& s);
 
-// Renders the truth of `s` at width x height. `progress` gets ("truth", fraction); `cancel`, when
-// set, stops at the next row: the rows done keep their samples, the others stay 0 (std::runtime_error
-// is not thrown). InputError for spp < 1, an AOV the truth does not write, or a
-// technique without a truth.
+// Renders the truth of `s` at width x height (samples [settings.first, settings.spp), stopping
+// early on settings.noise or time_limit_s). `progress` gets ("truth: ...", fraction) between
+// blocks; `cancel`, when set, stops within the block under way and throws Cancelled. InputError
+// for spp < 1, an empty sample range, an AOV the truth does not write, or a technique without a
+// truth.
 Frame render_truth(const Scene& s, const Evaluation& ev, int width, int height, const TruthSettings& settings,
                    const std::vector<std::string>& aovs = {}, const std::function<void(const std::string&, double)>& progress = {},
                    const std::atomic<bool>* cancel = nullptr);
 
-// InputError for spp < 1, a size out of range, an AOV the truth does not write or a
-// technique without a truth: what render_truth checks before any work.
+// InputError for spp < 1, a sample range that is empty or starts below 0, a noise target outside
+// (0, 1), a negative time limit, a size out of range, an AOV the truth does not write or a technique
+// without a truth: what render_truth checks before any work.
 void check_truth_request(const Scene& s, int width, int height, const TruthSettings& settings, const std::vector<std::string>& aovs);
 
-// The samples of the truth of `s` up to settings.spp, continuing `from` when it holds fewer samples
-// of the same size and seed (from->continues), else from none. Arguments and errors as render_truth.
+// The samples of the truth of `s` from settings.first up to settings.spp, continuing `from` when
+// it holds fewer samples of the same size, seed and first sample (from->continues), else from none;
+// stops early on settings.noise (once noise_rel ≤ it) or settings.time_limit_s, and says which in
+// `ended`. A cancelled call (the flag set) returns ended = Cancelled: its sums are incomplete and
+// must not be kept. Arguments and errors as render_truth.
 TruthAccumulator accumulate_truth(const Scene& s, const Evaluation& ev, int width, int height, const TruthSettings& settings,
                                   const TruthAccumulator* from = nullptr, const std::function<void(const std::string&, double)>& progress = {},
                                   const std::atomic<bool>* cancel = nullptr);
-// The frame of an accumulator: radiance (the mean), normal, truth_stderr, exitance.
+// The frame of an accumulator: radiance (the mean), normal, truth_stderr, exitance, irradiance.
 Frame truth_frame(const TruthAccumulator& a);
+// truth_noise_rel of the accumulator's frame, without making the frame.
+double truth_noise_rel(const TruthAccumulator& a);
 
 // Over the pixels that show an object in the truth (all channels): the RMS of truth_stderr over
 // the mean radiance there, the truth's relative noise. 0 when no pixel shows an object.
 double truth_noise_rel(const Frame& truth);
+
+// [SECTION] Partial truths
+// Samples [first, spp) of a truth, written by `capture --backend truth --samples A:B` and joined by
+// `mesolab truth merge`: the sums with what they are of (the scene's name, the truth's cache key, its
+// size, seed and sample range, and the build they were made with).
+struct TruthPart {
+    std::string scene;  // Scene::name
+    std::string key;    // the truth cache's key (TruthCache::key): what the truth reads, size and seed
+    std::string build;  // truth_build()
+    TruthAccumulator sums;
+};
+// Writes through a temporary file and a rename. std::runtime_error naming the file when it cannot.
+void write_truth_part(const std::string& path, const TruthPart& p);
+// InputError naming the file and what is wrong: not a partial truth, truncated, inconsistent sizes.
+TruthPart read_truth_part(const std::string& path);
+// Joins parts of one truth into one: InputError naming the two parts and what differs when they
+// are of another scene, key, size, seed or build, or when their sample ranges overlap or leave a
+// gap (in any order given; the result runs from the lowest first sample to the highest end).
+// Exact sums: the result is the same bytes as the samples rendered at once.
+TruthPart merge_truth_parts(const std::vector<std::pair<std::string, TruthPart>>& named_parts);
 
 // [SECTION] Against the truth
 // A real-time frame against the truth of the same scene at the same size.

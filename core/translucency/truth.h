@@ -1,0 +1,182 @@
+#pragma once
+// [SECTION] Technique translucency's truth: volumetric light transport inside the object's own
+// closed mesh, traced from the lights, and the exitance it sends out resolved at each point the
+// camera sees, independently of the mesh's tessellation (truth.cpp has the whole description).
+//
+// The exitance M(x) at a surface point x is the power per unit area leaving there. It is estimated
+// by a gather: the photons that leave the medium within a sphere of radius r around x (on a facet
+// not turned away from x's by more than 120°, so that the far side of a sheet thinner than r is
+// not counted), their power over π r². That is the mean of M over the disc of radius r on a flat
+// surface (and exactly over a sphere's cap, whose area within a chord r is π r²), so its bias is
+// the blur of that disc: for a profile M(ρ) it is r²/8 ∇²M to first order, which a radius well
+// below the smallest mean free path keeps far below the noise (tests/translucency: a slab at r
+// and r/2). Within r of an edge sharper than 60° the disc is cut by the edge and M is low there.
+#include "core/math.h"
+#include "core/mesh.h"
+#include "core/translucency/dipole.h"
+#include "core/render.h"
+#include "core/scene.h"
+#include "core/stage.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace mesolab {
+class RayScene;
+}
+
+namespace mesolab::translucency {
+
+// The estimators' radius in mm, per channel: a quarter of the channel's mean free path
+// 1 / (σs′ + σa), kept within 1/64 of the object's bounding-sphere radius (an object smaller than a
+// few mean free paths varies on its own scale) and above 2^-20 of it (the cells stay countable).
+glm::dvec3 exitance_radius_mm(const Medium& medium, double bound_radius_mm);
+
+// The truth's exitance at surface points of translucent object `object` of `s` (for tests and
+// tools): its photon batches for samples [0, samples) of `seed`, lit by the scene's lights, the
+// object alone traced (no other object shadows it), the estimators' radius times radius_scale; per
+// point (normals: the surface's outward unit normals there), the mean over the samples and its
+// standard error, per channel, in the scene's power per world unit².
+struct ExitanceEstimate {
+    std::vector<vec3> mean, stderr_;
+    int photons_per_sample = 0;
+    glm::dvec3 radius_mm{0.0};
+};
+ExitanceEstimate truth_exitance(const Scene& s, const Evaluation& ev, int object, const std::vector<vec3>& points, const std::vector<vec3>& normals,
+                                int samples, uint64_t seed, double radius_scale = 1.0);
+
+// A lower bound on the distance from a point to any triangle of a RayScene, on a grid over a box
+// (the translucent object's): a photon whose free path is shorter than the bound moves without a
+// ray cast. The bound is the grid's Chebyshev distance to the nearest cell that a triangle
+// touches, less one cell: no triangle lies nearer than that. 0 outside the box.
+class DistanceBound {
+public:
+    DistanceBound() = default;
+    // Cells of about max(extent) / cells_per_side on each axis.
+    DistanceBound(const RayScene& rt, vec3 lo, vec3 hi, int cells_per_side = 128);
+    float at(vec3 p) const;
+    bool empty() const { return d_.empty(); }
+
+private:
+    vec3 lo_{0.f};
+    float cell_ = 1.f, inv_cell_ = 1.f;
+    glm::ivec3 n_{0};
+    std::vector<uint8_t> d_;  // Chebyshev distance in cells to a touched cell, capped at 255
+};
+
+// Records with a position, sorted into cubic cells of one size and found again by the cells a ball
+// overlaps (a hash table of the cells, open addressing). The records keep their given order within
+// a cell, so that a sum over a query is the same whatever threads made them.
+template <class Record>
+class CellMap {
+public:
+    CellMap() = default;
+    // `origin`: a corner below every record (cells are counted from it); `cell`: the cells' side.
+    CellMap(std::vector<Record> records, float cell, vec3 origin);
+    // Calls f(record) for every record in the cells that the ball (p, radius) overlaps.
+    template <class F>
+    void for_each_near(vec3 p, float radius, F&& f) const;
+    size_t size() const { return records_.size(); }
+
+private:
+    struct Cell {
+        int32_t x = 0, y = 0, z = 0;
+        uint32_t begin = 0, end = 0;  // records_[begin, end); end == 0: an empty slot
+    };
+    const Cell* find(int32_t x, int32_t y, int32_t z) const;
+    std::vector<Record> records_;  // grouped by cell
+    std::vector<Cell> table_;      // a power of two
+    float inv_cell_ = 0.f;
+    vec3 origin_{0.f};
+};
+
+// Where a photon of one channel left the medium after a reflection since its last scattering
+// event, or without any (the light that leaves straight from an event is estimated from the
+// events): the point (world), its power and the outward normal of the facet it crossed.
+struct PhotonExit {
+    vec3 p{0.f};
+    float power = 0.f;
+    int8_t n[3] = {0, 0, 0};  // outward unit normal x 127
+};
+
+// A scattering event of a photon of one channel near the surface: the point (world) and the
+// photon's weight as it leaves it (after the albedo). Their density is the source of the light that leaves the
+// medium straight from an event.
+struct ScatterVertex {
+    vec3 p{0.f};
+    float weight = 0.f;
+};
+
+}  // namespace mesolab::translucency
+
+// [SECTION] CellMap's members
+namespace mesolab::translucency {
+namespace detail {
+inline uint64_t cell_hash(int32_t x, int32_t y, int32_t z) {
+    const uint64_t h = uint64_t(uint32_t(x)) * 0x9e3779b97f4a7c15ull ^ uint64_t(uint32_t(y)) * 0xc2b2ae3d27d4eb4full ^ uint64_t(uint32_t(z)) * 0x165667b19e3779f9ull;
+    return h ^ (h >> 29);
+}
+}  // namespace detail
+
+template <class Record>
+CellMap<Record>::CellMap(std::vector<Record> records, float cell, vec3 origin) : inv_cell_(1.f / cell), origin_(origin) {
+    const size_t n = records.size();
+    if (n == 0 || !(cell > 0.f)) return;
+    struct Key {
+        int32_t x, y, z;
+        uint32_t i;
+    };
+    std::vector<Key> keys(n);
+    for (size_t i = 0; i < n; ++i) {
+        const vec3 f = glm::floor((records[i].p - origin_) * inv_cell_);
+        keys[i] = {int32_t(f.x), int32_t(f.y), int32_t(f.z), uint32_t(i)};
+    }
+    std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
+        if (a.z != b.z) return a.z < b.z;
+        if (a.y != b.y) return a.y < b.y;
+        if (a.x != b.x) return a.x < b.x;
+        return a.i < b.i;
+    });
+    records_.resize(n);
+    size_t cells = 0;
+    for (size_t i = 0; i < n; ++i) {
+        records_[i] = records[keys[i].i];
+        if (i == 0 || keys[i].x != keys[i - 1].x || keys[i].y != keys[i - 1].y || keys[i].z != keys[i - 1].z) ++cells;
+    }
+    size_t size = 16;
+    while (size < 2 * cells) size *= 2;
+    table_.assign(size, Cell{});
+    for (size_t i = 0; i < n;) {
+        size_t j = i + 1;
+        while (j < n && keys[j].x == keys[i].x && keys[j].y == keys[i].y && keys[j].z == keys[i].z) ++j;
+        size_t slot = detail::cell_hash(keys[i].x, keys[i].y, keys[i].z) & (size - 1);
+        while (table_[slot].end != 0) slot = (slot + 1) & (size - 1);
+        table_[slot] = Cell{keys[i].x, keys[i].y, keys[i].z, uint32_t(i), uint32_t(j)};
+        i = j;
+    }
+}
+
+template <class Record>
+const typename CellMap<Record>::Cell* CellMap<Record>::find(int32_t x, int32_t y, int32_t z) const {
+    const size_t mask = table_.size() - 1;
+    for (size_t slot = detail::cell_hash(x, y, z) & mask;; slot = (slot + 1) & mask) {
+        const Cell& c = table_[slot];
+        if (c.end == 0) return nullptr;
+        if (c.x == x && c.y == y && c.z == z) return &c;
+    }
+}
+
+template <class Record>
+template <class F>
+void CellMap<Record>::for_each_near(vec3 p, float radius, F&& f) const {
+    if (table_.empty()) return;
+    const vec3 lo = glm::floor((p - vec3(radius) - origin_) * inv_cell_), hi = glm::floor((p + vec3(radius) - origin_) * inv_cell_);
+    for (int32_t z = int32_t(lo.z); z <= int32_t(hi.z); ++z)
+        for (int32_t y = int32_t(lo.y); y <= int32_t(hi.y); ++y)
+            for (int32_t x = int32_t(lo.x); x <= int32_t(hi.x); ++x)
+                if (const Cell* c = find(x, y, z))
+                    for (uint32_t i = c->begin; i < c->end; ++i) f(records_[i]);
+}
+}  // namespace mesolab::translucency
