@@ -7,17 +7,22 @@
 // a pinhole camera): photons from a disc covering the object (directional lights, environment) or
 // from the point light towards it, shadowed by everything in the scene, enter with the Fresnel
 // transmittance, walk (free paths of mean 1/σt, albedo σs′/σt per step, Russian roulette below a
-// fifth of the weight) and, where they leave, are kept in a photon map with their power, the
-// point and the facet they crossed. Each sample of the truth is an independent batch of photons
-// (8 per gather disc of the surface, within [2^16, 2^20], split evenly over the lights and the
+// fifth of the weight), reflect or leave at the boundary by the exact Fresnel reflectance. Each
+// sample of the truth is an independent batch of photons (16 per square of the smallest mean free
+// path's side of the surface, within [2^14, 2^20], split evenly over the lights and the
 // environment, one colour channel per photon), so the spread over samples is the exitance's
-// standard error; batches are traced a block of samples at a time, so that memory stays bounded.
+// standard error; a batch is traced, used for every pixel and dropped, one at a time.
 //
-// The exitance at a point the camera sees is the gather of truth.h: the power of the photons that
-// left within the radius r (exitance_radius_mm: a quarter of the smallest mean free path) over
-// π r². Nothing of the mesh's tessellation enters it. A photon's free path shorter than the
-// distance to the nearest triangle (DistanceBound) moves without a ray cast: the same result as
-// casting it, sooner.
+// The exitance at a point x the camera sees (truth.h) does not depend on the mesh's vertices:
+// - the light that leaves straight from a scattering event (most of it) comes from the events'
+//   density near x: from x, 16 directions into the medium (∝ cos θ) and on each 4 distances per
+//   channel (∝ σt e^-σt t), the events within r_c (a quarter of the channel's mean free path) of
+//   each such point over the ball's volume inside the medium, times T / (4 σt) (exitance_at);
+// - the light that leaves after a reflection since its last event, or without any, is the power of
+//   those photons that left within r_c of x, over π r_c².
+// Both blur at r_c, which the slab of tests/translucency (12 triangles or 3 mm squares, r and r/2)
+// shows to be below the noise. A photon's free path shorter than the distance to the nearest
+// triangle (DistanceBound) moves without a ray cast: the same result as casting it, sooner.
 //
 // The camera sees M as radiance with the real-time display's angular distribution and texture:
 // L = ρ(x) T(cos θo) M / (π t̄), t̄ = 2 ∫ T(μ) μ dμ over [0, 1] with the paper's Schlick T, so that
@@ -36,7 +41,6 @@
 
 #include <array>
 #include <cstring>
-#include <cstdlib>
 
 #include <tbb/parallel_for.h>
 #include <algorithm>
@@ -227,7 +231,7 @@ public:
         longest_ = glm::length(hi_ - lo_) * 1.01f;
         // Photons per sample: kPhotonsPerPatch per square of the smallest mean free path's side of
         // the surface, within [2^14, 2^20].
-        photons_ = int(std::clamp(photons_per_patch() * area / (smallest * smallest), double(1 << 14), double(1 << 20)));
+        photons_ = int(std::clamp(kPhotonsPerPatch * area / (smallest * smallest), double(1 << 14), double(1 << 20)));
     }
 
     int photons_per_sample() const { return photons_; }
@@ -253,7 +257,7 @@ public:
     // The photon batches of samples [first, end): each traced in chunks on every core, its exits
     // and scattering events in the photons' order.
     void prepare(const TruthPrep& p) {
-        if (bound_.empty()) bound_ = DistanceBound(p.rt, lo_, hi_, std::getenv("MLGRID") ? std::atoi(std::getenv("MLGRID")) : 128);
+        if (bound_.empty()) bound_ = DistanceBound(p.rt, lo_, hi_);
         first_ = p.first;
         seed_ = p.seed;
         rt_ = &p.rt;
@@ -311,13 +315,11 @@ public:
         vec3 t_axis, b_axis;
         basis(-n, t_axis, b_axis);
         dvec3 M(0.0);
-        const int directions = directions_per_point();
-        const int side = std::max(1, int(std::lround(std::sqrt(double(directions)))));
-        const float ox = rng.next(), oy = rng.next();  // Cranley-Patterson shift of the direction grid
+        constexpr int directions = kDirections;
+        constexpr int side = 4;  // directions: one in each cell of a side x side grid over the unit square
+        static_assert(side * side == directions);
         for (int k = 0; k < directions; ++k) {
-            // A stratified point of the unit square (a side x side grid, wrapped) -> cosine-weighted.
-            const float u1 = std::fmod((float(k % side) + ox) / float(side) + 0.f, 1.f);
-            const float u2 = std::fmod((float((k / side) % side) + oy) / float(side) + rng.next() / float(side), 1.f);
+            const float u1 = (float(k % side) + rng.next()) / float(side), u2 = (float(k / side) + rng.next()) / float(side);
             const float rr = std::sqrt(u1), phi = 2.f * kPi * u2, cos_theta = std::sqrt(std::max(0.f, 1.f - u1));
             if (!(cos_theta > 1e-4f)) continue;
             const double T = transmittance_out(cos_theta);
@@ -336,6 +338,7 @@ public:
                     const double u = (double(j) + double(shift)) / double(kDistances);
                     const double t = -std::log(1.0 - u) / sigma_t_[c];
                     if (!(t < t_b)) break;  // the boundary comes first: nothing beyond it sends light straight to x
+                    if (t + double(radius_[c]) > double(depth_[c])) break;  // deeper than the events kept: below e^-kDepth
                     const vec3 z = o + float(t) * w;
                     // The ball: r_c, or as far as the wall the ray meets (at least r_c / 4), so that
                     // only x's facet plane cuts it as a rule.
@@ -387,18 +390,6 @@ private:
     static constexpr double kPhotonsPerPatch = 16.0;
     static constexpr int kDirections = 16;  // directions from a point per sample
     static constexpr int kDistances = 4;    // points on each direction per channel
-    static double photons_per_patch() {
-        static const double v = std::getenv("MLPP") ? std::atof(std::getenv("MLPP")) : kPhotonsPerPatch;
-        return v;
-    }
-    static double deep_survival() {
-        static const double v = std::getenv("MLDEEP") ? std::atof(std::getenv("MLDEEP")) : 1.0;
-        return v;
-    }
-    static int directions_per_point() {
-        static const int v = std::getenv("MLREV") ? std::atoi(std::getenv("MLREV")) : kDirections;
-        return v;
-    }
 
     // What a chunk of photons left: per channel, their exits and their events near the surface.
     struct Walks {
@@ -481,7 +472,6 @@ private:
         const double albedo = (s_.medium.sigma_s[channel] + s_.medium.sigma_a[channel]) > 0.0
                                   ? s_.medium.sigma_s[channel] / (s_.medium.sigma_s[channel] + s_.medium.sigma_a[channel]) : 0.0;
         bool scattered = false, reflected = false;  // since the last scattering event
-        bool deep = false;
         for (int step = 0; step < 1000000; ++step) {
             const double free = sigma_t > 0.0 ? -std::log(1.0 - double(rng.next())) / sigma_t : 3.4e38;
             // Nothing within `free`: the ray cast would find nothing, so it is not cast.
@@ -513,16 +503,7 @@ private:
             weight *= albedo;
             if (!(weight > 0.0)) return;
             // A scattering event: its light reaches the surface points in view of it.
-            const float bx = bound_.at(x);
-            if (bx < depth_[channel]) {
-                out.events[size_t(channel)].push_back({x, float(weight)});
-                deep = false;
-            } else if (!deep && deep_survival() < 1.0) {
-                // Deeper than the events kept: Russian roulette once, on the way down.
-                deep = true;
-                if (double(rng.next()) >= deep_survival()) return;
-                weight /= deep_survival();
-            }
+            if (bound_.at(x) < depth_[channel]) out.events[size_t(channel)].push_back({x, float(weight)});
             scattered = true, reflected = false;
             if (weight < 0.2 * 3.0 * power / per_source) {  // Russian roulette below a fifth of the start
                 if (rng.next() < 0.5f) return;

@@ -79,6 +79,21 @@ def test_the_truth_renders_with_spp_and_seed(mesolab, wb):
         wb.render(s, size=(12, 12), backend="truth", spp=0)
 
 
+def test_the_truth_samples_to_a_noise_target_and_says_what_ended_it(mesolab, wb):
+    s = mesolab.load_preset(SPHERE)
+    f = wb.render(s, size=(16, 16), backend="truth", noise=0.05, seed=4)
+    assert f.truth["ended"] == "noise" and f.truth["noise_rel"] <= 0.05 and f.truth["spp"] >= 16
+    assert f.truth["noise_target"] == 0.05
+    capped = wb.render(s, size=(16, 16), backend="truth", noise=1e-6, spp=20, seed=4)
+    assert capped.truth["ended"] == "samples" and capped.truth["spp"] == 20
+    timed = wb.render(s, size=(16, 16), backend="truth", noise=1e-6, time_limit=1e-6, seed=5)
+    assert timed.truth["ended"] == "time limit"
+    with pytest.raises(mesolab.InputError, match="noise=2"):
+        wb.render(s, size=(16, 16), backend="truth", noise=2)
+    with pytest.raises(mesolab.InputError, match="time_limit=-1"):
+        wb.render(s, size=(16, 16), backend="truth", time_limit=-1)
+
+
 def test_render_errors_are_input_errors(mesolab, wb):
     s = mesolab.load_preset(SPHERE)
     with pytest.raises(mesolab.InputError, match="is not one of gpu|cpu|truth"):

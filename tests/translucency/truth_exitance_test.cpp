@@ -12,6 +12,7 @@
 #include "core/translucency/truth.h"
 #include "core/truth/truth.h"
 #include "support/cli.h"
+#include "support/truth.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -314,4 +315,36 @@ TEST(TranslucencyTruthExitance, TheDistanceBoundNeverExceedsTheDistanceToTheSurf
         }
         EXPECT_GT(positive, inside / 2) << "n " << n;
     }
+}
+
+// The AOV irradiance is the power per unit area entering the medium: on a slab's top face lit by a
+// directional light 30° from its normal (no sky), E cos 30° (1 - F(30°)) with the exact Fresnel
+// reflectance of η 1.3, at every pixel that shows the top face (the light's estimate has no noise).
+TEST(TranslucencyTruthExitance, TheIrradianceIsThePowerEnteringTheMedium) {
+    test::TempDir dir("translucency-irradiance");
+    const std::string text = R"({"schema": 1, "name": "slab", "camera": {"mode": "orbit", "distance": 2.0, "orbit": [1, -89], "fov": 20},
+        "lights": [{"type": "directional", "direction": [30, 0], "intensity": 2, "color": [1, 0.5, 0.25]}],
+        "env": {"color": [0, 0, 0], "intensity": 0}, "effects": {"environment": false},
+        "objects": [{"name": "slab", "geometry": {"type": "mesh", "path": ")" + write_slab(dir.path.string(), "coarse", 1, 1) + R"("},
+        "material": {"technique": "translucency", "material": "skin1", "mm_per_unit": 150, "vertices": 0}}]})";
+    const Scene s = scene_from_json(nlohmann::json::parse(text), "slab", dir.path.string());
+    const Frame f = test::render_uncached(s, test::truth_request(Backend::Truth, 16, 1, {"irradiance"})).frame;
+    Session session;
+    const Lighting lighting = make_lighting(s, session.evaluate(s, truth_stages(s)));
+    ASSERT_EQ(lighting.lights.size(), 1u);
+    const vec3 wi = -glm::normalize(lighting.lights[0].direction) * (glm::dot(lighting.lights[0].direction, vec3(0.f, 0.f, 1.f)) < 0.f ? 1.f : -1.f);
+    const double cos_i = std::fabs(double(wi.z));
+    double ct = 0.0;
+    const double T = 1.0 - fresnel(cos_i, 1.3, ct);
+    EXPECT_NEAR(cos_i, std::cos(30.0 * std::numbers::pi / 180.0), 1e-3);
+    int top = 0;
+    for (int y = 0; y < f.height; ++y)
+        for (int x = 0; x < f.width; ++x) {
+            const float* n = f.aov("normal").at(x, y);
+            if (!(n[2] > 0.99f)) continue;
+            ++top;
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(f.aov("irradiance").at(x, y)[c], lighting.lights[0].radiance[c] * cos_i * T, 1e-4 * lighting.lights[0].radiance[c]) << x << "," << y;
+        }
+    EXPECT_GT(top, 100);
 }
