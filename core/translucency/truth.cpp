@@ -475,7 +475,8 @@ private:
         for (int step = 0; step < 1000000; ++step) {
             const double free = sigma_t > 0.0 ? -std::log(1.0 - double(rng.next())) / sigma_t : 3.4e38;
             // Nothing within `free`: the ray cast would find nothing, so it is not cast.
-            const RayHit h = free < double(bound_.at(x)) ? RayHit{} : p.rt.intersect(x, d, 0.f, float(std::min(free, 3.4e38)));
+            const float bound = bound_.at(x);
+            const RayHit h = free < double(bound) ? RayHit{} : p.rt.intersect(x, d, 0.f, float(std::min(free, 3.4e38)));
             if (h.hit()) {
                 if (h.geometry != p.geometry) return;  // another object inside this one: absorbed there
                 vec3 m = glm::normalize(h.ng);
@@ -502,8 +503,10 @@ private:
             x += float(free) * d;
             weight *= albedo;
             if (!(weight > 0.0)) return;
-            // A scattering event: its light reaches the surface points in view of it.
-            if (bound_.at(x) < depth_[channel]) out.events[size_t(channel)].push_back({x, float(weight)});
+            // A scattering event: its light reaches the surface points in view of it. (It is within
+            // `free` of where the bound was taken: deeper than kDepth mean free paths where that
+            // bound, less `free`, says so.)
+            if (double(bound) - free < double(depth_[channel])) out.events[size_t(channel)].push_back({x, float(weight)});
             scattered = true, reflected = false;
             if (weight < 0.2 * 3.0 * power / per_source) {  // Russian roulette below a fifth of the start
                 if (rng.next() < 0.5f) return;

@@ -131,37 +131,49 @@ inline uint64_t cell_hash(int32_t x, int32_t y, int32_t z) {
 template <class Record>
 CellMap<Record>::CellMap(std::vector<Record> records, float cell, vec3 origin) : inv_cell_(1.f / cell), origin_(origin) {
     const size_t n = records.size();
-    if (n == 0 || !(cell > 0.f)) return;
-    struct Key {
-        int32_t x, y, z;
-        uint32_t i;
-    };
-    std::vector<Key> keys(n);
+    if (n == 0 || !(cell > 0.f) || n >= size_t(UINT32_MAX)) return;
+    // Each record's cell as a key of 21 bits a coordinate (the cells counted from `origin`, which
+    // lies below every record), sorted by a stable radix sort of four 16-bit digits: the records
+    // grouped by cell, in their given order within each.
+    std::vector<uint64_t> key(n), key2(n);
+    std::vector<uint32_t> index(n), index2(n);
     for (size_t i = 0; i < n; ++i) {
-        const vec3 f = glm::floor((records[i].p - origin_) * inv_cell_);
-        keys[i] = {int32_t(f.x), int32_t(f.y), int32_t(f.z), uint32_t(i)};
+        const vec3 f = glm::clamp(glm::floor((records[i].p - origin_) * inv_cell_), vec3(0.f), vec3(float((1 << 21) - 1)));
+        key[i] = uint64_t(f.x) | uint64_t(f.y) << 21 | uint64_t(f.z) << 42;
+        index[i] = uint32_t(i);
     }
-    std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
-        if (a.z != b.z) return a.z < b.z;
-        if (a.y != b.y) return a.y < b.y;
-        if (a.x != b.x) return a.x < b.x;
-        return a.i < b.i;
-    });
+    std::vector<uint32_t> count(1 << 16);
+    for (int pass = 0; pass < 4; ++pass) {
+        const int shift = 16 * pass;
+        std::fill(count.begin(), count.end(), 0u);
+        for (size_t i = 0; i < n; ++i) ++count[(key[i] >> shift) & 0xffff];
+        uint32_t sum = 0;
+        for (uint32_t& c : count) {
+            const uint32_t k = c;
+            c = sum, sum += k;
+        }
+        for (size_t i = 0; i < n; ++i) {
+            const uint32_t at = count[(key[i] >> shift) & 0xffff]++;
+            key2[at] = key[i], index2[at] = index[i];
+        }
+        key.swap(key2), index.swap(index2);
+    }
     records_.resize(n);
     size_t cells = 0;
     for (size_t i = 0; i < n; ++i) {
-        records_[i] = records[keys[i].i];
-        if (i == 0 || keys[i].x != keys[i - 1].x || keys[i].y != keys[i - 1].y || keys[i].z != keys[i - 1].z) ++cells;
+        records_[i] = records[index[i]];
+        cells += i == 0 || key[i] != key[i - 1];
     }
     size_t size = 16;
     while (size < 2 * cells) size *= 2;
     table_.assign(size, Cell{});
     for (size_t i = 0; i < n;) {
         size_t j = i + 1;
-        while (j < n && keys[j].x == keys[i].x && keys[j].y == keys[i].y && keys[j].z == keys[i].z) ++j;
-        size_t slot = detail::cell_hash(keys[i].x, keys[i].y, keys[i].z) & (size - 1);
+        while (j < n && key[j] == key[i]) ++j;
+        const int32_t x = int32_t(key[i] & 0x1fffff), y = int32_t((key[i] >> 21) & 0x1fffff), z = int32_t(key[i] >> 42);
+        size_t slot = detail::cell_hash(x, y, z) & (size - 1);
         while (table_[slot].end != 0) slot = (slot + 1) & (size - 1);
-        table_[slot] = Cell{keys[i].x, keys[i].y, keys[i].z, uint32_t(i), uint32_t(j)};
+        table_[slot] = Cell{x, y, z, uint32_t(i), uint32_t(j)};
         i = j;
     }
 }
@@ -180,7 +192,8 @@ template <class Record>
 template <class F>
 void CellMap<Record>::for_each_near(vec3 p, float radius, F&& f) const {
     if (table_.empty()) return;
-    const vec3 lo = glm::floor((p - vec3(radius) - origin_) * inv_cell_), hi = glm::floor((p + vec3(radius) - origin_) * inv_cell_);
+    const vec3 lo = glm::max(glm::floor((p - vec3(radius) - origin_) * inv_cell_), vec3(0.f)),
+               hi = glm::min(glm::floor((p + vec3(radius) - origin_) * inv_cell_), vec3(float((1 << 21) - 1)));
     for (int32_t z = int32_t(lo.z); z <= int32_t(hi.z); ++z)
         for (int32_t y = int32_t(lo.y); y <= int32_t(hi.y); ++y)
             for (int32_t x = int32_t(lo.x); x <= int32_t(hi.x); ++x)
