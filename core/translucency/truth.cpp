@@ -9,8 +9,9 @@
 // transmittance, walk (free paths of mean 1/σt, albedo σs′/σt per step, Russian roulette below a
 // fifth of the weight), reflect or leave at the boundary by the exact Fresnel reflectance. Each
 // sample of the truth is an independent batch of photons (16 per square of the smallest mean free
-// path's side of the surface, within [2^14, 2^20], split evenly over the lights and the
-// environment, one colour channel per photon), so the spread over samples is the exitance's
+// path's side of the surface, at most 2^20 and fewer where a pilot shows each photon leaving many
+// events, so that a batch keeps about 8 million events, 128 MB; split evenly over the lights and
+// the environment, one colour channel per photon), so the spread over samples is the exitance's
 // standard error; a batch is traced, used for every pixel and dropped, one at a time.
 //
 // The exitance at a point x the camera sees (truth.h) does not depend on the mesh's vertices:
@@ -270,6 +271,23 @@ public:
         batches_.resize(size_t(std::max(0, samples)));
         if (sources == 0 || samples <= 0) return;
         constexpr int kChunks = 64;
+        if (!sized_) {
+            // The events a photon leaves near the surface, from a pilot of kPilot photons whose
+            // streams no sample uses (the same in every process): fewer photons a sample where each
+            // leaves many (a batch's events stay within kMostEvents), whatever the range of samples.
+            TruthPrep pilot = p;
+            pilot.seed = 0x70696c6f74ull;
+            std::vector<Walks> walks(kChunks);
+            tbb::parallel_for(0, kChunks, [&](int c) {
+                for (int i = c; i < kPilot; i += kChunks) trace_photon(pilot, centre, radius, sources, 0, i, walks[size_t(c)]);
+            });
+            size_t events = 0;
+            for (const Walks& w : walks)
+                for (const auto& e : w.events) events += e.size();
+            const double per_photon = std::max(1.0, double(events) / double(kPilot));
+            photons_ = int(std::clamp(std::min(double(photons_), double(kMostEvents) / per_photon), double(1 << 12), double(1 << 20)));
+            sized_ = true;
+        }
         std::vector<Walks> chunks(size_t(samples) * kChunks);
         tbb::parallel_for(0, samples * kChunks, [&](int job) {
             if (p.cancel && p.cancel->load()) return;
@@ -389,6 +407,8 @@ private:
     static constexpr double kDepth = 8.0;  // events kept within this many mean free paths of the surface
     static constexpr double kPhotonsPerPatch = 16.0;
     static constexpr int kDirections = 16;  // directions from a point per sample
+    static constexpr int kPilot = 4096;      // photons that size a batch
+    static constexpr double kMostEvents = 8.0 * (1 << 20);  // events kept a sample, about (16 bytes each)
     static constexpr int kDistances = 4;    // points on each direction per channel
 
     // What a chunk of photons left: per channel, their exits and their events near the surface.
@@ -530,6 +550,7 @@ private:
     float longest_ = 1.f;  // the bounding box's diagonal
     std::vector<float> mean_curvature_;  // per triangle, 1 / world unit (positive where the surface bends away from its outside)
     int photons_ = 0;  // per sample
+    bool sized_ = false;  // photons_ set from the pilot
     DistanceBound bound_;
     const RayScene* rt_ = nullptr;  // the scene of the last prepare (it outlives the samples)
     float eps_ = 1e-4f;
