@@ -197,7 +197,7 @@ std::vector<float> facet_mean_curvature(const TriMesh& m, const mat4& to_world) 
 // scattering events near the surface.
 struct Batch {
     std::array<CellMap<PhotonExit>, 3> exits;      // cells of 2 r_c
-    std::array<CellMap<ScatterVertex>, 3> events;  // cells of 2 r_c
+    std::array<CellMap<ScatterVertex>, 3> events;  // cells of 4 r_c (fewer, larger look-ups beat more, smaller ones)
 };
 
 class TranslucentTruth final : public TruthMaterial {
@@ -312,7 +312,7 @@ public:
                     events.insert(events.end(), ch.begin(), ch.end());
                     std::vector<ScatterVertex>().swap(ch);
                 }
-                batches_[size_t(j)].events[size_t(c)] = CellMap<ScatterVertex>(std::move(events), 2.f * radius_[c], origin);
+                batches_[size_t(j)].events[size_t(c)] = CellMap<ScatterVertex>(std::move(events), 4.f * radius_[c], origin);
             }
         });
     }

@@ -132,19 +132,30 @@ template <class Record>
 CellMap<Record>::CellMap(std::vector<Record> records, float cell, vec3 origin) : inv_cell_(1.f / cell), origin_(origin) {
     const size_t n = records.size();
     if (n == 0 || !(cell > 0.f) || n >= size_t(UINT32_MAX)) return;
-    // Each record's cell as a key of 21 bits a coordinate (the cells counted from `origin`, which
-    // lies below every record), sorted by a stable radix sort of four 16-bit digits: the records
-    // grouped by cell, in their given order within each.
+    // Each record's cell (counted from `origin`, which lies below every record) packed into a key
+    // of as many bits a coordinate as the records' extent needs, sorted by a stable radix sort of
+    // 16-bit digits: the records grouped by cell, in their given order within each.
+    std::vector<glm::uvec3> at(n);
+    glm::uvec3 most(0u);
+    for (size_t i = 0; i < n; ++i) {
+        const vec3 f = glm::clamp(glm::floor((records[i].p - origin_) * inv_cell_), vec3(0.f), vec3(float((1 << 21) - 1)));
+        at[i] = glm::uvec3(f);
+        most = glm::max(most, at[i]);
+    }
+    int bits[3];
+    for (int a = 0; a < 3; ++a) {
+        bits[a] = 1;
+        while ((1u << bits[a]) <= most[a]) ++bits[a];
+    }
     std::vector<uint64_t> key(n), key2(n);
     std::vector<uint32_t> index(n), index2(n);
     for (size_t i = 0; i < n; ++i) {
-        const vec3 f = glm::clamp(glm::floor((records[i].p - origin_) * inv_cell_), vec3(0.f), vec3(float((1 << 21) - 1)));
-        key[i] = uint64_t(f.x) | uint64_t(f.y) << 21 | uint64_t(f.z) << 42;
+        key[i] = uint64_t(at[i].x) | uint64_t(at[i].y) << bits[0] | uint64_t(at[i].z) << (bits[0] + bits[1]);
         index[i] = uint32_t(i);
     }
+    std::vector<glm::uvec3>().swap(at);
     std::vector<uint32_t> count(1 << 16);
-    for (int pass = 0; pass < 4; ++pass) {
-        const int shift = 16 * pass;
+    for (int shift = 0; shift < bits[0] + bits[1] + bits[2]; shift += 16) {
         std::fill(count.begin(), count.end(), 0u);
         for (size_t i = 0; i < n; ++i) ++count[(key[i] >> shift) & 0xffff];
         uint32_t sum = 0;
@@ -153,11 +164,13 @@ CellMap<Record>::CellMap(std::vector<Record> records, float cell, vec3 origin) :
             c = sum, sum += k;
         }
         for (size_t i = 0; i < n; ++i) {
-            const uint32_t at = count[(key[i] >> shift) & 0xffff]++;
-            key2[at] = key[i], index2[at] = index[i];
+            const uint32_t to = count[(key[i] >> shift) & 0xffff]++;
+            key2[to] = key[i], index2[to] = index[i];
         }
         key.swap(key2), index.swap(index2);
     }
+    std::vector<uint64_t>().swap(key2);
+    std::vector<uint32_t>().swap(index2);
     records_.resize(n);
     size_t cells = 0;
     for (size_t i = 0; i < n; ++i) {
@@ -170,7 +183,8 @@ CellMap<Record>::CellMap(std::vector<Record> records, float cell, vec3 origin) :
     for (size_t i = 0; i < n;) {
         size_t j = i + 1;
         while (j < n && key[j] == key[i]) ++j;
-        const int32_t x = int32_t(key[i] & 0x1fffff), y = int32_t((key[i] >> 21) & 0x1fffff), z = int32_t(key[i] >> 42);
+        const int32_t x = int32_t(key[i] & ((1ull << bits[0]) - 1)), y = int32_t((key[i] >> bits[0]) & ((1ull << bits[1]) - 1)),
+                      z = int32_t(key[i] >> (bits[0] + bits[1]));
         size_t slot = detail::cell_hash(x, y, z) & (size - 1);
         while (table_[slot].end != 0) slot = (slot + 1) & (size - 1);
         table_[slot] = Cell{x, y, z, uint32_t(i), uint32_t(j)};
