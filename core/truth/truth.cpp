@@ -230,7 +230,7 @@ PixelSample trace(const TruthScene& sc, const Lighting& lighting, const Primary&
             if (cos_i <= 0.f || glm::dot(th.ng, wi) <= 0.f) continue;
             const float dist = l.point ? glm::length(l.position - p) : 3.4e38f;
             if (sc.rt.occluded(p, wi, 0.f, dist)) continue;
-            out.L += beta * mat.fcos(th, wo, wi) * E;
+            out.L += beta * mat.fcos_light(th, wo, wi, rng) * E;
         }
         vec3 wi;
         const vec3 w = mat.sample(th, wo, rng, wi);
