@@ -180,6 +180,10 @@ struct Primary {
     vec3 view{0.f};  // texture: the direction towards the viewer
     vec3 dpdx{0.f}, dpdy{0.f};
     vec3 d_x{0.f}, d_y{0.f};  // orbit: the rays through the next pixel's centre in x and in y
+    // Orbit: the hit of the ray through the pixel's centre, the same for every sample, traced once
+    // per pixel (a pixel that sees no object then costs no ray per sample).
+    bool centre_traced = false;
+    RayHit centre;
 };
 
 PixelSample trace(const TruthScene& sc, const Lighting& lighting, const Primary& primary, const TruthSettings& st, uint64_t pixel, uint64_t sample) {
@@ -194,7 +198,7 @@ PixelSample trace(const TruthScene& sc, const Lighting& lighting, const Primary&
     vec3 beta(1.f);
     bool spread = false;  // the camera ray spread over the pixel (TruthMaterial::pixel_filter)
     for (int depth = 0; depth < st.max_depth; ++depth) {
-        const RayHit h = sc.rt.intersect(o, d, depth == 0 ? 0.f : sc.eps);
+        const RayHit h = depth == 0 && !spread && primary.centre_traced ? primary.centre : sc.rt.intersect(o, d, depth == 0 ? 0.f : sc.eps);
         if (depth == 0 && !spread && !primary.texture && h.hit() && sc.objects[size_t(h.geometry)].material->pixel_filter()) {
             spread = true;
             const float jx = rng.next() - 0.5f, jy = rng.next() - 0.5f;
@@ -348,6 +352,7 @@ TruthAccumulator accumulate_truth(const Scene& s, const Evaluation& ev, int widt
                 primary.d = cam.ray_dir(x, y);
                 primary.d_x = cam.ray_dir_at(float(x) + 1.5f, float(y) + 0.5f);
                 primary.d_y = cam.ray_dir_at(float(x) + 0.5f, float(y) + 1.5f);
+                primary.centre = sc.rt.intersect(primary.o, primary.d, 0.f), primary.centre_traced = true;
             }
             for (int k = first; k < st.spp; ++k) {
                 const PixelSample ps = trace(sc, lighting, primary, st, pixel, uint64_t(k));
