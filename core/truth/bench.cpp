@@ -56,7 +56,7 @@ std::string seconds(double ms) { return ms >= 1000.0 ? strprintf("%.3g s", ms / 
 
 BenchTable truth_bench_table(double noise, double time_limit_s) {
     BenchTable t;
-    t.name = "truth";
+    t.name = noise > 0.0 ? "truth-noise" : "truth";  // the pages' block: the extrapolated table and the measured one are both kept
     const std::string target = strprintf("%g%%", 100.0 * noise);
     t.title = noise > 0.0 ? "The truth: time to " + target + " noise per preset, measured (path tracer on the CPU, " + std::to_string(kSize) + "x" +
                                 std::to_string(kSize) + "; texture mode at the texture's size; at most " + seconds(1000.0 * time_limit_s) + " each)"

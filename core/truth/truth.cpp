@@ -188,6 +188,10 @@ struct Primary {
     vec3 view{0.f};  // texture: the direction towards the viewer
     vec3 dpdx{0.f}, dpdy{0.f};
     vec3 d_x{0.f}, d_y{0.f};  // orbit: the rays through the next pixel's centre in x and in y
+    // Orbit: the hit of the ray through the pixel's centre, the same for every sample, traced once
+    // per pixel (a pixel that sees no object then costs no ray per sample).
+    bool centre_traced = false;
+    RayHit centre;
 };
 
 // The power per unit area entering a medium at a camera's hit (the AOV irradiance): each light's
@@ -230,7 +234,7 @@ PixelSample trace(const TruthScene& sc, const Lighting& lighting, const Primary&
     vec3 beta(1.f);
     bool spread = false;  // the camera ray spread over the pixel (TruthMaterial::pixel_filter)
     for (int depth = 0; depth < st.max_depth; ++depth) {
-        const RayHit h = sc.rt.intersect(o, d, depth == 0 ? 0.f : sc.eps);
+        const RayHit h = depth == 0 && !spread && primary.centre_traced ? primary.centre : sc.rt.intersect(o, d, depth == 0 ? 0.f : sc.eps);
         if (depth == 0 && !spread && !primary.texture && h.hit() && sc.objects[size_t(h.geometry)].material->pixel_filter()) {
             spread = true;
             const float jx = rng.next() - 0.5f, jy = rng.next() - 0.5f;
@@ -267,7 +271,7 @@ PixelSample trace(const TruthScene& sc, const Lighting& lighting, const Primary&
             if (cos_i <= 0.f || glm::dot(th.ng, wi) <= 0.f) continue;
             const float dist = l.point ? glm::length(l.position - p) : 3.4e38f;
             if (sc.rt.occluded(p, wi, 0.f, dist)) continue;
-            out.L += beta * mat.fcos(th, wo, wi) * E;
+            out.L += beta * mat.fcos_light(th, wo, wi, rng) * E;
         }
         vec3 wi;
         const vec3 w = mat.sample(th, wo, rng, wi);
@@ -397,6 +401,7 @@ void sample_block(const TruthScene& sc, const Lighting& lighting, const FrameCam
                 primary.d = cam.ray_dir(x, y);
                 primary.d_x = cam.ray_dir_at(float(x) + 1.5f, float(y) + 0.5f);
                 primary.d_y = cam.ray_dir_at(float(x) + 0.5f, float(y) + 1.5f);
+                primary.centre = sc.rt.intersect(primary.o, primary.d, 0.f), primary.centre_traced = true;
             }
             TruthFixed sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0}, exit[3] = {0, 0, 0}, irr[3] = {0, 0, 0};
             for (int k = k0; k < k1; ++k) {

@@ -90,6 +90,11 @@ public:
     virtual vec3 fcos(const TruthHit& h, vec3 wo, vec3 wi) const { return f(h, wo, wi) * std::max(0.f, glm::dot(h.n, wi)); }
     // Whether the camera's hits need the pixel's footprint (TruthHit::duv_dx, duv_dy, jitter).
     virtual bool footprint() const { return false; }
+    // fcos for next-event estimation towards a light in direction wi, as an estimate whose mean over
+    // `rng` is the mean of fcos over the hit's footprint (TruthHit::jitter uniform). The default is
+    // fcos at the hit's own point, drawing nothing; a material whose pixel stands for a footprint
+    // may average fcos over several points of it drawn from `rng`.
+    virtual vec3 fcos_light(const TruthHit& h, vec3 wo, vec3 wi, TruthRng& /*rng*/) const { return fcos(h, wo, wi); }
     // Whether a pixel whose centre sees this material stands for its whole square: its samples'
     // camera rays are then spread uniformly over the pixel (a box filter over geometry finer than
     // a pixel, such as yarns, whose real-time counterpart filters it), and may miss the object.

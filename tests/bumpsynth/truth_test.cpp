@@ -12,10 +12,14 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
+#include <vector>
 
 using namespace mesolab;
 
@@ -87,4 +91,117 @@ TEST(BumpsynthTruth, ReadsNoAccuracyKnob) {
     const Scene s = scene(R"("ndf": "beckmann")", kOrbit);
     test::expect_truth_key(s, {"bumpsynth.lut_size=1024", "bumpsynth.ndf_resolution=256", "bumpsynth.noise=texture", "bumpsynth.detail_distance=100"},
                            {"bumpsynth.ks=[0.5,0.5,0.5]", "bumpsynth.alpha_x=0.1", "bumpsynth.octaves_max=5", "bumpsynth.noise_seed=7", "bumpsynth.masking=true"});
+}
+
+// [SECTION] Next-event estimation over the footprint (truth.cpp, TruthMaterial::fcos_light)
+namespace {
+// Sets MESOLAB_TRUTH_PLAIN (the plain estimator: fcos at the path's own point of the footprint)
+// while it lives.
+struct PlainEstimator {
+    PlainEstimator() { setenv("MESOLAB_TRUTH_PLAIN", "1", 1); }
+    ~PlainEstimator() { unsetenv("MESOLAB_TRUTH_PLAIN"); }
+    PlainEstimator(const PlainEstimator&) = delete;
+    PlainEstimator& operator=(const PlainEstimator&) = delete;
+};
+
+// A glossy bumpy plane (Beckmann 0.1, 6 octaves from 8 cells per unit of uv: ~8 of the finest
+// bumps across a pixel of 24²) seen at 30° with the light in the mirror direction: each pixel's
+// footprint holds many narrow highlights.
+Scene glossy_bumps() {
+    return scene(R"("ndf": "beckmann", "alpha_x": 0.1, "alpha_y": 0.1, "octaves_max": 6, "noise_frequency": 8, "detail_distance": 100,
+                 "ks": [0.6, 0.6, 0.6], "kd": [0.2, 0.2, 0.2])",
+                 R"({"mode": "orbit", "distance": 3.0, "orbit": [30, -90], "fov": 30})", "[30, 90]");
+}
+
+// The two-sided z value at which a family of n tests keeps its false-alarm rate at alpha (Šidák:
+// each test at 1 - (1 - alpha)^(1/n)), from erfc by bisection.
+double sidak_z(double alpha, int n) {
+    const double each = 1.0 - std::pow(1.0 - alpha, 1.0 / double(n));
+    double lo = 0.0, hi = 40.0;
+    for (int i = 0; i < 200; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (std::erfc(mid / std::sqrt(2.0)) > each ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+}  // namespace
+
+// The footprint's points change the variance, not the mean: per pixel, the new estimator's mean
+// (64 spp) and the plain one's (256 spp, another seed) differ by no more than the Šidák-corrected
+// two-sided z of the family of pixels at a 1% false-alarm rate, in units of their combined standard
+// error; and so do their means over the object. The new estimator's noise per sample is far lower.
+TEST(BumpsynthTruth, FootprintSplittingKeepsThePlainEstimatorsMean) {
+    const Scene s = glossy_bumps();
+    constexpr int kSize = 24;
+    Workbench wb;
+    wb.set_truth_cache(TruthCache(""));
+    Frame plain;
+    {
+        PlainEstimator p;
+        plain = wb.render(s, test::truth_request(Backend::Truth, kSize, 256, {"truth_stderr"}, 11)).frame;
+    }
+    const Frame split = wb.render(s, test::truth_request(Backend::Truth, kSize, 64, {"truth_stderr"}, 12)).frame;
+    std::vector<double> z;
+    for (int y = 0; y < kSize; ++y)
+        for (int x = 0; x < kSize; ++x) {
+            if (!test::shows_object(plain, x, y)) continue;
+            for (int c = 0; c < 3; ++c) {
+                const double d = double(split.aov("radiance").at(x, y)[c]) - plain.aov("radiance").at(x, y)[c];
+                const double e = std::hypot(double(split.aov("truth_stderr").at(x, y)[c]), double(plain.aov("truth_stderr").at(x, y)[c]));
+                if (c == 1) z.push_back(e > 0.0 ? d / e : (d == 0.0 ? 0.0 : 1e30));
+            }
+        }
+    const double zmax_allowed = sidak_z(0.01, int(z.size()));
+    double zmax = 0.0;
+    for (double v : z) zmax = std::max(zmax, std::fabs(v));
+    const test::ObjectMean a = test::object_mean(split), b = test::object_mean(plain);
+    const double noise_split = truth_noise_rel(split) * std::sqrt(64.0), noise_plain = truth_noise_rel(plain) * std::sqrt(256.0);
+    std::printf("%zu pixels: max |z| %.2f (Šidák bound %.2f); object mean %.5f +- %.5f (split) vs %.5f +- %.5f (plain); noise per sample %.3f vs %.3f\n",
+                z.size(), zmax, zmax_allowed, a.mean, a.stderr_mean, b.mean, b.stderr_mean, noise_split, noise_plain);
+    ASSERT_GT(z.size(), 300u);
+    EXPECT_LT(zmax, zmax_allowed);
+    EXPECT_NEAR(a.mean, b.mean, 3.0 * std::hypot(a.stderr_mean, b.stderr_mean));
+    EXPECT_LT(noise_split, 0.5 * noise_plain);
+}
+
+// The number of points is a deterministic function of the footprint (its pilot), so the truth stays
+// the same bytes at any thread count, and its samples independent: over 6 seeds, the spread of each
+// pixel's estimate matches the standard error it reports (as in tests/truth, within 15%).
+TEST(BumpsynthTruth, FootprintSplittingIsDeterministicAndItsStandardErrorHonest) {
+    const Scene s = glossy_bumps();
+    constexpr int kSize = 16, kSeeds = 6;
+    Workbench wb;  // one for every truth here: the stages once, no truth from the cache
+    wb.set_truth_cache(TruthCache(""));
+    auto truth = [&](uint64_t seed) { return wb.render(s, test::truth_request(Backend::Truth, kSize, 4, {"truth_stderr"}, seed)).frame; };
+    Frame one, four;
+    {
+        tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+        one = truth(5);
+    }
+    {
+        tbb::global_control c(tbb::global_control::max_allowed_parallelism, 4);
+        four = truth(5);
+    }
+    for (const char* aov : {"radiance", "truth_stderr"}) EXPECT_EQ(one.aov(aov).data, four.aov(aov).data) << aov;
+    std::vector<Frame> frames;
+    for (int k = 0; k < kSeeds; ++k) frames.push_back(truth(uint64_t(200 + k)));
+    double spread2 = 0.0, se2 = 0.0;
+    int pixels = 0;
+    for (int y = 0; y < kSize; ++y)
+        for (int x = 0; x < kSize; ++x) {
+            if (!test::shows_object(frames[0], x, y)) continue;
+            double m = 0.0;
+            for (const Frame& f : frames) m += f.aov("radiance").at(x, y)[1];
+            m /= kSeeds;
+            for (const Frame& f : frames) {
+                const double d = f.aov("radiance").at(x, y)[1] - m, e = f.aov("truth_stderr").at(x, y)[1];
+                spread2 += d * d, se2 += e * e;
+            }
+            ++pixels;
+        }
+    spread2 *= double(kSeeds) / double(kSeeds - 1);
+    const double ratio = std::sqrt(spread2 / se2);
+    std::printf("spread over seeds / reported standard error: %.3f over %d pixels\n", ratio, pixels);
+    ASSERT_GT(pixels, 200);
+    EXPECT_NEAR(ratio, 1.0, 0.15);
 }
