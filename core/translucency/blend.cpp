@@ -1,5 +1,6 @@
 // Blending the local and global responses (see blend.h).
 #include "core/translucency/blend.h"
+#include "core/translucency/surface.h"
 
 #include <Eigen/Dense>
 
@@ -130,7 +131,9 @@ BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position,
     vec3 lo(INFINITY), hi(-INFINITY);
     for (const vec3& v : position) lo = glm::min(lo, v), hi = glm::max(hi, v);
     const RdTable Rd(dipole, std::max(1e-9, double(glm::length(hi - lo)) * mm_per_unit) * 1.0001);
-    // The energy closure's tables: F0's column sums and the dipole's power over a kernel window.
+    // The energy closure's tables: the dipole's power over the object's surface, F0's column sums
+    // and the dipole's power over a kernel window.
+    const SurfaceReflectance surface(position, index, mm_per_unit, dipole);
     const dvec3 R_total = dipole.total_reflectance();
     const std::vector<dvec3> s0 = vertex_power(F0);
     double side_lo = INFINITY, side_hi = 0.0;  // kernel windows' sides, mm
@@ -226,6 +229,7 @@ BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position,
             if (!hats_inside) {
                 Eigen::Vector3d hat_in = Eigen::Vector3d::Zero();  // Σ_window, inner texels: φ_m A_p (mm²)
                 dvec3 f0_in(0.0);                                   // Σ_window F0 response A_p (mm²)
+                dvec3 fold(0.0);                                    // the kernel's border taps in 3D over flat (mm²·mm⁻²)
                 for (int dy = -h; dy <= h; ++dy)
                     for (int dx = -h; dx <= h; ++dx) {
                         if (tx + dx < 0 || ty + dy < 0 || tx + dx >= N || ty + dy >= N) continue;
@@ -238,6 +242,13 @@ BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position,
                         if (atlas.texel_kind[p] == Atlas::kInner)
                             for (int m = 0; m < 3; ++m) hat_in[m] += double(hat(rp, src.v[size_t(m)])) * Ap;
                         f0_in += dvec3(global_response(cache, rp, src, e)) * Ap;
+                        if (atlas.texel_kind[p] == Atlas::kBorder) {
+                            // The kernel reads the surface beyond the chunk's edge at its 3D distance;
+                            // flat, it would lie where the atlas puts it.
+                            const vec3 d = x[p] - x[t];
+                            const float r2_min = texel_disk_r2(float(Ap)), r2_flat = float(dx * dx + dy * dy) * texel_mm * texel_mm;
+                            fold += dvec3(Rd.at_r2(std::max(glm::dot(d, d), r2_min)) - Rd.at_r2(std::max(r2_flat, r2_min))) * Ap;
+                        }
                     }
                 Eigen::Vector3d H, ew;
                 bool reaches = true;
@@ -248,11 +259,14 @@ BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position,
                     reaches = reaches && H[m] >= kShareBeyond * third;
                 }
                 const double He = H.dot(ew);
+                // The dipole's power on the surface, less the kernel's fold share beyond the flat
+                // window (where c can be topped up); R_total where the hats lie within the kernel.
+                const dvec3 R = reaches ? surface(x[t]) - fold : R_total;
                 const dvec3 P_W = window_power(double(K) * std::sqrt(double(area_t)));
                 for (int c = 0; c < 3; ++c) {
                     double f0 = 0.0;
                     for (int m = 0; m < 3; ++m) f0 += double(src.w[m]) * s0[src.v[size_t(m)]][c];
-                    const double G = (R_total[c] - P_W[c] - f0) * double(area_t) + f0_in[c];
+                    const double G = (R[c] - P_W[c] - f0) * double(area_t) + f0_in[c];
                     const double P = H.dot(sol.col(c));
                     if (P > std::max(G, 0.0)) sol.col(c) *= std::max(G, 0.0) / P;
                     else if (reaches && He > 0.0 && G > P) sol.col(c) += (G - P) / He * ew;

@@ -30,18 +30,29 @@
 //   P = Σ_m c_m H_m,  H_m = A_m / 3 − Σ_{inner p in the window} φ_m(p) A_p   (mm², corner m's hat
 //                                                                           beyond the kernel)
 // plus F0's power beyond the window, A_t Σ_m λ_m s_m − Σ_{p in the window} F0 response(p) A_p,
-// s_j = Σ_i R̂_ij A_i / 3 (F0's column sums, dimensionless). On a surface flat within R_d's reach
-// the dipole puts A_t (R_total − P_W) there, P_W the integral of R_d over the window (a square of
-// side K √A_t: the disk of half that side in closed form, Dipole::reflectance_within, plus its
-// corners by quadrature); R_d being smooth beyond the kernel, that is also what the brute-force
-// reference's texel sums give. The target for c is then
-//   G = A_t (R_total − P_W − Σ_m λ_m s_m) + Σ_{p in the window} F0 response(p) A_p,
+// s_j = Σ_i R̂_ij A_i / 3 (F0's column sums, dimensionless). The dipole puts A_t (R_S(x_t) − P_W −
+// D) there: R_S the power on the object's own surface (Eq. 2 integrated over the receivers,
+// surface.h), P_W the integral of R_d over the window on a plane (a square of side K √A_t: the disk
+// of half that side in closed form, Dipole::reflectance_within, plus its corners by quadrature),
+// and D what the kernel's border taps hold beyond that because the surface folds at the chunk's
+// edge: Σ_{border p in the window} [R_d(|x_p − x_t|) − R_d(atlas distance)] A_p (both at least the
+// tap's disk radius, local.h). R_d being smooth beyond the kernel, that is also what the
+// brute-force reference's texel sums give. The target for c is then
+//   G = A_t (R_S − P_W − D − Σ_m λ_m s_m) + Σ_{p in the window} F0 response(p) A_p,
 // and c is moved to it without making it negative: above max(G, 0) it is scaled down (where F0
 // alone already puts more than the dipole beyond the kernel, c is 0); below G, and where every
 // corner's hat reaches at least 20% of its integral beyond the kernel, c += (G − P) e / (H · e),
 // the missing power spread like the source's own irradiance. (Where a hat barely leaves the
 // kernel, the missing power would land as a bright ring just outside it; the mesh is then fine
-// against the kernel and F0 carries the far field.)
+// against the kernel and F0 carries the far field.) Where c cannot be topped up, the target keeps
+// the plane's R_total in place of R_S − D: c only ever shrinks there (the hats lie mostly within
+// the kernel), and R_S costs a tree query (0.05-0.1 ms) per texel, which all of the bunny's
+// 43,000 texels would pay. R_S against R_total: on a regular octahedron at 10 mm per unit in skin1
+// (faces 87 mm², a few diffusion lengths) the surface holds 1.03-1.09 R_total, at 1 mm 0.39 /
+// 0.71 / 0.97; with R_total the blended Σ B A / Σ E A was 0.93-0.98 and 2.6 of the reference
+// there, with R_S 1.00-1.02 and 1.00 (tests/translucency/energy_at_every_scale_test.cpp).
+// Without D (R_S alone), the 70° folds of a tetrahedron at 50-200 mm per unit, where the kernel's
+// border taps already hold the fold's share, came out 1.3-4.2% high; with D, within 0.9%.
 // Why: on a mesh whose triangles are far larger than the diffusion length (a box of 300 mm faces
 // in skin), the ring fit asks c for R_d at the ring, and a hat spreads that over its whole
 // triangle: more than 30x the power the dipole puts beyond the kernel, Σ radiosity / Σ
@@ -50,7 +61,9 @@
 // skin bunny's reference holds 1.075 R_total in red), and closing every texel to it raised the
 // bunny's red RMSE by 18-46% at 1,000-4,000 vertices (0.076 → 0.111 at 2,000). At chunk edges, which the
 // equation skipped, the closure helps: skin sphere RMSE 0.039, 0.081, 0.134 → 0.034, 0.075,
-// 0.134, Spot 0.044, 0.092, 0.165 → 0.043, 0.091, 0.165 (tests/translucency).
+// 0.134, Spot 0.044, 0.092, 0.165 → 0.043, 0.091, 0.165 (tests/translucency). With R_S − D where
+// c can be topped up, and the edge cap of global.h, Spot 0.042, 0.088, 0.157 → 0.040, 0.079,
+// 0.119, the skin sphere unchanged (0.034, 0.075, 0.135), measured one after the other.
 #include "core/math.h"
 #include "core/translucency/atlas.h"
 #include "core/translucency/global.h"

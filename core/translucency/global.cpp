@@ -95,7 +95,7 @@ struct SubSamples {
 
 constexpr int kMaxSplit = 8;
 
-SubSamples sub_samples(const std::vector<vec3>& x, const std::vector<uint32_t>& index, const Dipole& dipole) {
+SubSamples sub_samples(const std::vector<vec3>& x, const std::vector<uint32_t>& index, const Dipole& dipole, int max_split) {
     SubSamples S;
     const size_t faces = index.size() / 3;
     const dvec3 zv = dipole.z_v();
@@ -105,7 +105,7 @@ SubSamples sub_samples(const std::vector<vec3>& x, const std::vector<uint32_t>& 
     for (size_t f = 0; f < faces; ++f) {
         const vec3 a = x[index[3 * f]], b = x[index[3 * f + 1]], c = x[index[3 * f + 2]];
         const double e = std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
-        split[f] = std::isfinite(e) ? std::clamp(int(std::ceil(e / z)), 1, kMaxSplit) : 1;
+        split[f] = std::isfinite(e) ? std::clamp(int(std::ceil(e / z)), 1, max_split) : 1;
         S.first[f + 1] = split[f] * split[f];
     }
     for (size_t f = 0; f < faces; ++f) S.first[f + 1] += S.first[f];
@@ -413,21 +413,22 @@ VertexFactors build_vertex_factors(const std::vector<vec3>& position, const std:
         }
     }
     // Without blending, the diagonal and the pairs that share an edge (whose hats overlap) are
-    // the hat-pair means R̄_ij (see global.h); diag[i], and edge[i][k] for ring[i][k] > i.
+    // the hat-pair means R̄_ij (see global.h); diag[i], and edge[i][k] for ring[i][k] > i. With
+    // blending, an edge keeps R_d(r_ij) up to twice R̄_ij, sampled once per triangle.
     std::vector<vec3> diag;
     std::vector<std::vector<vec3>> edge;
-    if (p.interpolation_correction && !p.zero_diagonal) {
+    if (p.interpolation_correction) {
         std::vector<std::vector<uint32_t>> faces(size_t(F.n));
         for (size_t f = 0; f + 2 < index.size(); f += 3)
             for (int k = 0; k < 3; ++k) faces[index[f + size_t(k)]].push_back(uint32_t(f / 3));
-        const SubSamples S = sub_samples(x, index, dipole);
+        const SubSamples S = sub_samples(x, index, dipole, p.zero_diagonal ? 1 : kMaxSplit);
         diag.assign(size_t(F.n), vec3(0.f));
         edge.resize(size_t(F.n));
         tbb::parallel_for(tbb::blocked_range<int>(0, F.n, 16), [&](const tbb::blocked_range<int>& r) {
             std::vector<std::pair<int, float>> si, sj;
             for (int i = r.begin(); i != r.end(); ++i) {
                 hat_samples(S, index, faces[size_t(i)], uint32_t(i), si);
-                diag[size_t(i)] = hat_pair_mean(S, Rd, si, si);
+                if (!p.zero_diagonal) diag[size_t(i)] = hat_pair_mean(S, Rd, si, si);
                 edge[size_t(i)].assign(ring[size_t(i)].size(), vec3(0.f));
                 for (size_t k = 0; k < ring[size_t(i)].size(); ++k) {
                     const uint32_t j = ring[size_t(i)][k];
@@ -483,7 +484,8 @@ VertexFactors build_vertex_factors(const std::vector<vec3>& position, const std:
                     const auto it = std::lower_bound(ri.begin(), ri.end(), uint32_t(j));
                     if (it != ri.end() && *it == uint32_t(j)) {
                         neighbour = true;
-                        if (!diag.empty()) rd = edge[size_t(i)][size_t(it - ri.begin())];
+                        const vec3 mean = edge[size_t(i)][size_t(it - ri.begin())];
+                        rd = p.zero_diagonal ? glm::min(rd, 2.f * mean) : mean;
                     }
                 }
                 if (!diag.empty() && j == i) rd = diag[size_t(i)];

@@ -2,6 +2,7 @@
 #include "core/translucency/local.h"
 #include "core/error.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -61,7 +62,7 @@ LocalKernels build_local_kernels(const Atlas& atlas, const std::vector<vec3>& po
                         w = vec3(dipole.reflectance_within(std::sqrt(area / 3.14159265358979323846)));
                     } else {
                         const vec3 d = x[n] - xt;
-                        w = Rd.at_r2(glm::dot(d, d)) * float(area);
+                        w = Rd.at_r2(std::max(glm::dot(d, d), texel_disk_r2(float(area)))) * float(area);
                     }
                     for (int c = 0; c < 3; ++c) L.w[o + size_t(c)] = w[c];
                 }

@@ -3,10 +3,17 @@
 // Near where light enters, R_d is large and sharp, so it is resolved on the atlas's texels
 // (piecewise constant basis, dual basis 1/area): the radiosity at an inner texel t is
 //   B_local(t) = Σ_{t' in the K x K block around t} w(t, t') E(t'),
-//   w(t, t')   = R_d(|x_t − x_t'|) A_t'                    for t' ≠ t (A_t': the texel's area, mm²)
-//   w(t, t)    = ∫_{|r| < ρ} R_d 2πr dr, ρ = sqrt(A_t / π) (the texel as a disk of its own area,
+//   w(t, t')   = R_d(max(|x_t − x_t'|, ρ_t')) A_t'          for t' ≠ t (A_t': the texel's area, mm²)
+//   w(t, t)    = ∫_{|r| < ρ_t} R_d 2πr dr, ρ_t = sqrt(A_t / π) (the texel as a disk of its own area,
 //                closed form: Dipole::reflectance_within), since R_d(0) A_t would misjudge the
 //                peak when a texel is wider than the source depth z_r.
+// For the same reason no pair samples R_d nearer than the source's disk radius ρ_t': texels of one
+// grid are at least a texel apart, but where two chunks' grids meet at an edge (the reference,
+// reference.h, pairs every two inner texels) their centres can lie a fraction of a texel apart in
+// 3D, and on texels wider than the diffusion length R_d there is its peak times a whole texel's
+// area (a regular octahedron at 1,000 mm per unit in a 192² atlas, texels of 22 mm, skin1: the
+// reference's Σ B A / Σ E A 1.18–1.78 times the dipole's sum over the surface, surface.h; with
+// the radius, 0.99–1.00).
 // The atlas's borders make every t' of the block a texel of t's chunk that samples the surface
 // (unfolded beyond the chunk's edge), so kernels reach across chunk borders.
 // Kernels are stored for inner texels only: K² weights per channel per inner texel (rows padded
@@ -41,6 +48,9 @@ struct LocalKernels {
     }
     float weight(size_t k, int dx, int dy, int c) const { return w[at(k, dx, dy) + size_t(c)]; }
 };
+
+// ρ² = A / π (mm²) of a texel of area A (mm²): the nearest distance at which a pair samples R_d.
+inline float texel_disk_r2(float area_mm2) { return area_mm2 / 3.14159265358979323846f; }
 
 // Surface positions of every non-empty atlas texel, in mm (0 for empty texels).
 std::vector<vec3> texel_positions_mm(const Atlas& atlas, const std::vector<vec3>& position, const std::vector<uint32_t>& index,

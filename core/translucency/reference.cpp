@@ -9,19 +9,24 @@
 
 namespace mesolab::translucency {
 
+vec3 reference_self_weight(const Dipole& dipole, const RdTable& Rd, float area) {
+    return vec3(dipole.reflectance_within(std::sqrt(double(texel_disk_r2(area))))) - Rd.at_r2(texel_disk_r2(area)) * area;
+}
+
 std::vector<vec3> reference_radiosity(const Atlas& atlas, const std::vector<vec3>& x, const Dipole& dipole, double mm_per_unit,
                                       const std::vector<vec3>& E) {
     const float s2 = float(mm_per_unit * mm_per_unit);
     // Sources: lit inner texels, with their power E A (mm²).
     struct Source {
         vec3 x, power;
+        float r2_min;  // ρ² of its disk (local.h)
     };
     std::vector<Source> src;
     vec3 lo(INFINITY), hi(-INFINITY);
     for (size_t t = 0; t < E.size(); ++t) {
         if (atlas.texel_kind[t] != Atlas::kInner) continue;
         lo = glm::min(lo, x[t]), hi = glm::max(hi, x[t]);
-        if (E[t] != vec3(0.f)) src.push_back({x[t], E[t] * (atlas.texel_area[t] * s2)});
+        if (E[t] != vec3(0.f)) src.push_back({x[t], E[t] * (atlas.texel_area[t] * s2), texel_disk_r2(atlas.texel_area[t] * s2)});
     }
     std::vector<vec3> B(E.size(), vec3(0.f));
     if (src.empty()) return B;
@@ -33,11 +38,10 @@ std::vector<vec3> reference_radiosity(const Atlas& atlas, const std::vector<vec3
             vec3 sum(0.f);
             for (const Source& s : src) {
                 const vec3 d = s.x - xt;
-                sum += Rd.at_r2(glm::dot(d, d)) * s.power;
+                sum += Rd.at_r2(std::max(glm::dot(d, d), s.r2_min)) * s.power;
             }
-            // The texel itself: its disk instead of R_d(0) A_t.
-            const float area = atlas.texel_area[t] * s2;
-            sum += (vec3(dipole.reflectance_within(std::sqrt(double(area) / 3.14159265358979323846))) - Rd.at_r2(0.f) * area) * E[t];
+            // The texel itself: its disk instead of R_d(ρ) A_t.
+            sum += reference_self_weight(dipole, Rd, atlas.texel_area[t] * s2) * E[t];
             B[t] = sum;
         }
     });

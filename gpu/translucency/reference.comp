@@ -1,12 +1,13 @@
 #version 430 core
 // Technique translucency, step translucency.reference: the brute-force radiosity (core/translucency/
 // reference.cpp): every lit inner texel's power times R_d (the same table) at every inner texel,
-// the texel itself as a disk; written filled (fill source) into an image.
+// never nearer than the source's disk radius, the texel itself as a disk; written filled (fill
+// source) into an image.
 #include "translucency.glsl"
 layout(local_size_x = 64) in;
 
 layout(std430, binding = 0) readonly buffer Fill { int fill[]; };
-layout(std430, binding = 1) readonly buffer Sources { vec4 src[]; };    // 2 per lit inner texel: position (mm), power
+layout(std430, binding = 1) readonly buffer Sources { vec4 src[]; };    // 2 per lit inner texel: position (mm) and ρ² (mm², local.h), power
 layout(std430, binding = 2) readonly buffer Position { vec4 x[]; };     // per texel, mm; w = 1 for inner texels
 layout(std430, binding = 3) readonly buffer Self { vec4 self_w[]; };    // per texel: the disk term's weight
 layout(std430, binding = 4) readonly buffer Irradiance { vec4 E[]; };
@@ -35,7 +36,7 @@ void main() {
         vec3 xs = x[s].xyz;
         for (int k = 0; k < u_sources; ++k) {
             vec3 d = src[2 * k].xyz - xs;
-            b += rd_at_r2(dot(d, d)) * src[2 * k + 1].rgb;
+            b += rd_at_r2(max(dot(d, d), src[2 * k].w)) * src[2 * k + 1].rgb;
         }
         b += self_w[s].rgb * E[s].rgb;
     }

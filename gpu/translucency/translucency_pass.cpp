@@ -563,7 +563,7 @@ private:
                 if (a.texel_kind[t] != Atlas::kInner) continue;
                 const float area = a.texel_area[t] * s2;
                 r.x[t] = vec4(x[t], 1.f);
-                r.self[t] = vec4(vec3(d.reflectance_within(std::sqrt(double(area) / 3.14159265358979323846))) - Rd.at_r2(0.f) * area, 0.f);
+                r.self[t] = vec4(reference_self_weight(d, Rd, area), 0.f);
                 r.sources_x.push_back(vec4(x[t], area));
                 r.sources_t.push_back(int32_t(t));
             }
@@ -581,7 +581,7 @@ private:
         for (size_t k = 0; k < r.sources_t.size(); ++k) {
             const vec3 e = vec3(E[size_t(r.sources_t[k])]);
             if (e == vec3(0.f)) continue;
-            src.push_back(vec4(vec3(r.sources_x[k]), 0.f));
+            src.push_back(vec4(vec3(r.sources_x[k]), texel_disk_r2(r.sources_x[k].w)));
             src.push_back(vec4(e * r.sources_x[k].w, 0.f));
         }
         const Buffer sources = storage(src);

@@ -2,26 +2,17 @@
 // diffusion length. A box, a tetrahedron and a sphere of few triangles, lit through the
 // technique's own illumination step; Σ radiosity / Σ irradiance over the atlas's inner texels
 // (area-weighted) against the brute-force reference on the same atlas.
-#include "core/mesh.h"
-#include "core/render.h"
-#include "core/translucency/reference.h"
-#include "core/translucency/translucency.h"
+#include "tests/translucency/energy.h"
 
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <cstdio>
-#include <memory>
 
 using namespace mesolab;
 using namespace mesolab::translucency;
+using namespace mesolab::translucency::test;
 
 namespace {
-struct Shape {
-    std::vector<vec3> position;
-    std::vector<uint32_t> index;
-};
-
 // 12 triangles, 8 vertices, half extents `half`.
 Shape box(vec3 half) {
     Shape s;
@@ -36,75 +27,11 @@ Shape tetrahedron() {
     return {{vec3(1, 1, 1), vec3(1, -1, -1), vec3(-1, 1, -1), vec3(-1, -1, 1)}, {0, 1, 2, 0, 3, 1, 0, 2, 3, 1, 3, 2}};
 }
 
-Light point_light(vec3 p) {
-    Light l;
-    l.point = true;
-    l.position = p;
-    l.radiance = vec3(1.f);
-    return l;
-}
-
-struct Energy {
-    dvec3 blended, unblended, kernels, factors, reference;  // Σ B A / Σ E A
-    double lowest = 0.0;                                    // most negative blended radiosity / the reference's mean
-    dvec3 rmse{0.0};                                        // blended against the reference, over its mean
-};
-
 // Every vertex kept, a 192² atlas (texels of 1.3-1.4 mm here: 7 x 7 kernels hold 82-86% of
 // skin1's red, the rest is the global part's), K = 7, threshold 3e-5, skin1: the technique's
-// stages and frame steps on the CPU, blended and not.
-Energy energy(const Shape& shape, double mm, const Light& light) {
-    const char* material = "skin1";
-    const PreparedMesh m = prepare_mesh(shape.position, shape.index, 0);
-    const AtlasStage a = make_atlas_stage(m, {192, 4, 30.f});
-    const Dipole d(measured_material(material).medium);
-    Lighting L;
-    L.lights = {light};
-    L.env_lighting = false;
-    const std::vector<ShadowMap> shadows = {make_shadow_map(*a.display, mat4(1.f), light, 512)};
-    const std::vector<vec3> E = illuminate(a, mat4(1.f), L, d.medium().eta, shadows);
-    const std::vector<float> A = vertex_areas(m.position, m.index, mm);
-    auto ratio = [&](const std::vector<vec3>& B) {
-        dvec3 out(0.0), in(0.0);
-        for (size_t t = 0; t < B.size(); ++t)
-            if (a.atlas.texel_kind[t] == Atlas::kInner) out += dvec3(B[t]) * double(a.atlas.texel_area[t]), in += dvec3(E[t]) * double(a.atlas.texel_area[t]);
-        return out / in;
-    };
-    Energy r;
-    std::vector<vec3> blended;
-    for (const bool blend : {true, false}) {
-        LocalKernels K = build_local_kernels(a.atlas, m.position, m.index, d, mm, 7);
-        const VertexFactors F = build_vertex_factors(m.position, m.index, d, {mm, 3e-5f, blend});
-        std::unique_ptr<BlendWeights> w;
-        if (blend) w = std::make_unique<BlendWeights>(fit_blending(a.atlas, m.position, m.index, d, mm, F, K));
-        const VertexValues v = gather_vertices(make_gather(a.atlas, m.index, A, mm, w.get(), blend ? &K : nullptr), E);
-        std::vector<vec3> Bv = F.multiply(v.E);
-        for (size_t i = 0; i < Bv.size(); ++i) Bv[i] += v.direct[i];
-        const std::vector<vec3> local = convolve_local(K, E), global = interpolate_to_texels(a.atlas, m.index, Bv);
-        std::vector<vec3> B(local.size());
-        for (size_t t = 0; t < B.size(); ++t) B[t] = local[t] + global[t];
-        if (blend) {
-            r.blended = ratio(B);
-            blended = std::move(B);
-        } else {
-            r.unblended = ratio(B), r.kernels = ratio(local), r.factors = ratio(global);
-        }
-    }
-    const std::vector<vec3> ref = reference_radiosity(a.atlas, texel_positions_mm(a.atlas, m.position, m.index, mm), d, mm, E);
-    r.reference = ratio(ref);
-    dvec3 sum(0.0), se(0.0);
-    double lowest = 0.0;
-    size_t n = 0;
-    for (size_t t = 0; t < ref.size(); ++t)
-        if (a.atlas.texel_kind[t] == Atlas::kInner) {
-            ++n;
-            for (int c = 0; c < 3; ++c) {
-                sum[c] += double(ref[t][c]), se[c] += std::pow(double(blended[t][c] - ref[t][c]), 2.0);
-                lowest = std::min(lowest, double(blended[t][c]));
-            }
-        }
-    r.lowest = lowest / ((sum.x + sum.y + sum.z) / (3.0 * double(n)));
-    for (int c = 0; c < 3; ++c) r.rmse[c] = std::sqrt(se[c] / double(n)) / (sum[c] / double(n));
+// stages and frame steps on the CPU, blended and not (energy.h).
+Energy printed_energy(const Shape& shape, double mm, const Light& light) {
+    const Energy r = test::energy(shape, mm, light);
     std::printf("Σ B / Σ E (R, G, B): blended %.4f %.4f %.4f, unblended %.4f %.4f %.4f (kernels alone %.4f %.4f %.4f, factors alone %.4f %.4f %.4f), "
                 "reference %.4f %.4f %.4f; blended RMSE / mean %.3f %.3f %.3f\n",
                 r.blended.x, r.blended.y, r.blended.z, r.unblended.x, r.unblended.y, r.unblended.z, r.kernels.x, r.kernels.y, r.kernels.z,
@@ -134,7 +61,7 @@ void expect_energy_kept(const Energy& e, const Dipole& d, const char* what) {
 // A 2 x 2 x 0.4 box at 56 mm per unit (faces of 112 mm against skin1's diffusion length of
 // 0.7-3.7 mm), lit by a point light 0.033 units (1.8 mm) above its top face's centre.
 TEST(CoarseEnergy, ABoxWithFacesFarLargerThanTheDiffusionLengthKeepsTheReferencesEnergy) {
-    const Energy e = energy(box(vec3(1.f, 1.f, 0.2f)), 56.0, point_light(vec3(0.f, 0.f, 0.233f)));
+    const Energy e = printed_energy(box(vec3(1.f, 1.f, 0.2f)), 56.0, point_light(vec3(0.f, 0.f, 0.233f)));
     expect_energy_kept(e, Dipole(measured_material("skin1").medium), "box");
 }
 
@@ -143,7 +70,7 @@ TEST(CoarseEnergy, ATetrahedronKeepsTheReferencesEnergy) {
     const Shape t = tetrahedron();
     const vec3 c = (t.position[0] + t.position[1] + t.position[2]) / 3.f;
     const vec3 n = glm::normalize(glm::cross(t.position[1] - t.position[0], t.position[2] - t.position[0]));
-    const Energy e = energy(t, 45.0, point_light(c + 0.05f * n));
+    const Energy e = printed_energy(t, 45.0, point_light(c + 0.05f * n));
     expect_energy_kept(e, Dipole(measured_material("skin1").medium), "tetrahedron");
 }
 
@@ -156,7 +83,7 @@ TEST(CoarseEnergy, ACoarseSphereKeepsTheReferencesEnergy) {
     l.direction = glm::normalize(vec3(0.3f, 0.2f, 1.f));
     l.radiance = vec3(1.f);
     for (const double mm : {45.0, 10.0}) {
-        const Energy e = energy({sp.position, sp.index}, mm, l);
+        const Energy e = printed_energy({sp.position, sp.index}, mm, l);
         expect_energy_kept(e, Dipole(measured_material("skin1").medium), mm > 20.0 ? "sphere, 45 mm" : "sphere, 10 mm");
     }
 }
