@@ -37,6 +37,9 @@ std::string TruthCache::key(const Scene& s, int width, int height, uint64_t seed
     Fnv f;
     f.add(std::string(version_string()));
     f.add(std::string("sums exact; translucency's exitance gathered"));  // the truths' format and estimators
+    // The developer switch that selects bumpsynth's plain estimator (core/bumpsynth/truth.cpp): its
+    // truths are not the split estimator's bytes.
+    if (std::getenv("MESOLAB_TRUTH_PLAIN")) f.add(std::string("plain"));
     f.add(truth_description(s));
     const int64_t dims[3] = {width, height, int64_t(seed)};
     f.add(dims, sizeof dims);

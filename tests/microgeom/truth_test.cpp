@@ -148,7 +148,7 @@ TEST(MicrogeomTruth, SweepOverTwoKnobsAgainstOneTruth) {
     for (const char* row : {"\n0,32,", "\n2,32,", "\n0,64,", "\n2,64,"}) EXPECT_NE(csv.find(row), std::string::npos) << row << "\n" << csv;
     EXPECT_NE(test::slurp(stem + ".svg").find("noise floor"), std::string::npos);
     size_t truths = 0;
-    for (size_t at = r.err.find("truth: 4 spp"); at != std::string::npos; at = r.err.find("truth: 4 spp", at + 1)) ++truths;
+    for (size_t at = r.err.find("truth: 4 spp ("); at != std::string::npos; at = r.err.find("truth: 4 spp (", at + 1)) ++truths;
     EXPECT_EQ(truths, 1u) << r.err;
     // --by without the truth, and a zero-sample truth, are refused by name.
     EXPECT_EQ(test::run_mesolab("sweep presets/microgeom/fig1b-scattering.json --knob microgeom.depth=0,2 --by microgeom.directions=32,64 -o /tmp/mesolab-never").status, 2);
