@@ -11,6 +11,7 @@ MESOLAB_PACKAGES=(
   libgtest-dev libgmock-dev
   pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib python3-openimageio
   xvfb xauth
+  ccache
 )
 
 ensure_packages() {
@@ -32,10 +33,13 @@ build() {
   local jobs
   jobs="$(nproc 2>/dev/null || echo 2)"
   echo "== building $dir"
-  # ccache, where installed, makes rebuilds of a fresh clone cheap; it is not required.
+  # ccache (installed with the packages above) makes rebuilds of a fresh clone cheap: paths under
+  # the clone are taken as relative to it, and the folder is not hashed (debug builds), so another
+  # clone of the same commit compiles from the cache. The build does not need it.
   local launcher=()
   if command -v ccache >/dev/null 2>&1; then
     launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+    export CCACHE_BASEDIR="$PWD" CCACHE_NOHASHDIR=1
   fi
   cmake -S . -B "$dir" -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" "$@" >/dev/null
   cmake --build "$dir" -j "$jobs"

@@ -1,6 +1,7 @@
 // GUI smoke tests: run the real window under a virtual X display (xvfb-run) in scripted mode and
 // check the exit status, the screenshots it writes and its error messages.
 #include "core/image.h"
+#include "support/cli.h"
 
 #include <gtest/gtest.h>
 
@@ -46,7 +47,7 @@ protected:
                                             ::testing::UnitTest::GetInstance()->current_test_info()->name());
         fs::remove_all(dir_);
         fs::create_directories(dir_);
-        preset_ = fs::path(MESOLAB_SOURCE_DIR) / "presets/basic/sphere.json";
+        preset_ = fs::path(mesolab::test::source_dir()) / "presets/basic/sphere.json";
         if (!fs::exists(preset_)) {
             preset_ = dir_ / "sphere.json";
             std::ofstream(preset_) << R"({"schema":1,"objects":[{"geometry":{"type":"sphere"},"material":{"technique":"basic"}}]})";
@@ -62,7 +63,7 @@ protected:
     Result gui(const std::string& args) {
         const fs::path err = dir_ / "stderr.txt", status = dir_ / "status.txt";
         fs::remove(status);
-        const std::string inner = q(MESOLAB_BINARY) + " gui " + args + " >/dev/null 2>" + q(err.string()) + "; echo $? >" + q(status.string());
+        const std::string inner = q(mesolab::test::mesolab_binary()) + " gui " + args + " >/dev/null 2>" + q(err.string()) + "; echo $? >" + q(status.string());
         const std::string cmd = "cd " + q(dir_.string()) + " && timeout 600 xvfb-run -a -s " + q("-screen 0 1600x1000x24") + " sh -c " + q(inner) +
                                 " >" + q((dir_ / "xvfb.txt").string()) + " 2>&1";
         // `xvfb-run -a` instances started at the same moment (ctest -j) may race for a display
@@ -214,7 +215,7 @@ TEST_F(GuiSmoke, TruthViewShowsTheTruthAndTheErrorAndSurvivesATechniqueWithoutOn
                           << "view error\n"
                           << "wait\n"
                           << "screenshot " << error.string() << "\n"
-                          << "load " << (fs::path(MESOLAB_SOURCE_DIR) / "presets/bumpsynth/fig1-sphere-distances.json").string() << "\n"
+                          << "load " << (fs::path(mesolab::test::source_dir()) / "presets/bumpsynth/fig1-sphere-distances.json").string() << "\n"
                           << "wait\n"
                           << "view real-time\n"
                           << "wait\n"

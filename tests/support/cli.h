@@ -10,6 +10,10 @@
 
 namespace mesolab::test {
 
+// The repository's folder and the mesolab binary (tests/CMakeLists.txt generates them).
+const char* source_dir();
+const char* mesolab_binary();
+
 struct CliResult {
     int status = -1;
     std::string out, err;
@@ -48,7 +52,7 @@ inline CliResult run_mesolab(const std::string& args, const std::string& prefix 
     const auto dir = std::filesystem::temp_directory_path();
     const std::string tag = std::to_string(::getpid()) + "-" + std::to_string(counter++);
     const std::string out = (dir / ("mesolab-out-" + tag)).string(), err = (dir / ("mesolab-err-" + tag)).string();
-    const std::string cmd = "cd '" MESOLAB_SOURCE_DIR "' && " + prefix + " '" MESOLAB_BINARY "' " + args + " >'" + out + "' 2>'" + err + "' </dev/null";
+    const std::string cmd = "cd '" + std::string(source_dir()) + "' && " + prefix + " '" + mesolab_binary() + "' " + args + " >'" + out + "' 2>'" + err + "' </dev/null";
     const int raw = std::system(cmd.c_str());
     CliResult r;
     r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : 128 + (WIFSIGNALED(raw) ? WTERMSIG(raw) : 0);
@@ -59,5 +63,5 @@ inline CliResult run_mesolab(const std::string& args, const std::string& prefix 
     return r;
 }
 
-inline std::string source_path(const std::string& rel) { return std::string(MESOLAB_SOURCE_DIR) + "/" + rel; }
+inline std::string source_path(const std::string& rel) { return std::string(source_dir()) + "/" + rel; }
 }  // namespace mesolab::test

@@ -125,7 +125,8 @@ TEST(TruthParts, PartsMergedInAnyOrderAreTheBytesOfOneRender) {
         st.spp = 11;
         expect_same_bytes(accumulate_truth(s, ev, kSize, kSize, st, &three), whole.sums, s.name + ", continued");
         double most = 0.0;
-        for (float v : truth_frame(whole.sums).aov("radiance").data) most = std::max(most, double(v));
+        const Frame frame = truth_frame(whole.sums);
+        for (float v : frame.aov("radiance").data) most = std::max(most, double(v));
         EXPECT_GT(most, 0.0) << s.name;
     }
 }
