@@ -40,12 +40,11 @@
 #include "core/translucency/translucency.h"
 #include "core/translucency/truth.h"
 
-#include <array>
-#include <cstring>
-
 #include <tbb/parallel_for.h>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <numbers>
 #include <optional>
