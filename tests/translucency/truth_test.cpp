@@ -1,7 +1,7 @@
 // translucency's truth (core/translucency/truth.cpp): volumetric light transport inside the
 // closed mesh, traced from the lights. A non-absorbing medium behind an index-matched boundary
 // (η = 1) lets every bit of entered power out, so under a uniform sky of radiance 1 it glows at
-// exactly 1 (within the estimator's blur); absorption darkens it; the photons' sums are the same
+// exactly 1 (within the exitance estimate's edge loss on coarse facets); absorption darkens it; the photons' sums are the same
 // bytes at any thread count; an open mesh is refused by name.
 #include "app/truth_cache.h"
 #include "app/workbench.h"
@@ -38,8 +38,8 @@ Frame truth(const Scene& s, int size, int spp) {
 }  // namespace
 
 // σa = 0 and η = 1: the photons that enter all leave, and in a uniform sky of radiance 1 every
-// point sends out what it receives, π per unit area: L = M / π = 1. Neighbouring pixels share
-// vertices, so the mean over the ball's pixels is judged by its spread over 8 seeds: per channel,
+// point sends out what it receives, π per unit area: L = M / π = 1. All pixels share a sample's
+// photons, so the mean over the ball's pixels is judged by its spread over 8 seeds: per channel,
 // the grand mean within 4.4 of its standard error (three tests: 1e-5 each, Šidák).
 TEST(TranslucencyTruth, ANonAbsorbingIndexMatchedBallInAUniformSkyGlowsAtOne) {
     const Scene s = ball(R"("sigma_s": [1, 2, 4], "sigma_a": [0, 0, 0], "eta": 1.0)", "[]", 1.f);
@@ -90,7 +90,7 @@ TEST(TranslucencyTruth, TheSameBytesAtAnyThreadCount) {
 
 // Light travels inside the mesh: a sheet (a plane) is refused, naming the object and saying why; a
 // solid with holes (the cylinder has no caps) is closed by a fan over each hole, and the
-// index-matched, non-absorbing furnace glows at 1 in it too (within 5%: one seed, shared vertices).
+// index-matched, non-absorbing furnace glows at 1 in it too (within 5%: one seed, the pixels sharing its photons).
 TEST(TranslucencyTruth, AnOpenSheetIsRefusedAndHolesAreClosed) {
     const test::ObjectMean can = test::object_mean(truth(ball(R"("sigma_s": [1, 1, 1], "sigma_a": [0, 0, 0], "eta": 1.0)", "[]", 1.f, "cylinder"), 32, 16));
     ASSERT_GT(can.pixels, 100);
