@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 namespace mesolab::test {
 
@@ -91,5 +92,34 @@ inline ObjectMean object_mean(const Frame& f, int c = 1) {
             }
     if (m.pixels) m.mean = sum / m.pixels, m.stderr_mean = std::sqrt(var) / m.pixels;
     return m;
+}
+// Frames of one truth under different seeds: each pixel's spread of channel `c` around its mean
+// over the seeds (unbiased), against the standard errors the frames report, as the ratio of their
+// root mean squares over the pixels that show an object (1 when truth_stderr is right).
+struct StderrCheck {
+    double ratio = 0.0;
+    int pixels = 0;
+};
+inline StderrCheck stderr_against_spread(const std::vector<Frame>& frames, int c = 1) {
+    const size_t n = frames.size();
+    double spread2 = 0.0, se2 = 0.0;
+    StderrCheck r;
+    if (n < 2) return r;
+    for (int y = 0; y < frames[0].height; ++y)
+        for (int x = 0; x < frames[0].width; ++x) {
+            if (!shows_object(frames[0], x, y)) continue;
+            double m = 0.0;
+            for (const Frame& f : frames) m += f.aov("radiance").at(x, y)[c];
+            m /= double(n);
+            for (const Frame& f : frames) {
+                const double d = f.aov("radiance").at(x, y)[c] - m, e = f.aov("truth_stderr").at(x, y)[c];
+                spread2 += d * d, se2 += e * e;
+            }
+            ++r.pixels;
+        }
+    spread2 *= double(n) / double(n - 1);
+    if (se2 > 0.0) r.ratio = std::sqrt(spread2 / se2);
+    std::printf("spread over seeds / reported standard error: %.3f over %d pixels\n", r.ratio, r.pixels);
+    return r;
 }
 }  // namespace mesolab::test

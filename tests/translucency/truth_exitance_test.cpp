@@ -12,6 +12,7 @@
 #include "core/translucency/truth.h"
 #include "core/truth/truth.h"
 #include "support/cli.h"
+#include "support/meshes.h"
 #include "support/truth.h"
 
 #include <gtest/gtest.h>
@@ -38,36 +39,7 @@ constexpr double kRadii[3] = {4.0, 8.0, 16.0};      // mm: the discs around the 
 // A closed box |x|, |y| <= 1, -0.4 <= z <= 0 (units), its faces cut into n x n (top, bottom) and
 // n x k (sides) squares, welded along the edges, wound outwards.
 std::string write_slab(const std::string& dir, const std::string& name, int n, int k) {
-    std::map<std::array<int, 3>, int> ids;
-    std::string verts, faces;
-    const auto v = [&](int i, int j, int l) {
-        const auto [it, fresh] = ids.emplace(std::array<int, 3>{i, j, l}, int(ids.size()) + 1);
-        if (fresh)
-            verts += "v " + std::to_string(2.0 * i / n - 1.0) + " " + std::to_string(2.0 * j / n - 1.0) + " " + std::to_string(0.4 * l / k - 0.4) + "\n";
-        return it->second;
-    };
-    const auto quad = [&](int a, int b, int c, int d) {
-        faces += "f " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(c) + "\n";
-        faces += "f " + std::to_string(a) + " " + std::to_string(c) + " " + std::to_string(d) + "\n";
-    };
-    for (int i = 0; i < n; ++i)
-        for (int j = 0; j < n; ++j) {
-            quad(v(i, j, k), v(i + 1, j, k), v(i + 1, j + 1, k), v(i, j + 1, k));
-            quad(v(i, j, 0), v(i, j + 1, 0), v(i + 1, j + 1, 0), v(i + 1, j, 0));
-        }
-    for (int i = 0; i < n; ++i)
-        for (int l = 0; l < k; ++l) {
-            quad(v(i, 0, l), v(i + 1, 0, l), v(i + 1, 0, l + 1), v(i, 0, l + 1));
-            quad(v(i, n, l), v(i, n, l + 1), v(i + 1, n, l + 1), v(i + 1, n, l));
-            quad(v(0, i, l), v(0, i, l + 1), v(0, i + 1, l + 1), v(0, i + 1, l));
-            quad(v(n, i, l), v(n, i + 1, l), v(n, i + 1, l + 1), v(n, i, l + 1));
-        }
-    const std::string path = dir + "/" + name + ".obj";
-    std::FILE* f = std::fopen(path.c_str(), "w");
-    std::fputs(verts.c_str(), f);
-    std::fputs(faces.c_str(), f);
-    std::fclose(f);
-    return path;
+    return test::write_box_obj(dir + "/" + name + ".obj", n, k, -0.4, 0.0);
 }
 
 Scene slab_scene(const std::string& mesh, const std::string& dir) {

@@ -9,6 +9,7 @@
 #include "core/scene.h"
 #include "core/truth/truth.h"
 #include "support/cli.h"
+#include "support/meshes.h"
 #include "support/truth.h"
 
 #include <gtest/gtest.h>
@@ -109,38 +110,7 @@ TEST(TranslucencyTruth, AnOpenSheetIsRefusedAndHolesAreClosed) {
 namespace {
 // A closed box of 2 x 2 x 0.5 units, its faces split into squares of 0.05 (welded along the edges):
 // at 20 mm a unit, a slab 40 mm wide and 10 mm thick.
-std::string write_slab(const std::string& dir) {
-    constexpr int N = 40, K = 10;
-    std::map<std::array<int, 3>, int> ids;
-    std::string verts, faces;
-    const auto v = [&](int i, int j, int k) {
-        const auto [it, fresh] = ids.emplace(std::array<int, 3>{i, j, k}, int(ids.size()) + 1);
-        if (fresh) verts += "v " + std::to_string(2.0 * i / N - 1.0) + " " + std::to_string(2.0 * j / N - 1.0) + " " + std::to_string(0.5 * k / K - 0.25) + "\n";
-        return it->second;
-    };
-    const auto quad = [&](int a, int b, int c, int d) {
-        faces += "f " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(c) + "\n";
-        faces += "f " + std::to_string(a) + " " + std::to_string(c) + " " + std::to_string(d) + "\n";
-    };
-    for (int i = 0; i < N; ++i)
-        for (int j = 0; j < N; ++j) {
-            quad(v(i, j, K), v(i + 1, j, K), v(i + 1, j + 1, K), v(i, j + 1, K));
-            quad(v(i, j, 0), v(i, j + 1, 0), v(i + 1, j + 1, 0), v(i + 1, j, 0));
-        }
-    for (int i = 0; i < N; ++i)
-        for (int k = 0; k < K; ++k) {
-            quad(v(i, 0, k), v(i + 1, 0, k), v(i + 1, 0, k + 1), v(i, 0, k + 1));
-            quad(v(i, N, k), v(i, N, k + 1), v(i + 1, N, k + 1), v(i + 1, N, k));
-            quad(v(0, i, k), v(0, i, k + 1), v(0, i + 1, k + 1), v(0, i + 1, k));
-            quad(v(N, i, k), v(N, i + 1, k), v(N, i + 1, k + 1), v(N, i, k + 1));
-        }
-    const std::string path = dir + "/slab.obj";
-    std::FILE* f = std::fopen(path.c_str(), "w");
-    std::fputs(verts.c_str(), f);
-    std::fputs(faces.c_str(), f);
-    std::fclose(f);
-    return path;
-}
+std::string write_slab(const std::string& dir) { return test::write_box_obj(dir + "/slab.obj", 40, 10, -0.25, 0.25); }
 
 // The mean of `aov`'s channel c over the central half of the frame.
 double central_mean(const Frame& f, const char* aov, int c) {

@@ -139,25 +139,9 @@ TEST(TruthNoise, TheStandardErrorMatchesTheSpreadOverSeeds) {
     constexpr int kSeeds = 8, kSize = 32;
     std::vector<Frame> frames;
     for (int k = 0; k < kSeeds; ++k) frames.push_back(truth(s, kSize, 16, uint64_t(100 + k)));
-    double spread2 = 0.0, se2 = 0.0;
-    int pixels = 0;
-    for (int y = 0; y < kSize; ++y)
-        for (int x = 0; x < kSize; ++x) {
-            if (!shows_object(frames[0], x, y)) continue;
-            double m = 0.0;
-            for (const Frame& f : frames) m += f.aov("radiance").at(x, y)[1];
-            m /= kSeeds;
-            for (const Frame& f : frames) {
-                const double d = f.aov("radiance").at(x, y)[1] - m, e = f.aov("truth_stderr").at(x, y)[1];
-                spread2 += d * d, se2 += e * e;
-            }
-            ++pixels;
-        }
-    spread2 *= double(kSeeds) / double(kSeeds - 1);  // unbiased
-    const double ratio = std::sqrt(spread2 / se2);
-    std::printf("spread over seeds / reported standard error: %.3f over %d pixels\n", ratio, pixels);
-    ASSERT_GT(pixels, 400);
-    EXPECT_NEAR(ratio, 1.0, 0.15);
+    const test::StderrCheck check = test::stderr_against_spread(frames);
+    ASSERT_GT(check.pixels, 400);
+    EXPECT_NEAR(check.ratio, 1.0, 0.15);
 }
 
 // Bad input is an error naming what is wrong.
