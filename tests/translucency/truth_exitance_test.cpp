@@ -1,6 +1,7 @@
 // translucency's truth resolves the exitance at each point the camera sees, whatever the mesh's
 // tessellation (core/translucency/truth.h): a closed slab of 12 triangles and the same slab cut into
-// 3 mm squares give the same exitance around a point light, and both agree with an independent
+// fine squares give the same exitance around a point light, 60 mm thick and 1 mm thick (thinner
+// than a mean free path), and both agree with an independent
 // random walk through the same slab (written here, with no mesh and no ray caster); the estimators'
 // radius halved changes nothing beyond the noise (its blur's bias is small); the distance bound that
 // lets photons skip ray casts never exceeds the true distance to the surface.
@@ -31,10 +32,19 @@ using namespace mesolab;
 using glm::dvec3;
 
 namespace {
-constexpr double kMm = 150.0;                        // mm per unit
-constexpr double kHalf = 150.0, kDepth = 60.0;      // the slab: 300 x 300 x 60 mm, its top face at z = 0
-constexpr double kLight = 5.0;                       // mm above the top face's centre
-constexpr double kRadii[3] = {4.0, 8.0, 16.0};      // mm: the discs around the light's foot
+// A slab |x|, |y| <= 1, -0.4 <= z <= 0 (units) at `mm` mm a unit, lit by a point light `light` mm
+// above its top face's centre; `radii` (mm): the discs around the light's foot.
+struct Slab {
+    double mm, light;
+    std::array<double, 3> radii;
+    double half() const { return mm; }         // mm: half the slab's width
+    double depth() const { return 0.4 * mm; }  // mm: its thickness
+};
+// 300 x 300 x 60 mm, 46 mean free paths thick (skin1, red): a semi-infinite medium near the light.
+constexpr Slab kLarge{150.0, 5.0, {4.0, 8.0, 16.0}};
+// 5 x 5 x 1 mm, thinner than a mean free path: light crosses it, and the balls near the bottom
+// face shrink as they do in thin ears.
+constexpr Slab kThin{2.5, 0.5, {0.5, 1.0, 2.0}};
 
 // A closed box |x|, |y| <= 1, -0.4 <= z <= 0 (units), its faces cut into n x n (top, bottom) and
 // n x k (sides) squares, welded along the edges, wound outwards.
@@ -42,12 +52,12 @@ std::string write_slab(const std::string& dir, const std::string& name, int n, i
     return test::write_box_obj(dir + "/" + name + ".obj", n, k, -0.4, 0.0);
 }
 
-Scene slab_scene(const std::string& mesh, const std::string& dir) {
+Scene slab_scene(const Slab& g, const std::string& mesh, const std::string& dir) {
     const std::string text = R"({"schema": 1, "name": "slab", "camera": {"mode": "orbit", "distance": 3.0, "orbit": [1, -90], "fov": 30},
-        "lights": [{"type": "point", "position": [0, 0, )" + std::to_string(kLight / kMm) + R"(], "intensity": 1, "color": [1, 1, 1]}],
+        "lights": [{"type": "point", "position": [0, 0, )" + std::to_string(g.light / g.mm) + R"(], "intensity": 1, "color": [1, 1, 1]}],
         "env": {"color": [0, 0, 0], "intensity": 0}, "effects": {"environment": false},
         "objects": [{"name": "slab", "geometry": {"type": "mesh", "path": ")" + mesh + R"("}, "material": {"technique": "translucency",
-        "material": "skin1", "mm_per_unit": 150, "vertices": 0}}]})";
+        "material": "skin1", "mm_per_unit": )" + std::to_string(g.mm) + R"(, "vertices": 0}}]})";
     return scene_from_json(nlohmann::json::parse(text), "slab", dir);
 }
 
@@ -60,16 +70,16 @@ double fresnel(double cos_i, double eta, double& cos_t) {
     return 0.5 * (rs * rs + rp * rp);
 }
 
-// The power entering the top face from a point light of unit intensity kLight mm above its centre:
+// The power entering the top face from a point light of unit intensity g.light mm above its centre:
 // ∫ cos θ / d² (1 - F(θ)) dA over the face (a solid angle), by the midpoint rule.
-double entered_solid_angle(double eta) {
+double entered_solid_angle(const Slab& g, double eta) {
     constexpr int kCells = 3000;
-    const double h = 2.0 * kHalf / kCells;
+    const double h = 2.0 * g.half() / kCells;
     double sum = 0.0;
     for (int i = 0; i < kCells; ++i)
         for (int j = 0; j < kCells; ++j) {
-            const double x = -kHalf + (i + 0.5) * h, y = -kHalf + (j + 0.5) * h, d2 = x * x + y * y + kLight * kLight;
-            const double c = kLight / std::sqrt(d2);
+            const double x = -g.half() + (i + 0.5) * h, y = -g.half() + (j + 0.5) * h, d2 = x * x + y * y + g.light * g.light;
+            const double c = g.light / std::sqrt(d2);
             double ct = 0.0;
             sum += c / d2 * (1.0 - fresnel(c, eta, ct)) * h * h;
         }
@@ -78,13 +88,13 @@ double entered_solid_angle(double eta) {
 
 // The independent reference: photons from the point light into the box, refracted in with the
 // exact Fresnel transmittance, walked (free paths of mean 1/σt, albedo σs′/σt, isotropic), reflected
-// or let out at every face by the exact Fresnel reflectance. Returns, per radius of kRadii and for
+// or let out at every face by the exact Fresnel reflectance. Returns, per radius of g.radii and for
 // the whole top face, the power leaving the top face within it over the power that entered.
 struct Reference {
-    std::array<double, 4> fraction{};  // kRadii..., then the whole top face
+    std::array<double, 4> fraction{};  // g.radii..., then the whole top face
     std::array<double, 4> stderr_{};
 };
-Reference random_walk(const translucency::Medium& m, int channel, int photons, uint64_t seed) {
+Reference random_walk(const Slab& g, const translucency::Medium& m, int channel, int photons, uint64_t seed) {
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> U(0.0, 1.0);
     const double sigma_t = m.sigma_s[channel] + m.sigma_a[channel], albedo = m.sigma_s[channel] / sigma_t, eta = m.eta;
@@ -94,8 +104,8 @@ Reference random_walk(const translucency::Medium& m, int channel, int photons, u
         // Uniform over the lower hemisphere (weight 2π per unit intensity: the ratio needs none).
         const double cz = -U(rng), phi = 2.0 * std::numbers::pi * U(rng), sz = std::sqrt(1.0 - cz * cz);
         dvec3 d(sz * std::cos(phi), sz * std::sin(phi), cz);
-        dvec3 x = dvec3(0.0, 0.0, kLight) + d * (kLight / -cz);
-        if (std::fabs(x.x) > kHalf || std::fabs(x.y) > kHalf) continue;
+        dvec3 x = dvec3(0.0, 0.0, g.light) + d * (g.light / -cz);
+        if (std::fabs(x.x) > g.half() || std::fabs(x.y) > g.half()) continue;
         double ct = 0.0;
         const double F = fresnel(-cz, eta, ct);
         double w = 1.0 - F;
@@ -110,7 +120,7 @@ Reference random_walk(const translucency::Medium& m, int channel, int photons, u
             int axis = -1;
             double sign = 0.0;
             for (int a = 0; a < 3; ++a) {
-                const double lo = a == 2 ? -kDepth : -kHalf, hi = a == 2 ? 0.0 : kHalf;
+                const double lo = a == 2 ? -g.depth() : -g.half(), hi = a == 2 ? 0.0 : g.half();
                 if (d[a] > 0.0 && (hi - x[a]) / d[a] < t) t = (hi - x[a]) / d[a], axis = a, sign = 1.0;
                 if (d[a] < 0.0 && (lo - x[a]) / d[a] < t) t = (lo - x[a]) / d[a], axis = a, sign = -1.0;
             }
@@ -134,7 +144,7 @@ Reference random_walk(const translucency::Medium& m, int channel, int photons, u
             if (axis == 2 && sign > 0.0) {  // out through the top face
                 const double rho = std::hypot(x.x, x.y);
                 for (int k = 0; k < 3; ++k)
-                    if (rho < kRadii[k]) out[size_t(k)] += w;
+                    if (rho < g.radii[size_t(k)]) out[size_t(k)] += w;
                 out[3] += w;
             }
             break;
@@ -152,39 +162,40 @@ Reference random_walk(const translucency::Medium& m, int channel, int photons, u
 }
 
 // The truth's exitance on the top face at rings around the light's foot, integrated over the
-// discs of kRadii (midpoint rule in ρ, kAngles points per ring), over the entered power.
+// discs of g.radii (midpoint rule in ρ, 64 rings to the largest, kAngles points per ring), over the
+// entered power.
 struct Profile {
     std::array<double, 3> fraction{}, stderr_{};
     int photons = 0;
     dvec3 radius_mm{0.0};
 };
-Profile truth_profile(const Scene& s, int channel, int samples, double radius_scale) {
-    constexpr double kStep = 0.25;  // mm between rings
+Profile truth_profile(const Slab& g, const Scene& s, int channel, int samples, double radius_scale) {
+    const double kStep = g.radii[2] / 64.0;  // mm between rings
     constexpr int kAngles = 8;
     Session session;
     const Evaluation ev = session.evaluate(s, truth_stages(s));
     std::vector<vec3> points, normals;
     std::vector<double> ring;
-    for (double rho = 0.5 * kStep; rho < kRadii[2]; rho += kStep)
+    for (double rho = 0.5 * kStep; rho < g.radii[2]; rho += kStep)
         for (int a = 0; a < kAngles; ++a) {
             const double phi = 2.0 * std::numbers::pi * (a + 0.5 * (int(rho / kStep) % 2)) / kAngles;
-            points.push_back(vec3(float(rho * std::cos(phi) / kMm), float(rho * std::sin(phi) / kMm), 0.f));
+            points.push_back(vec3(float(rho * std::cos(phi) / g.mm), float(rho * std::sin(phi) / g.mm), 0.f));
             normals.push_back(vec3(0.f, 0.f, 1.f));
             ring.push_back(rho);
         }
     const translucency::ExitanceEstimate e = translucency::truth_exitance(s, ev, 0, points, normals, samples, 7, radius_scale);
     const Lighting lighting = make_lighting(s, ev);
     const double intensity = lighting.lights.at(0).radiance[channel];
-    const double entered = intensity * entered_solid_angle(translucency::measured_material("skin1").medium.eta);
+    const double entered = intensity * entered_solid_angle(g, translucency::measured_material("skin1").medium.eta);
     Profile p;
     p.photons = e.photons_per_sample, p.radius_mm = e.radius_mm;
     for (int k = 0; k < 3; ++k) {
         double sum = 0.0, var = 0.0;
         for (size_t i = 0; i < points.size(); ++i) {
-            if (ring[i] >= kRadii[k]) continue;
+            if (ring[i] >= g.radii[size_t(k)]) continue;
             const double area = 2.0 * std::numbers::pi * ring[i] * kStep / kAngles;  // mm²
-            const double M = double(e.mean[i][channel]) / (kMm * kMm);                  // per mm²
-            const double se = double(e.stderr_[i][channel]) / (kMm * kMm);
+            const double M = double(e.mean[i][channel]) / (g.mm * g.mm);                // per mm²
+            const double se = double(e.stderr_[i][channel]) / (g.mm * g.mm);
             sum += M * area, var += se * se * area * area;
         }
         p.fraction[size_t(k)] = sum / entered;
@@ -207,41 +218,49 @@ float distance_to_triangle(vec3 p, vec3 a, vec3 b, vec3 c) {
     if (inside) return std::fabs(glm::dot(p - a, n));
     return std::min({distance_to_segment(p, a, b), distance_to_segment(p, b, c), distance_to_segment(p, c, a)});
 }
-}  // namespace
 
-// A point light 5 mm above a skin slab (300 x 300 x 60 mm, skin1, η 1.3): the fraction of the
-// entered power that leaves the top face within 4, 8 and 16 mm of the light's foot, red. The
-// truth on 12 triangles, on 3 mm squares and with its radius halved, against the reference walk:
+// A point light above a skin slab (skin1, η 1.3): the fraction of the entered power that leaves
+// the top face within each of g.radii of the light's foot, red. The truth on 12 triangles, on
+// squares of a 100th of the slab's width and with its radius halved, against the reference walk:
 // each within 4 of their joint standard errors plus 2% of the reference (the reference's own
 // discretisation-free answer; the truth's blur is r = a quarter of a mean free path).
-TEST(TranslucencyTruthExitance, ASlabOfTwelveTrianglesAndAFineSlabAgreeWithARandomWalk) {
+void expect_agreement_with_a_random_walk(const Slab& g, int samples) {
     test::TempDir dir("translucency-exitance");
-    const Scene coarse = slab_scene(write_slab(dir.path.string(), "coarse", 1, 1), dir.path.string());
-    const Scene fine = slab_scene(write_slab(dir.path.string(), "fine", 100, 20), dir.path.string());
+    const Scene coarse = slab_scene(g, write_slab(dir.path.string(), "coarse", 1, 1), dir.path.string());
+    const Scene fine = slab_scene(g, write_slab(dir.path.string(), "fine", 100, 20), dir.path.string());
     const translucency::Medium skin1 = translucency::measured_material("skin1").medium;
     constexpr int kChannel = 0;
-    const Reference ref = random_walk(skin1, kChannel, 400000, 11);
-    std::printf("reference walk (red): within 4, 8, 16 mm %.4f %.4f %.4f (± %.4f %.4f %.4f), the top face %.4f ± %.4f\n", ref.fraction[0], ref.fraction[1],
-                ref.fraction[2], ref.stderr_[0], ref.stderr_[1], ref.stderr_[2], ref.fraction[3], ref.stderr_[3]);
+    const Reference ref = random_walk(g, skin1, kChannel, 400000, 11);
+    std::printf("slab %g x %g x %g mm, reference walk (red): within %g, %g, %g mm %.4f %.4f %.4f (± %.4f %.4f %.4f), the top face %.4f ± %.4f\n",
+                2.0 * g.half(), 2.0 * g.half(), g.depth(), g.radii[0], g.radii[1], g.radii[2], ref.fraction[0], ref.fraction[1], ref.fraction[2],
+                ref.stderr_[0], ref.stderr_[1], ref.stderr_[2], ref.fraction[3], ref.stderr_[3]);
     struct Case {
         const char* name;
         const Scene* scene;
         double radius_scale;
     };
     std::vector<Profile> profiles;
-    for (const Case& c : {Case{"12 triangles", &coarse, 1.0}, Case{"3 mm squares", &fine, 1.0}, Case{"12 triangles, r / 2", &coarse, 0.5}}) {
-        const Profile p = truth_profile(*c.scene, kChannel, 3, c.radius_scale);
-        std::printf("truth, %s (r %.3f mm, %d photons a sample): %.4f %.4f %.4f (± %.4f %.4f %.4f)\n", c.name, p.radius_mm[kChannel], p.photons, p.fraction[0],
-                    p.fraction[1], p.fraction[2], p.stderr_[0], p.stderr_[1], p.stderr_[2]);
+    for (const Case& c : {Case{"12 triangles", &coarse, 1.0}, Case{"fine squares", &fine, 1.0}, Case{"12 triangles, r / 2", &coarse, 0.5}}) {
+        const Profile p = truth_profile(g, *c.scene, kChannel, samples, c.radius_scale);
+        std::printf("truth, %s (r %.3f mm, %d photons a sample, %d samples): %.4f %.4f %.4f (± %.4f %.4f %.4f)\n", c.name, p.radius_mm[kChannel], p.photons,
+                    samples, p.fraction[0], p.fraction[1], p.fraction[2], p.stderr_[0], p.stderr_[1], p.stderr_[2]);
         for (int k = 0; k < 3; ++k) {
             const double tol = 4.0 * std::hypot(p.stderr_[size_t(k)], ref.stderr_[size_t(k)]) + 0.02 * ref.fraction[size_t(k)];
-            EXPECT_NEAR(p.fraction[size_t(k)], ref.fraction[size_t(k)], tol) << c.name << ", within " << kRadii[k] << " mm";
+            EXPECT_NEAR(p.fraction[size_t(k)], ref.fraction[size_t(k)], tol) << c.name << ", within " << g.radii[size_t(k)] << " mm";
         }
         profiles.push_back(p);
     }
-    // Where the mesh-bound estimate gave 0.0-0.4%: the light near its foot is resolved.
+    // Where the mesh-bound estimate gave 0.0-0.4% on the large slab: the light near its foot is resolved.
     EXPECT_GT(profiles[0].fraction[0], 0.5 * ref.fraction[0]);
 }
+}  // namespace
+
+// 300 x 300 x 60 mm, the light 5 mm above, discs of 4, 8 and 16 mm: a semi-infinite medium.
+TEST(TranslucencyTruthExitance, ASlabOfTwelveTrianglesAndAFineSlabAgreeWithARandomWalk) { expect_agreement_with_a_random_walk(kLarge, 3); }
+
+// 5 x 5 x 1 mm, the light 0.5 mm above, discs of 0.5, 1 and 2 mm: thinner than a mean free path,
+// where the balls shrink at the bottom face and most light crosses the slab.
+TEST(TranslucencyTruthExitance, AThinSlabAgreesWithARandomWalk) { expect_agreement_with_a_random_walk(kThin, 64); }
 
 // Every point's distance bound is at most its distance to the nearest triangle (brute force), on
 // a coarse and a fine mesh and for points inside, outside and near the surface; and most points
