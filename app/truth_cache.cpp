@@ -36,9 +36,9 @@ TruthCache::TruthCache() {
 std::string TruthCache::key(const Scene& s, int width, int height, uint64_t seed) const {
     Fnv f;
     f.add(std::string(version_string()));
-    f.add(std::string("sums exact; translucency's exitance gathered"));  // the truths' format and estimators
-    // The developer switch that selects bumpsynth's plain estimator (core/bumpsynth/truth.cpp): its
-    // truths are not the split estimator's bytes.
+    f.add(std::string("sums exact; translucency's exitance gathered, its photons split by power"));  // the truths' format and estimators
+    // The developer switch that selects the plain estimators (bumpsynth's without the split of
+    // direct light, translucency's photons split evenly over the sources): not the same bytes.
     if (std::getenv("MESOLAB_TRUTH_PLAIN")) f.add(std::string("plain"));
     f.add(truth_description(s));
     const int64_t dims[3] = {width, height, int64_t(seed)};

@@ -10,9 +10,10 @@
 // fifth of the weight), reflect or leave at the boundary by the exact Fresnel reflectance. Each
 // sample of the truth is an independent batch of photons (16 per square of the smallest mean free
 // path's side of the surface, at most 2^20 and fewer where a pilot shows each photon leaving many
-// events, so that a batch keeps about 8 million events, 128 MB; split evenly over the lights and
-// the environment, one colour channel per photon), so the spread over samples is the exitance's
-// standard error; a batch is traced, used for every pixel and dropped, one at a time.
+// events, so that a batch keeps about 8 million events, 128 MB; split over the lights and the
+// environment by the power each sends towards the object, a quarter evenly, one colour channel per
+// photon), so the spread over samples is the exitance's standard error; a batch is traced, used
+// for every pixel and dropped, one at a time.
 //
 // The exitance at a point x the camera sees (truth.h) does not depend on the mesh's vertices:
 // - the light that leaves straight from a scattering event (most of it) comes from the events'
@@ -44,6 +45,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <map>
 #include <numbers>
@@ -217,6 +219,7 @@ public:
             area += 0.5 * double(glm::length(glm::cross(pb - pa, pc - pa)));
         }
         mean_curvature_ = facet_mean_curvature(*mesh_, to_world_);
+        plain_ = std::getenv("MESOLAB_TRUTH_PLAIN") != nullptr;
         double smallest = double(glm::length(hi_ - lo_));  // mean free path, world units
         for (int c = 0; c < 3; ++c) {
             radius_[c] = float(radius_mm[c] / mm_per_world_);
@@ -269,6 +272,7 @@ public:
         const int samples = p.end - p.first;
         batches_.resize(size_t(std::max(0, samples)));
         if (sources == 0 || samples <= 0) return;
+        const std::vector<double> power = source_power(p.lighting, centre, radius);
         constexpr int kChunks = 64;
         if (!sized_) {
             // The events a photon leaves near the surface, from a pilot of kPilot photons whose
@@ -277,21 +281,23 @@ public:
             TruthPrep pilot = p;
             pilot.seed = 0x70696c6f74ull;
             std::vector<Walks> walks(kChunks);
+            const std::vector<int> split = allocate(power, kPilot);
             tbb::parallel_for(0, kChunks, [&](int c) {
-                for (int i = c; i < kPilot; i += kChunks) trace_photon(pilot, centre, radius, sources, 0, i, walks[size_t(c)]);
+                for (int i = c; i < split.back(); i += kChunks) trace_photon(pilot, centre, radius, split, 0, i, walks[size_t(c)]);
             });
             size_t events = 0;
             for (const Walks& w : walks)
                 for (const auto& e : w.events) events += e.size();
-            const double per_photon = std::max(1.0, double(events) / double(kPilot));
+            const double per_photon = std::max(1.0, double(events) / double(split.back()));
             photons_ = int(std::clamp(std::min(double(photons_), double(kMostEvents) / per_photon), double(1 << 12), double(1 << 20)));
             sized_ = true;
         }
+        const std::vector<int> split = allocate(power, photons_);
         std::vector<Walks> chunks(size_t(samples) * kChunks);
         tbb::parallel_for(0, samples * kChunks, [&](int job) {
             if (p.cancel && p.cancel->load()) return;
             const int k = p.first + job / kChunks, c = job % kChunks;
-            for (int i = c; i < photons_; i += kChunks) trace_photon(p, centre, radius, sources, k, i, chunks[size_t(job)]);
+            for (int i = c; i < split.back(); i += kChunks) trace_photon(p, centre, radius, split, k, i, chunks[size_t(job)]);
         });
         tbb::parallel_for(0, 6 * samples, [&](int job) {
             const int j = job / 6, c = (job / 2) % 3;
@@ -435,13 +441,63 @@ private:
         return r;
     }
 
-    // Photon i of batch k: its source (lights in order, then the environment), its channel
-    // (i mod 3, weight x 3), then the walk: its scattering events near the surface and, where it
-    // leaves after a reflection or without scattering, its exit.
-    void trace_photon(const TruthPrep& p, vec3 centre, float radius, int sources, int k, int i, Walks& out) const {
+    // The power each source (the lights in order, then the environment) sends towards the sphere
+    // (centre, radius) around the object, summed over the channels: where its photons start.
+    std::vector<double> source_power(const Lighting& lighting, vec3 centre, float radius) const {
+        std::vector<double> power;
+        const double disc = std::numbers::pi * double(radius) * double(radius);
+        for (const Light& l : lighting.lights) {
+            const double sum = double(l.radiance.r) + double(l.radiance.g) + double(l.radiance.b);
+            if (!l.point) {
+                power.push_back(sum * disc);
+            } else {
+                const float dist = glm::length(centre - l.position);
+                const double cos_max = dist > radius ? std::sqrt(1.0 - double(radius) * radius / (double(dist) * dist)) : -1.0;
+                power.push_back(sum * 2.0 * std::numbers::pi * (1.0 - cos_max));
+            }
+        }
+        if (lighting.env_lighting) {
+            // The environment's mean radiance over the sphere, from a fixed spiral of directions.
+            constexpr int kDirs = 1024;
+            double sum = 0.0;
+            for (int j = 0; j < kDirs; ++j) {
+                const float z = 1.f - (2.f * float(j) + 1.f) / float(kDirs), r = std::sqrt(std::max(0.f, 1.f - z * z));
+                const float phi = float(j) * 2.39996323f;  // the golden angle
+                const vec3 L = lighting.env.radiance(vec3(r * std::cos(phi), r * std::sin(phi), z));
+                sum += double(L.r) + double(L.g) + double(L.b);
+            }
+            power.push_back(sum / kDirs * 4.0 * std::numbers::pi * disc);
+        }
+        return power;
+    }
+    // The photons of a batch of about `total` per source: in proportion to the source's power
+    // (photons emitted by power, Jensen 2001, "Realistic Image Synthesis Using Photon Mapping",
+    // §5.1), three quarters of them, and the last quarter split evenly, so that a dim source keeps
+    // some photons (the light of a dim sky where the sun does not reach); a multiple of 3 each,
+    // one channel per photon in turn. Source s emits photons [end[s - 1], end[s]), end[-1] = 0.
+    // MESOLAB_TRUTH_PLAIN=1 (a developer switch, for measuring) splits them evenly instead.
+    std::vector<int> allocate(const std::vector<double>& power, int total) const {
+        double all = 0.0;
+        for (double q : power) all += std::max(0.0, q);
+        std::vector<int> end;
+        int at = 0;
+        for (double q : power) {
+            const double share = all > 0.0 && !plain_ ? 0.75 * std::max(0.0, q) / all + 0.25 / double(power.size()) : 1.0 / double(power.size());
+            at += 3 * std::max(1, int(std::lround(double(total) * share / 3.0)));
+            end.push_back(at);
+        }
+        return end;
+    }
+
+    // Photon i of batch k: its source (split: allocate's), its channel (in turn, each a third of
+    // the source's photons, weight x 3), then the walk: its scattering events near the surface
+    // and, where it leaves after a reflection or without scattering, its exit.
+    void trace_photon(const TruthPrep& p, vec3 centre, float radius, const std::vector<int>& split, int k, int i, Walks& out) const {
         TruthRng rng(p.seed ^ 0x7472616e736c75ull, uint64_t(p.geometry) << 32 | uint64_t(i), uint64_t(k));
-        const int source = i % sources, channel = (i / sources) % 3;
-        const double per_source = double(photons_) / double(sources);
+        const int source = int(std::upper_bound(split.begin(), split.end(), i) - split.begin());
+        const int start = source == 0 ? 0 : split[size_t(source) - 1];
+        const int channel = (i - start) % 3;
+        const double per_source = double(split[size_t(source)] - start);
         vec3 o, d;
         double power = 0.0;
         const float u1 = rng.next(), u2 = rng.next(), u3 = rng.next(), u4 = rng.next();
@@ -550,6 +606,7 @@ private:
     std::vector<float> mean_curvature_;  // per triangle, 1 / world unit (positive where the surface bends away from its outside)
     int photons_ = 0;  // per sample
     bool sized_ = false;  // photons_ set from the pilot
+    bool plain_ = false;  // photons split evenly over the sources (MESOLAB_TRUTH_PLAIN)
     DistanceBound bound_;
     const RayScene* rt_ = nullptr;  // the scene of the last prepare (it outlives the samples)
     float eps_ = 1e-4f;

@@ -95,15 +95,6 @@ TEST(BumpsynthTruth, ReadsNoAccuracyKnob) {
 
 // [SECTION] Next-event estimation over the footprint (truth.cpp, TruthMaterial::fcos_light)
 namespace {
-// Sets MESOLAB_TRUTH_PLAIN (the plain estimator: fcos at the path's own point of the footprint)
-// while it lives.
-struct PlainEstimator {
-    PlainEstimator() { setenv("MESOLAB_TRUTH_PLAIN", "1", 1); }
-    ~PlainEstimator() { unsetenv("MESOLAB_TRUTH_PLAIN"); }
-    PlainEstimator(const PlainEstimator&) = delete;
-    PlainEstimator& operator=(const PlainEstimator&) = delete;
-};
-
 // A glossy bumpy plane (Beckmann 0.1, 6 octaves from 8 cells per unit of uv: ~8 of the finest
 // bumps across a pixel of 24²) seen at 30° with the light in the mirror direction: each pixel's
 // footprint holds many narrow highlights.
@@ -113,17 +104,6 @@ Scene glossy_bumps() {
                  R"({"mode": "orbit", "distance": 3.0, "orbit": [30, -90], "fov": 30})", "[30, 90]");
 }
 
-// The two-sided z value at which a family of n tests keeps its false-alarm rate at alpha (Šidák:
-// each test at 1 - (1 - alpha)^(1/n)), from erfc by bisection.
-double sidak_z(double alpha, int n) {
-    const double each = 1.0 - std::pow(1.0 - alpha, 1.0 / double(n));
-    double lo = 0.0, hi = 40.0;
-    for (int i = 0; i < 200; ++i) {
-        const double mid = 0.5 * (lo + hi);
-        (std::erfc(mid / std::sqrt(2.0)) > each ? lo : hi) = mid;
-    }
-    return 0.5 * (lo + hi);
-}
 }  // namespace
 
 // The footprint's points change the variance, not the mean: per pixel, the new estimator's mean
@@ -137,7 +117,7 @@ TEST(BumpsynthTruth, FootprintSplittingKeepsThePlainEstimatorsMean) {
     wb.set_truth_cache(TruthCache(""));
     Frame plain;
     {
-        PlainEstimator p;
+        test::PlainEstimator p;
         plain = wb.render(s, test::truth_request(Backend::Truth, kSize, 256, {"truth_stderr"}, 11)).frame;
     }
     const Frame split = wb.render(s, test::truth_request(Backend::Truth, kSize, 64, {"truth_stderr"}, 12)).frame;
@@ -151,7 +131,7 @@ TEST(BumpsynthTruth, FootprintSplittingKeepsThePlainEstimatorsMean) {
                 if (c == 1) z.push_back(e > 0.0 ? d / e : (d == 0.0 ? 0.0 : 1e30));
             }
         }
-    const double zmax_allowed = sidak_z(0.01, int(z.size()));
+    const double zmax_allowed = test::sidak_z(0.01, int(z.size()));
     double zmax = 0.0;
     for (double v : z) zmax = std::max(zmax, std::fabs(v));
     const test::ObjectMean a = test::object_mean(split), b = test::object_mean(plain);

@@ -15,6 +15,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 namespace mesolab::test {
 
@@ -122,4 +123,26 @@ inline StderrCheck stderr_against_spread(const std::vector<Frame>& frames, int c
     std::printf("spread over seeds / reported standard error: %.3f over %d pixels\n", r.ratio, r.pixels);
     return r;
 }
+
+// The two-sided z value at which a family of n tests keeps its false-alarm rate at alpha (Šidák:
+// each test at 1 - (1 - alpha)^(1/n)), from erfc by bisection.
+inline double sidak_z(double alpha, int n) {
+    const double each = 1.0 - std::pow(1.0 - alpha, 1.0 / double(n));
+    double lo = 0.0, hi = 40.0;
+    for (int i = 0; i < 200; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (std::erfc(mid / std::sqrt(2.0)) > each ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
+// Sets MESOLAB_TRUTH_PLAIN while it lives: the truths' plain estimators (bumpsynth's direct light at
+// the path's own point of the footprint, translucency's photons split evenly over the sources), to
+// compare the estimators with.
+struct PlainEstimator {
+    PlainEstimator() { setenv("MESOLAB_TRUTH_PLAIN", "1", 1); }
+    ~PlainEstimator() { unsetenv("MESOLAB_TRUTH_PLAIN"); }
+    PlainEstimator(const PlainEstimator&) = delete;
+    PlainEstimator& operator=(const PlainEstimator&) = delete;
+};
 }  // namespace mesolab::test
