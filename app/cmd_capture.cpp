@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <tuple>
 
 namespace fs = std::filesystem;
 
@@ -23,16 +24,9 @@ namespace mesolab {
 
 // [SECTION] Shared helpers
 void parse_size(const std::string& s, int& w, int& h) {
-    const auto x = s.find('x');
-    try {
-        if (x == std::string::npos) throw std::invalid_argument("");
-        size_t a = 0, b = 0;
-        w = std::stoi(s.substr(0, x), &a);
-        h = std::stoi(s.substr(x + 1), &b);
-        if (a != x || b != s.size() - x - 1) throw std::invalid_argument("");
-    } catch (const std::exception&) {
-        throw InputError("--size: expected WxH (e.g. 512x512), got '" + s + "'");
-    }
+    const auto wh = parse_wxh(s);
+    if (!wh) throw InputError("--size: expected WxH (e.g. 512x512), got '" + s + "'");
+    std::tie(w, h) = *wh;
     if (w < 1 || h < 1 || w > 16384 || h > 16384) throw InputError("--size: " + s + " is out of range (1..16384 per side)");
 }
 

@@ -1,6 +1,7 @@
 #include "app/truth_cache.h"
 #include "app/workbench.h"
 #include "core/file.h"
+#include "core/hash.h"
 
 #include <cstdlib>
 #include <cstring>
@@ -11,21 +12,6 @@
 namespace fs = std::filesystem;
 
 namespace mesolab {
-namespace {
-struct Fnv {
-    uint64_t h = 0xcbf29ce484222325ull;
-    void add(const void* p, size_t n) {
-        const auto* b = static_cast<const unsigned char*>(p);
-        for (size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 0x100000001b3ull;
-    }
-    void add(const std::string& s) {
-        const uint64_t n = s.size();
-        add(&n, sizeof n);
-        add(s.data(), s.size());
-    }
-};
-
-}  // namespace
 
 TruthCache::TruthCache() {
     if (const char* d = std::getenv("MESOLAB_CACHE_DIR"); d && *d) folder_ = d;
@@ -34,13 +20,13 @@ TruthCache::TruthCache() {
 }
 
 std::string TruthCache::key(const Scene& s, int width, int height, uint64_t seed) const {
-    Fnv f;
-    f.add(std::string(version_string()));
-    f.add(std::string("sums exact; translucency's exitance gathered, its photons split by power"));  // the truths' format and estimators
+    Fnv1a f;
+    f.add_sized(std::string(version_string()));
+    f.add_sized(std::string("sums exact; translucency's exitance gathered, its photons split by power"));  // the truths' format and estimators
     // The developer switch that selects the plain estimators (bumpsynth's without the split of
     // direct light, translucency's photons split evenly over the sources): not the same bytes.
-    if (std::getenv("MESOLAB_TRUTH_PLAIN")) f.add(std::string("plain"));
-    f.add(truth_description(s));
+    if (std::getenv("MESOLAB_TRUTH_PLAIN")) f.add_sized(std::string("plain"));
+    f.add_sized(truth_description(s));
     const int64_t dims[3] = {width, height, int64_t(seed)};
     f.add(dims, sizeof dims);
     char hex[17];

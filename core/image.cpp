@@ -224,4 +224,13 @@ void write_png_rgba8(const std::string& path, int width, int height, const uint8
     spec.attribute("oiio:ColorSpace", "sRGB");
     write_file_atomic(path, "image", [&](const std::string& tmp) { return write_oiio(tmp, "png", spec, px.data()); });
 }
+
+void write_png_raw(const std::string& path, int width, int height, int channels, int bits, const void* pixels) {
+    check_size(path, width, height, channels);
+    if (channels > 4) throw InputError(path + ": cannot write image: " + std::to_string(channels) + " channels (a PNG holds 1 to 4)");
+    if (bits != 8 && bits != 16) throw InputError(path + ": cannot write image: " + std::to_string(bits) + " bits a channel (a PNG holds 8 or 16)");
+    if (!pixels) throw InputError(path + ": cannot write image: no pixel data");
+    const OIIO::ImageSpec spec(width, height, channels, bits == 8 ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16);
+    write_file_atomic(path, "image", [&](const std::string& tmp) { return write_oiio(tmp, "png", spec, pixels); });
+}
 }  // namespace mesolab

@@ -46,4 +46,7 @@ void write_png_srgb(const std::string& path, const Image& img);
 void write_exr(const std::string& path, const Image& img);
 // Write raw 8-bit RGBA pixels (e.g. a GL read-back, already display-encoded) as PNG. Atomic.
 void write_png_rgba8(const std::string& path, int width, int height, const uint8_t* rgba, bool flip_vertically);
+// Write raw 8- or 16-bit (`bits`) pixels of 1 to 4 channels, interleaved, row 0 at the top, as a
+// PNG of the values as stored (no encoding; a data image or one already encoded). Atomic.
+void write_png_raw(const std::string& path, int width, int height, int channels, int bits, const void* pixels);
 }  // namespace mesolab

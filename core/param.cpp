@@ -1,5 +1,6 @@
 #include "core/strings.h"
 #include "core/param.h"
+#include "core/hash.h"
 #include "core/error.h"
 
 #include <algorithm>
@@ -378,13 +379,13 @@ std::string value_canonical(const ParamDecl& d, const Value& v, const std::strin
         if (files == FileIdentity::Contents) {
             std::ifstream in(p, std::ios::binary);
             if (!in) return s + "|missing";
-            uint64_t h = 0xcbf29ce484222325ull;  // FNV-1a over the bytes
+            Fnv1a h;  // over the bytes
             char buf[1 << 16];
             while (in.read(buf, sizeof buf) || in.gcount() > 0) {
-                for (std::streamsize i = 0; i < in.gcount(); ++i) h = (h ^ uint8_t(buf[i])) * 0x100000001b3ull;
+                h.add(buf, size_t(in.gcount()));
                 if (!in) break;
             }
-            return s + "|" + std::to_string(h);
+            return s + "|" + std::to_string(h.h);
         }
         // Size, modification time and file number (device, inode): file systems stamp times with
         // a coarse clock (several ms), so two atomic saves of one size within a tick differ only

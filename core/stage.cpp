@@ -1,4 +1,5 @@
 #include "core/stage.h"
+#include "core/hash.h"
 #include "core/error.h"
 
 #include <algorithm>
@@ -177,11 +178,7 @@ bool StageGraph::enabled(const Scene& scene, const StageDecl& d, int object, std
 
 // [SECTION] Fingerprints and keys
 uint64_t StageGraph::hash(std::string_view s) {
-    uint64_t h = 1469598103934665603ull;  // FNV-1a
-    for (unsigned char c : s) {
-        h ^= c;
-        h *= 1099511628211ull;
-    }
+    const uint64_t h = fnv1a(s);
     return h == 0 ? 1 : h;
 }
 

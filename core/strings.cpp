@@ -1,5 +1,6 @@
 #include "core/strings.h"
 
+#include <charconv>
 #include <cstdarg>
 #include <cstdio>
 
@@ -42,5 +43,16 @@ std::string format_bytes(double bytes) {
     if (bytes >= MiB) return strprintf("%.1f MiB", bytes / MiB);
     if (bytes >= KiB) return strprintf("%.1f KiB", bytes / KiB);
     return strprintf("%.0f B", bytes);
+}
+
+std::optional<std::pair<int, int>> parse_wxh(const std::string& s) {
+    const size_t x = s.find_first_of("xX");
+    if (x == std::string::npos || x == 0 || x + 1 >= s.size()) return std::nullopt;
+    int w = 0, h = 0;
+    const char* end = s.data() + s.size();
+    const auto a = std::from_chars(s.data(), s.data() + x, w);
+    const auto b = std::from_chars(s.data() + x + 1, end, h);
+    if (a.ec != std::errc() || a.ptr != s.data() + x || b.ec != std::errc() || b.ptr != end) return std::nullopt;
+    return std::pair{w, h};
 }
 }  // namespace mesolab

@@ -1,6 +1,9 @@
 #pragma once
-// [SECTION] Text: numbers formatted as printf does, byte counts in binary units, fields split.
+// [SECTION] Text: numbers formatted as printf does, byte counts in binary units, fields split,
+// "WxH" pairs read.
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace mesolab {
@@ -14,4 +17,8 @@ std::string format_bytes(double bytes);
 // The fields of `s` between the separators, empty ones included: n separators give n + 1 fields
 // ("a,,b," -> "a", "", "b", "").
 std::vector<std::string> split(const std::string& s, char sep);
+
+// "WxH" (or "WXH"): two decimal integers and nothing else ("512x256" -> {512, 256}); nullopt for
+// anything else. Ranges are the caller's to check (frame sizes, goniometer grids).
+std::optional<std::pair<int, int>> parse_wxh(const std::string& s);
 }  // namespace mesolab

@@ -141,18 +141,20 @@ std::string store_array(const std::string& key, const py::array& given) {
     const fs::path folder = arrays_folder(), path = folder / name;
     std::error_code ec;
     if (fs::is_regular_file(path, ec)) return path.string();
-    fs::create_directories(folder, ec);
-    if (ec) throw InputError(key + ": could not create " + folder.string() + " for the array (" + ec.message() + ")");
-    // Written beside its final name, then renamed: a reader never sees half a file.
-    const std::string tmp = (folder / (name + ".tmp" + std::to_string(::getpid()) + path.extension().string())).string();
-    auto out = OIIO::ImageOutput::create(tmp);
-    if (!out || !out->open(tmp, OIIO::ImageSpec(w, h, c, type)) || !out->write_image(type, a.data()) || !out->close()) {
-        const std::string why = out ? out->geterror() : OIIO::geterror();
-        std::remove(tmp.c_str());
-        throw std::runtime_error(key + ": could not write the array to " + tmp + ": " + why);
+    // Written beside its final name, then renamed (core/file.h): a reader never sees half a file.
+    try {
+        if (type == OIIO::TypeDesc::FLOAT) {
+            Image img;
+            img.width = w, img.height = h, img.channels = c;
+            const float* px = static_cast<const float*>(a.data());
+            img.data.assign(px, px + size_t(w) * size_t(h) * size_t(c));
+            write_exr(path.string(), img);
+        } else {
+            write_png_raw(path.string(), w, h, c, type == OIIO::TypeDesc::UINT8 ? 8 : 16, a.data());
+        }
+    } catch (const InputError& e) {
+        throw InputError(key + ": could not store the array: " + e.what());
     }
-    fs::rename(tmp, path, ec);
-    if (ec) throw std::runtime_error(key + ": could not rename " + tmp + " to " + path.string() + ": " + ec.message());
     return path.string();
 }
 

@@ -2,6 +2,7 @@
 #include "core/bumpsynth/sweep_metric.h"
 #include "core/bumpsynth/bumpsynth.h"
 #include "core/error.h"
+#include "core/hash.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/combinable.h>
@@ -19,13 +20,6 @@ constexpr uint64_t kJitterSeed = 0x4b4854323030316bull;  // fixed: the metric is
 constexpr const char* kMetricName = "bumpsynth.ndf_histogram";
 
 // [SECTION] Sampling
-uint64_t splitmix64(uint64_t x) {
-    x += 0x9e3779b97f4a7c15ull;
-    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-    return x ^ (x >> 31);
-}
-
 // The jittered point of grid cell (i, j) of side² over the uv square.
 vec2 jittered_uv(int i, int j, int side) {
     const uint64_t h = splitmix64(kJitterSeed ^ (uint64_t(j) * uint64_t(side) + uint64_t(i)));

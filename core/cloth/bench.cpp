@@ -1,4 +1,5 @@
 // Technique cloth: the timing table (mesolab bench cloth) beside the paper's §7 figures.
+#include "core/cloth/paper.h"
 #include "core/cloth/stages.h"
 #include "core/cloth/technique.h"
 #include "core/strings.h"
@@ -8,20 +9,12 @@
 #include <vector>
 
 namespace mesolab::cloth {
-namespace {
 // [SECTION] Timing table
-// The paper's figures (Daubert 2001, §7; Athlon 1 GHz, GeForce 2 GTS).
-constexpr double kPaperAcquireMs = 45.0 * 60e3;  // "15-45 min": the upper end
-constexpr double kPaperFitMs = 2.5 * 3600e3;     // "about 2.5 h"
-constexpr double kPaperFrameMs = 1000.0;         // "about 1 fps" at 730 x 400
-
-}  // namespace
-
 std::vector<BenchTable> ClothTechnique::bench_tables() const {
     BenchTable t;
     t.name = "cloth";
     t.title = "Daubert et al. 2001: acquisition, fitting (32 x 32 points, 32 x 32 directions, 1365 BRDFs), memory and frames";
-    t.paper_machine = "Athlon 1 GHz / GeForce 2 GTS";
+    t.paper_machine = paper::kMachine;
     BenchColumn brdfs{"BRDFs"}, memory{"memory (fitted)"}, error{"fit rel. RMS (level 0, median)"};
     brdfs.info = [](const Scene&, const Evaluation& ev) {
         const auto p = ev.get(stages::fit, 0);
@@ -29,7 +22,7 @@ std::vector<BenchTable> ClothTechnique::bench_tables() const {
     };
     memory.info = [](const Scene&, const Evaluation& ev) {
         const auto p = ev.get(stages::fit, 0);
-        return p ? strprintf("%.2f MB (paper 4 MB)", double(p->bytes()) / 1048576.0) : std::string("—");
+        return p ? strprintf("%.2f MB (paper %s)", double(p->bytes()) / 1048576.0, paper::kMemory) : std::string("—");
     };
     error.info = [](const Scene&, const Evaluation& ev) {
         const auto p = ev.get(stages::fit, 0);
@@ -45,7 +38,7 @@ std::vector<BenchTable> ClothTechnique::bench_tables() const {
                  {"stitch mesh", stages::stitch},
                  {"acquisition", stages::acquire},
                  {"fitting", stages::fit},
-                 {"frame 730x400", {}, 730, 400, true, true},
+                 {"frame " + std::to_string(paper::kFrameWidth) + "x" + std::to_string(paper::kFrameHeight), {}, paper::kFrameWidth, paper::kFrameHeight, true, true},
                  {"frame 1920x1080", {}, 1920, 1080, true, true}};
     auto row = [](const std::string& stitch) {
         BenchRow r;
@@ -58,7 +51,7 @@ std::vector<BenchTable> ClothTechnique::bench_tables() const {
             apply_set(s, "light.intensity", "3");
             return s;
         };
-        r.paper_ms = {std::nullopt, std::nullopt, std::nullopt, std::nullopt, kPaperAcquireMs, kPaperFitMs, kPaperFrameMs, std::nullopt};
+        r.paper_ms = {std::nullopt, std::nullopt, std::nullopt, std::nullopt, paper::kAcquireMs, paper::kFitMs, paper::kFrameMs, std::nullopt};
         return r;
     };
     t.rows = {row("knit"), row("weave")};

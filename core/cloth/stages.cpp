@@ -1,6 +1,7 @@
 // Technique cloth: the stage graph (stages.h): the stitch mesh, the virtual acquisition (or the
 // samples file), the fitted pyramid and the procedural garment.
 #include "core/cloth/stages.h"
+#include "core/cloth/paper.h"
 #include "core/cloth/garment.h"
 #include "core/cloth/samples.h"
 #include "core/cloth/technique.h"
@@ -42,7 +43,7 @@ void ClothTechnique::declare_stages(StageGraph& g) const {
            .technique = "cloth",
            .params = acquire_keys,
            .inputs = {stages::stitch},
-           .paper = PaperFigure{45.0 * 60e3, "Daubert 2001, §4: acquisition 15-45 min (Athlon 1 GHz)"},
+           .paper = paper::acquire(),
            .memory = [](const StageContext& ctx) {
                const double n = double(ctx.material().get_int("spatial")), d = double(ctx.material().get_int("directions"));
                return MemoryEstimate{n * n * d * d * 24.0, std::to_string(int(n)) + "² points x " + std::to_string(int(d * d)) + " pairs x 3 doubles",
@@ -64,7 +65,7 @@ void ClothTechnique::declare_stages(StageGraph& g) const {
            .technique = "cloth",
            .params = {"cloth.lobes", "cloth.lookup_table", "cloth.tolerance"},
            .inputs = {stages::acquire},
-           .paper = PaperFigure{2.5 * 3600e3, "Daubert 2001, §5: fitting ~2.5 h (Athlon 1 GHz)"},
+           .paper = paper::fit(),
            .run = [](StageContext& ctx) -> std::any {
                const Settings s = Settings::from(ctx.scene, ctx.obj(), Settings::Fit);
                const ProgressFn progress = [&](const std::string&, double f) {

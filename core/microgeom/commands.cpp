@@ -7,6 +7,7 @@
 #include "core/microgeom/goniometer.h"
 #include "core/microgeom/technique.h"
 #include "core/scene.h"
+#include "core/strings.h"
 
 #include <nlohmann/json.hpp>
 #include <chrono>
@@ -18,9 +19,9 @@ namespace mesolab::microgeom {
 // [SECTION] BTF export (§6)
 namespace {
 ivec2 parse_grid(const std::string& key, const std::string& text) {
-    int a = 0, b = 0;
-    char x = 0, extra = 0;
-    if (std::sscanf(text.c_str(), "%d%c%d%c", &a, &x, &b, &extra) != 3 || (x != 'x' && x != 'X') || a < 1 || b < 1 || a > 64 || b > 128)
+    const auto ab = parse_wxh(text);
+    const int a = ab ? ab->first : 0, b = ab ? ab->second : 0;
+    if (a < 1 || b < 1 || a > 64 || b > 128)
         throw InputError("--option " + key + "=" + text + ": expected THETAxPHI with 1..64 theta and 1..128 phi steps, e.g. 4x8");
     return {a, b};
 }

@@ -1,5 +1,6 @@
 #include "core/truth/truth.h"
 #include "core/error.h"
+#include "core/hash.h"
 #include "core/raster.h"
 #include "core/raytrace.h"
 #include "core/render.h"
@@ -25,20 +26,12 @@ namespace mesolab {
 using glm::dvec3;
 
 // [SECTION] Random numbers
-namespace {
-uint64_t mix(uint64_t z) {
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-}
-}  // namespace
-
 TruthRng::TruthRng(uint64_t seed, uint64_t pixel, uint64_t sample)
-    : state_(mix(mix(mix(seed + 0x9e3779b97f4a7c15ull) ^ pixel) + sample * 0x9e3779b97f4a7c15ull)) {}
+    : state_(splitmix64_mix(splitmix64_mix(splitmix64(seed) ^ pixel) + sample * kSplitmix64Gamma)) {}
 
 float TruthRng::next() {
-    state_ += 0x9e3779b97f4a7c15ull;
-    return float(mix(state_) >> 40) * 0x1p-24f;  // 24 bits: exactly representable, < 1
+    state_ += kSplitmix64Gamma;
+    return float(splitmix64_mix(state_) >> 40) * 0x1p-24f;  // 24 bits: exactly representable, < 1
 }
 
 // [SECTION] Materials

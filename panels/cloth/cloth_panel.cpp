@@ -1,6 +1,7 @@
 // Panel of technique cloth: the stitch with a 3D preview, the acquisition and the fit with their
 // times, fitted against acquired BRDF slices with the fit's error, and the garment's mip blending
 // with one-click views of the mip level, the BRDF index and alpha.
+#include "core/strings.h"
 #include "core/cloth/stages.h"
 #include "core/cloth/cloth.h"
 #include "core/technique.h"
@@ -160,7 +161,7 @@ public:
                 if (ctx.eval) {
                     const auto g = ctx.eval->get(cloth::stages::acquire, i);
                     const auto p = ctx.eval->get(cloth::stages::fit, i);
-                    if (p) ImGui::Text("%zu BRDFs in %zu levels, %.2f MB", p->count(), p->level.size(), double(p->bytes()) / 1048576.0);
+                    if (p) ImGui::Text("%zu BRDFs in %zu levels, %s", p->count(), p->level.size(), format_bytes(double(p->bytes())).c_str());
                     if (g && p && g->res == p->res) brdf_slice(*g, *p, slice_);
                 }
             } else if (section == "Garment and mip blending") {

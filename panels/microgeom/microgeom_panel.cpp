@@ -2,6 +2,7 @@
 // set, curvature, scattering, shading and level of detail, the light and view directions as
 // hemisphere discs, a Fig. 9-style side-by-side of the three levels of detail, and what the
 // stages hold (sizes, fold-over warnings).
+#include "core/strings.h"
 #include "core/microgeom/stages.h"
 #include "core/microgeom/goniometer.h"
 #include "core/microgeom/microgeom.h"
@@ -99,9 +100,9 @@ void MicrogeomPanel::draw(PanelContext& ctx) {
     aov_buttons(ctx, "microgeom");
     if (ctx.eval) {
         if (const auto v = ctx.eval->get(microgeom::stages::visibility, i))
-            ImGui::TextDisabled("S_i: %d directions x %dx%d texels, %.1f MB", v->count, v->width, v->height, double(v->bytes()) / (1 << 20));
+            ImGui::TextDisabled("S_i: %d directions x %dx%d texels, %s", v->count, v->width, v->height, format_bytes(double(v->bytes())).c_str());
         if (const auto f = ctx.eval->get(microgeom::stages::brdf, i))
-            ImGui::TextDisabled("BRDF: %d^4 table from %d goniometer images, %.2f MB", f->n_theta, f->images, double(f->bytes()) / (1 << 20));
+            ImGui::TextDisabled("BRDF: %d^4 table from %d goniometer images, %s", f->n_theta, f->images, format_bytes(double(f->bytes())).c_str());
         if (const auto m = ctx.eval->get(microgeom::stages::displaced, i)) ImGui::TextDisabled("displaced: %zu triangles", m->triangle_count());
     }
 }

@@ -2,6 +2,7 @@
 // Fig. 2), accuracy settings with the live factor count and memory, blending and response, and
 // one-click views of the atlas, the illumination map, the local and global parts, the reference
 // and the error.
+#include "core/strings.h"
 #include "core/translucency/stages.h"
 #include "core/technique.h"
 #include "core/translucency/translucency.h"
@@ -64,8 +65,6 @@ void rd_plot(const Medium& m) {
                 "The mean free path 1/sigma'_t and sigma_tr set how far light travels: compare the plot's range with the object's size in mm.");
 }
 
-double mb(double bytes) { return bytes / 1048576.0; }
-
 class TranslucencyPanel final : public TechniquePanel {
 public:
     void draw(PanelContext& ctx) override;
@@ -102,8 +101,8 @@ void TranslucencyPanel::draw(PanelContext& ctx) {
         if (atlas)
             ImGui::Text("atlas: %d chunks, fill %.1f%%, texel %.3g mm", int(atlas->atlas.chunks.size()), 100.0 * atlas->atlas.fill_ratio,
                         atlas->atlas.scale > 0.f ? Settings::from(o, Settings::Scale).mm_per_unit / double(atlas->atlas.scale) : 0.0);
-        if (F) ImGui::Text("form factors: %zu (%.1f MB)", F->count(), mb(double(F->bytes())));
-        if (K) ImGui::Text("kernels: %zu texels x %d² (%.1f MB)", K->texel.size(), K->K, mb(double(K->bytes())));
+        if (F) ImGui::Text("form factors: %zu (%s)", F->count(), format_bytes(double(F->bytes())).c_str());
+        if (K) ImGui::Text("kernels: %zu texels x %d² (%s)", K->texel.size(), K->K, format_bytes(double(K->bytes())).c_str());
         for (const StageName& st : std::vector<StageName>{translucency::stages::mesh, translucency::stages::atlas, translucency::stages::factors})
             for (const StageRun* run : ctx.eval->runs_of(st))
                 if (run->object == i)
