@@ -1,7 +1,7 @@
 // mesolab capture: headless render of presets to PNG + AOV EXRs + a JSON sidecar.
 #include "core/file.h"
 #include "app/commands.h"
-#include "app/gui/truth_view.h"
+#include "app/truth_figures.h"
 #include "app/workbench.h"
 #include "core/error.h"
 #include "core/image.h"
@@ -182,7 +182,7 @@ std::vector<std::string> write_capture(const std::string& out_dir, const Scene& 
     if (r.truth && r.truth_frame) {  // truth_error: the truth and the error beside the frame, as pictures too
         const std::string tpng = (dir / (s.name + ".truth.png")).string(), epng = (dir / (s.name + ".truth_error.png")).string();
         write_png_srgb(tpng, radiance_rgb(*r.truth_frame));
-        write_png_srgb(epng, gui::error_figure(r.truth->error, *r.truth_frame));
+        write_png_srgb(epng, error_figure(r.truth->error, *r.truth_frame));
         written.push_back(tpng);
         written.push_back(epng);
     }
@@ -308,6 +308,11 @@ int run_capture(const CaptureOptions& o) {
         scenes.push_back(std::move(s));
     }
     Workbench wb;
+    if (o.no_cache) {
+        wb.set_truth_cache(TruthCache(""));
+    } else {
+        wb.session().set_store(StageStore::from_environment(version_string()));
+    }
     wb.session().set_memory_limit(memory_limit_bytes(o.memory_limit));
     if (req.backend == Backend::Gpu) {
         try {
@@ -328,17 +333,19 @@ int run_capture(const CaptureOptions& o) {
             continue;
         }
         const std::string png = write_capture(o.out_dir, s, files[i], r, o.aovs, req.truth).front();
-        int ran = 0, cached = 0, skipped = 0;
+        int ran = 0, cached = 0, stored = 0, skipped = 0;
         for (const auto& run : r.eval.runs)
             for (const auto& w : run.warnings)
                 std::fprintf(stderr, "mesolab: warning: %s: stage %s: %s\n", files[i].c_str(), run.label(s).c_str(), w.c_str());
         for (const auto& run : r.eval.runs) {
             ran += run.status == StageStatus::Ran;
             cached += run.status == StageStatus::Cached;
+            stored += run.status == StageStatus::Stored;
             skipped += run.status == StageStatus::Skipped;
         }
-        std::printf("%-28s %4dx%-4d %-6s stages %7.2f ms (%d ran, %d cached, %d skipped)  render %7.2f ms  -> %s\n", s.name.c_str(), r.frame.width,
-                    r.frame.height, req.backend == Backend::Cpu ? "cpu" : req.backend == Backend::Gpu ? "gpu" : "truth", r.stages_ms, ran, cached, skipped, r.render_ms, png.c_str());
+        std::printf("%-28s %4dx%-4d %-6s stages %7.2f ms (%d ran, %d cached, %d cached (disk), %d skipped)  render %7.2f ms  -> %s\n", s.name.c_str(),
+                    r.frame.width, r.frame.height, req.backend == Backend::Cpu ? "cpu" : req.backend == Backend::Gpu ? "gpu" : "truth", r.stages_ms, ran,
+                    cached, stored, skipped, r.render_ms, png.c_str());
         if (req.backend == Backend::Truth)
             std::printf("%-28s truth: %d spp (%d from the cache), noise_rel %.4f, ended by %s\n", "", r.truth_spp, r.truth_cached_spp,
                         truth_noise_rel(r.frame), to_string(r.truth_ended));

@@ -42,6 +42,7 @@ int run_export(const ExportOptions& o) {
 
     const auto t0 = std::chrono::steady_clock::now();
     Workbench wb;
+    wb.session().set_store(StageStore::from_environment(version_string()));  // expensive stages kept between runs
     wb.session().set_memory_limit(memory_limit_bytes(o.memory_limit));
     ProgressFn progress = tty_progress();
     const Evaluation ev = wb.evaluate(s, decl.stages, progress);

@@ -30,6 +30,7 @@ struct CaptureOptions {
     std::string samples;     // --samples A:B: a partial truth of samples [A, B), written as NAME.samples-A-B.truth
     double noise = 0;        // --noise: sample until the truth's noise_rel reaches it
     std::string time_limit;  // --time-limit: stop sampling after this long (600, 90s, 10m, 1.5h)
+    bool no_cache = false;   // --no-cache: compute every stage and truth, read and keep nothing on disk
 };
 int run_capture(const CaptureOptions& o);
 

@@ -63,6 +63,9 @@ int main(int argc, char** argv) {
     c->add_option("--seed", cap.seed, "--backend truth: seed of the random streams (the same seed gives the same bytes)")->capture_default_str();
     c->add_option("--set", cap.sets, "Override a parameter: KEY=VALUE (repeatable), e.g. camera.distance=4");
     c->add_flag("--profile", cap.profile, "Print the scoped CPU/GPU timing hierarchy at the end");
+    c->add_flag("--no-cache", cap.no_cache,
+                "Compute every stage and truth: read nothing from the disk cache and keep nothing there (else expensive stages and truths are kept in "
+                "$MESOLAB_CACHE_DIR, ~/.cache/mesolab by default)");
     c->add_option("--aov", cap.aovs, "Also render this AOV and write it as 32-bit float EXR (repeatable): radiance, normal, ...; truth_error also "
                   "renders the truth (--spp, --seed) and writes it and the error, colour-mapped with its legend, as NAME.truth.png and NAME.truth_error.png");
     add_memory_limit(c, cap.memory_limit);

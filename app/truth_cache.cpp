@@ -2,6 +2,7 @@
 #include "app/workbench.h"
 #include "core/file.h"
 #include "core/hash.h"
+#include "core/stage_store.h"
 
 #include <cstdlib>
 #include <cstring>
@@ -13,11 +14,7 @@ namespace fs = std::filesystem;
 
 namespace mesolab {
 
-TruthCache::TruthCache() {
-    if (const char* d = std::getenv("MESOLAB_CACHE_DIR"); d && *d) folder_ = d;
-    else if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x) folder_ = std::string(x) + "/mesolab/truth";
-    else if (const char* home = std::getenv("HOME"); home && *home) folder_ = std::string(home) + "/.cache/mesolab/truth";
-}
+TruthCache::TruthCache() : folder_(cache_folder("truth")) {}
 
 std::string TruthCache::key(const Scene& s, int width, int height, uint64_t seed) const {
     Fnv1a f;
@@ -42,6 +39,7 @@ std::optional<TruthAccumulator> TruthCache::load(const std::string& key) const {
     try {
         TruthPart p = read_truth_part(path.string());
         if (p.key != key || p.build != truth_build(version_string()) || p.sums.first != 0) return std::nullopt;
+        fs::last_write_time(path, fs::file_time_type::clock::now(), ec);  // recently used: evicted last
         return std::move(p.sums);
     } catch (const std::exception&) {
         return std::nullopt;  // unreadable: rendered again
@@ -56,6 +54,10 @@ bool TruthCache::store(const std::string& key, const TruthAccumulator& a) const 
     p.sums = a;
     try {
         write_truth_part((fs::path(folder_) / (key + ".truth")).string(), p);
+        // The truths share the cache's size limit with the stage store (least recently used first).
+        std::vector<std::string> roots = {folder_};
+        if (folder_ == cache_folder("truth")) roots.push_back(cache_folder("stages"));
+        StageStore(folder_, version_string(), cache_size_limit(), roots).evict();
         return true;
     } catch (const std::exception&) {
         return false;

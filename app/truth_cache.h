@@ -1,7 +1,9 @@
 #pragma once
 // [SECTION] The truths on disk: a truth's samples (TruthAccumulator) kept between runs, outside
 // the repository, so that asking again costs nothing and asking for more samples continues it.
-// Folder: $MESOLAB_CACHE_DIR, else $XDG_CACHE_HOME/mesolab/truth, else ~/.cache/mesolab/truth.
+// Folder: the cache root's truth/ ($MESOLAB_CACHE_DIR/truth, else $XDG_CACHE_HOME/mesolab/truth, else
+// ~/.cache/mesolab/truth; core/stage_store.h), evicted with the stage store's entries, least
+// recently used first, above the cache's size limit.
 // A truth is keyed by a hash of the program version, what the truth reads (truth_description: the
 // physical description, with the contents of the files it names, never an accuracy knob, so
 // one truth serves a whole sweep), the frame size and the seed; a file that cannot be read back, or

@@ -1,9 +1,9 @@
 // Environment lighting: lat-long lookup, order-2 spherical-harmonic projection and irradiance.
 #include "core/env.h"
+#include "core/parallel.h"
 #include "core/sampling.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -72,7 +72,7 @@ SH9 project_sh9(const Environment& env) {
     // Per-row results: the 9 coefficients of that row, summed afterwards in row order so the
     // result does not depend on how TBB splits the work.
     std::vector<std::array<double, 27>> rows(static_cast<size_t>(h));
-    tbb::parallel_for(tbb::blocked_range<int>(0, h, 8), [&](const tbb::blocked_range<int>& r) {
+    mesolab::parallel_for(tbb::blocked_range<int>(0, h, 8), [&](const tbb::blocked_range<int>& r) {
         for (int j = r.begin(); j != r.end(); ++j) {
             // Theta integrals over [t0, t1] with c = cos theta: int sin = c0 - c1, int cos sin,
             // int sin^2, int sin^3, int sin^2 cos, int (3cos^2 - 1) sin.

@@ -44,6 +44,12 @@ auto gpu_or_cpu(bool want_gpu, const std::string& what, const std::function<void
 // The same in a stage: the warning goes with the stage's result (StageContext::warn).
 template <class Gpu, class Cpu>
 auto gpu_or_cpu(StageContext& ctx, bool want_gpu, const std::string& what, Gpu&& gpu, Cpu&& cpu) -> decltype(cpu()) {
-    return gpu_or_cpu(want_gpu, what, [&ctx](std::string m) { ctx.warn(std::move(m)); }, std::forward<Gpu>(gpu), std::forward<Cpu>(cpu));
+    return gpu_or_cpu(
+        want_gpu, what,
+        [&ctx](std::string m) {
+            ctx.warn(std::move(m));
+            ctx.fell_back_to_cpu();
+        },
+        std::forward<Gpu>(gpu), std::forward<Cpu>(cpu));
 }
 }  // namespace mesolab

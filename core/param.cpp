@@ -137,6 +137,20 @@ thread_local ParamReadWatch* t_read_watch = nullptr;
 
 ParamReadScope::ParamReadScope(ParamReadWatch* watch) : previous_(t_read_watch) { t_read_watch = watch; }
 ParamReadScope::~ParamReadScope() { t_read_watch = previous_; }
+ParamReadWatch* current_read_watch() { return t_read_watch; }
+
+const std::vector<Value>& ParamTable::values() const {
+    if (t_read_watch) t_read_watch->read(*this, "*");
+    return values_;
+}
+
+bool ParamTable::operator==(const ParamTable& o) const {
+    if (t_read_watch) {
+        t_read_watch->read(*this, "*");
+        t_read_watch->read(o, "*");
+    }
+    return group_ == o.group_ && values_ == o.values_;
+}
 
 void ParamGroup::section(std::string title, std::vector<std::string> names, bool open) {
     for (const std::string& n : names) {

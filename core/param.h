@@ -127,7 +127,8 @@ public:
 
     const ParamGroup& group() const { return *group_; }
     bool valid() const { return group_ != nullptr; }
-    const std::vector<Value>& values() const { return values_; }
+    // Every value, in declaration order: a read of every key of the group (a watch sees "*").
+    const std::vector<Value>& values() const;
 
     const Value& get(std::string_view name) const;
     bool get_bool(std::string_view name) const;
@@ -142,7 +143,8 @@ public:
     // Whether a declaration is in use given the current values (see ParamDecl::used_when).
     bool is_used(const ParamDecl& d) const;
 
-    bool operator==(const ParamTable& o) const { return group_ == o.group_ && values_ == o.values_; }
+    // Compares every value: a read of every key of both tables (a watch sees "*").
+    bool operator==(const ParamTable& o) const;
 
 private:
     const ParamGroup* group_ = nullptr;
@@ -151,7 +153,8 @@ private:
 
 // [SECTION] Watching reads
 // While a ParamReadScope is alive on a thread, every value read through a ParamTable on that
-// thread (get and the typed getters) is reported to its watch. A session uses it to check that a
+// thread (get, the typed getters; values() and == as a read of "*", every key) is reported to its
+// watch. mesolab's parallel loops carry the watch into their tasks (core/parallel.h). A session uses it to check that a
 // stage reads only the keys it declares (core/session.h): a key read but not declared would not
 // be part of the stage's cache key, and its cached result would go stale when the key changes.
 class ParamReadWatch {
@@ -170,6 +173,8 @@ public:
 private:
     ParamReadWatch* previous_;
 };
+// The watch of the calling thread (null when none), to carry into work on other threads.
+ParamReadWatch* current_read_watch();
 
 // [SECTION] Conversions, each naming `where` (file and key) in its InputError.
 // JSON value -> Value with type/range/choice checks.

@@ -1,8 +1,8 @@
 #include "core/raster.h"
+#include "core/parallel.h"
 #include "core/profile.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <array>
@@ -99,7 +99,7 @@ void shade_vertices(const DrawItem& item, const RasterCamera& cam, ShadedVertice
 
     sv.clip.resize(n);
     sv.attr.resize(n);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    mesolab::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i != r.end(); ++i) {
             const vec4 p(m.position[i], 1.f);
             const vec2 uv = has_uv ? m.uv[i] : vec2(0.f);
@@ -412,7 +412,7 @@ void rasterize(const std::vector<DrawItem>& items, const RasterCamera& cam, GBuf
     phase.emplace("setup");
     std::vector<std::vector<ScreenTriangle>>& chunk_triangles = scratch.chunk_triangles;
     if (chunk_triangles.size() < chunks.size()) chunk_triangles.resize(chunks.size());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+    mesolab::parallel_for(tbb::blocked_range<size_t>(0, chunks.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t c = r.begin(); c != r.end(); ++c) {
             const Chunk& ch = chunks[c];
             chunk_triangles[c].clear();
@@ -450,7 +450,7 @@ void rasterize(const std::vector<DrawItem>& items, const RasterCamera& cam, GBuf
     phase.emplace("tiles");
     // Tiles in parallel: depth-tested visibility (nearest triangle per pixel), then the
     // attributes of the visible triangle, once per pixel. Every pixel of `out` is written.
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n_tiles, 1), [&](const tbb::blocked_range<size_t>& r) {
+    mesolab::parallel_for(tbb::blocked_range<size_t>(0, n_tiles, 1), [&](const tbb::blocked_range<size_t>& r) {
         TileBuffers buf;
         for (size_t tile = r.begin(); tile != r.end(); ++tile) {
             const int tx = int(tile % size_t(tiles_x)) * kTileW, ty = int(tile / size_t(tiles_x)) * kTileH;

@@ -1,12 +1,14 @@
 #include "core/render.h"
+#include "core/parallel.h"
+#include "core/read_contract.h"
 #include "core/error.h"
 #include "core/profile.h"
 #include "core/scene_stages.h"
 
 #include <glm/gtc/matrix_transform.hpp>
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <chrono>
+#include <optional>
 
 namespace mesolab {
 
@@ -100,7 +102,7 @@ Coverage coverage_of(const GBuffer& gb) {
     c.width = gb.width, c.height = gb.height;
     c.object = gb.object;
     c.edge.assign(gb.object.size(), 0);
-    tbb::parallel_for(0, gb.height, [&](int y) {
+    mesolab::parallel_for(0, gb.height, [&](int y) {
         for (int x = 0; x < gb.width; ++x) {
             const size_t p = gb.index(x, y);
             bool edge = false;
@@ -187,6 +189,19 @@ std::string frame_step_fingerprint(const Scene& s, const Evaluation& ev, const F
     return fp;
 }
 
+namespace {
+// What a frame step may read: its params and those its stages' results depend on.
+DeclaredReads frame_step_reads(const Scene& s, const FrameStepDecl& d) {
+    const StageGraph& g = Registry::instance().stages();
+    std::vector<std::string> patterns = d.params;
+    for (const StageName& st : d.stages)
+        for (std::string& p : g.params_upstream(g.at(st))) patterns.push_back(std::move(p));
+    return DeclaredReads("frame step " + d.name, s, std::move(patterns), -1,
+                         "neither it nor a stage it reads declares: its output would be reused from an earlier frame when that key changes (declare it "
+                         "in the step's params)");
+}
+}  // namespace
+
 std::vector<FrameStepRun> FrameStepScheduler::run(const Scene& s, const Evaluation& ev, const Runner& work) {
     std::vector<FrameStepRun> runs;
     for (const Technique* t : Registry::instance().techniques()) {
@@ -205,6 +220,10 @@ std::vector<FrameStepRun> FrameStepScheduler::run(const Scene& s, const Evaluati
             }
             last.clear();  // a failure must not leave a stale "done" behind
             outputs_.erase(d.name);
+            // The read contract: the step (CPU or GPU) reads only the keys in its fingerprint.
+            std::optional<DeclaredReads> watch;
+            if (check_reads_by_default()) watch.emplace(frame_step_reads(s, d));
+            ParamReadScope reads(watch ? &*watch : nullptr);
             Work w = work(*t, d, objects);
             run.ms = w.ms;
             outputs_[d.name] = std::move(w.output);
@@ -310,7 +329,7 @@ Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height, co
         const bool constant = lighting.env.constant();
         const vec3 L_const = lighting.env.color * lighting.env.intensity;
         if (!cam.texture_mode)
-            tbb::parallel_for(0, height, [&](int y) {
+            mesolab::parallel_for(0, height, [&](int y) {
                 for (int x = 0; x < width; ++x) {
                     if (gb.object[gb.index(x, y)] >= 0) continue;
                     const vec3 L = constant ? L_const : lighting.env.radiance(cam.ray_dir(x, y));

@@ -2,7 +2,6 @@
 #include "core/error.h"
 
 #include <glm/gtc/matrix_transform.hpp>
-#include <tbb/parallel_for.h>
 
 namespace mesolab {
 

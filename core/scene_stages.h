@@ -14,7 +14,7 @@ namespace mesolab {
 // The scene-wide stages' handles (core/stage.h).
 namespace stages {
 inline constexpr Stage<TriMesh> geometry{"scene.geometry"};
-inline constexpr Stage<Image> env_map{"env.map"};
+inline constexpr Stage<Image> env_map{"env.image"};
 inline constexpr Stage<SH9> env_irradiance{"env.irradiance"};
 }  // namespace stages
 

@@ -1,5 +1,7 @@
 #include "core/session.h"
+#include "core/blob.h"
 #include "core/error.h"
+#include "core/read_contract.h"
 #include "core/strings.h"
 #include "core/technique.h"
 
@@ -91,48 +93,14 @@ size_t StageCache::entries() const {
 
 // [SECTION] The cache contract
 namespace {
-// Whether `key` ("group.name") is one of a stage's declared parameter patterns, or of a stage
-// upstream of it: their fingerprints are part of its own, so its cached result follows them too.
-bool declares(const StageGraph& g, const StageDecl& d, const std::string& group, std::string_view name) {
-    for (const StageName& in : d.inputs)
-        if (declares(g, g.at(in), group, name)) return true;
-    for (const std::string& p : d.params) {
-        if (p.size() == group.size() + 2 && p.compare(0, group.size(), group) == 0 && p.compare(group.size(), 2, ".*") == 0) return true;
-        if (p.size() == group.size() + 1 + name.size() && p.compare(0, group.size(), group) == 0 && p[group.size()] == '.' &&
-            p.compare(group.size() + 1, name.size(), name) == 0)
-            return true;
-    }
-    return false;
+// A stage may read the keys it and the stages upstream declare (StageGraph::params_upstream).
+DeclaredReads stage_reads(const StageGraph& g, const Scene& s, const StageDecl& d, int object) {
+    return DeclaredReads("stage " + d.name, s, g.params_upstream(d), d.scope == StageScope::Object ? object : -1,
+                         "neither it nor a stage upstream declares: its cached result would not follow that key (declare it in the stage's params)");
 }
-
-class DeclaredReads final : public ParamReadWatch {
-public:
-    DeclaredReads(const StageGraph& g, const Scene& s, const StageDecl& d, int object) : graph_(g), scene_(s), decl_(d), object_(object) {}
-    void read(const ParamTable& t, std::string_view name) override {
-        const std::string& group = t.group().name();
-        if (decl_.scope == StageScope::Object)
-            for (size_t j = 0; j < scene_.objects.size(); ++j)
-                if (int(j) != object_ && (&t == &scene_.objects[j].material || &t == &scene_.objects[j].geometry))
-                    throw std::logic_error("stage " + decl_.name + " read " + group + "." + std::string(name) + " of object " + std::to_string(j) +
-                                           ", not its own: an object stage's result may depend only on its own object");
-        if (!declares(graph_, decl_, group, name))
-            throw std::logic_error("stage " + decl_.name + " read " + group + "." + std::string(name) +
-                                   ", which neither it nor a stage upstream declares: its cached result would not follow that key (declare it in the "
-                                   "stage's params)");
-    }
-
-private:
-    const StageGraph& graph_;
-    const Scene& scene_;
-    const StageDecl& decl_;
-    int object_;
-};
 }  // namespace
 
-bool Session::default_check_stage_reads() {
-    const char* v = std::getenv("MESOLAB_CHECK_STAGE_READS");
-    return v && std::string(v) == "1";
-}
+bool Session::default_check_stage_reads() { return check_reads_by_default(); }
 
 // [SECTION] Session
 Session::Session() : Session(Registry::instance().stages()) {}
@@ -184,7 +152,7 @@ StageKeys Session::keys(const Scene& scene, const std::vector<StageName>& target
 Evaluation Session::evaluate(const Scene& scene, const std::vector<StageName>& targets, const ProgressFn& progress, const std::atomic<bool>* cancel) {
     ProfilerBinding bind(profiler_);
     Evaluation ev;
-    StageGraph::Memo memo;
+    StageGraph::Memo memo, memo_contents;
     std::set<std::pair<std::string, int>> visited;
     const size_t capacity = cache_capacity_per_stage + (scene.objects.size() > 1 ? scene.objects.size() - 1 : 0);
 
@@ -222,16 +190,38 @@ Evaluation Session::evaluate(const Scene& scene, const std::vector<StageName>& t
             ev.runs.push_back(run);
             return;
         }
+        // The disk store: the fingerprint with the files' contents (never their dates) is the key.
+        const std::string* disk_fp = d.disk && store_ ? &graph_.fingerprint(scene, d, object, memo_contents, FileIdentity::Contents) : nullptr;
+        if (disk_fp) {
+            ProfileScope scope("stage/" + d.name + "/disk read");
+            if (std::optional<StageStore::Entry> e = store_->load(d.name, *disk_fp)) {
+                try {
+                    BlobReader r(e->payload);
+                    std::any result = d.disk->load(r);
+                    if (!r.done()) throw BlobError("bytes left over");
+                    run.status = StageStatus::Stored;
+                    run.warnings = std::move(e->warnings);
+                    run.ms = ms_since();
+                    cache_.put(d.name, {run.key, fp, result, run.warnings}, capacity);
+                    store(d, object, std::move(result));
+                    ev.runs.push_back(run);
+                    return;
+                } catch (const BlobError&) {
+                    // Not such a result (another layout of the type): computed again, and overwritten.
+                }
+            }
+        }
         StageContext ctx(scene, ev, d.name, object, progress, cancel);
         if (progress) progress(d.name, 0.0);  // lets a UI name the stage that is running
         std::any result;
         try {
             if (cancel && cancel->load()) throw Cancelled();
+            // The estimate and the work read keys under the same contract.
+            std::optional<DeclaredReads> watch;
+            if (check_stage_reads) watch.emplace(stage_reads(graph_, scene, d, object));
+            ParamReadScope reads(watch ? &*watch : nullptr);
             if (d.memory) check_memory("stage " + run.label(scene), d.memory(ctx));
             ProfileScope scope("stage/" + d.name);
-            std::optional<DeclaredReads> watch;
-            if (check_stage_reads) watch.emplace(graph_, scene, d, object);
-            ParamReadScope reads(watch ? &*watch : nullptr);
             result = d.run(ctx);
         } catch (const Cancelled&) {
             run.status = StageStatus::Cancelled;
@@ -257,6 +247,14 @@ Evaluation Session::evaluate(const Scene& scene, const std::vector<StageName>& t
         run.ms = ms_since();
         run.warnings = ctx.warnings;
         if (progress) progress(d.name, 1.0);
+        // Kept on disk, but a result the CPU computed because the GPU could not: an entry of a stage
+        // asked to run on the GPU holds the GPU's result.
+        if (disk_fp && result.has_value() && !ctx.fell_back()) {
+            ProfileScope scope("stage/" + d.name + "/disk write");
+            BlobWriter w;
+            d.disk->save(result, w);
+            store_->save(d.name, *disk_fp, {w.take(), run.warnings});
+        }
         cache_.put(d.name, {run.key, fp, result, run.warnings}, capacity);
         store(d, object, std::move(result));
         ev.runs.push_back(run);

@@ -16,6 +16,7 @@
 // the stage, the figure and the parameters to lower.
 #include "core/profile.h"
 #include "core/stage.h"
+#include "core/stage_store.h"
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -108,6 +109,12 @@ public:
     bool check_stage_reads = default_check_stage_reads();
     static bool default_check_stage_reads();
 
+    // The disk store of expensive stages (core/stage_store.h): null (the default) keeps results in
+    // memory only. capture, the window and Python use the environment's store (--no-cache: none);
+    // bench and sweep, which time the stages, never do.
+    void set_store(std::shared_ptr<const StageStore> store) { store_ = std::move(store); }
+    const StageStore* store() const { return store_.get(); }
+
     // Memory budget for one stage's allocation: 0 = the machine's available memory.
     void set_memory_limit(uint64_t bytes) { memory_limit_ = bytes; }
     uint64_t memory_limit() const { return memory_limit_; }
@@ -117,6 +124,7 @@ public:
 private:
     const StageGraph& graph_;
     StageCache cache_;
+    std::shared_ptr<const StageStore> store_;
     Profiler profiler_;
     uint64_t memory_limit_ = 0;
 };

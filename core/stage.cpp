@@ -23,6 +23,7 @@ const char* to_string(StageStatus s) {
         case StageStatus::Skipped: return "skipped";
         case StageStatus::Failed: return "failed";
         case StageStatus::Cancelled: return "cancelled";
+        case StageStatus::Stored: return "cached (disk)";
     }
     return "?";
 }
@@ -176,13 +177,21 @@ bool StageGraph::enabled(const Scene& scene, const StageDecl& d, int object, std
     return false;
 }
 
+std::vector<std::string> StageGraph::params_upstream(const StageDecl& d) const {
+    std::vector<std::string> out = d.params;
+    for (const StageName& in : d.inputs)
+        for (std::string& p : params_upstream(at(in)))
+            if (std::find(out.begin(), out.end(), p) == out.end()) out.push_back(std::move(p));
+    return out;
+}
+
 // [SECTION] Fingerprints and keys
 uint64_t StageGraph::hash(std::string_view s) {
     const uint64_t h = fnv1a(s);
     return h == 0 ? 1 : h;
 }
 
-const std::string& StageGraph::fingerprint(const Scene& scene, const StageDecl& d, int object, Memo& memo) const {
+const std::string& StageGraph::fingerprint(const Scene& scene, const StageDecl& d, int object, Memo& memo, FileIdentity files) const {
     const int subject = d.scope == StageScope::Object ? object : -1;
     const std::string memo_key = d.name + "#" + std::to_string(subject);
     if (auto it = memo.find(memo_key); it != memo.end()) return it->second;
@@ -190,15 +199,15 @@ const std::string& StageGraph::fingerprint(const Scene& scene, const StageDecl& 
     if (enabled(scene, d, subject)) {
         fp = d.name;
         fp += d.scope == StageScope::Object ? "(object)" : "(scene)";
-        for (const auto& p : d.params) fp += param_fingerprint(scene, p, subject);
+        for (const auto& p : d.params) fp += param_fingerprint(scene, p, subject, files);
         for (const auto& in : d.inputs) {
             const StageDecl& u = at(in);
             fp += "<";
             if (u.scope == StageScope::Object && subject < 0) {
                 // A scene stage reading an object stage: every object's fingerprint.
-                for (int o : subjects(scene, u)) fp.append("#").append(std::to_string(o)).append(":").append(fingerprint(scene, u, o, memo)).append(";");
+                for (int o : subjects(scene, u)) fp.append("#").append(std::to_string(o)).append(":").append(fingerprint(scene, u, o, memo, files)).append(";");
             } else {
-                fp += fingerprint(scene, u, subject, memo);
+                fp += fingerprint(scene, u, subject, memo, files);
             }
             fp += ">";
         }

@@ -47,6 +47,16 @@ struct MemoryEstimate {
 
 class StageContext;
 struct StageDecl;
+class BlobWriter;  // core/blob.h
+class BlobReader;
+
+// How a stage's result is kept on disk between runs (core/stage_store.h): written as bytes and read
+// back exactly (the same bytes as computing it). Made with stage_codec from two functions of the
+// result's type.
+struct StageCodec {
+    std::function<void(const std::any& result, BlobWriter&)> save;
+    std::function<std::any(BlobReader&)> load;  // BlobError for bytes that are not such a result
+};
 
 // [SECTION] Typed handles
 // A stage's name and the type of its result, declared once, in the stages.h of the technique
@@ -127,16 +137,21 @@ struct StageDecl {
     std::function<MemoryEstimate(const StageContext&)> memory;
     // Returns the result through the stage's handle: stage_result(handle, value) (or an empty any).
     std::function<std::any(StageContext&)> run;
+    // Set for expensive stages (fits, visibility, atlases, tables): the result is kept on disk,
+    // keyed by the program version and the stage's fingerprint with its files' contents, and a
+    // later run of the same scene reads it back (core/stage_store.h).
+    std::optional<StageCodec> disk;
 };
 
-enum class StageStatus { Ran, Cached, Skipped, Failed, Cancelled };
+// Cached: from the session's memory; Stored: read back from the disk store ("cached (disk)").
+enum class StageStatus { Ran, Cached, Skipped, Failed, Cancelled, Stored };
 const char* to_string(StageStatus s);
 
 struct StageRun {
     std::string name;
     int object = -1;       // object stages: the scene object; -1 for scene stages
     StageStatus status = StageStatus::Skipped;
-    double ms = 0;         // time to compute (Ran) or look up (Cached)
+    double ms = 0;         // time to compute (Ran), look up (Cached) or read back (Stored)
     uint64_t key = 0;
     std::string reason;    // why skipped ("effects.environment is off") or the error
     std::vector<std::string> warnings;  // results that are valid but need the user's attention (kept with the cached result)
@@ -201,6 +216,10 @@ public:
     // the object's name for object stages).
     void warn(std::string message) { warnings.push_back(std::move(message)); }
     std::vector<std::string> warnings;
+    // Says that the CPU computed what the stage asked the GPU for (gpu_or_cpu): such a result is not
+    // kept on disk (core/stage_store.h).
+    void fell_back_to_cpu() { fell_back_ = true; }
+    bool fell_back() const { return fell_back_; }
     const std::string& name() const { return name_; }
 
 private:
@@ -208,12 +227,21 @@ private:
     std::string name_;
     const ProgressFn& progress_;
     const std::atomic<bool>* cancel_;
+    bool fell_back_ = false;
 };
 
 // A stage's result, returned from its run() through its handle.
 template <class T, class V>
 std::any stage_result(const Stage<T>&, V&& value) {
     return std::any(std::shared_ptr<const T>(std::make_shared<T>(std::forward<V>(value))));
+}
+
+// The codec of a stage whose result type T is written by write(BlobWriter&, const T&) and read back
+// by read(BlobReader&) -> T.
+template <class T, class Write, class Read>
+StageCodec stage_codec(const Stage<T>& stage, Write write, Read read) {
+    return {[write](const std::any& a, BlobWriter& w) { write(w, *std::any_cast<std::shared_ptr<const T>>(a)); },
+            [stage, read](BlobReader& r) { return stage_result(stage, read(r)); }};
 }
 
 // The declarations: immutable once the registry is built (tests build graphs of their own).
@@ -243,6 +271,10 @@ public:
     // object's result of an object stage.
     void for_each_input(const Scene& scene, const StageDecl& d, int object, const std::function<void(const StageDecl&, int)>& f) const;
 
+    // Every key pattern a stage's result depends on: its own params and those of every stage
+    // upstream (their fingerprints are part of its own). What the read contract lets it read.
+    std::vector<std::string> params_upstream(const StageDecl& d) const;
+
     // The full fingerprint of a stage's inputs for a scene (object stages: for `object`): its
     // name, its declared parameter values and its inputs' fingerprints. Empty when the stage
     // would be skipped. Two inputs with equal fingerprints give equal results.
@@ -252,9 +284,10 @@ public:
     // Cache key of a stage for a scene (0 if the stage would be skipped).
     uint64_t key(const Scene& scene, const std::string& stage, int object = -1) const;
 
-    // Memo of fingerprints within one evaluation, keyed by "stage#object".
+    // Memo of fingerprints within one evaluation, keyed by "stage#object" (one memo per FileIdentity).
+    // FileIdentity::Contents: the files' contents in place of their size and date (keys kept on disk).
     using Memo = std::map<std::string, std::string>;
-    const std::string& fingerprint(const Scene& scene, const StageDecl& d, int object, Memo& memo) const;
+    const std::string& fingerprint(const Scene& scene, const StageDecl& d, int object, Memo& memo, FileIdentity files = FileIdentity::Stat) const;
 
 private:
     void add_decl(StageDecl d);

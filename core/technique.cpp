@@ -1,5 +1,6 @@
 #include "core/technique.h"
 #include "core/error.h"
+#include "core/read_contract.h"
 #include "core/scene_stages.h"
 
 #include <algorithm>
@@ -88,7 +89,34 @@ void Registry::finish() {
         for (const auto& e : t->effects())
             if (std::none_of(all.begin(), all.end(), [&](const EffectDecl& x) { return x.name == e.name; })) all.push_back(e);
     for (const auto& e : all) effects_.add_bool(e.name, e.def).doc(e.help);
+    check_declarations();
     derive_costs();
+}
+
+void Registry::check_declarations() const {
+    const auto find_group = [this](std::string_view name) { return group(std::string(name)); };
+    const auto is_key = [&](const std::string& name) {
+        const auto dot = name.find('.');
+        const ParamGroup* g = dot == std::string::npos ? nullptr : group(name.substr(0, dot));
+        return g && g->find(name.substr(dot + 1));
+    };
+    for (const StageDecl& d : stages_.stages()) {
+        check_key_patterns("stage " + d.name, d.params, find_group);
+        for (const std::string& e : d.effects)
+            if (!effects_.find(e)) throw std::logic_error("stage " + d.name + " needs effect " + e + ", which nothing declares");
+        if (is_key(d.name)) throw std::logic_error("stage " + d.name + " has the name of a key: a name is either a stage or a key");
+    }
+    for (const auto& t : techniques_) {
+        for (const FrameStepDecl& f : t->frame_steps()) {
+            check_key_patterns("frame step " + f.name, f.params, find_group);
+            if (is_key(f.name)) throw std::logic_error("frame step " + f.name + " has the name of a key: a name is either a step or a key");
+        }
+        if (const std::optional<TruthDecl> truth = t->truth()) {
+            check_key_patterns("the truth of " + t->name(), truth->params, find_group);
+            for (const StageName& n : truth->stages)
+                if (!stages_.find(n)) throw std::logic_error("the truth of " + t->name() + " reads unknown stage " + n.str());
+        }
+    }
 }
 
 // A key costs a recompute when a stage declares it (exactly or as "group.*"), an effect when a

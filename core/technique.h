@@ -200,21 +200,9 @@ public:
     // technique's objects only (they add about a fifth to the rasterisation).
     virtual bool uses_uv_derivatives() const { return false; }
 
-    // The truth (core/truth/truth.h): whether the technique has one, the explicit geometry and
-    // material of one of its objects as the truth traces them, and the stages that reads (only
-    // physical ones: the mesh, material maps; never an accuracy knob's).
-    virtual bool has_truth() const { return false; }
-    virtual TruthObject truth_object(const Scene&, const Evaluation&, int /*object*/) const { return {}; }
-    virtual std::vector<StageName> truth_stages() const { return {}; }
-    // The technique's keys truth_object reads itself (its material's), beside those of its
-    // truth_stages: with them and the scene's camera, lights, environment and geometry they are
-    // all a truth depends on (truth_description), so its accuracy knobs leave a truth as it is.
-    virtual std::vector<std::string> truth_params() const { return {}; }
-    // Texture-mode cameras: how far (object units, along the normal) the truth's surface of an
-    // object may reach above the surface the rasteriser draws in texture space; the truth's
-    // ray for a texel starts that far above the drawn point and goes down the normal to the first
-    // hit. 0 (the default): the truth's surface is the drawn one.
-    virtual float truth_lift(const Scene&, const Evaluation&, int /*object*/) const { return 0.f; }
+    // The truth (core/truth/truth.h): what it reads and how it makes the objects it traces, or
+    // nothing when the technique has no truth yet.
+    virtual std::optional<TruthDecl> truth() const { return std::nullopt; }
 
 protected:
     friend class Registry;  // derives the parameters' costs from the stage graph
@@ -254,6 +242,9 @@ public:
 private:
     Registry();
     void finish();
+    // Every declared key exists, every effect a stage needs is declared, and no stage or frame
+    // step has the name of a key (std::logic_error naming it: the program stops at start-up).
+    void check_declarations() const;
     void derive_costs();
     ParamGroup camera_, light_, env_, geometry_, effects_;
     std::vector<EffectDecl> scene_effects_;

@@ -16,6 +16,7 @@ unsigned status_color(StageStatus s) {
     switch (s) {
         case StageStatus::Ran: return IM_COL32(120, 200, 120, 255);
         case StageStatus::Cached: return IM_COL32(110, 170, 235, 255);
+        case StageStatus::Stored: return IM_COL32(150, 140, 235, 255);
         case StageStatus::Skipped: return IM_COL32(140, 140, 140, 255);
         case StageStatus::Failed: return IM_COL32(235, 95, 85, 255);
         case StageStatus::Cancelled: return IM_COL32(230, 170, 80, 255);
@@ -85,7 +86,7 @@ void stages_table(const Scene& scene, const std::vector<StageRun>& runs, const s
             if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", w.c_str());
         }
         ImGui::TableNextColumn();
-        if (r.status == StageStatus::Ran || r.status == StageStatus::Cached || r.status == StageStatus::Failed) right_aligned(ms_format(r.ms), r.ms);
+        if (r.status == StageStatus::Ran || r.status == StageStatus::Cached || r.status == StageStatus::Stored || r.status == StageStatus::Failed) right_aligned(ms_format(r.ms), r.ms);
         ImGui::TableNextColumn();
         const StageDecl* d = Registry::instance().stages().find(r.name);
         if (d && d->paper) {

@@ -16,6 +16,7 @@
 #include "core/image.h"
 #include "core/scene.h"
 #include "core/session.h"
+#include "core/stage_store.h"
 #include "core/strings.h"
 #include "core/technique.h"
 #include "core/truth/truth.h"
@@ -102,11 +103,11 @@ py::object to_python(const Value& v) {
 // cache keys follow the contents: the same array again reuses the stages, another recomputes.
 // float arrays become float EXR (linear values, as an EXR holds); uint8 and uint16 arrays PNG
 // (what an 8/16-bit file means, e.g. sRGB for albedo maps).
+// The folder is never evicted: presets name its files.
 std::string arrays_folder() {
-    if (const char* d = std::getenv("MESOLAB_CACHE_DIR"); d && *d) return std::string(d) + "/arrays";
-    if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x) return std::string(x) + "/mesolab/arrays";
-    if (const char* home = std::getenv("HOME"); home && *home) return std::string(home) + "/.cache/mesolab/arrays";
-    throw std::runtime_error("no folder for arrays given as images: set MESOLAB_CACHE_DIR (or HOME)");
+    const std::string folder = cache_folder("arrays");
+    if (folder.empty()) throw std::runtime_error("no folder for arrays given as images: set MESOLAB_CACHE_DIR (or HOME)");
+    return folder;
 }
 
 std::string store_array(const std::string& key, const py::array& given) {
@@ -448,6 +449,7 @@ public:
         run_on<int>(worker_, py::none(), [this](const ProgressFn&, const std::atomic<bool>*) {
             wb_ = std::make_unique<Workbench>();
             wb_->session().set_memory_limit(limit_);
+            wb_->session().set_store(StageStore::from_environment(version_string()));  // expensive stages kept between runs
             return 0;
         });
     }

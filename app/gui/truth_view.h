@@ -6,8 +6,7 @@
 //    every pass. A scene whose truth reads other values (truth_description), another size or
 //    seed starts over; a higher target continues. Cancel stops the pass under way and keeps the
 //    last finished one. It has its own Session, so the window's stage cache is not touched.
-//  - error_colors: truth_error as colours (blue below the truth, red above, white where equal)
-//    for a legend of ±scale.
+// The error's colours and figure (error_colors, error_figure) are app/truth_figures.h's.
 // Nothing here needs a window (no GLFW, ImGui or GL), so tests drive it directly.
 #include "core/image.h"
 #include "core/render.h"
@@ -83,15 +82,4 @@ private:
     std::jthread thread_;
 };
 
-// truth_error (RGB) as display colours: the mean over channels of (error / scale), clamped to
-// [-1, 1], on a blue - white - red ramp (linear RGB). Background pixels (where `truth` shows no
-// object) are dark grey.
-Image error_colors(const Image& error, const Frame& truth, float scale);
-// A scale for error_colors: the 99th percentile of |error| (mean over channels) on the object's
-// pixels, rounded up to 1, 2 or 5 times a power of ten; 1 when there are none.
-float error_scale(const Image& error, const Frame& truth);
-// The error as a picture to keep: error_colors at error_scale over the frame, and below it a strip
-// with the legend (the ramp from -scale to +scale and what it shows), in linear RGB (write it with
-// write_png_srgb, as the plots). Throws std::runtime_error when the plot font is missing.
-Image error_figure(const Image& error, const Frame& truth);
 }  // namespace mesolab::gui

@@ -1,6 +1,7 @@
 // The viewport: the window with the frame, camera input and overlays; rendering and display.
 #include "app/gui/viewport.h"
 #include "app/gui/truth_view.h"
+#include "app/truth_figures.h"
 #include "gpu/gl.h"
 #include "core/error.h"
 #include "core/image.h"

@@ -1,9 +1,9 @@
 // Technique basic: CPU shading (basic.h gives the maths; gpu/basic/basic.frag is the GPU twin).
 #include "core/basic/stages.h"
+#include "core/parallel.h"
 #include "core/basic/technique.h"
 #include "core/render.h"
 
-#include <tbb/parallel_for.h>
 #include <map>
 
 namespace mesolab::basic {
@@ -16,7 +16,7 @@ void BasicTechnique::shade_cpu(const ShadeContext& ctx) const {
         const auto& o = ctx.scene.objects[size_t(i)];
         mats[i] = {Material::from(o.material, ctx.scene.resolve(o.material.get_string("albedo_map"))), ctx.eval.get(stages::albedo, i)};
     }
-    tbb::parallel_for(0, gb.height, [&](int y) {
+    mesolab::parallel_for(0, gb.height, [&](int y) {
         for (int x = 0; x < gb.width; ++x) {
             const size_t px = gb.index(x, y);
             if (!ctx.mine(px)) continue;

@@ -50,7 +50,7 @@ private:
 };
 }  // namespace
 
-TruthObject BasicTechnique::truth_object(const Scene& s, const Evaluation& ev, int object) const {
+TruthObject truth_object(const Scene& s, const Evaluation& ev, int object) {
     const SceneObject& o = s.objects.at(size_t(object));
     TruthObject t;
     t.mesh = ev.get(mesolab::stages::geometry, object);
@@ -60,7 +60,9 @@ TruthObject BasicTechnique::truth_object(const Scene& s, const Evaluation& ev, i
     return t;
 }
 
-std::vector<StageName> BasicTechnique::truth_stages() const { return {stages::albedo}; }
-
-std::vector<std::string> BasicTechnique::truth_params() const { return {"basic.kd", "basic.ks", "basic.shininess", "basic.albedo_map"}; }
+std::optional<TruthDecl> BasicTechnique::truth() const {
+    return TruthDecl{.params = {"basic.kd", "basic.ks", "basic.shininess", "basic.albedo_map"},
+                     .stages = {stages::albedo},
+                     .object = truth_object};
+}
 }  // namespace mesolab::basic

@@ -1,6 +1,6 @@
 #include "core/bumpsynth/brdf.h"
+#include "core/parallel.h"
 
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <cmath>
 
@@ -24,7 +24,7 @@ SmithTable SmithTable::build(const Ndf& ndf) {
         }
     SmithTable t;
     t.g1_.assign(size_t(kTheta) * size_t(kPhi), 0.f);
-    tbb::parallel_for(0, kTheta - 1, [&](int j) {  // row kTheta - 1 (θ = π/2) stays 0
+    mesolab::parallel_for(0, kTheta - 1, [&](int j) {  // row kTheta - 1 (θ = π/2) stays 0
         const double theta = double(j) * (kPi / 2.0) / double(kTheta - 1);
         for (int p = 0; p < kPhi; ++p) {
             const double phi = 2.0 * kPi * double(p) / double(kPhi);

@@ -1,11 +1,11 @@
 // Existing bump maps: normals from heightfields and normal maps, index textures, detail (see bump_map.h).
 #include "core/bumpsynth/bump_map.h"
+#include "core/parallel.h"
 #include "core/sampling.h"
 #include "core/error.h"
 #include "core/heightfield/heightfield.h"
 #include "core/image.h"
 
-#include <tbb/parallel_for.h>
 #include <cmath>
 
 namespace mesolab::bumpsynth {
@@ -21,7 +21,7 @@ BumpNormals normals_of(const Heightfield& f) {
     n.width = f.width;
     n.height = f.height;
     n.m.resize(size_t(f.width) * size_t(f.height));
-    tbb::parallel_for(0, f.height, [&](int y) {
+    mesolab::parallel_for(0, f.height, [&](int y) {
         for (int x = 0; x < f.width; ++x) n.m[size_t(y) * size_t(f.width) + size_t(x)] = f.normal(x, y);
     });
     return n;
@@ -67,7 +67,7 @@ IndexMap make_index_map(const BumpNormals& n, const Lut& lut) {
     map.width = n.width;
     map.height = n.height;
     map.u.resize(n.m.size());
-    tbb::parallel_for(0, n.height, [&](int y) {
+    mesolab::parallel_for(0, n.height, [&](int y) {
         for (int x = 0; x < n.width; ++x) {
             const size_t i = size_t(y) * size_t(n.width) + size_t(x);
             map.u[i] = lut.index(n.m[i]);

@@ -1,9 +1,9 @@
 #include "core/bumpsynth/lut.h"
+#include "core/parallel.h"
 
 #include "core/error.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -282,7 +282,7 @@ Lut build_lut(const Ndf& ndf, int size, const InputCdf& g) {
     // Conditional C(y | x) per column; a column without mass gets a uniform CDF (never sampled).
     L.C_.assign(size_t(R) * size_t(R + 1), 0.0);
     L.last_cell_.assign(size_t(R), -1);
-    tbb::parallel_for(tbb::blocked_range<int>(0, R), [&](const tbb::blocked_range<int>& cols) {
+    mesolab::parallel_for(tbb::blocked_range<int>(0, R), [&](const tbb::blocked_range<int>& cols) {
         for (int i = cols.begin(); i != cols.end(); ++i) {
             double* C = L.C_.data() + size_t(i) * size_t(R + 1);
             for (int j = 0; j < R; ++j) C[j + 1] = C[j] + ndf.mass(i, j);
@@ -308,7 +308,7 @@ Lut build_lut(const Ndf& ndf, int size, const InputCdf& g) {
         x_of[size_t(a)] = -1.0 + (i + tx) * L.h();
     }
     L.entries_.resize(size_t(S) * size_t(S));
-    tbb::parallel_for(tbb::blocked_range<int>(0, S), [&](const tbb::blocked_range<int>& rows) {
+    mesolab::parallel_for(tbb::blocked_range<int>(0, S), [&](const tbb::blocked_range<int>& rows) {
         for (int b = rows.begin(); b != rows.end(); ++b) {
             const double u2 = L.G_((b + 0.5) / S);
             for (int a = 0; a < S; ++a)

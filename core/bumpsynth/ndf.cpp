@@ -1,9 +1,9 @@
 #include "core/bumpsynth/ndf.h"
+#include "core/parallel.h"
 
 #include "core/error.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
@@ -173,7 +173,7 @@ template <class Fn>
 std::vector<double> tabulate(int R, const Fn& f, const std::vector<Core>& cores) {
     std::vector<double> mass(size_t(R) * size_t(R), 0.0);
     const double h = 2.0 / R;
-    tbb::parallel_for(tbb::blocked_range<int>(0, R), [&](const tbb::blocked_range<int>& rows) {
+    mesolab::parallel_for(tbb::blocked_range<int>(0, R), [&](const tbb::blocked_range<int>& rows) {
         for (int j = rows.begin(); j != rows.end(); ++j)
             for (int i = 0; i < R; ++i) {
                 const Rect cell{-1.0 + i * h, -1.0 + (i + 1) * h, -1.0 + j * h, -1.0 + (j + 1) * h};
@@ -326,7 +326,7 @@ struct NdfBuilder {
         ndf.value_.assign(ndf.mass_.size(), 0.f);
         const double h = 2.0 / R;
         const double min_area = 1e-15 * h * h;  // slivers below this count as outside the disk for eval
-        tbb::parallel_for(tbb::blocked_range<int>(0, R), [&](const tbb::blocked_range<int>& rows) {
+        mesolab::parallel_for(tbb::blocked_range<int>(0, R), [&](const tbb::blocked_range<int>& rows) {
             for (int j = rows.begin(); j != rows.end(); ++j)
                 for (int i = 0; i < R; ++i) {
                     const size_t c = ndf.idx(i, j);
@@ -376,7 +376,7 @@ Ndf Ndf::from_image(const std::vector<float>& pixels, int width, int height, int
     const int R = resolution;
     const double h = 2.0 / R, pw = 2.0 / width, ph = 2.0 / height;
     std::vector<double> mass(size_t(R) * size_t(R), 0.0);
-    tbb::parallel_for(tbb::blocked_range<int>(0, R), [&](const tbb::blocked_range<int>& rows) {
+    mesolab::parallel_for(tbb::blocked_range<int>(0, R), [&](const tbb::blocked_range<int>& rows) {
         for (int j = rows.begin(); j != rows.end(); ++j)
             for (int i = 0; i < R; ++i) {
                 const double cx0 = -1.0 + i * h, cx1 = -1.0 + (i + 1) * h, cy0 = -1.0 + j * h, cy1 = -1.0 + (j + 1) * h;

@@ -1,8 +1,8 @@
 #include "core/bumpsynth/noise.h"
+#include "core/parallel.h"
 #include "core/sampling.h"
 #include "core/error.h"
 
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -132,7 +132,7 @@ NoiseCdfs measure_noise_cdfs(const NoiseParams& n, int samples) {
     const int K = n.octaves_max, N = std::max(16, samples);
     const NoiseOctaves oc(n);
     std::vector<std::vector<float>> r(size_t(2 * K), std::vector<float>(size_t(N) * size_t(N)));
-    tbb::parallel_for(0, N, [&](int y) {
+    mesolab::parallel_for(0, N, [&](int y) {
         std::mt19937 rng(uint32_t(y) * 7919u + n.seed);
         std::uniform_real_distribution<float> jitter(0.f, 1.f);
         std::vector<vec2> all(static_cast<size_t>(K));
@@ -148,7 +148,7 @@ NoiseCdfs measure_noise_cdfs(const NoiseParams& n, int samples) {
     out.octaves = oc;
     out.G.resize(size_t(2 * K));
     out.table.resize(size_t(2 * K) * size_t(NoiseCdfs::kCdfNodes));
-    tbb::parallel_for(0, 2 * K, [&](int k) {
+    mesolab::parallel_for(0, 2 * K, [&](int k) {
         out.G[size_t(k)] = measure_input_cdf(r[size_t(k)]);
         const std::vector<float> t = resample_input_cdf(out.G[size_t(k)]);
         std::copy(t.begin(), t.end(), out.table.begin() + std::ptrdiff_t(size_t(k) * size_t(NoiseCdfs::kCdfNodes)));
@@ -223,7 +223,7 @@ NoiseTexture make_noise_texture(const NoiseCdfs& cdfs, int size) {
         const int s = size >> l, k = std::max(1, tex.octaves_max - l), sub = l == 0 ? 1 : 2;
         std::vector<vec2>& t = tex.levels[size_t(l)];
         t.resize(size_t(s) * size_t(s));
-        tbb::parallel_for(0, s, [&](int y) {
+        mesolab::parallel_for(0, s, [&](int y) {
             for (int x = 0; x < s; ++x) {
                 vec2 sum(0.f);
                 for (int j = 0; j < sub; ++j)

@@ -1,10 +1,10 @@
 // Technique bumpsynth: CPU shading (brdf.h gives the synthesis and the BRDF;
 // gpu/bumpsynth/bumpsynth.frag is the GPU twin).
 #include "core/bumpsynth/stages.h"
+#include "core/parallel.h"
 #include "core/bumpsynth/technique.h"
 #include "core/render.h"
 
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <cmath>
 
@@ -16,7 +16,7 @@ void BumpsynthTechnique::shade_cpu(const ShadeContext& ctx) const {
     // Materials parsed once per frame into each object's synthesis.
     std::map<int, Synthesis> syns;
     for (int i : ctx.objects) syns[i] = synthesis_for(ctx.scene, ctx.eval, i);
-    tbb::parallel_for(0, gb.height, [&](int y) {
+    mesolab::parallel_for(0, gb.height, [&](int y) {
         for (int x = 0; x < gb.width; ++x) {
             const size_t px = gb.index(x, y);
             if (!ctx.mine(px)) continue;

@@ -19,12 +19,12 @@ struct TruthNdf;
 
 namespace stages {
 inline constexpr Stage<BumpNormals> bump_normals{"bumpsynth.bump_normals"};
-inline constexpr Stage<Ndf> ndf{"bumpsynth.ndf"};
+inline constexpr Stage<Ndf> ndf{"bumpsynth.ndf_table"};
 inline constexpr Stage<Lut> lut{"bumpsynth.lut"};
-inline constexpr Stage<IndexMap> index_map{"bumpsynth.index_map"};
+inline constexpr Stage<IndexMap> index_map{"bumpsynth.index_texture"};
 inline constexpr Stage<NoiseCdfs> noise_cdf{"bumpsynth.noise_cdf"};
 inline constexpr Stage<NoiseTexture> noise_texture{"bumpsynth.noise_texture"};
-inline constexpr Stage<SmithTable> masking{"bumpsynth.masking"};
+inline constexpr Stage<SmithTable> masking{"bumpsynth.smith_table"};
 inline constexpr Stage<Image> albedo{"bumpsynth.albedo"};
 inline constexpr Stage<TruthNdf> truth_ndf{"bumpsynth.truth_ndf"};
 }  // namespace stages

@@ -1,12 +1,12 @@
 // The sweep metric bumpsynth.ndf_histogram (see sweep_metric.h).
 #include "core/bumpsynth/sweep_metric.h"
+#include "core/parallel.h"
 #include "core/bumpsynth/bumpsynth.h"
 #include "core/error.h"
 #include "core/hash.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/combinable.h>
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -95,7 +95,7 @@ std::vector<double> synthesised_histogram(const Synthesis& s, int bins, int side
     const float octaves = float(s.cdfs->params.octaves_max);
     const size_t cells = size_t(bins) * size_t(bins);
     tbb::combinable<std::vector<int64_t>> counts([cells] { return std::vector<int64_t>(cells, 0); });
-    tbb::parallel_for(tbb::blocked_range<int>(0, side), [&](const tbb::blocked_range<int>& rows) {
+    mesolab::parallel_for(tbb::blocked_range<int>(0, side), [&](const tbb::blocked_range<int>& rows) {
         std::vector<int64_t>& c = counts.local();
         for (int j = rows.begin(); j < rows.end(); ++j)
             for (int i = 0; i < side; ++i) {

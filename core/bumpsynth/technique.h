@@ -81,9 +81,6 @@ public:
     std::vector<BenchTable> bench_tables() const override;
     FrameAgreement agreement() const override;
     std::vector<SweepMetricDecl> sweep_metrics() const override;
-    bool has_truth() const override { return true; }
-    TruthObject truth_object(const Scene& s, const Evaluation& ev, int object) const override;
-    std::vector<StageName> truth_stages() const override;
-    std::vector<std::string> truth_params() const override;
+    std::optional<TruthDecl> truth() const override;
 };
 }  // namespace mesolab::bumpsynth

@@ -215,7 +215,7 @@ private:
 };
 }  // namespace
 
-TruthObject BumpsynthTechnique::truth_object(const Scene& s, const Evaluation& ev, int object) const {
+TruthObject truth_object(const Scene& s, const Evaluation& ev, int object) {
     const SceneObject& o = s.objects.at(size_t(object));
     const ParamTable& m = o.material;
     auto t = ev.get(stages::truth_ndf, object);
@@ -230,9 +230,9 @@ TruthObject BumpsynthTechnique::truth_object(const Scene& s, const Evaluation& e
     return ob;
 }
 
-std::vector<StageName> BumpsynthTechnique::truth_stages() const { return {stages::truth_ndf, stages::noise_cdf, stages::albedo}; }
-
-std::vector<std::string> BumpsynthTechnique::truth_params() const {
-    return keys({"octaves_max", "noise_frequency", "noise_gain", "noise_seed", "index_noise", "ks", "kd", "fresnel", "masking"});
+std::optional<TruthDecl> BumpsynthTechnique::truth() const {
+    return TruthDecl{.params = keys({"octaves_max", "noise_frequency", "noise_gain", "noise_seed", "index_noise", "ks", "kd", "fresnel", "masking"}),
+                     .stages = {stages::truth_ndf, stages::noise_cdf, stages::albedo},
+                     .object = truth_object};
 }
 }  // namespace mesolab::bumpsynth

@@ -1,11 +1,11 @@
 // Virtual acquisition of a stitch with Embree (see acquire.h).
 #include "core/cloth/stages.h"
+#include "core/parallel.h"
 #include "core/cloth/acquire.h"
 #include "core/error.h"
 #include "core/raytrace.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include <atomic>
 #include <cmath>
@@ -101,7 +101,7 @@ SampleGrid acquire(const StitchMesh& st, const AcquireParams& p, const ProgressF
     const int K = p.visibility_rays > 0 ? std::max(1, int(std::lround(std::sqrt(double(p.visibility_rays))))) : 0;
     const size_t KK = size_t(K) * size_t(K);
     std::vector<Hit> seen(V * KK);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, V, 256), [&](const tbb::blocked_range<size_t>& r) {
+    mesolab::parallel_for(tbb::blocked_range<size_t>(0, V, 256), [&](const tbb::blocked_range<size_t>& r) {
         check_cancel();
         for (size_t i = r.begin(); i != r.end(); ++i) {
             if (KK == 0) break;
@@ -118,7 +118,7 @@ SampleGrid acquire(const StitchMesh& st, const AcquireParams& p, const ProgressF
     const size_t N = dirs.size();
     std::vector<vec3> Lo(V * N);
     const std::vector<vec3>& rho = st.color;
-    tbb::parallel_for(size_t(0), N, [&](size_t li) {
+    mesolab::parallel_for(size_t(0), N, [&](size_t li) {
         check_cancel();
         const vec3 l = vec3(dirs[li]);
         std::vector<vec3> direct(V);
@@ -148,7 +148,7 @@ SampleGrid acquire(const StitchMesh& st, const AcquireParams& p, const ProgressF
     g.normal.assign(S, dvec3(0.0, 0.0, 1.0));
     g.tangent.assign(S, dvec3(1.0, 0.0, 0.0));
     const float z_top = st.hi.z + eps;
-    tbb::parallel_for(size_t(0), S, [&](size_t s) {
+    mesolab::parallel_for(size_t(0), S, [&](size_t s) {
         check_cancel();
         const int a = int(s) % p.spatial, b = int(s) / p.spatial;
         const vec3 x((float(a) + 0.5f) / float(p.spatial) * st.tile.x, (float(b) + 0.5f) / float(p.spatial) * st.tile.y, z_top);

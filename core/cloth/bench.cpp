@@ -22,7 +22,7 @@ std::vector<BenchTable> ClothTechnique::bench_tables() const {
     };
     memory.info = [](const Scene&, const Evaluation& ev) {
         const auto p = ev.get(stages::fit, 0);
-        return p ? strprintf("%.2f MB (paper %s)", double(p->bytes()) / 1048576.0, paper::kMemory) : std::string("—");
+        return p ? format_bytes(double(p->bytes())) + " (paper " + paper::kMemory + ")" : std::string("—");
     };
     error.info = [](const Scene&, const Evaluation& ev) {
         const auto p = ev.get(stages::fit, 0);

@@ -6,11 +6,11 @@
 // file cloth.samples names) → cloth.fit (the BRDF pyramid); cloth.garment (the drawn mesh). A
 // frame reads the pyramid: per pixel the garment's uv times cloth.repeat gives the pattern
 // coordinates, the screen-space uv derivatives the footprint (tiles per pixel) and so the mip
-// level (shade.h); the entry's model in its own frame gives the radiance per light, and the
+// level (reflectance.h); the entry's model in its own frame gives the radiance per light, and the
 // table's alpha mixes it with the background seen through holes (the environment along the
 // pixel's ray; objects behind the garment do not show through).
 #include "core/cloth/acquire.h"
-#include "core/cloth/shade.h"
+#include "core/cloth/reflectance.h"
 #include "core/cloth/stitch.h"
 #include "core/raster.h"
 #include "core/scene.h"

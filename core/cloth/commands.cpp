@@ -1,13 +1,13 @@
 // Technique cloth: its commands, mesolab cloth fit (measured samples in, one fitted model per
 // point out) and mesolab cloth eval (a fitted model at given directions).
 #include "core/file.h"
+#include "core/parallel.h"
 #include "core/cloth/samples.h"
 #include "core/cloth/stages.h"
 #include "core/cloth/technique.h"
 #include "core/error.h"
 #include "core/strings.h"
 
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -72,7 +72,7 @@ std::vector<CommandDecl> ClothTechnique::commands() const {
         m.reports.resize(set.points.size());
         std::atomic<size_t> done{0};
         std::mutex progress_mutex;
-        tbb::parallel_for(size_t(0), set.points.size(), [&](size_t i) {
+        mesolab::parallel_for(size_t(0), set.points.size(), [&](size_t i) {
             m.brdfs[i] = fit_brdf(set.points[i], o, &m.reports[i]);
             const size_t d = ++done;
             if (progress) {

@@ -1,9 +1,9 @@
 // The mip levels of a fabric's BRDF array (see pyramid.h).
 #include "core/cloth/stages.h"
+#include "core/parallel.h"
 #include "core/cloth/pyramid.h"
 #include "core/error.h"
 
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <atomic>
@@ -109,7 +109,7 @@ BrdfPyramid fit_pyramid(const SampleGrid& g, const FitOptions& o, const Progress
     // parent's lobes and the paper's grey start only (a block's mean is close to its parts').
     for (int k = int(out.level.size()) - 1; k >= 0 && !stopped; --k) {
         const int side = g.res >> k;
-        tbb::parallel_for(size_t(0), size_t(side) * size_t(side), [&](size_t at) {
+        mesolab::parallel_for(size_t(0), size_t(side) * size_t(side), [&](size_t at) {
             if (stopped.load(std::memory_order_relaxed) || (cancel && cancel->load(std::memory_order_relaxed))) {
                 stopped = true;
                 return;

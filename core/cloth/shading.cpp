@@ -1,9 +1,9 @@
-// Technique cloth: CPU shading of the garment's pixels (shade.h for a point's maths).
+// Technique cloth: CPU shading of the garment's pixels (reflectance.h for a point's maths).
 #include "core/cloth/stages.h"
+#include "core/parallel.h"
 #include "core/cloth/technique.h"
 #include "core/render.h"
 
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <stdexcept>
 #include <string>
@@ -32,7 +32,7 @@ void ClothTechnique::shade_cpu(const ShadeContext& ctx) const {
     const vec3 env_const = ctx.lighting.env.color * ctx.lighting.env.intensity;
     const GBuffer& gb = ctx.gbuffer;
     if (gb.uv_dx.size() != gb.uv.size()) throw std::logic_error("cloth: the G-buffer lacks uv derivatives (DrawItem::uv_derivatives)");
-    tbb::parallel_for(0, gb.height, [&](int y) {
+    mesolab::parallel_for(0, gb.height, [&](int y) {
         for (int x = 0; x < gb.width; ++x) {
             const size_t px = gb.index(x, y);
             if (!ctx.mine(px)) continue;

@@ -6,6 +6,7 @@
 #include "core/cloth/samples.h"
 #include "core/cloth/technique.h"
 #include "core/cloth/truth.h"
+#include "core/blob.h"
 #include "core/error.h"
 #include "core/scene_stages.h"
 
@@ -17,6 +18,65 @@ namespace {
 // [SECTION] Stages
 const std::vector<std::string> kStitchKeys = {"cloth.stitch", "cloth.yarn_radius", "cloth.loop_height", "cloth.color_a", "cloth.color_b",
                                               "cloth.stitch_resolution"};
+
+// [SECTION] The acquisition and the fit on disk (core/stage_store.h)
+template <class T>
+void put_nested(BlobWriter& w, const std::vector<std::vector<T>>& v) {
+    w.put(uint64_t(v.size()));
+    for (const auto& x : v) w.put_vector(x);
+}
+template <class T>
+std::vector<std::vector<T>> get_nested(BlobReader& r) {
+    std::vector<std::vector<T>> v(r.get_count(8));
+    for (auto& x : v) x = r.get_vector<T>();
+    return v;
+}
+
+void write_grid(BlobWriter& w, const SampleGrid& g) {
+    w.put(int32_t(g.res));
+    w.put_vector(g.l), w.put_vector(g.v), w.put_vector(g.view_of), w.put_vector(g.views);
+    put_nested(w, g.f), put_nested(w, g.alpha);
+    w.put_vector(g.normal), w.put_vector(g.tangent);
+}
+
+SampleGrid read_grid(BlobReader& r) {
+    SampleGrid g;
+    g.res = r.get<int32_t>();
+    g.l = r.get_vector<dvec3>(), g.v = r.get_vector<dvec3>(), g.view_of = r.get_vector<int>(), g.views = r.get_vector<dvec3>();
+    g.f = get_nested<dvec3>(r), g.alpha = get_nested<double>(r);
+    g.normal = r.get_vector<dvec3>(), g.tangent = r.get_vector<dvec3>();
+    return g;
+}
+
+void write_pyramid(BlobWriter& w, const BrdfPyramid& p) {
+    w.put(int32_t(p.res));
+    w.put(uint64_t(p.level.size()));
+    for (const auto& level : p.level) {
+        w.put(uint64_t(level.size()));
+        for (const ClothBrdf& b : level) {
+            w.put(b.L.kd), w.put_vector(b.L.lobes);
+            w.put_vector(b.table.v), w.put_vector(b.table.T);
+            w.put(b.f_max);
+        }
+    }
+    put_nested(w, p.frame), put_nested(w, p.report);
+}
+
+BrdfPyramid read_pyramid(BlobReader& r) {
+    BrdfPyramid p;
+    p.res = r.get<int32_t>();
+    p.level.resize(r.get_count(8));
+    for (auto& level : p.level) {
+        level.resize(r.get_count(64));
+        for (ClothBrdf& b : level) {
+            b.L.kd = r.get<dvec3>(), b.L.lobes = r.get_vector<LafortuneLobe>();
+            b.table.v = r.get_vector<dvec3>(), b.table.T = r.get_vector<dvec4>();
+            b.f_max = r.get<dvec3>();
+        }
+    }
+    p.frame = get_nested<glm::dmat3>(r), p.report = get_nested<FitReport>(r);
+    return p;
+}
 
 }  // namespace
 
@@ -59,7 +119,8 @@ void ClothTechnique::declare_stages(StageGraph& g) const {
                    if (!ctx.cancelled()) ctx.progress(f);
                };
                return stage_result(stages::acquire, acquire(*ctx.input(stages::stitch), s.acquire, progress, ctx.cancel_flag()));
-           }});
+           },
+           .disk = stage_codec(stages::acquire, write_grid, read_grid)});
     g.add(stages::fit, {.help = "Lafortune x view-table fits (Ceres) of every mip level's entries, coarse to fine",
            .scope = StageScope::Object,
            .technique = "cloth",
@@ -78,7 +139,8 @@ void ClothTechnique::declare_stages(StageGraph& g) const {
                if (unconverged)
                    ctx.warn(std::to_string(unconverged) + " of " + std::to_string(p.count()) + " BRDFs stopped before the table met cloth.tolerance");
                return stage_result(stages::fit, std::move(p));
-           }});
+           },
+           .disk = stage_codec(stages::fit, write_pyramid, read_pyramid)});
     g.add(stages::garment, {.help = "The procedural garment (folded curtain, bent sleeve) drawn instead of the object's geometry",
            .scope = StageScope::Object,
            .technique = "cloth",

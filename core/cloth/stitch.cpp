@@ -1,9 +1,9 @@
 // Stitch micro-geometry (see stitch.h).
 #include "core/cloth/stitch.h"
+#include "core/parallel.h"
 #include "core/cloth/marching_cubes.h"
 #include "core/error.h"
 
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -131,7 +131,7 @@ StitchMesh build_stitch_mesh(const StitchPattern& s, int cells) {
             const int n = 16;
             for (int k = 0; k < n; ++k) pieces.push_back({b.at(float(k) / float(n)), b.at(float(k + 1) / float(n)), int(y)});
         }
-    tbb::parallel_for(0, g.n.z, [&](int kz) {
+    mesolab::parallel_for(0, g.n.z, [&](int kz) {
         const float z = g.origin.z + h * float(kz);
         for (const Piece& p : pieces) {
             if (z < std::min(p.a.z, p.b.z) - band || z > std::max(p.a.z, p.b.z) + band) continue;

@@ -33,9 +33,6 @@ public:
     FrameAgreement agreement() const override;
     std::vector<SweepMetricDecl> sweep_metrics() const override;
     bool uses_uv_derivatives() const override { return true; }  // the mip level's footprint
-    bool has_truth() const override { return true; }
-    TruthObject truth_object(const Scene& s, const Evaluation& ev, int object) const override;
-    std::vector<StageName> truth_stages() const override;
-    float truth_lift(const Scene& s, const Evaluation& ev, int object) const override;
+    std::optional<TruthDecl> truth() const override;
 };
 }  // namespace mesolab::cloth

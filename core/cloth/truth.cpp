@@ -1,13 +1,13 @@
 // Technique cloth: its truth (truth.h): the stitch's tile, the fabric instanced over the garment,
 // and the yarn's material for the path tracer.
 #include "core/cloth/stages.h"
+#include "core/parallel.h"
 #include "core/cloth/technique.h"
 #include "core/cloth/truth.h"
 #include "core/error.h"
 #include "core/render.h"
 #include "core/scene_stages.h"
 
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -110,7 +110,7 @@ TruthFabric truth_fabric(const TruthFabric& tile, const TriMesh& base, int repea
     out.mesh.index.resize(nt * copies);
     out.color.resize(nv * copies);
     out.half_thickness = tile.half_thickness * s;
-    tbb::parallel_for(size_t(0), copies, [&](size_t c) {
+    mesolab::parallel_for(size_t(0), copies, [&](size_t c) {
         const int i = int(c % size_t(repeat)), j = int(c / size_t(repeat));
         for (size_t v = 0; v < nv; ++v) {
             const vec2 uv = (vec2(float(i), float(j)) + tile.mesh.uv[v]) / float(repeat);
@@ -158,7 +158,7 @@ private:
 };
 }  // namespace
 
-TruthObject ClothTechnique::truth_object(const Scene& s, const Evaluation& ev, int object) const {
+TruthObject truth_object(const Scene& s, const Evaluation& ev, int object) {
     const auto fabric = ev.get(stages::truth_fabric, object);
     TruthObject t;
     if (!fabric) return t;
@@ -168,10 +168,15 @@ TruthObject ClothTechnique::truth_object(const Scene& s, const Evaluation& ev, i
     return t;
 }
 
-float ClothTechnique::truth_lift(const Scene&, const Evaluation& ev, int object) const {
+float truth_lift(const Scene&, const Evaluation& ev, int object) {
     const auto fabric = ev.get(stages::truth_fabric, object);
     return fabric ? 1.5f * fabric->half_thickness : 0.f;
 }
 
-std::vector<StageName> ClothTechnique::truth_stages() const { return {stages::truth_stitch, stages::truth_fabric}; }
+std::optional<TruthDecl> ClothTechnique::truth() const {
+    return TruthDecl{.params = {},
+                     .stages = {stages::truth_stitch, stages::truth_fabric},
+                     .object = truth_object,
+                     .lift = truth_lift};
+}
 }  // namespace mesolab::cloth

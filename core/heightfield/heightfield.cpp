@@ -1,5 +1,6 @@
 // Heightfields: queries, bilinear look-ups, procedural fields, images and albedo maps (see heightfield.h).
 #include "core/heightfield/heightfield.h"
+#include "core/parallel.h"
 #include "core/error.h"
 
 #include <algorithm>
@@ -7,7 +8,6 @@
 #include <random>
 #include <sstream>
 
-#include <tbb/parallel_for.h>
 
 namespace mesolab {
 
@@ -176,7 +176,7 @@ void make_gaussian(Heightfield& f, int n, double sigma, double rms_slope, uint32
     // and then along y, and leaves the field in its original layout.
     auto convolve_rows_transposed = [&](const std::vector<double>& in, std::vector<double>& out) {
         constexpr int kBlock = 32;  // rows per task: the transposed writes then come in runs
-        tbb::parallel_for(0, (n + kBlock - 1) / kBlock, [&](int block) {
+        mesolab::parallel_for(0, (n + kBlock - 1) / kBlock, [&](int block) {
             const int y0 = block * kBlock, rows = std::min(kBlock, n - y0);
             std::vector<double> result(size_t(rows) * size_t(n));
             for (int r = 0; r < rows; ++r) {

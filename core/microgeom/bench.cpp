@@ -35,7 +35,7 @@ std::vector<BenchTable> MicrogeomTechnique::bench_tables() const {
             return s;
         };
     };
-    auto mb = [](size_t bytes) { return strprintf("%.2f MB", double(bytes) / 1048576.0); };
+    auto mb = [](size_t bytes) { return format_bytes(double(bytes)); };
     BenchTable t;
     t.name = "microgeom";
     t.title = "Heidrich et al. 2000, Table 1: precomputation and rendering (100 directions)";

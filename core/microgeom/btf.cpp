@@ -1,8 +1,8 @@
 #include "core/microgeom/btf.h"
+#include "core/parallel.h"
 #include "core/error.h"
 #include "core/microgeom/scatter.h"
 
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -31,7 +31,7 @@ Image btf_mosaic(const Heightfield& hf, const DirectionSet& dirs, const Visibili
     Image out(int(W * views.size()), int(H * lights.size()), 3, 0.f);
     // Masking per view, once.
     std::vector<std::vector<float>> mask(views.size());
-    tbb::parallel_for(size_t(0), views.size(), [&](size_t k) {
+    mesolab::parallel_for(size_t(0), views.size(), [&](size_t k) {
         mask[k] = s.scatter.ellipses ? ellipse_visibility_texture(*s.scatter.ellipses, hf, views[k]) : visibility_texture(hf, dirs, vis, views[k]);
     });
     // Light images in batches: on s.lights where set (the GPU), else scatter() in parallel.
@@ -43,7 +43,7 @@ Image btf_mosaic(const Heightfield& hf, const DirectionSet& dirs, const Visibili
         if (s.lights) {
             s.lights->solve(std::vector<vec3>(lights.begin() + std::ptrdiff_t(l0), lights.begin() + std::ptrdiff_t(l0 + bn)), L, shadow);
         } else {
-            tbb::parallel_for(size_t(0), bn, [&](size_t k) {
+            mesolab::parallel_for(size_t(0), bn, [&](size_t k) {
                 ScatterSettings st = s.scatter;
                 st.light_dir = lights[l0 + k];
                 st.light_E = vec3(1.f);
@@ -54,7 +54,7 @@ Image btf_mosaic(const Heightfield& hf, const DirectionSet& dirs, const Visibili
                 shadow[k] = std::move(sr.shadow);
             });
         }
-        tbb::parallel_for(size_t(0), bn * views.size(), [&](size_t kv) {
+        mesolab::parallel_for(size_t(0), bn * views.size(), [&](size_t kv) {
             const size_t k = kv / views.size(), vi = kv % views.size(), li = l0 + k;
             const vec3 l = lights[li], v = views[vi];
             const vec3 h = glm::normalize(l + v);

@@ -1,6 +1,6 @@
 #include "core/microgeom/curvature.h"
+#include "core/parallel.h"
 
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <cmath>
 
@@ -47,7 +47,7 @@ Importance compute_importance(const Heightfield& hf, const DirectionSet& dirs, c
     const int rows_per_batch = std::max(1, hf.height / 8);
     for (int y0 = 0; y0 < hf.height; y0 += rows_per_batch) {
         const int y1 = std::min(hf.height, y0 + rows_per_batch);
-        tbb::parallel_for(y0, y1, [&](int y) {
+        mesolab::parallel_for(y0, y1, [&](int y) {
             std::vector<vec3> bent(N);
             std::vector<uint8_t> is_hit(N);
             std::vector<float> tri_area(M);

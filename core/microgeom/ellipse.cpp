@@ -1,6 +1,6 @@
 #include "core/microgeom/ellipse.h"
+#include "core/parallel.h"
 
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -237,7 +237,7 @@ std::vector<EllipseMap> fit_bent_maps(const Heightfield& hf, const DirectionSet&
     const int batches = std::min(H, 16);
     for (int batch = 0; batch < batches; ++batch) {
         const int y0 = int(long(H) * batch / batches), y1 = int(long(H) * (batch + 1) / batches);
-        tbb::parallel_for(tbb::blocked_range<int>(y0, y1), [&](const tbb::blocked_range<int>& rows) {
+        mesolab::parallel_for(tbb::blocked_range<int>(y0, y1), [&](const tbb::blocked_range<int>& rows) {
             Fitter fitter(edge);
             std::vector<vec2> points;
             std::vector<uint8_t> lit;
@@ -337,7 +337,7 @@ EllipseMap fit_ellipses(const Heightfield& hf, const DirectionSet& dirs, const V
     const int batches = std::min(H, 16);
     for (int batch = 0; batch < batches; ++batch) {
         const int y0 = int(long(H) * batch / batches), y1 = int(long(H) * (batch + 1) / batches);
-        tbb::parallel_for(tbb::blocked_range<int>(y0, y1), [&](const tbb::blocked_range<int>& rows) {
+        mesolab::parallel_for(tbb::blocked_range<int>(y0, y1), [&](const tbb::blocked_range<int>& rows) {
             Fitter fitter(points, map.edge);
             std::vector<uint8_t> lit(up.size());
             for (int y = rows.begin(); y < rows.end(); ++y)
@@ -370,7 +370,7 @@ std::vector<float> ellipse_visibility_texture(const EllipseMap& map, const Heigh
                                     std::to_string(map.height) + ", heightfield " + std::to_string(hf.width) + "x" +
                                     std::to_string(hf.height));
     std::vector<float> out(map.e.size(), 0.f);
-    tbb::parallel_for(0, hf.height, [&](int y) {
+    mesolab::parallel_for(0, hf.height, [&](int y) {
         for (int x = 0; x < hf.width; ++x)
             if (glm::dot(hf.normal(x, y), w) > 0.f) out[hf.index(x, y)] = ellipse_visibility(map.at(x, y), w, map.edge);
     });
@@ -436,7 +436,7 @@ EllipseMap interpolate_ellipses(const CurvedEllipses& c, Bending b) {
     if (const double du = (1.0 - wu) * (1.0 - wu) + wv * wv; du < best) nearest = 1, best = du;
     if (const double dv = wu * wu + (1.0 - wv) * (1.0 - wv); dv < best) nearest = 2;
     const int W = std::max(1, out.width);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, size_t(W)), [&](const tbb::blocked_range<size_t>& r) {
+    mesolab::parallel_for(tbb::blocked_range<size_t>(0, n, size_t(W)), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t p = r.begin(); p < r.end(); ++p) {
             const Ellipse* s[3] = {&c.flat.e[p], &su.e[p], &sv.e[p]};
             const Ellipse* near = s[nearest];

@@ -1,11 +1,11 @@
 #include "core/microgeom/goniometer.h"
+#include "core/parallel.h"
 
 #include "core/error.h"
 
 // Eigen (header-only, find_package(Eigen3) -> Eigen3::Eigen: a system include directory, so its
 // headers stay out of our warnings).
 #include <Eigen/Dense>
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -49,7 +49,7 @@ vec3 safe_normalize(vec3 w) {
 // Normals once per call (every image needs them).
 std::vector<vec3> normals_of(const Heightfield& hf) {
     std::vector<vec3> n(size_t(hf.width) * size_t(hf.height));
-    tbb::parallel_for(0, hf.height, [&](int y) {
+    mesolab::parallel_for(0, hf.height, [&](int y) {
         for (int x = 0; x < hf.width; ++x) n[hf.index(x, y)] = hf.normal(x, y);
     });
     return n;
@@ -112,7 +112,7 @@ std::vector<LightImage> solve_lights(const Heightfield& hf, const DirectionSet& 
         for (size_t k = 0; k < wis.size(); ++k) out[k] = light_image(g, n, wis[k], std::move(L[k]), shadow[k]);
         return out;
     }
-    tbb::parallel_for(size_t(0), wis.size(), [&](size_t k) { out[k] = solve_light(hf, dirs, vis, g, n, wis[k]); });
+    mesolab::parallel_for(size_t(0), wis.size(), [&](size_t k) { out[k] = solve_light(hf, dirs, vis, g, n, wis[k]); });
     return out;
 }
 
@@ -248,7 +248,7 @@ void simulate_table(const Heightfield& hf, const DirectionSet& dirs, const Visib
         Eigen::MatrixXf L[3] = {Eigen::MatrixXf(T, bn), Eigen::MatrixXf(T, bn), Eigen::MatrixXf(T, bn)};
         std::vector<LightImage> images =
             solve_lights(hf, dirs, vis, g, n, std::vector<vec3>(lights.begin() + b0, lights.begin() + b0 + bn));
-        tbb::parallel_for(Eigen::Index(0), bn, [&](Eigen::Index k) {
+        mesolab::parallel_for(Eigen::Index(0), bn, [&](Eigen::Index k) {
             const LightImage& li = images[size_t(k)];
             for (Eigen::Index p = 0; p < T; ++p)
                 for (int c = 0; c < 3; ++c) L[c](p, k) = li.L[size_t(p)][c];
@@ -258,7 +258,7 @@ void simulate_table(const Heightfield& hf, const DirectionSet& dirs, const Visib
         for (Eigen::Index k = 0; k < bn; ++k)
             for (Eigen::Index v = 0; v < nv; ++v) out[size_t((b0 + k) * nv + v)] = vec3(R[0](k, v), R[1](k, v), R[2](k, v));
         if (g.phong) {
-            tbb::parallel_for(Eigen::Index(0), bn * nv, [&](Eigen::Index kv) {
+            mesolab::parallel_for(Eigen::Index(0), bn * nv, [&](Eigen::Index kv) {
                 const Eigen::Index k = kv / nv, v = kv % nv;
                 const vec3 wi = lights[size_t(b0 + k)], h = safe_normalize(wi + views[size_t(v)]);
                 const std::vector<float>& cv = images[size_t(k)].cos_vis;
@@ -281,7 +281,7 @@ Eigen::MatrixXf masking_matrix(const Heightfield& hf, const DirectionSet& dirs, 
                                const std::vector<vec3>& n, const std::vector<vec3>& views) {
     const Eigen::Index T = Eigen::Index(n.size());
     Eigen::MatrixXf Mn(T, Eigen::Index(views.size()));
-    tbb::parallel_for(size_t(0), views.size(), [&](size_t v) {
+    mesolab::parallel_for(size_t(0), views.size(), [&](size_t v) {
         const std::vector<float> m = masking(hf, dirs, vis, g, n, views[v]);
         double sum = 0;
         for (float x : m) sum += double(x);
@@ -420,7 +420,7 @@ SimulatedBrdf simulate_brdf(const Heightfield& hf, const DirectionSet& dirs, con
     // solve: the shadow test's data with the light direction).
     {
         Eigen::MatrixXf S(Eigen::Index(n.size()), Eigen::Index(distinct));
-        tbb::parallel_for(0, distinct, [&](int d) {
+        mesolab::parallel_for(0, distinct, [&](int d) {
             const std::vector<float> V = view_visibility(hf, dirs, vis, g, lights[size_t(d)]);
             for (size_t p = 0; p < V.size(); ++p) S(Eigen::Index(p), d) = lights[size_t(d)].z > 0.f ? V[p] : 0.f;
         });
@@ -469,7 +469,7 @@ SimulatedBrdf simulate_brdf(const Heightfield& hf, const DirectionSet& dirs, con
     for (int s0 = 0; s0 < S; s0 += batch) {
         const int sn = std::min(batch, S - s0);
         const std::vector<LightImage> images = solve_lights(hf, dirs, vis, g, n, std::vector<vec3>(wis.begin() + s0, wis.begin() + s0 + sn));
-        tbb::parallel_for(s0, s0 + sn, [&](int s) {
+        mesolab::parallel_for(s0, s0 + sn, [&](int s) {
             y[size_t(s)] = masked_average(g, n, images[size_t(s - s0)], masking(hf, dirs, vis, g, n, wos[size_t(s)]), wis[size_t(s)], wos[size_t(s)]);
         });
         if (progress) progress(0.02 + 0.93 * double(s0 + sn) / double(S));

@@ -1,7 +1,7 @@
 #include "core/microgeom/lod.h"
+#include "core/parallel.h"
 #include "core/microgeom/scatter.h"
 
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -40,7 +40,7 @@ void displace_by(TriMesh& m, const Heightfield& hf, float tiling, HeightAt heigh
     for (float h : hf.h) mean += h;
     mean /= double(std::max<size_t>(1, hf.h.size()));
     const float inv_s = 1.f / hf.texel_size;
-    tbb::parallel_for(size_t(0), nv, [&](size_t v) {
+    mesolab::parallel_for(size_t(0), nv, [&](size_t v) {
         const vec2 uv = m.uv[v];
         const float c = uv.x * float(hf.width) * tiling - 0.5f, r = (1.f - uv.y) * float(hf.height) * tiling - 0.5f;
         const double per_uv = area_uv[v] > 0.0 ? std::sqrt(area_w[v] / area_uv[v]) : 0.0;

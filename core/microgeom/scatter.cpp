@@ -1,6 +1,6 @@
 #include "core/microgeom/scatter.h"
+#include "core/parallel.h"
 
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -39,7 +39,7 @@ std::vector<float> visibility_texture(const Heightfield& hf, const DirectionSet&
     std::vector<float> out(size_t(hf.width) * size_t(hf.height));
     vec3 bary;
     const auto& tri = dirs.triangles[size_t(dirs.locate(w, bary))];
-    tbb::parallel_for(0, hf.height, [&](int y) {
+    mesolab::parallel_for(0, hf.height, [&](int y) {
         for (int x = 0; x < hf.width; ++x) {
             float v = 0.f;
             if (glm::dot(hf.normal(x, y), w) > 0.f)
@@ -76,7 +76,7 @@ ScatterResult scatter(const Heightfield& hf, const DirectionSet& dirs, const Vis
 
     // Normals once (the quadrature weights need them per texel and direction).
     std::vector<vec3> n(T);
-    tbb::parallel_for(0, H, [&](int y) {
+    mesolab::parallel_for(0, H, [&](int y) {
         for (int x = 0; x < W; ++x) n[hf.index(x, y)] = hf.normal(x, y);
     });
 
@@ -86,7 +86,7 @@ ScatterResult scatter(const Heightfield& hf, const DirectionSet& dirs, const Vis
                  : s.ellipses             ? ellipse_visibility_texture(*s.ellipses, hf, s.light_dir)
                                           : visibility_texture(hf, dirs, vis, s.light_dir);
     out.direct.assign(T, vec3(0.f));
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, T, 16384), [&](const tbb::blocked_range<size_t>& r) {
+    mesolab::parallel_for(tbb::blocked_range<size_t>(0, T, 16384), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t p = r.begin(); p < r.end(); ++p) {
             const float cos_l = std::max(0.f, glm::dot(n[p], s.light_dir));
             if (cos_l <= 0.f) out.shadow[p] = 0.f;
@@ -103,7 +103,7 @@ ScatterResult scatter(const Heightfield& hf, const DirectionSet& dirs, const Vis
     const Importance* bent = s.importance && !s.importance->empty() ? s.importance : nullptr;
     auto gather = [&](const std::vector<vec3>* L_prev, const std::vector<int>& J, bool primary) {
         std::vector<vec3> E(T, vec3(0.f));
-        tbb::parallel_for(0, H, [&](int y) {
+        mesolab::parallel_for(0, H, [&](int y) {
             for (int x = 0; x < W; ++x) {
                 const size_t p = hf.index(x, y);
                 vec3 sum(0.f);
@@ -218,7 +218,7 @@ DirectionalScatter scatter_directions(const Heightfield& hf, const DirectionSet&
         if (s.gatherer) {
             solve(j0);
         } else {
-            tbb::parallel_for(j0, j1, [&](int j) { solve(j); });
+            mesolab::parallel_for(j0, j1, [&](int j) { solve(j); });
         }
         if (progress) progress(double(j1) / double(out.count));
     }

@@ -1,10 +1,10 @@
 // Technique microgeom: CPU shading of every level of detail (see microgeom.h).
 #include "core/microgeom/stages.h"
+#include "core/parallel.h"
 #include "core/microgeom/goniometer.h"
 #include "core/microgeom/technique.h"
 #include "core/render.h"
 
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <map>
 #include <stdexcept>
@@ -57,7 +57,7 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
         out.put(shadow_out, x, y, shadow);
     };
 
-    tbb::parallel_for(0, gb.height, [&](int y) {
+    mesolab::parallel_for(0, gb.height, [&](int y) {
         for (int x = 0; x < gb.width; ++x) {
             const size_t px = gb.index(x, y);
             if (!ctx.mine(px)) continue;

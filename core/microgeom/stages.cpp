@@ -6,6 +6,7 @@
 #include "core/microgeom/lod.h"
 #include "core/microgeom/paper.h"
 #include "core/microgeom/stages.h"
+#include "core/blob.h"
 #include "core/microgeom/technique.h"
 #include "core/scene_stages.h"
 
@@ -215,7 +216,21 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
                               return gpu_compute().visibility(*in.hf, *in.dirs);
                           },
                           [&] { return compute_visibility(*in.hf, *in.dirs, [&](double f) { ctx.progress(f); }); }));
-                  }}));
+                  },
+                  // Kept on disk: the first hits (a device's own copy is made again where a pass needs it).
+                  .disk = stage_codec(
+                      stages::visibility,
+                      [](BlobWriter& w, const Visibility& v) {
+                          w.put(int32_t(v.width)), w.put(int32_t(v.height)), w.put(int32_t(v.count));
+                          w.put_vector(v.hit);
+                      },
+                      [](BlobReader& r) {
+                          Visibility v;
+                          v.width = r.get<int32_t>(), v.height = r.get<int32_t>(), v.count = r.get<int32_t>();
+                          v.hit = r.get_vector<uint32_t, HitArray::allocator_type>();
+                          if (v.hit.size() != size_t(v.width) * size_t(v.height) * size_t(v.count)) throw BlobError("S_i: sizes do not match");
+                          return v;
+                      })}));
     // Curved base: fan-area importance of the bent directions (never recomputes S_i).
     g.add(stages::importance, object({.help = "Bend the directions by the base curvature and weight them by the relative triangle-fan area (§5)",
                   .params = with(keys(kCurvatureKeys), {"microgeom.device"}),
@@ -403,7 +418,7 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
                       gs.samples = int(m.get_int("brdf_samples"));
                       gs.sh_bands = int(m.get_int("sh_bands"));
                       gs.seed = uint32_t(m.get_int("scatter_seed"));
-                      return stage_result(stages::brdf, with_light_solver([&](std::string w) { ctx.warn(std::move(w)); }, ctx.obj(), *in.hf, *in.dirs, *in.vis, gs.scatter,
+                      return stage_result(stages::brdf, with_light_solver([&](std::string w) { ctx.warn(std::move(w)); ctx.fell_back_to_cpu(); }, ctx.obj(), *in.hf, *in.dirs, *in.vis, gs.scatter,
                                                             [&](LightSolver* solver) {
                                                                 gs.lights = solver;
                                                                 return simulate_brdf(*in.hf, *in.dirs, *in.vis, gs, [&](double f) { ctx.progress(f); });

@@ -20,14 +20,14 @@ struct SimulatedBrdf;
 struct Visibility;
 
 namespace stages {
-inline constexpr Stage<Heightfield> heightfield{"microgeom.heightfield"};
-inline constexpr Stage<DirectionSet> directions{"microgeom.directions"};
+inline constexpr Stage<Heightfield> heightfield{"microgeom.heights"};
+inline constexpr Stage<DirectionSet> directions{"microgeom.direction_set"};
 inline constexpr Stage<Visibility> visibility{"microgeom.visibility"};
 inline constexpr Stage<Importance> importance{"microgeom.importance"};
 inline constexpr Stage<CurvedEllipses> ellipses_curved{"microgeom.ellipses_curved"};
 inline constexpr Stage<EllipseMap> ellipses{"microgeom.ellipses"};
 inline constexpr Stage<TriMesh> displaced{"microgeom.displaced"};
-inline constexpr Stage<SimulatedBrdf> brdf{"microgeom.brdf"};
+inline constexpr Stage<SimulatedBrdf> brdf{"microgeom.simulated_brdf"};
 inline constexpr Stage<LightScatter> scatter_env{"microgeom.scatter_env"};
 inline constexpr Stage<LightsScatter> scatter{"microgeom.scatter"};
 inline constexpr Stage<DirectionalScatter> scatter_directions{"microgeom.scatter_directions"};

@@ -34,11 +34,7 @@ public:
     std::vector<ExportDecl> exports() const override;
     std::vector<BenchTable> bench_tables() const override;
     FrameAgreement agreement() const override;
-    bool has_truth() const override { return true; }
-    TruthObject truth_object(const Scene& s, const Evaluation& ev, int object) const override;
-    std::vector<StageName> truth_stages() const override;
-    std::vector<std::string> truth_params() const override;
-    float truth_lift(const Scene& s, const Evaluation& ev, int object) const override;
+    std::optional<TruthDecl> truth() const override;
 };
 
 // The tiling of the truth's surface (truth.cpp): microgeom.tiling; in texture mode the field

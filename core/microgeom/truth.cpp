@@ -56,7 +56,7 @@ private:
 };
 }  // namespace
 
-TruthObject MicrogeomTechnique::truth_object(const Scene& s, const Evaluation& ev, int object) const {
+TruthObject truth_object(const Scene& s, const Evaluation& ev, int object) {
     const SceneObject& o = s.objects.at(size_t(object));
     const ParamTable& m = o.material;
     const bool phong = m.get_string("brdf") == "blinn-phong";
@@ -76,7 +76,7 @@ float truth_tiling(const Scene& s, const SceneObject& o) {
 // Texture mode: the heights' largest reach above the base, in object units (the displacement of
 // lod.h at the largest world length per uv unit of the drawn base's triangles), and, on a bent
 // plane, the bend's sag over the three tiles.
-float MicrogeomTechnique::truth_lift(const Scene& s, const Evaluation& ev, int object) const {
+float truth_lift(const Scene& s, const Evaluation& ev, int object) {
     const SceneObject& o = s.objects.at(size_t(object));
     const auto hf = ev.get(stages::heightfield, object);
     const auto base = drawn_mesh(s, ev, object);
@@ -99,9 +99,10 @@ float MicrogeomTechnique::truth_lift(const Scene& s, const Evaluation& ev, int o
     return float(1.5 * lift);
 }
 
-std::vector<StageName> MicrogeomTechnique::truth_stages() const { return {stages::heightfield, stages::truth_surface}; }
-
-std::vector<std::string> MicrogeomTechnique::truth_params() const {
-    return {"microgeom.tiling", "microgeom.brdf", "microgeom.ks", "microgeom.shininess", "microgeom.curvature_u", "microgeom.curvature_v"};
+std::optional<TruthDecl> MicrogeomTechnique::truth() const {
+    return TruthDecl{.params = {"microgeom.tiling", "microgeom.brdf", "microgeom.ks", "microgeom.shininess", "microgeom.curvature_u", "microgeom.curvature_v"},
+                     .stages = {stages::heightfield, stages::truth_surface},
+                     .object = truth_object,
+                     .lift = truth_lift};
 }
 }  // namespace mesolab::microgeom

@@ -48,9 +48,9 @@
 // compute_visibility: per-texel normals and lifted origins once, per-direction constants once,
 // then TBB tasks of (direction, block of rows) writing contiguous rows of [dir][row][col].
 #include "core/microgeom/visibility.h"
+#include "core/parallel.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <array>
@@ -522,7 +522,7 @@ Visibility compute_visibility(const Heightfield& hf, const DirectionSet& dirs, c
     // Per texel: normal and lifted origin (texel space), computed once.
     std::vector<vec3> normal(size_t(W) * size_t(H));
     std::vector<Origin> origin(normal.size());
-    tbb::parallel_for(tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& rows) {
+    mesolab::parallel_for(tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& rows) {
         for (int y = rows.begin(); y < rows.end(); ++y)
             for (int x = 0; x < W; ++x) {
                 const size_t k = size_t(y) * size_t(W) + size_t(x);
@@ -541,7 +541,7 @@ Visibility compute_visibility(const Heightfield& hf, const DirectionSet& dirs, c
     if (progress) progress(0.0);
     for (int b = 0; b < batches; ++b) {
         const int d0 = int(long(N) * b / batches), d1 = int(long(N) * (b + 1) / batches);
-        tbb::parallel_for(tbb::blocked_range<int>(0, (d1 - d0) * blocks), [&](const tbb::blocked_range<int>& tasks) {
+        mesolab::parallel_for(tbb::blocked_range<int>(0, (d1 - d0) * blocks), [&](const tbb::blocked_range<int>& tasks) {
             for (int task = tasks.begin(); task < tasks.end(); ++task) {
                 const int i = d0 + task / blocks, y0 = (task % blocks) * rows_per_task, y1 = std::min(H, y0 + rows_per_task);
                 const vec3 d = dirs.d[size_t(i)];
@@ -568,7 +568,7 @@ HitArray hits_filled(size_t n, uint32_t value) {
     HitArray h;
     h.resize(n);  // uninitialised (UninitAllocator)
     constexpr size_t kBlock = size_t(1) << 20;  // 4 MB per task
-    tbb::parallel_for(size_t(0), (n + kBlock - 1) / kBlock, [&](size_t b) {
+    mesolab::parallel_for(size_t(0), (n + kBlock - 1) / kBlock, [&](size_t b) {
         std::fill(h.begin() + std::ptrdiff_t(b * kBlock), h.begin() + std::ptrdiff_t(std::min(n, (b + 1) * kBlock)), value);
     });
     return h;

@@ -18,7 +18,7 @@ std::string shipped_mesh(const std::string& name) {
     return std::string(MESOLAB_SOURCE_DIR) + "/" + rel;
 }
 
-std::string mb(double bytes) { return strprintf("%.1f MB", bytes / 1048576.0); }
+std::string mb(double bytes) { return format_bytes(bytes); }
 
 // The row's scene: the mesh lit from behind at 45 degrees, marble, 512 x 512 atlas.
 Scene table_scene(const std::string& mesh, int vertices, const std::string& name) {

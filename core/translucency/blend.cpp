@@ -1,5 +1,6 @@
 // Blending the local and global responses (see blend.h).
 #include "core/translucency/blend.h"
+#include "core/parallel.h"
 #include "core/translucency/surface.h"
 
 #include <Eigen/Dense>
@@ -8,7 +9,6 @@
 #include <cmath>
 
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 namespace mesolab::translucency {
 
@@ -144,7 +144,7 @@ BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position,
     const SquarePower window_power(dipole, L.texel.empty() ? 1.0 : side_lo, L.texel.empty() ? 1.0 : side_hi);
 
     // [SECTION] Fit c per inner texel on the ring just outside its kernel, its energy beyond
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, L.texel.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    mesolab::parallel_for(tbb::blocked_range<size_t>(0, L.texel.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
         FactorCache cache(F0);
         for (size_t k = r.begin(); k != r.end(); ++k) {
             const size_t t = size_t(L.texel[k]);
@@ -278,7 +278,7 @@ BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position,
     });
 
     // [SECTION] Correct the kernels: w(t', t) -= the blended global response at t' to t
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, L.texel.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    mesolab::parallel_for(tbb::blocked_range<size_t>(0, L.texel.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
         FactorCache cache(F0);
         for (size_t k = r.begin(); k != r.end(); ++k) {
             const size_t tr = size_t(L.texel[k]);
@@ -319,7 +319,7 @@ std::vector<vec3> direct_vertex_radiosity(const BlendWeights& b, const LocalKern
 
 std::vector<vec3> interpolate_to_texels(const Atlas& atlas, const std::vector<uint32_t>& index, const std::vector<vec3>& value) {
     std::vector<vec3> out(atlas.texel_kind.size(), vec3(0.f));
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, out.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    mesolab::parallel_for(tbb::blocked_range<size_t>(0, out.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t t = r.begin(); t != r.end(); ++t) {
             if (atlas.texel_face[t] < 0) continue;
             const size_t f = size_t(atlas.texel_face[t]);

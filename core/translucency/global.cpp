@@ -1,5 +1,6 @@
 // Vertex-to-vertex throughput factors (see global.h).
 #include "core/translucency/global.h"
+#include "core/parallel.h"
 #include "core/translucency/atlas.h"
 #include "core/error.h"
 
@@ -11,7 +12,6 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
-#include <tbb/parallel_for.h>
 
 #include <cstring>
 #include <limits>
@@ -111,7 +111,7 @@ SubSamples sub_samples(const std::vector<vec3>& x, const std::vector<uint32_t>& 
     for (size_t f = 0; f < faces; ++f) S.first[f + 1] += S.first[f];
     const size_t total = size_t(S.first[faces]);
     S.x.resize(total), S.bary.resize(total), S.area.resize(total), S.face.resize(total), S.disk.assign(faces, vec3(0.f));
-    tbb::parallel_for(size_t(0), faces, [&](size_t f) {
+    mesolab::parallel_for(size_t(0), faces, [&](size_t f) {
         const int n = split[f];
         const vec3 a = x[index[3 * f]], b = x[index[3 * f + 1]], c = x[index[3 * f + 2]];
         const float sub = 0.5f * glm::length(glm::cross(b - a, c - a)) / float(n * n);
@@ -291,7 +291,7 @@ Eigen::SparseMatrix<float, Eigen::RowMajor> VertexFactors::upper(int c) const {
 std::vector<vec3> VertexFactors::multiply(const std::vector<vec3>& E, bool simd) const {
     const std::vector<vec4> Ew = weighted(*this, E);
     tbb::enumerable_thread_specific<std::vector<vec4>> sums([&] { return std::vector<vec4>(size_t(n), vec4(0.f)); });
-    tbb::parallel_for(tbb::blocked_range<int>(0, n, 128), [&](const tbb::blocked_range<int>& r) {
+    mesolab::parallel_for(tbb::blocked_range<int>(0, n, 128), [&](const tbb::blocked_range<int>& r) {
         rows(*this, Ew.data(), sums.local().data(), r.begin(), r.end(), simd);
     });
     std::vector<vec3> B(size_t(n), vec3(0.f));
@@ -334,7 +334,7 @@ DirectedFactors expand_directed(const VertexFactors& F) {
 std::vector<vec3> multiply_directed(const VertexFactors& F, const DirectedFactors& D, const std::vector<vec3>& E) {
     const std::vector<vec4> Ew = weighted(F, E);
     std::vector<vec3> B(size_t(F.n), vec3(0.f));
-    tbb::parallel_for(tbb::blocked_range<int>(0, F.n, 256), [&](const tbb::blocked_range<int>& r) {
+    mesolab::parallel_for(tbb::blocked_range<int>(0, F.n, 256), [&](const tbb::blocked_range<int>& r) {
         for (int i = r.begin(); i != r.end(); ++i) {
             vec4 sum(0.f);
             for (int k = D.outer[size_t(i)]; k < D.outer[size_t(i) + 1]; ++k) {
@@ -424,7 +424,7 @@ VertexFactors build_vertex_factors(const std::vector<vec3>& position, const std:
         const SubSamples S = sub_samples(x, index, dipole, p.zero_diagonal ? 1 : kMaxSplit);
         diag.assign(size_t(F.n), vec3(0.f));
         edge.resize(size_t(F.n));
-        tbb::parallel_for(tbb::blocked_range<int>(0, F.n, 16), [&](const tbb::blocked_range<int>& r) {
+        mesolab::parallel_for(tbb::blocked_range<int>(0, F.n, 16), [&](const tbb::blocked_range<int>& r) {
             std::vector<std::pair<int, float>> si, sj;
             for (int i = r.begin(); i != r.end(); ++i) {
                 hat_samples(S, index, faces[size_t(i)], uint32_t(i), si);
@@ -468,7 +468,7 @@ VertexFactors build_vertex_factors(const std::vector<vec3>& position, const std:
     };
     std::vector<Row> rows(size_t(F.n));
     const float thr = p.threshold;
-    tbb::parallel_for(tbb::blocked_range<int>(0, F.n, 64), [&](const tbb::blocked_range<int>& r) {
+    mesolab::parallel_for(tbb::blocked_range<int>(0, F.n, 64), [&](const tbb::blocked_range<int>& r) {
         for (int i = r.begin(); i != r.end(); ++i) {
             Row& row = rows[size_t(i)];
             const vec3 xi = x[size_t(i)];
@@ -510,7 +510,7 @@ VertexFactors build_vertex_factors(const std::vector<vec3>& position, const std:
     for (int i = 0; i < F.n; ++i) F.outer[size_t(i) + 1] = F.outer[size_t(i)] + int(rows[size_t(i)].pair.size());
     F.pair.resize(total);
     if (wide) F.col_hi.resize(total);
-    tbb::parallel_for(tbb::blocked_range<int>(0, F.n, 256), [&](const tbb::blocked_range<int>& r) {
+    mesolab::parallel_for(tbb::blocked_range<int>(0, F.n, 256), [&](const tbb::blocked_range<int>& r) {
         for (int i = r.begin(); i != r.end(); ++i) {
             Row& row = rows[size_t(i)];
             std::copy(row.pair.begin(), row.pair.end(), F.pair.begin() + F.outer[size_t(i)]);

@@ -1,5 +1,6 @@
 // Texel-to-texel kernels (see local.h).
 #include "core/translucency/local.h"
+#include "core/parallel.h"
 #include "core/error.h"
 
 #include <algorithm>
@@ -8,14 +9,13 @@
 #include <string>
 
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 namespace mesolab::translucency {
 
 std::vector<vec3> texel_positions_mm(const Atlas& atlas, const std::vector<vec3>& position, const std::vector<uint32_t>& index,
                                      double mm_per_unit) {
     std::vector<vec3> x(atlas.texel_kind.size(), vec3(0.f));
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, x.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    mesolab::parallel_for(tbb::blocked_range<size_t>(0, x.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t t = r.begin(); t != r.end(); ++t)
             if (atlas.texel_face[t] >= 0) x[t] = texel_position(atlas, position, index, t) * float(mm_per_unit);
     });
@@ -46,7 +46,7 @@ LocalKernels build_local_kernels(const Atlas& atlas, const std::vector<vec3>& po
     const double reach = 4.0 * std::sqrt(2.0) * double(h + 1) / double(atlas.scale) * mm_per_unit;
     const RdTable Rd(dipole, reach);
     const int N = atlas.size;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, L.texel.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    mesolab::parallel_for(tbb::blocked_range<size_t>(0, L.texel.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t k = r.begin(); k != r.end(); ++k) {
             const int t = L.texel[k], tx = t % N, ty = t / N;
             const vec3 xt = x[size_t(t)];
@@ -81,7 +81,7 @@ std::vector<vec3> convolve_local(const LocalKernels& L, const std::vector<vec3>&
     // right and is not on the last row), so they are finite.
     typedef float f4 __attribute__((vector_size(16)));
     const float* e = reinterpret_cast<const float*>(E.data());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, L.texel.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+    mesolab::parallel_for(tbb::blocked_range<size_t>(0, L.texel.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t k = r.begin(); k != r.end(); ++k) {
             const int t = L.texel[k], tx = t % N, ty = t / N;
             const float* w = L.w.data() + k * size_t(K) * size_t(R);

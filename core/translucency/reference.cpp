@@ -1,11 +1,11 @@
 // The reference radiosity (see reference.h).
 #include "core/translucency/reference.h"
+#include "core/parallel.h"
 
 #include <algorithm>
 #include <cmath>
 
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 namespace mesolab::translucency {
 
@@ -31,7 +31,7 @@ std::vector<vec3> reference_radiosity(const Atlas& atlas, const std::vector<vec3
     std::vector<vec3> B(E.size(), vec3(0.f));
     if (src.empty()) return B;
     const RdTable Rd(dipole, std::max(1e-6, double(glm::length(hi - lo))) * 1.0001);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, E.size(), 512), [&](const tbb::blocked_range<size_t>& r) {
+    mesolab::parallel_for(tbb::blocked_range<size_t>(0, E.size(), 512), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t t = r.begin(); t != r.end(); ++t) {
             if (atlas.texel_kind[t] != Atlas::kInner) continue;
             const vec3 xt = x[t];

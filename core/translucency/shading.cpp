@@ -1,5 +1,6 @@
 // Technique translucency: CPU shading, L_o = rho T(cos theta_o) B / pi (gpu/translucency/translucency.frag is the GPU twin).
 #include "core/error.h"
+#include "core/parallel.h"
 #include "core/profile.h"
 #include "core/render.h"
 #include "core/scene_stages.h"
@@ -9,7 +10,6 @@
 #include "core/translucency/technique.h"
 #include "core/translucency/translucency.h"
 
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -41,7 +41,7 @@ void TranslucencyTechnique::shade_cpu(const ShadeContext& ctx) const {
     // The parts only the displayed response or a requested AOV needs are looked up.
     const bool parts = ctx.out.wanted(out_rad) || ctx.out.wanted(out_loc) || ctx.out.wanted(out_glo) || ctx.out.wanted(out_ref) || ctx.out.wanted(out_err);
     const GBuffer& gb = ctx.gbuffer;
-    tbb::parallel_for(0, gb.height, [&](int y) {
+    mesolab::parallel_for(0, gb.height, [&](int y) {
         for (int x = 0; x < gb.width; ++x) {
             const size_t px = gb.index(x, y);
             if (!ctx.mine(px)) continue;

@@ -1,4 +1,5 @@
 // Technique translucency: the stage graph and the frame steps' CPU work (handles in stages.h).
+#include "core/blob.h"
 #include "core/error.h"
 #include "core/profile.h"
 #include "core/render.h"
@@ -9,7 +10,6 @@
 #include "core/translucency/technique.h"
 #include "core/translucency/translucency.h"
 
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -66,7 +66,19 @@ void TranslucencyTechnique::declare_stages(StageGraph& g) const {
                const auto m = ctx.input(stages::mesh);
                const auto a = ctx.input(stages::atlas);
                return stage_result(stages::kernels, build_local_kernels(a->atlas, m->position, m->index, Dipole(s.medium), s.mm_per_unit, s.kernel));
-           }});
+           },
+           .disk = stage_codec(
+               stages::kernels,
+               [](BlobWriter& w, const LocalKernels& k) {
+                   w.put(int32_t(k.K)), w.put(int32_t(k.size)), w.put(int32_t(k.row));
+                   w.put_vector(k.texel), w.put_vector(k.slot), w.put_vector(k.w);
+               },
+               [](BlobReader& r) {
+                   LocalKernels k;
+                   k.K = r.get<int32_t>(), k.size = r.get<int32_t>(), k.row = r.get<int32_t>();
+                   k.texel = r.get_vector<int32_t>(), k.slot = r.get_vector<int32_t>(), k.w = r.get_vector<float>();
+                   return k;
+               })});
     g.add(stages::factors, {.help = "Vertex-to-vertex throughput factors above translucency.threshold (§5.2)",
            .scope = StageScope::Object,
            .technique = "translucency",
@@ -74,7 +86,7 @@ void TranslucencyTechnique::declare_stages(StageGraph& g) const {
            .inputs = {stages::mesh},
            .paper = PaperFigure{paper::kFactorsMaxMs, "Lensch 2002, §6: form factors 2-8 min (dual Xeon 1.7 GHz)"},
            .memory = [](const StageContext& ctx) {
-               return factor_memory(*ctx.input(stages::mesh), Settings::from(ctx.obj()));
+               return factor_memory(*ctx.input(stages::mesh), Settings::from(ctx.obj(), Settings::Medium_ | Settings::Scale | Settings::Factors));
            },
            .run = [](StageContext& ctx) -> std::any {
                const Settings s = Settings::from(ctx.obj(), Settings::Medium_ | Settings::Scale | Settings::Factors);
@@ -83,7 +95,25 @@ void TranslucencyTechnique::declare_stages(StageGraph& g) const {
                if (F.count() == 0 && m->vertex_count() > 1)
                    ctx.warn("translucency.threshold = " + std::to_string(s.threshold) + " drops every factor: the global response is zero");
                return stage_result(stages::factors, std::move(F));
-           }});
+           },
+           .disk = stage_codec(
+               stages::factors,
+               [](BlobWriter& w, const VertexFactors& F) {
+                   w.put(int32_t(F.n));
+                   w.put_vector(F.outer), w.put_vector(F.pair), w.put_vector(F.col_hi);
+                   w.put(F.scale);
+                   w.put_vector(F.vertex_area);
+                   w.put(uint64_t(F.diagonal)), w.put(F.threshold), w.put(F.zero_diagonal);
+               },
+               [](BlobReader& r) {
+                   VertexFactors F;
+                   F.n = r.get<int32_t>();
+                   F.outer = r.get_vector<int>(), F.pair = r.get_vector<uint64_t>(), F.col_hi = r.get_vector<uint16_t>();
+                   F.scale = r.get<vec3>();
+                   F.vertex_area = r.get_vector<float>();
+                   F.diagonal = size_t(r.get<uint64_t>()), F.threshold = r.get<double>(), F.zero_diagonal = r.get<bool>();
+                   return F;
+               })});
     g.add(stages::blend, {.help = "Blending (§5.4): direct weights fitted by least squares, kernels corrected",
            .scope = StageScope::Object,
            .technique = "translucency",
@@ -149,16 +179,16 @@ std::vector<FrameStepDecl> TranslucencyTechnique::frame_steps() const {
                        PerObject<std::vector<vec3>> out;
                        for (int o : ctx.objects) {
                            const SceneObject& obj = ctx.scene.objects[size_t(o)];
-                           const Settings s = Settings::from(obj);
+                           const Settings s = Settings::from(obj, Settings::Medium_ | Settings::Shadows);
                            const auto a = atlas(ctx, o);
                            const mat4 model = object_to_world(obj);
                            std::vector<ShadowMap> shadows;
                            if (s.shadows) {
-                               PROFILE_SCOPE("translucency.shadow_maps");
+                               PROFILE_SCOPE("shadow maps");
                                for (size_t i = 0; i < ctx.lighting.lights.size() && i < size_t(kMaxShadowMaps); ++i)
                                    shadows.push_back(make_shadow_map(*a->display, model, ctx.lighting.lights[i], s.shadow_map));
                            }
-                           PROFILE_SCOPE("translucency.texels");
+                           PROFILE_SCOPE("texels lit");
                            out[o] = illuminate(*a, model, ctx.lighting, s.medium.eta, shadows);
                        }
                        return out;
@@ -208,7 +238,7 @@ std::vector<FrameStepDecl> TranslucencyTechnique::frame_steps() const {
                        const auto& E = ctx.step(steps::illumination);
                        PerObject<std::vector<vec3>> out;
                        for (int o : ctx.objects) {
-                           const Settings s = Settings::from(ctx.scene.objects[size_t(o)]);
+                           const Settings s = Settings::from(ctx.scene.objects[size_t(o)], Settings::Medium_ | Settings::Scale | Settings::Show);
                            if (!s.needs_reference()) continue;
                            const auto a = atlas(ctx, o);
                            const auto m = ctx.eval.get(stages::mesh, o);

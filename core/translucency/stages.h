@@ -24,7 +24,7 @@ inline constexpr Stage<PreparedMesh> mesh{"translucency.mesh"};
 inline constexpr Stage<AtlasStage> atlas{"translucency.atlas"};
 inline constexpr Stage<LocalKernels> kernels{"translucency.kernels"};
 inline constexpr Stage<VertexFactors> factors{"translucency.factors"};
-inline constexpr Stage<Blended> blend{"translucency.blend"};
+inline constexpr Stage<Blended> blend{"translucency.blended"};
 inline constexpr Stage<Gather> gather{"translucency.gather"};
 inline constexpr Stage<std::vector<vec3>> albedo{"translucency.albedo"};  // rho per texel
 }  // namespace stages
@@ -32,7 +32,7 @@ inline constexpr Stage<std::vector<vec3>> albedo{"translucency.albedo"};  // rho
 // The frame steps, in the order a frame runs them.
 namespace steps {
 inline constexpr FrameStep<PerObject<std::vector<vec3>>> illumination{"translucency.illumination"};  // E per texel
-inline constexpr FrameStep<PerObject<VertexValues>> vertices{"translucency.vertices"};
+inline constexpr FrameStep<PerObject<VertexValues>> vertices{"translucency.vertex_values"};
 inline constexpr FrameStep<PerObject<std::vector<vec3>>> local{"translucency.local"};  // local response per texel
 inline constexpr FrameStep<PerObject<std::vector<vec3>>> global{"translucency.global"};  // global response per vertex
 inline constexpr FrameStep<PerObject<Maps>> combine{"translucency.combine"};

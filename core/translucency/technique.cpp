@@ -10,7 +10,6 @@
 #include "core/translucency/technique.h"
 #include "core/translucency/translucency.h"
 
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -42,9 +41,11 @@ Settings Settings::from(const SceneObject& o, unsigned parts) {
         s.threshold = float(t.get_float("threshold"));
         s.blend = t.get_bool("blend");
     }
-    if (parts & Frame) {
+    if (parts & Shadows) {
         s.shadows = t.get_bool("shadows");
         s.shadow_map = int(t.get_int("shadow_map"));
+    }
+    if (parts & Show) {
         s.compare = t.get_bool("compare");
         const std::string& r = t.get_string("response");
         s.response = r == "local" ? Response::Local : r == "global" ? Response::Global : r == "reference" ? Response::Reference : Response::Both;

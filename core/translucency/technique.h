@@ -7,8 +7,10 @@
 //   stages.cpp     the stage graph (declare_stages) and the frame steps' CPU work (frame_steps)
 //   shading.cpp    CPU shading (shade_cpu)
 //   bench.cpp      the timing table (Table 1) and its rows
-// The maths: dipole, mesh_prep, atlas, local, global, blend, reference; frame.cpp holds the atlas
-// stage's extras, the gather table, rho and the per-frame CPU passes; paper.h the paper's figures.
+// The maths: dipole, mesh_prep, atlas, local, global, blend, reference; the atlas stage's extras
+// (atlas_stage.cpp), the gather table (gather.cpp), rho (albedo.cpp), the lights' shadow maps
+// (shadow_map.cpp) and the illumination map with the combination (illumination.cpp); paper.h the
+// paper's figures.
 #include "core/bench.h"
 #include "core/technique.h"
 #include "core/translucency/translucency.h"
@@ -41,9 +43,6 @@ public:
     std::vector<BenchTable> bench_tables() const override;
     FrameAgreement agreement() const override;
     std::vector<SweepMetricDecl> sweep_metrics() const override;
-    bool has_truth() const override { return true; }
-    TruthObject truth_object(const Scene& s, const Evaluation& ev, int object) const override;
-    std::vector<StageName> truth_stages() const override;
-    std::vector<std::string> truth_params() const override;
+    std::optional<TruthDecl> truth() const override;
 };
 }  // namespace mesolab::translucency

@@ -62,17 +62,20 @@ struct Settings {
     float veins = 0.f;          // 0 = none
     vec3 vein_color{0.3f};
     double vein_scale = 10.0;   // mm per vein period
-    // The keys are read by part, so that a stage reads only those it declares (the session checks
-    // it, core/session.h); the fields of the parts not read keep their defaults.
+    // The keys are read by part, so that a stage or a frame step reads only those it declares (the
+    // read contract checks it, core/read_contract.h); the fields of the parts not read keep their
+    // defaults.
     enum Part : unsigned {
         Medium_ = 1,    // material, sigma_s, sigma_a, eta
         Scale = 2,      // mm_per_unit x geometry.scale
         Mesh = 4,       // vertices
         AtlasPart = 8,  // atlas_size, kernel, chunk_angle
         Factors = 16,   // threshold, blend
-        Frame = 32,     // shadows, shadow_map, compare, response
+        Shadows = 32,   // shadows, shadow_map
         Rho = 64,       // albedo_map, veins, vein_color, vein_scale
-        All = 127,
+        Show = 128,     // compare, response: what the frame shows
+        Frame = Shadows | Show,
+        All = 255,
     };
     static Settings from(const SceneObject& o, unsigned parts = All);  // InputError naming a bad material key
     bool needs_reference() const { return compare || response == Response::Reference; }

@@ -33,6 +33,7 @@
 // real-time path. The AOV irradiance is the power per unit area entering the medium: the lights'
 // irradiance on the facet with the exact Fresnel transmittance, shadowed, and the sky's.
 #include "core/basic/basic.h"
+#include "core/parallel.h"
 #include "core/error.h"
 #include "core/raytrace.h"
 #include "core/render.h"
@@ -41,7 +42,6 @@
 #include "core/translucency/translucency.h"
 #include "core/translucency/truth.h"
 
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -282,7 +282,7 @@ public:
             pilot.seed = 0x70696c6f74ull;
             std::vector<Walks> walks(kChunks);
             const std::vector<int> split = allocate(power, kPilot);
-            tbb::parallel_for(0, kChunks, [&](int c) {
+            mesolab::parallel_for(0, kChunks, [&](int c) {
                 for (int i = c; i < split.back(); i += kChunks) trace_photon(pilot, centre, radius, split, 0, i, walks[size_t(c)]);
             });
             size_t events = 0;
@@ -294,12 +294,12 @@ public:
         }
         const std::vector<int> split = allocate(power, photons_);
         std::vector<Walks> chunks(size_t(samples) * kChunks);
-        tbb::parallel_for(0, samples * kChunks, [&](int job) {
+        mesolab::parallel_for(0, samples * kChunks, [&](int job) {
             if (p.cancel && p.cancel->load()) return;
             const int k = p.first + job / kChunks, c = job % kChunks;
             for (int i = c; i < split.back(); i += kChunks) trace_photon(p, centre, radius, split, k, i, chunks[size_t(job)]);
         });
-        tbb::parallel_for(0, 6 * samples, [&](int job) {
+        mesolab::parallel_for(0, 6 * samples, [&](int job) {
             const int j = job / 6, c = (job / 2) % 3;
             const vec3 origin = lo_ - vec3(4.f * radius_[c]);
             if (job % 2 == 0) {
@@ -647,7 +647,7 @@ DistanceBound::DistanceBound(const RayScene& rt, vec3 lo, vec3 hi, int cells_per
     for (int g = 0; g < rt.geometry_count(); ++g) {
         const size_t triangles = rt.triangle_count(g);
         std::vector<std::vector<size_t>> marks(std::max<size_t>(1, std::min<size_t>(64, triangles)));
-        tbb::parallel_for(size_t(0), marks.size(), [&](size_t part) {
+        mesolab::parallel_for(size_t(0), marks.size(), [&](size_t part) {
             for (size_t t = part; t < triangles; t += marks.size()) {
                 vec3 a, b, c;
                 rt.triangle(g, t, a, b, c);
@@ -752,7 +752,7 @@ TruthObject make_truth_object(const Scene& s, const Evaluation& ev, int object, 
 }
 }  // namespace
 
-TruthObject TranslucencyTechnique::truth_object(const Scene& s, const Evaluation& ev, int object) const { return make_truth_object(s, ev, object, 1.0); }
+TruthObject truth_object(const Scene& s, const Evaluation& ev, int object) { return make_truth_object(s, ev, object, 1.0); }
 
 ExitanceEstimate truth_exitance(const Scene& s, const Evaluation& ev, int object, const std::vector<vec3>& points, const std::vector<vec3>& normals,
                                 int samples, uint64_t seed, double radius_scale) {
@@ -772,7 +772,7 @@ ExitanceEstimate truth_exitance(const Scene& s, const Evaluation& ev, int object
     std::vector<dvec3> sum(points.size(), dvec3(0.0)), sum2(points.size(), dvec3(0.0));
     for (int k = 0; k < samples; ++k) {
         t.prepare(TruthPrep{rt, 0, lighting, k, k + 1, seed, eps, 0.5f * (lo + hi), 0.5f * glm::length(hi - lo), nullptr});
-        tbb::parallel_for(size_t(0), points.size(), [&](size_t i) {
+        mesolab::parallel_for(size_t(0), points.size(), [&](size_t i) {
             TruthHit h;
             h.p = points[i], h.ng = h.n = glm::normalize(normals[i]);
             const dvec3 M = dvec3(material->exitance(h, uint64_t(k)));
@@ -791,10 +791,10 @@ ExitanceEstimate truth_exitance(const Scene& s, const Evaluation& ev, int object
     return e;
 }
 
-std::vector<StageName> TranslucencyTechnique::truth_stages() const { return {}; }
-
-std::vector<std::string> TranslucencyTechnique::truth_params() const {
-    return {"translucency.material", "translucency.sigma_s", "translucency.sigma_a", "translucency.eta", "translucency.mm_per_unit",
-            "translucency.albedo_map", "translucency.veins", "translucency.vein_scale", "translucency.vein_color"};
+std::optional<TruthDecl> TranslucencyTechnique::truth() const {
+    return TruthDecl{.params = {"translucency.material", "translucency.sigma_s", "translucency.sigma_a", "translucency.eta", "translucency.mm_per_unit",
+            "translucency.albedo_map", "translucency.veins", "translucency.vein_scale", "translucency.vein_color"},
+                     .stages = {},
+                     .object = truth_object};
 }
 }  // namespace mesolab::translucency

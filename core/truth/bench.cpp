@@ -133,7 +133,7 @@ BenchTable truth_bench_table(double noise, double time_limit_s) {
         if (s.objects.empty()) continue;
         const bool all_truth = std::all_of(s.objects.begin(), s.objects.end(), [](const SceneObject& o) {
             const Technique* tech = Registry::instance().technique(o.technique);
-            return tech && tech->has_truth();
+            return tech && tech->truth().has_value();
         });
         if (!all_truth) continue;
         const std::string path = f.string();

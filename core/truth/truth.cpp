@@ -1,4 +1,6 @@
 #include "core/truth/truth.h"
+#include "core/read_contract.h"
+#include "core/parallel.h"
 #include "core/error.h"
 #include "core/hash.h"
 #include "core/raster.h"
@@ -10,7 +12,6 @@
 #include "core/strings.h"
 #include "core/technique.h"
 
-#include <tbb/parallel_for.h>
 #include <chrono>
 #include <cstring>
 #include <filesystem>
@@ -54,13 +55,15 @@ const std::vector<std::string>& truth_aovs() {
 }
 
 namespace {
-const Technique& technique_with_truth(const Scene& s, size_t object) {
+// The truth of object `object`'s technique (InputError when it has none).
+TruthDecl truth_of(const Scene& s, size_t object) {
     const std::string& name = s.objects[object].technique;
     const Technique* t = Registry::instance().technique(name);
     if (!t) throw InputError("objects[" + std::to_string(object) + "].technique: unknown technique '" + name + "'");
-    if (!t->has_truth())
-        throw InputError("--backend truth: technique " + name + " (object '" + s.objects[object].name + "') has no truth renderer yet");
-    return *t;
+    std::optional<TruthDecl> d = t->truth();
+    if (!d) throw InputError("--backend truth: technique " + name + " (object '" + s.objects[object].name + "') has no truth renderer yet");
+    if (!d->object) throw std::logic_error("technique " + name + ": its TruthDecl has no `object`");
+    return std::move(*d);
 }
 }  // namespace
 
@@ -68,17 +71,24 @@ std::vector<StageName> truth_stages(const Scene& s) {
     std::vector<StageName> out = {stages::geometry, stages::env_map};
     std::set<std::string> seen;
     for (size_t i = 0; i < s.objects.size(); ++i) {
-        const Technique& t = technique_with_truth(s, i);
-        if (!seen.insert(t.name()).second) continue;
-        for (const StageName& n : t.truth_stages()) out.push_back(n);
+        const TruthDecl t = truth_of(s, i);
+        if (!seen.insert(s.objects[i].technique).second) continue;
+        for (const StageName& n : t.stages) out.push_back(n);
     }
     return out;
 }
 
-std::string truth_description(const Scene& s) {
+const std::vector<std::string>& truth_scene_params() {
+    static const std::vector<std::string> keys = {"camera.*", "light.*", "env.*", "effects.environment", "geometry.*"};
+    return keys;
+}
+
+std::vector<std::pair<std::string, int>> truth_reads(const Scene& s) {
     const StageGraph& g = Registry::instance().stages();
-    // (key pattern, object) pairs the truth reads, in a fixed order; object -1 for scene-wide keys.
-    std::set<std::pair<std::string, int>> keys = {{"camera.*", -1}, {"light.*", -1}, {"env.*", -1}, {"effects.environment", -1}};
+    // (key pattern, object) pairs, in a fixed order; object -1 for scene-wide keys.
+    std::set<std::pair<std::string, int>> keys;
+    for (const std::string& p : truth_scene_params())
+        if (p != "geometry.*") keys.insert({p, -1});
     std::set<std::pair<std::string, int>> seen;
     std::function<void(const StageDecl&, int)> visit = [&](const StageDecl& d, int object) {
         if (!seen.insert({d.name, object}).second) return;
@@ -89,16 +99,31 @@ std::string truth_description(const Scene& s) {
         const StageDecl& d = g.at(n.str());
         for (int object : g.subjects(s, d)) visit(d, object);
     }
-    std::string out;
     for (size_t i = 0; i < s.objects.size(); ++i) {
-        const Technique& t = technique_with_truth(s, i);
-        out += "object " + std::to_string(i) + " " + t.name() + ";";
         keys.insert({"geometry.*", int(i)});
-        for (const std::string& p : t.truth_params()) keys.insert({p, int(i)});
+        for (const std::string& p : truth_of(s, i).params) keys.insert({p, int(i)});
     }
-    for (const auto& [pattern, object] : keys) out += param_fingerprint(s, pattern, object, FileIdentity::Contents);
+    return {keys.begin(), keys.end()};
+}
+
+std::string truth_description(const Scene& s) {
+    std::string out;
+    for (size_t i = 0; i < s.objects.size(); ++i) out += "object " + std::to_string(i) + " " + s.objects[i].technique + ";";
+    for (const auto& [pattern, object] : truth_reads(s)) out += param_fingerprint(s, pattern, object, FileIdentity::Contents);
     return out;
 }
+
+namespace {
+// The read contract of the truth: it reads only what truth_reads lists.
+std::optional<DeclaredReads> truth_contract(const Scene& s) {
+    if (!check_reads_by_default()) return std::nullopt;
+    std::vector<std::string> patterns;
+    for (auto& [p, object] : truth_reads(s)) patterns.push_back(p);
+    return DeclaredReads("the truth", s, std::move(patterns), -1,
+                         "neither the scene's truth keys nor the object's technique's truth declare: a truth kept on disk would not follow that key "
+                         "(declare it in the technique's TruthDecl::params)");
+}
+}  // namespace
 
 // [SECTION] The path tracer
 namespace {
@@ -346,7 +371,7 @@ void check_truth_request(const Scene& s, int width, int height, const TruthSetti
     for (const std::string& a : aovs)
         if (std::find(truth_aovs().begin(), truth_aovs().end(), a) == truth_aovs().end())
             throw InputError("--aov " + a + ": the truth does not write it (it writes radiance, normal, truth_stderr, exitance, irradiance)");
-    for (size_t i = 0; i < s.objects.size(); ++i) technique_with_truth(s, i);
+    for (size_t i = 0; i < s.objects.size(); ++i) truth_of(s, i);
 }
 
 namespace {
@@ -362,7 +387,7 @@ void sample_block(const TruthScene& sc, const Lighting& lighting, const FrameCam
                   const TruthSettings& st, int k0, int k1, TruthAccumulator& a, const std::atomic<bool>* cancel) {
     const int width = a.width, height = a.height;
     const bool media = !a.exitance.empty();
-    tbb::parallel_for(0, height, [&](int y) {
+    mesolab::parallel_for(0, height, [&](int y) {
         if (cancel && cancel->load()) return;
         for (int x = 0; x < width; ++x) {
             const uint64_t pixel = uint64_t(y) * uint64_t(width) + uint64_t(x);
@@ -419,14 +444,16 @@ TruthAccumulator accumulate_truth(const Scene& s, const Evaluation& ev, int widt
                                   const std::function<void(const std::string&, double)>& progress, const std::atomic<bool>* cancel) {
     using clock = std::chrono::steady_clock;
     check_truth_request(s, width, height, st, {});
+    std::optional<DeclaredReads> contract = truth_contract(s);
+    ParamReadScope reads(contract ? &*contract : nullptr);
     TruthScene sc;
     Bounds all{vec3(1e30f), vec3(-1e30f)};
     bool media = false;
     int block = kTruthBlock;
     for (size_t i = 0; i < s.objects.size(); ++i) {
-        const Technique& t = technique_with_truth(s, i);
-        TruthObject ob = t.truth_object(s, ev, int(i));
-        if (!ob.mesh || !ob.material) throw std::logic_error("truth: technique " + t.name() + " gave no mesh or material for object " + std::to_string(i));
+        TruthObject ob = truth_of(s, i).object(s, ev, int(i));
+        if (!ob.mesh || !ob.material)
+            throw std::logic_error("truth: technique " + s.objects[i].technique + " gave no mesh or material for object " + std::to_string(i));
         media = media || ob.material->medium();
         block = std::clamp(ob.samples_per_block, 1, block);
         sc.rt.add(*ob.mesh, ob.to_world);
@@ -455,7 +482,8 @@ TruthAccumulator accumulate_truth(const Scene& s, const Evaluation& ev, int widt
             const mat4 m = object_to_world(s.objects[i]);
             items.push_back({keep.back().get(), m, int(i), false});
             const float scale = std::max({glm::length(vec3(m[0])), glm::length(vec3(m[1])), glm::length(vec3(m[2]))});
-            lift.push_back(technique_with_truth(s, i).truth_lift(s, ev, int(i)) * scale + 2.f * sc.eps);
+            const TruthDecl t = truth_of(s, i);
+            lift.push_back((t.lift ? t.lift(s, ev, int(i)) : 0.f) * scale + 2.f * sc.eps);
         }
         rasterize(items, cam.raster, gb);
     }
@@ -529,7 +557,7 @@ Frame truth_frame(const TruthAccumulator& a) {
     Image& stderr_ = f.aov("truth_stderr");
     Image& exitance = f.aov("exitance");
     Image& irradiance = f.aov("irradiance");
-    tbb::parallel_for(0, a.height, [&](int y) {
+    mesolab::parallel_for(0, a.height, [&](int y) {
         for (int x = 0; x < a.width; ++x) {
             const size_t o = 3 * (size_t(y) * size_t(a.width) + size_t(x));
             float* r = radiance.at(x, y);
@@ -559,7 +587,7 @@ double truth_noise_rel(const TruthAccumulator& a) {
     };
     // Rows summed in order, whatever the threads: the same figure every time.
     std::vector<Part> rows(size_t(a.height));
-    tbb::parallel_for(0, a.height, [&](int y) {
+    mesolab::parallel_for(0, a.height, [&](int y) {
         Part& p = rows[size_t(y)];
         for (size_t i = size_t(y) * size_t(a.width); i < size_t(y + 1) * size_t(a.width) && i < pixels; ++i) {
             const float* nn = &a.normal[3 * i];

@@ -7,14 +7,16 @@
 // its bumps' uv, TruthMaterial::footprint; cloth over the pixel's square, TruthMaterial::pixel_filter). In texture
 // mode a pixel is a texel: points of the texel's footprint on the drawn surface (uniform over it,
 // one per sample: at the centre alone a surface of facets has no one normal), carried onto the
-// truth's surface (a ray down the drawn surface's normal from Technique::truth_lift above it), seen
+// truth's surface (a ray down the drawn surface's normal from TruthDecl::lift above it), seen
 // from the camera's direction with no masking, as the real-time texture mode treats it. Next-event
 // estimation towards every light with shadow rays, the environment where a path escapes, all
 // bounces (Russian roulette from the fourth), surfaces two-sided as on the real-time paths.
 //
-// What a technique's truth traces is the technique's to say (Technique::truth_object): the mesh
-// and a TruthMaterial. It reads only the physical description of the scene (geometry, materials,
-// lights, environment, camera), never a technique's accuracy knobs, so one truth serves a sweep.
+// What a technique's truth traces is the technique's to say (Technique::truth, a TruthDecl): the
+// mesh and a TruthMaterial. It reads only the physical description of the scene (geometry,
+// materials, lights, environment, camera), never a technique's accuracy knobs, so one truth serves
+// a sweep. It declares what it reads as a stage does, the truth's key on disk is made of those
+// values, and the read contract (core/read_contract.h) checks that it reads nothing else.
 //
 // Determinism: sample s of pixel p draws from its own random stream, seeded by (seed, p, s), and
 // each pixel sums its samples in order, so a truth is the same bytes at any thread count, and a
@@ -154,11 +156,34 @@ struct TruthObject {
     int samples_per_block = kTruthBlock;
 };
 
-// What the truth of `s` depends on, as canonical text: the program's physical description only.
-// The values of every key the truth stages declare (and their inputs), of each technique's
-// truth_params, and of the camera, lights, environment, effects.environment and each object's
-// geometry, with the contents (not the names or dates) of the files they name. A technique's
-// accuracy knobs are not in it, so one truth serves a sweep over them. InputError as truth_stages.
+// A technique's truth, declared once (Technique::truth): what it reads, and how it makes the
+// objects it traces. Like a stage, it names the keys it reads and the stages whose results it reads
+// (only physical ones: the mesh, material maps; never an accuracy knob's). With the scene's camera,
+// lights, environment, effects.environment and each object's geometry (truth_scene_params), they
+// are all a truth depends on: its key on disk (truth_description) and its read contract.
+struct TruthDecl {
+    std::vector<std::string> params;  // the technique's keys `object` and `lift` read (its material's)
+    std::vector<StageName> stages;    // stages whose results they read
+    // The explicit geometry and material of one of its objects as the truth traces them.
+    std::function<TruthObject(const Scene&, const Evaluation&, int object)> object;
+    // Texture-mode cameras: how far (object units, along the normal) the truth's surface of an
+    // object may reach above the surface the rasteriser draws in texture space; the truth's ray for
+    // a texel starts that far above the drawn point and goes down the normal to the first hit. Null
+    // (or 0): the truth's surface is the drawn one.
+    std::function<float(const Scene&, const Evaluation&, int object)> lift;
+};
+
+// The scene-wide keys every truth reads: camera.*, light.*, env.*, effects.environment, geometry.*.
+const std::vector<std::string>& truth_scene_params();
+
+// Every key pattern the truth of `s` may read, with the object it is read for (-1: scene-wide): the
+// scene's (truth_scene_params), each object's technique's TruthDecl::params and what its truth
+// stages (and their inputs) declare. InputError as truth_stages.
+std::vector<std::pair<std::string, int>> truth_reads(const Scene& s);
+
+// What the truth of `s` depends on, as canonical text: the values of every key of truth_reads,
+// with the contents (not the names or dates) of the files they name. A technique's accuracy knobs
+// are not in it, so one truth serves a sweep over them. InputError as truth_stages.
 std::string truth_description(const Scene& s);
 
 // [SECTION] Exact sums
@@ -223,7 +248,7 @@ struct TruthAccumulator {
 const std::vector<std::string>& truth_aovs();
 
 // The stages the truth of `s` needs evaluated: the scene's geometry and environment map, and
-// what each object's technique declares (Technique::truth_stages). InputError naming the
+// what each object's technique's truth declares (TruthDecl::stages). InputError naming the
 // technique when one has no truth.
 std::vector<StageName> truth_stages(const Scene& s);
 

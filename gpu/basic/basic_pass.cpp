@@ -15,7 +15,7 @@ public:
     explicit BasicPass(const Technique& t) : program_(Program::graphics("shaders/mesh.vert", "basic/basic.frag", {"MESOLAB_SNAP_VERTICES"}, fragment_outputs(t))) {}
 
     void draw(DrawContext& ctx) override {
-        PROFILE_SCOPE("basic.draw");
+        PROFILE_SCOPE("draw.basic");
         program_.use();
         ctx.renderer.set_lighting_uniforms(program_, ctx.lighting, 0);
         for (int i : ctx.objects) {

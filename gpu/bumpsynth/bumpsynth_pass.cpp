@@ -23,7 +23,7 @@ public:
           depth_(Program::graphics("shaders/mesh.vert", "bumpsynth/depth.frag", {"MESOLAB_SNAP_VERTICES"})) {}
 
     void draw(DrawContext& ctx) override {
-        PROFILE_SCOPE("bumpsynth.draw");
+        PROFILE_SCOPE("draw.bumpsynth");
         // The GL objects of the stage results (made once per result, kept in the renderer's resource cache).
         GpuResources& res = ctx.renderer.resources();
         struct Bound { GLuint ndf, lut, noise, smith, albedo, index; GLuint cdf; };

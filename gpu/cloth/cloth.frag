@@ -1,5 +1,5 @@
 #version 450 core
-// Technique cloth (GLSL 4.50 for the fine derivatives): the fitted fabric on a garment, the GLSL twin of core/cloth/shade.cpp and
+// Technique cloth (GLSL 4.50 for the fine derivatives): the fitted fabric on a garment, the GLSL twin of core/cloth/reflectance.cpp and
 // ClothTechnique::shade_cpu (core/cloth/technique.cpp). The BRDF pyramid arrives packed as
 // core/cloth/technique.h PackedPyramid describes.
 #include "common.glsl"
@@ -151,7 +151,7 @@ void main() {
     v.z = max(v.z, 1e-4);
     v = normalize(v);
 
-    // Mip level (core/cloth/shade.h): lambda = log2(footprint x res) + bias.
+    // Mip level (core/cloth/reflectance.h): lambda = log2(footprint x res) + bias.
     float footprint = max(length(dFdxFine(v_uv)), length(dFdyFine(v_uv))) * u_repeat;
     int top = u_levels - 1;
     float lambda = log2(max(footprint, 1e-30) * float(u_res)) + u_bias;

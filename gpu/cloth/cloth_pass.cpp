@@ -25,7 +25,7 @@ public:
         : program_(Program::graphics("shaders/mesh.vert", "cloth/cloth.frag", {"MESOLAB_SNAP_VERTICES"}, fragment_outputs(t))) {}
 
     void draw(DrawContext& ctx) override {
-        PROFILE_SCOPE("cloth.draw");
+        PROFILE_SCOPE("draw.cloth");
         program_.use();
         ctx.renderer.set_lighting_uniforms(program_, ctx.lighting, 0);
         for (int i : ctx.objects) {

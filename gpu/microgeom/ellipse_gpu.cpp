@@ -2,13 +2,13 @@
 // batch's points and lit bits (ellipse_gpu.h, [SECTION] Points), dispatches one work group per
 // texel and reads the ellipses straight into the map (the shader writes Ellipse's layout).
 #include "gpu/microgeom/ellipse_gpu.h"
+#include "core/parallel.h"
 #include "core/profile.h"
 #include "gpu/dispatch_timer.h"
 
 #include "gpu/context.h"
 #include "gpu/gl.h"
 
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -80,7 +80,7 @@ void flat_batch(const Visibility& vis, const std::vector<int>& up, int t0, int t
     const size_t words = size_t(B.words);
     B.lit.assign(T * words, 0u);
     B.count.assign(T, uint32_t(up.size()));
-    tbb::parallel_for(tbb::blocked_range<int>(t0, t1, kBlock), [&](const tbb::blocked_range<int>& r) {
+    mesolab::parallel_for(tbb::blocked_range<int>(t0, t1, kBlock), [&](const tbb::blocked_range<int>& r) {
         uint32_t* bits = B.lit.data() + size_t(r.begin() - t0) * words;
         for (size_t j = 0; j < up.size(); ++j) {
             const uint32_t* hit = vis.hit.data() + size_t(up[j]) * plane + size_t(r.begin());
@@ -102,7 +102,7 @@ int bent_batch(const Heightfield& hf, const DirectionSet& dirs, const Visibility
     B.points.assign(T * size_t(B.stride), vec2(0.f));
     B.lit.assign(T * size_t(B.words), 0u);
     B.count.assign(T, 0u);
-    tbb::parallel_for(tbb::blocked_range<int>(t0, t1, std::max(1, W)), [&](const tbb::blocked_range<int>& r) {
+    mesolab::parallel_for(tbb::blocked_range<int>(t0, t1, std::max(1, W)), [&](const tbb::blocked_range<int>& r) {
         for (int t = r.begin(); t < r.end(); ++t) {
             const int x = t % W, y = t / W;
             const size_t k = size_t(t - t0);

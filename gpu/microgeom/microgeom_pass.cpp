@@ -101,7 +101,7 @@ Texture upload_per_light(const LightsScatter& s, const Heightfield& hf) {
 
 // microgeom.scatter_directions: one RGBA32F layer per direction above the horizon (at least one layer).
 Texture upload_per_direction(const DirectionalScatter& s) {
-    PROFILE_SCOPE("microgeom.upload_directions");
+    PROFILE_SCOPE("upload directions");
     const int layers = std::max(1, s.count);
     std::vector<float> rgba(size_t(s.width) * size_t(s.height) * size_t(layers) * 4, 0.f);
     for (size_t k = 0; k < s.E.size(); ++k)
@@ -131,7 +131,7 @@ Ellipses upload_ellipses(const EllipseMap& em) {
 
 // The simulated BRDF: (view node, light node) -> (T, shadow), and the environment row.
 BrdfTables upload_brdf(const SimulatedBrdf& b) {
-    PROFILE_SCOPE("microgeom.upload_brdf");
+    PROFILE_SCOPE("upload simulated BRDF");
     const int nodes = b.n_theta * b.n_phi;
     std::vector<float> rgba(size_t(nodes) * size_t(nodes) * 4), env(size_t(nodes) * 4, 1.f);
     for (size_t k = 0; k < size_t(nodes) * size_t(nodes); ++k) {
@@ -152,7 +152,7 @@ public:
     explicit MicrogeomPass(const Technique& t) : program_(Program::graphics("shaders/mesh.vert", "microgeom/microgeom.frag", {"MESOLAB_SNAP_VERTICES"}, fragment_outputs(t))) {}
 
     void draw(DrawContext& ctx) override {
-        PROFILE_SCOPE("microgeom.draw");
+        PROFILE_SCOPE("draw.microgeom");
         GpuResources& res = ctx.renderer.resources();
         // The objects' results and materials, parsed once per frame, and their GL objects.
         struct Bound {

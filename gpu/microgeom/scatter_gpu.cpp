@@ -1,4 +1,5 @@
 #include "gpu/microgeom/scatter_gpu.h"
+#include "core/parallel.h"
 
 #include "gpu/context.h"
 #include "gpu/gl.h"
@@ -6,7 +7,6 @@
 #include "core/profile.h"
 #include "gpu/dispatch_timer.h"
 
-#include <tbb/parallel_for.h>
 
 #include <stdexcept>
 #include <string>
@@ -20,7 +20,7 @@ constexpr int kLocal = 8;
 Buffer upload_vec4(const std::vector<vec3>& v, GLenum usage, const char* what) {
     return make_storage_buffer_filled(v.size() * sizeof(vec4), [&](void* dst) {
         vec4* out = static_cast<vec4*>(dst);
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, v.size(), 16384), [&](const tbb::blocked_range<size_t>& r) {
+        mesolab::parallel_for(tbb::blocked_range<size_t>(0, v.size(), 16384), [&](const tbb::blocked_range<size_t>& r) {
             for (size_t p = r.begin(); p < r.end(); ++p) out[p] = vec4(v[p], 0.f);
         });
     }, what, usage);
@@ -31,7 +31,7 @@ std::vector<vec3> read_vec3(GLuint b, size_t T, const char* what) {
     std::vector<vec3> out(T);
     read_storage_buffer(b, T * sizeof(vec4), [&](const void* src) {
         const vec4* in = static_cast<const vec4*>(src);
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, T, 16384), [&](const tbb::blocked_range<size_t>& r) {
+        mesolab::parallel_for(tbb::blocked_range<size_t>(0, T, 16384), [&](const tbb::blocked_range<size_t>& r) {
             for (size_t p = r.begin(); p < r.end(); ++p) out[p] = vec3(in[p]);
         });
     }, what);
@@ -65,7 +65,7 @@ public:
         chunks_ = upload_direction_chunks(vis, has_bent_ ? bent : nullptr, max_chunk_bytes_, "microgeom scattering (GPU)");
         normals_ = make_storage_buffer_filled(T * sizeof(vec4), [&](void* dst) {
             vec4* n = static_cast<vec4*>(dst);
-            tbb::parallel_for(0, H_, [&](int y) {
+            mesolab::parallel_for(0, H_, [&](int y) {
                 for (int x = 0; x < W_; ++x) n[hf.index(x, y)] = vec4(hf.normal(x, y), 0.f);
             });
         }, "microgeom scattering (GPU): normals");

@@ -3,12 +3,12 @@
 // heights, the min/max pyramid, lifted origins, normalised directions), uploads it as SSBOs and
 // dispatches one invocation per (texel, direction) in batches of directions.
 #include "gpu/microgeom/visibility_gpu.h"
+#include "core/parallel.h"
 
 #include "gpu/microgeom/chunks.h"
 #include "core/profile.h"
 #include "gpu/dispatch_timer.h"
 
-#include <tbb/parallel_for.h>
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -83,7 +83,7 @@ void prepare_field(const Heightfield& hf, Prepared& P) {
     }
     // Heights in texel units, each converted once (a cell reads four), on every core.
     std::vector<float> hs(size_t(W) * size_t(H));
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, hs.size(), 16384), [&](const tbb::blocked_range<size_t>& r) {
+    mesolab::parallel_for(tbb::blocked_range<size_t>(0, hs.size(), 16384), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t k = r.begin(); k < r.end(); ++k) hs[k] = float(double(hf.h[k]) / s);
     });
     auto h = [&](int x, int y) {
@@ -117,7 +117,7 @@ void prepare_field(const Heightfield& hf, Prepared& P) {
     P.mm.resize(total * 2);
     // Level 0 and each level above it, row by row on every core; the field's range from the rows'.
     std::vector<float> row_min(static_cast<size_t>(Hc)), row_max(static_cast<size_t>(Hc));
-    tbb::parallel_for(0, Hc, [&](int y) {
+    mesolab::parallel_for(0, Hc, [&](int y) {
         float lo = std::numeric_limits<float>::infinity(), hi = -lo;
         for (int x = 0; x < Wc; ++x) {
             const float c[4] = {h(x, y), h(x + 1, y), h(x, y + 1), h(x + 1, y + 1)};
@@ -137,7 +137,7 @@ void prepare_field(const Heightfield& hf, Prepared& P) {
         const float* p = P.mm.data() + 2 * off[size_t(L) - 1];
         float* q = P.mm.data() + 2 * off[size_t(L)];
         const int pw = lw[size_t(L) - 1], ph = lh[size_t(L) - 1], w = lw[size_t(L)], hh = lh[size_t(L)];
-        tbb::parallel_for(0, hh, [&](int y) {
+        mesolab::parallel_for(0, hh, [&](int y) {
             for (int x = 0; x < w; ++x) {
                 float lo = std::numeric_limits<float>::infinity(), hi = -lo;
                 for (int py = 2 * y; py < std::min(2 * y + 2, ph); ++py)
@@ -170,7 +170,7 @@ Prepared prepare(const Heightfield& hf, const DirectionSet& dirs) {
     // Per texel: normal and lifted origin (texel space, as compute_visibility), relative to the
     // texel: c0 - x, r0 - y and z0 - hs, with hs the texel's height as the cells store it.
     P.texels.resize(size_t(W) * size_t(H));
-    tbb::parallel_for(0, H, [&](int y) {
+    mesolab::parallel_for(0, H, [&](int y) {
         for (int x = 0; x < W; ++x) {
             const size_t k = size_t(y) * size_t(W) + size_t(x);
             const vec3 n = hf.normal(x, y);
@@ -298,7 +298,7 @@ void run(const Program& program, const VisibilityProgram::Batching& batching, co
 void read_back(GLuint b, size_t bytes, void* dst) {
     read_storage_buffer(b, bytes, [&](const void* src) {
         constexpr size_t kBlock = size_t(4) << 20;
-        tbb::parallel_for(size_t(0), (bytes + kBlock - 1) / kBlock, [&](size_t k) {
+        mesolab::parallel_for(size_t(0), (bytes + kBlock - 1) / kBlock, [&](size_t k) {
             const size_t at = k * kBlock;
             std::memcpy(static_cast<char*>(dst) + at, static_cast<const char*>(src) + at, std::min(kBlock, bytes - at));
         });

@@ -106,7 +106,7 @@ public:
     }
 
     void draw(DrawContext& ctx) override {
-        PROFILE_SCOPE("translucency.draw");
+        PROFILE_SCOPE("draw.translucency");
         const auto in_frame = [&](const char* aov) {
             const auto& l = ctx.renderer.layout();
             return std::any_of(l.begin(), l.end(), [&](const AovDecl& a) { return a.name == aov; });
@@ -118,7 +118,7 @@ public:
             const auto rho = ctx.eval.get(translucency::stages::albedo, o);
             if (shows_parts(ctx, s) && !w.parts_written) {
                 // Steps reused from a frame that did not show them: the parts from the step's buffers.
-                PROFILE_SCOPE("translucency.combine_parts");
+                PROFILE_SCOPE("combine parts");
                 combine(ctx, In(ctx, o), w, true);
                 barrier();
                 unbind_step_inputs();
@@ -171,7 +171,7 @@ private:
         std::shared_ptr<const VertexFactors> factors;
         std::shared_ptr<const Gather> gather;
         In(const DrawContext& ctx, int o)
-            : s(Settings::from(ctx.scene.objects[size_t(o)])),
+            : s(Settings::from(ctx.scene.objects[size_t(o)], Settings::Medium_ | Settings::Scale | Settings::Shadows)),
               mesh(ctx.eval.get(translucency::stages::mesh, o)),
               atlas(ctx.eval.get(translucency::stages::atlas, o)),
               kernels(ctx.eval.get(translucency::stages::kernels, o)),
@@ -428,7 +428,7 @@ private:
     };
     GpuFactors& factors(DrawContext& ctx, const In& in) {
         return ctx.renderer.resources().get<GpuFactors>(in.factors, "directed", [&] {
-            PROFILE_SCOPE("translucency.upload_factors");
+            PROFILE_SCOPE("upload factors");
             const VertexFactors& F = *in.factors;
             const PaddedFactors P = pad_factor_rows(F);
             GpuFactors g;
@@ -492,14 +492,20 @@ private:
     // [SECTION] translucency.combine
     // The irradiance, local and global maps are written when the frame shows one of them (as an
     // AOV, or as the displayed response); else by the first frame that does, from the step's buffers.
-    static bool shows_parts(const DrawContext& ctx, const Settings& s) {
+    // Whether the frame's layout asks for the parts (the AOVs irradiance, local, global).
+    static bool layout_shows_parts(const DrawContext& ctx) {
         const auto& l = ctx.renderer.layout();
-        const bool aov = std::any_of(l.begin(), l.end(), [](const AovDecl& a) { return a.name == "irradiance" || a.name == "local" || a.name == "global"; });
-        return aov || s.response == Response::Local || s.response == Response::Global;
+        return std::any_of(l.begin(), l.end(), [](const AovDecl& a) { return a.name == "irradiance" || a.name == "local" || a.name == "global"; });
+    }
+    // Whether the frame shows the parts: the layout, or a response that draws one of them.
+    static bool shows_parts(const DrawContext& ctx, const Settings& s) {
+        return layout_shows_parts(ctx) || s.response == Response::Local || s.response == Response::Global;
     }
 
     void combine_step(DrawContext& ctx, int /*o*/, const In& in, PerObject& w) {
-        combine(ctx, in, w, shows_parts(ctx, in.s));
+        // The step reads no key of what the frame shows (translucency.response): a response that
+        // draws a part has draw() combine the parts from the step's buffers, so the step is reused.
+        combine(ctx, in, w, layout_shows_parts(ctx));
     }
 
     void combine(DrawContext& ctx, const In& in, PerObject& w, bool parts) {
@@ -535,9 +541,9 @@ private:
     }
 
     // [SECTION] translucency.reference: every lit inner texel to every inner texel (O(n²))
-    void reference_step(DrawContext& ctx, int /*o*/, const In& in, PerObject& w) {
+    void reference_step(DrawContext& ctx, int o, const In& in, PerObject& w) {
         w.has_reference = false;
-        if (!in.s.needs_reference()) return;
+        if (!Settings::from(ctx.scene.objects[size_t(o)], Settings::Show).needs_reference()) return;
         const Atlas& a = in.atlas->atlas;
         const double mm = in.s.mm_per_unit;
         // Positions (mm), the table and the disk term depend on the material and the atlas: made

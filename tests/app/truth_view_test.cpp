@@ -2,6 +2,7 @@
 // to the target, each the bytes of one render of as many; a higher target continues, another
 // scene starts over, cancel keeps the last finished pass; the error's colours and legend scale.
 #include "app/gui/truth_view.h"
+#include "app/truth_figures.h"
 #include "core/scene.h"
 #include "core/session.h"
 #include "support/cli.h"
@@ -100,8 +101,8 @@ TEST(TruthView, ErrorColoursAreWhiteAtZeroAndSaturateAtTheScale) {
     for (int x = 0; x < 3; ++x) truth.aov("normal").at(x, 0)[2] = 1.f;
     Image err(3, 1, 3);
     for (int c = 0; c < 3; ++c) err.at(1, 0)[c] = 0.3f, err.at(2, 0)[c] = -0.05f;
-    EXPECT_FLOAT_EQ(gui::error_scale(err, truth), 0.5f);  // p99 of |error| 0.3: rounded up to 0.5
-    const Image c = gui::error_colors(err, truth, 0.3f);
+    EXPECT_FLOAT_EQ(error_scale(err, truth), 0.5f);  // p99 of |error| 0.3: rounded up to 0.5
+    const Image c = error_colors(err, truth, 0.3f);
     EXPECT_FLOAT_EQ(c.at(0, 0)[0], 1.f);   // zero: white
     EXPECT_FLOAT_EQ(c.at(0, 0)[2], 1.f);
     EXPECT_FLOAT_EQ(c.at(1, 0)[0], 1.f);   // +scale: red

@@ -304,7 +304,7 @@ TEST(Heightfield, GaussianHasTheRequestedRmsSlopeAndIsIndependentOfTheThreadCoun
 TEST(Heightfield, BadParametersAreInputErrors) {
     expect_input_error([] { make_procedural(params("bricks", 7)); }, "microgeom.resolution");
     expect_input_error([] { make_procedural(params("bricks", 4097)); }, "microgeom.resolution");
-    expect_input_error([] { make_procedural(params("brick", 32)); }, microgeom::stages::heightfield);
+    expect_input_error([] { make_procedural(params("brick", 32)); }, "microgeom.heightfield");  // the key
     expect_input_error([] { make_procedural(params("brick", 32)); }, "did you mean 'bricks'");
     ProceduralParams p = params("bumps", 32);
     p.texel_size = 0.f;

@@ -24,7 +24,7 @@ double det3(vec3 a, vec3 b, vec3 c) {
 
 // [SECTION] Direction sets
 TEST(Directions, BadCountsAreInputErrors) {
-    for (int n : {-1, 0, 3, 65537}) test::expect_input_error([n] { make_direction_set(n); }, {microgeom::stages::directions});
+    for (int n : {-1, 0, 3, 65537}) test::expect_input_error([n] { make_direction_set(n); }, {"microgeom.directions"});
 }
 
 TEST(Directions, SphericalTriangleArea) {

@@ -3,14 +3,18 @@
 #include "core/raster.h"
 #include "core/render.h"
 #include "core/scene_stages.h"
+#include "core/parallel.h"
 #include "gpu/renderer.h"
 
 #include <glm/gtc/type_ptr.hpp>
-#include <tbb/parallel_for.h>
 #include <algorithm>
+#include <chrono>
 #include <map>
+#include <thread>
 
 namespace mesolab::test {
+std::atomic<Sneak> g_sneak{Sneak::None};
+
 namespace {
 
 // Per object: an N x N RGB map, image row 0 at v = 1 (as the CPU rasteriser's texture mode).
@@ -22,7 +26,7 @@ int atlas_size(const Scene& s, int object) { return int(s.objects[size_t(object)
 
 // The frame steps' handles.
 constexpr FrameStep<Maps> kIllumination{"probe.illumination"};
-constexpr FrameStep<Maps> kBlur{"probe.blur"};
+constexpr FrameStep<Maps> kBlur{"probe.blurred"};
 
 // [SECTION] Core side
 class ProbeTechnique final : public Technique {
@@ -43,10 +47,20 @@ public:
         return {t};
     }
     std::vector<FrameStepDecl> frame_steps() const override {
-        return {frame_step(kIllumination, "Irradiance per texel of the (u,v) square", {"light.*", "probe.atlas_size"}, {mesolab::stages::geometry},
+        return {frame_step(kIllumination, "Irradiance per texel of the (u,v) square", {"light.*", "geometry.*", "probe.atlas_size"}, {mesolab::stages::geometry},
                            [](const FrameStepContext& ctx) {
                                Maps out;
                                for (int obj : ctx.objects) {
+                                   const ParamTable& m = ctx.scene.objects[size_t(obj)].material;
+                                   if (g_sneak == Sneak::InStep) (void)m.get_int("blur");
+                                   if (g_sneak == Sneak::InStepWorkers) {
+                                       // Only tasks that run on another thread than the step's read it.
+                                       const std::thread::id step_thread = std::this_thread::get_id();
+                                       mesolab::parallel_for(0, 256, [&](int) {
+                                           std::this_thread::sleep_for(std::chrono::microseconds(200));
+                                           if (std::this_thread::get_id() != step_thread) (void)m.get_int("blur");
+                                       });
+                                   }
                                    const int N = atlas_size(ctx.scene, obj);
                                    RasterCamera cam;
                                    cam.width = cam.height = N;
@@ -72,7 +86,7 @@ public:
                                }
                                return out;
                            }),
-                frame_step(kBlur, "Box filter of the illumination map", {"light.*", "probe.atlas_size", "probe.blur"}, {mesolab::stages::geometry},
+                frame_step(kBlur, "Box filter of the illumination map", {"light.*", "geometry.*", "probe.atlas_size", "probe.blur"}, {mesolab::stages::geometry},
                            [](const FrameStepContext& ctx) {
                                Maps out;
                                for (int obj : ctx.objects) {
@@ -98,13 +112,36 @@ public:
                            })};
     }
 
+    // A truth: the drawn mesh, Lambertian with kd.
+    std::optional<TruthDecl> truth() const override {
+        return TruthDecl{.params = {"probe.kd"},
+                         .stages = {},
+                         .object = [](const Scene& s, const Evaluation& ev, int object) {
+                             class Lambert final : public TruthMaterial {
+                             public:
+                                 explicit Lambert(vec3 kd) : kd_(kd) {}
+                                 vec3 f(const TruthHit&, vec3, vec3) const override { return kd_ * kInvPi; }
+
+                             private:
+                                 vec3 kd_;
+                             };
+                             const ParamTable& m = s.objects[size_t(object)].material;
+                             if (g_sneak == Sneak::InTruth) (void)m.get_int("blur");
+                             TruthObject t;
+                             t.mesh = drawn_mesh(s, ev, object);
+                             t.to_world = object_to_world(s.objects[size_t(object)]);
+                             t.material = std::make_shared<Lambert>(m.get_vec3("kd"));
+                             return t;
+                         }};
+    }
+
     void shade_cpu(const ShadeContext& ctx) const override {
         const Maps& maps = ctx.step(kBlur);
         const int texel_out = ctx.out.index("texel");
         std::map<int, vec3> kd;  // the material, read once per frame
         for (int obj : ctx.objects) kd[obj] = ctx.scene.objects[size_t(obj)].material.get_vec3("kd");
         const GBuffer& gb = ctx.gbuffer;
-        tbb::parallel_for(0, gb.height, [&](int y) {
+        mesolab::parallel_for(0, gb.height, [&](int y) {
             for (int x = 0; x < gb.width; ++x) {
                 const size_t px = gb.index(x, y);
                 if (!ctx.mine(px)) continue;
@@ -138,6 +175,7 @@ public:
 
     void illuminate(gpu::DrawContext& ctx) {
         for (int obj : ctx.objects) {
+            if (g_sneak == Sneak::InStep) (void)ctx.scene.objects[size_t(obj)].material.get_int("blur");
             const int N = atlas_size(ctx.scene, obj);
             PerObject& o = objects_[obj];
             o.illumination.resize(N, N, 1);

@@ -158,7 +158,7 @@ TEST(FrameSteps, RunBeforeTheFrameOnBothPathsAndAgree) {
     for (const Frame* f : {&cpu, &gpu}) {
         ASSERT_EQ(f->steps.size(), 2u);
         EXPECT_EQ(f->steps[0].name, "probe.illumination");
-        EXPECT_EQ(f->steps[1].name, "probe.blur");
+        EXPECT_EQ(f->steps[1].name, "probe.blurred");
         EXPECT_EQ(f->steps[0].status, StageStatus::Ran);
     }
     // A step that ran was timed.
@@ -188,15 +188,15 @@ TEST(FrameSteps, AreReusedWhileTheirInputsHold) {
         const Frame second = wb.render(moved, req).frame;
         ASSERT_EQ(second.steps.size(), 2u);
         EXPECT_EQ(step(second, "probe.illumination")->status, StageStatus::Cached);
-        EXPECT_EQ(step(second, "probe.blur")->status, StageStatus::Cached);
+        EXPECT_EQ(step(second, "probe.blurred")->status, StageStatus::Cached);
         apply_set(moved, "probe.blur=2");  // an input of the blur only
         const Frame third = wb.render(moved, req).frame;
         EXPECT_EQ(step(third, "probe.illumination")->status, StageStatus::Cached);
-        EXPECT_EQ(step(third, "probe.blur")->status, StageStatus::Ran);
+        EXPECT_EQ(step(third, "probe.blurred")->status, StageStatus::Ran);
         apply_set(moved, "light.direction=10,20");  // an input of both
         const Frame fourth = wb.render(moved, req).frame;
         EXPECT_EQ(step(fourth, "probe.illumination")->status, StageStatus::Ran);
-        EXPECT_EQ(step(fourth, "probe.blur")->status, StageStatus::Ran);
+        EXPECT_EQ(step(fourth, "probe.blurred")->status, StageStatus::Ran);
         EXPECT_NE(fourth.aov("radiance").data, third.aov("radiance").data) << "the light moved";
         // Back to the first scene: the reused outputs must not be stale.
         wb.forget_frame_steps();
@@ -214,7 +214,7 @@ TEST(FrameSteps, AreTimedAsTheirOwnRows) {
     wb.render(s, req);
     TimingStat st;
     EXPECT_TRUE(wb.session().profiler().find("frame.cpu/step.probe.illumination", st));
-    EXPECT_TRUE(wb.session().profiler().find("frame.cpu/step.probe.blur", st));
+    EXPECT_TRUE(wb.session().profiler().find("frame.cpu/step.probe.blurred", st));
     req.backend = Backend::Gpu;
     wb.render(s, req);
     EXPECT_TRUE(wb.session().profiler().find("frame.gpu/step.probe.illumination", st));
@@ -230,7 +230,7 @@ TEST(FrameSteps, BenchAndTheCaptureSidecarListThem) {
     const std::string md = test::slurp(dir / "bench.md");
     EXPECT_NE(md.find("| sphere |"), std::string::npos) << md;
     EXPECT_NE(md.find("| ↳ step probe.illumination |"), std::string::npos) << md;
-    EXPECT_NE(md.find("| ↳ step probe.blur |"), std::string::npos) << md;
+    EXPECT_NE(md.find("| ↳ step probe.blurred |"), std::string::npos) << md;
 
     test::write_file(dir / "p.json", R"({"schema":1,"name":"probe-scene","objects":[{"material":{"technique":"probe"}}]})");
     CaptureOptions c;
@@ -272,7 +272,7 @@ TEST(GpuTimings, AFramesTimeIsTheSumOfItsStepsAndPasses) {
     EXPECT_GE(r.gpu_ms, steps * (1 - 1e-9));
     // Every range under its own path: the steps, the clear and the technique's draw.
     TimingStat st;
-    for (const char* path : {"frame.gpu/gpu", "frame.gpu/step.probe.illumination/gpu", "frame.gpu/step.probe.blur/gpu", "frame.gpu/clear/gpu",
+    for (const char* path : {"frame.gpu/gpu", "frame.gpu/step.probe.illumination/gpu", "frame.gpu/step.probe.blurred/gpu", "frame.gpu/clear/gpu",
                              "frame.gpu/draw.probe/gpu"})
         EXPECT_TRUE(wb.session().profiler().find(path, st)) << path;
     // A frame whose steps are reused adds no step ranges, and its total is still complete.
@@ -319,7 +319,7 @@ TEST(GpuTimings, PagesKeepAnotherMachinesFiguresBesideThisOnes) {
     std::filesystem::create_directories(dir / "bench");
     test::write_file(dir / "bench/h100.json", R"({"machine": "Intel Xeon, 16 threads; GL: NVIDIA H100 80GB HBM3/PCIe/SSE2", "label": "H100", "repeat": 5,
         "cells": [{"table": "probe", "row": "sphere", "column": "frame 64x64", "device": "gpu", "median_ms": 0.25, "min_ms": 0.2, "max_ms": 0.3, "gpu_time_ms": 0.05},
-                  {"table": "probe", "row": "sphere", "column": "frame 64x64", "step": "probe.blur", "device": "gpu", "median_ms": 0.01, "min_ms": 0.01, "max_ms": 0.02},
+                  {"table": "probe", "row": "sphere", "column": "frame 64x64", "step": "probe.blurred", "device": "gpu", "median_ms": 0.01, "min_ms": 0.01, "max_ms": 0.02},
                   {"table": "elsewhere", "row": "x", "column": "y", "device": "cpu", "median_ms": 1, "min_ms": 1, "max_ms": 1}]})");
     BenchOptions b;
     b.tables = {"probe"};

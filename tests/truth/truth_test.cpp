@@ -1,7 +1,7 @@
 // The truth renderer (core/truth/truth.h) on scenes of the basic technique, whose answers are
 // known: a white furnace, Lambert's closed form, a shadow, determinism at any thread count,
 // honest standard errors, and bad input.
-#include "app/gui/truth_view.h"
+#include "app/truth_figures.h"
 #include "app/workbench.h"
 #include "core/error.h"
 #include "core/image.h"
@@ -196,7 +196,7 @@ TEST(TruthError, IsZeroWhereTheRealTimePathIsExactAndShowsTheMissingShadow) {
     // As a picture: the error's colours over the frame (red where the real-time path is brighter:
     // the shadow it misses), the legend in a strip below.
     ASSERT_TRUE(shadowed.truth_frame);
-    const Image fig = gui::error_figure(shadowed.truth->error, *shadowed.truth_frame);
+    const Image fig = error_figure(shadowed.truth->error, *shadowed.truth_frame);
     EXPECT_EQ(fig.width, 48);
     EXPECT_GT(fig.height, 48 + 20);
     int red = 0;

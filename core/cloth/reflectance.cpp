@@ -1,5 +1,5 @@
-// Shading with a fitted fabric (see shade.h).
-#include "core/cloth/shade.h"
+// Shading with a fitted fabric (see reflectance.h).
+#include "core/cloth/reflectance.h"
 #include "core/error.h"
 
 #include <algorithm>

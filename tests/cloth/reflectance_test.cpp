@@ -1,7 +1,7 @@
-// Shading with a fitted fabric (core/cloth/shade.h): the level follows the footprint, level 0
+// Shading with a fitted fabric (core/cloth/reflectance.h): the level follows the footprint, level 0
 // reproduces the point's model, and mip blending reduces the flicker of a distant moving garment.
 #include "core/cloth/acquire.h"
-#include "core/cloth/shade.h"
+#include "core/cloth/reflectance.h"
 #include "core/error.h"
 
 #include <gtest/gtest.h>
