@@ -171,6 +171,32 @@ DirectionalScatter scatter_directions_stage(StageContext& ctx) {
 }  // namespace
 
 // [SECTION] The stages
+namespace {
+// [SECTION] The ellipse fits on disk (core/stage_store.h)
+void write_ellipse_map(BlobWriter& w, const EllipseMap& m) {
+    w.put(int32_t(m.width)), w.put(int32_t(m.height)), w.put(m.edge);
+    w.put_vector(m.e);
+}
+EllipseMap read_ellipse_map(BlobReader& r) {
+    EllipseMap m;
+    m.width = r.get<int32_t>(), m.height = r.get<int32_t>(), m.edge = r.get<float>();
+    m.e = r.get_vector<Ellipse>();
+    if (m.e.size() != size_t(m.width) * size_t(m.height)) throw BlobError("ellipses: sizes do not match");
+    return m;
+}
+void write_curved_ellipses(BlobWriter& w, const CurvedEllipses& c) {
+    w.put(c.bend_deg), w.put(c.step_u), w.put(c.step_v);
+    for (const EllipseMap* m : {&c.flat, &c.u_pos, &c.u_neg, &c.v_pos, &c.v_neg}) write_ellipse_map(w, *m);
+}
+CurvedEllipses read_curved_ellipses(BlobReader& r) {
+    CurvedEllipses c;
+    c.bend_deg = r.get<float>(), c.step_u = r.get<Bending>(), c.step_v = r.get<Bending>();
+    for (EllipseMap* m : {&c.flat, &c.u_pos, &c.u_neg, &c.v_pos, &c.v_neg}) *m = read_ellipse_map(r);
+    return c;
+}
+
+}  // namespace
+
 void MicrogeomTechnique::declare_stages(StageGraph& g) const {
     // Every stage is an object stage: one result per object, shared by objects with equal keys.
     const auto object = [](StageDecl d) {
@@ -285,7 +311,8 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
                               });
                           },
                           [&] { return fit_curved_ellipses(*in.hf, *in.dirs, *in.vis, bend, progress); }));
-                  }}));
+                  },
+                  .disk = stage_codec(stages::ellipses_curved, write_curved_ellipses, read_curved_ellipses)}));
     g.add(stages::ellipses, object({.help = "Fit a per-texel ellipse to the projections of the unshadowed directions (covariance start, optimised); on a curved base "
                           "interpolate the 5 fits of microgeom.ellipses_curved",
                   .params = with(keys(kCurvatureKeys), {"microgeom.device"}),
@@ -311,7 +338,8 @@ void MicrogeomTechnique::declare_stages(StageGraph& g) const {
                               return gpu_compute().ellipses(*in.hf, *in.dirs, *in.vis, Bending{}, progress);
                           },
                           [&] { return fit_ellipses(*in.hf, *in.dirs, *in.vis, progress); }));
-                  }}));
+                  },
+                  .disk = stage_codec(stages::ellipses, write_ellipse_map, read_ellipse_map)}));
     // Geometry level of detail: the base re-tessellated at the texel rate and displaced.
     g.add(stages::displaced, object({.help = "Re-tessellate the base surface at one vertex per texel and displace it by the heights (lod = geometry)",
                   .params = {"microgeom.lod", "microgeom.tiling", "geometry.type", "geometry.resolution", "geometry.minor_ratio"},

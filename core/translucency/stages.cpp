@@ -17,6 +17,20 @@
 namespace mesolab::translucency {
 
 // [SECTION] Stages
+namespace {
+// [SECTION] Kernels on disk (core/stage_store.h), alone and inside the blended copy
+void write_kernels(BlobWriter& w, const LocalKernels& k) {
+    w.put(int32_t(k.K)), w.put(int32_t(k.size)), w.put(int32_t(k.row));
+    w.put_vector(k.texel), w.put_vector(k.slot), w.put_vector(k.w);
+}
+LocalKernels read_kernels(BlobReader& r) {
+    LocalKernels k;
+    k.K = r.get<int32_t>(), k.size = r.get<int32_t>(), k.row = r.get<int32_t>();
+    k.texel = r.get_vector<int32_t>(), k.slot = r.get_vector<int32_t>(), k.w = r.get_vector<float>();
+    return k;
+}
+}  // namespace
+
 void TranslucencyTechnique::declare_stages(StageGraph& g) const {
     g.add(stages::mesh, {.help = "Weld, clean and simplify the object's mesh (OpenMesh decimater) to translucency.vertices",
            .scope = StageScope::Object,
@@ -32,7 +46,24 @@ void TranslucencyTechnique::declare_stages(StageGraph& g) const {
                PreparedMesh p = prepare_mesh(m->position, m->index, int(ctx.material().get_int("vertices")), m->has_uv ? &m->uv : nullptr);
                for (const auto& w : p.warnings) ctx.warn(w);
                return stage_result(stages::mesh, std::move(p));
-           }});
+           },
+           .disk = stage_codec(
+               stages::mesh,
+               [](BlobWriter& w, const PreparedMesh& m) {
+                   w.put_vector(m.position), w.put_vector(m.normal), w.put_vector(m.corner_normal), w.put_vector(m.index), w.put_vector(m.corner_uv);
+                   for (int v : {m.welded_vertices, m.removed_triangles, m.detached_triangles, m.boundary_edges, m.input_vertices}) w.put(int32_t(v));
+                   w.put(uint64_t(m.warnings.size()));
+                   for (const std::string& x : m.warnings) w.put_string(x);
+               },
+               [](BlobReader& r) {
+                   PreparedMesh m;
+                   m.position = r.get_vector<vec3>(), m.normal = r.get_vector<vec3>(), m.corner_normal = r.get_vector<vec3>();
+                   m.index = r.get_vector<uint32_t>(), m.corner_uv = r.get_vector<vec2>();
+                   for (int* v : {&m.welded_vertices, &m.removed_triangles, &m.detached_triangles, &m.boundary_edges, &m.input_vertices}) *v = r.get<int32_t>();
+                   m.warnings.resize(r.get_count(8));
+                   for (std::string& x : m.warnings) x = r.get_string();
+                   return m;
+               })});
     g.add(stages::atlas, {.help = "Texture atlas (§5.1): chunks, projection, minimum-area rectangles, packing, borders",
            .scope = StageScope::Object,
            .technique = "translucency",
@@ -67,18 +98,7 @@ void TranslucencyTechnique::declare_stages(StageGraph& g) const {
                const auto a = ctx.input(stages::atlas);
                return stage_result(stages::kernels, build_local_kernels(a->atlas, m->position, m->index, Dipole(s.medium), s.mm_per_unit, s.kernel));
            },
-           .disk = stage_codec(
-               stages::kernels,
-               [](BlobWriter& w, const LocalKernels& k) {
-                   w.put(int32_t(k.K)), w.put(int32_t(k.size)), w.put(int32_t(k.row));
-                   w.put_vector(k.texel), w.put_vector(k.slot), w.put_vector(k.w);
-               },
-               [](BlobReader& r) {
-                   LocalKernels k;
-                   k.K = r.get<int32_t>(), k.size = r.get<int32_t>(), k.row = r.get<int32_t>();
-                   k.texel = r.get_vector<int32_t>(), k.slot = r.get_vector<int32_t>(), k.w = r.get_vector<float>();
-                   return k;
-               })});
+           .disk = stage_codec(stages::kernels, write_kernels, read_kernels)});
     g.add(stages::factors, {.help = "Vertex-to-vertex throughput factors above translucency.threshold (§5.2)",
            .scope = StageScope::Object,
            .technique = "translucency",
@@ -133,7 +153,19 @@ void TranslucencyTechnique::declare_stages(StageGraph& g) const {
                b.weights = fit_blending(ctx.input(stages::atlas)->atlas, m->position, m->index, Dipole(s.medium), s.mm_per_unit,
                                         *ctx.input(stages::factors), b.kernels);
                return stage_result(stages::blend, std::move(b));
-           }});
+           },
+           .disk = stage_codec(
+               stages::blend,
+               [](BlobWriter& w, const Blended& b) {
+                   write_kernels(w, b.kernels);
+                   w.put_vector(b.weights.c);
+               },
+               [](BlobReader& r) {
+                   Blended b;
+                   b.kernels = read_kernels(r);
+                   b.weights.c = r.get_vector<std::array<vec3, 3>>();
+                   return b;
+               })});
     g.add(stages::gather, {.help = "Per vertex, the texels its irradiance (hat-weighted) and its direct radiosity (blending) come from",
            .scope = StageScope::Object,
            .technique = "translucency",
