@@ -9,7 +9,6 @@
 #include "core/error.h"
 #include "core/profile.h"
 #include "core/technique.h"
-#include "gpu/renderer.h"
 
 #include <cmath>
 #include <cstdlib>
@@ -43,8 +42,7 @@ std::vector<double> time_runs(int n, const std::function<double()>& once, const 
 }
 }  // namespace
 
-int run_bench(const BenchOptions& o) {
-    if (o.format != "md" && o.format != "csv" && o.format != "json") throw InputError("--format: '" + o.format + "' is not one of md|csv|json");
+BenchResult measure_bench(const BenchOptions& o) {
     if (o.repeat < 1 || o.repeat > 1000) throw InputError("--repeat: " + std::to_string(o.repeat) + " is out of range [1, 1000]");
     if (o.backend != "cpu" && o.backend != "gpu" && o.backend != "both") throw InputError("--backend: '" + o.backend + "' is not one of cpu|gpu|both");
     const auto all = bench_tables();
@@ -63,10 +61,8 @@ int run_bench(const BenchOptions& o) {
         tables.push_back(*it);
     }
     // --noise: the truth table measures each preset's time to that noise.
-    if (o.noise != 0.0 || !o.time_limit.empty()) {
-        if (o.noise == 0.0) throw InputError("--time-limit: with bench it bounds the truth table's --noise runs; add --noise");
-        TruthSettings st;
-        truth_sampling(o.noise, o.time_limit.empty() ? "600" : o.time_limit, 1, false, st);
+    if (o.noise != 0.0) {
+        const TruthSettings st = truth_sampling(std::nullopt, o.noise, o.time_limit_s, 1);
         bool found = false;
         for (auto& t : tables)
             if (t.name == "truth") t = truth_bench_table(st.noise, st.time_limit_s), found = true;
@@ -77,7 +73,6 @@ int run_bench(const BenchOptions& o) {
         return parts.empty() || std::any_of(parts.begin(), parts.end(), [&](const std::string& p) { return name.find(p) != std::string::npos; });
     };
     if (!o.rows.empty() || !o.columns.empty()) {
-        if (o.update_pages) throw InputError("--update-pages writes whole tables: it does not take --row or --column");
         std::string row_names, column_names;
         for (auto& t : tables) {
             for (const auto& r : t.rows) row_names += (row_names.empty() ? "'" : ", '") + r.name + "'";
@@ -114,14 +109,14 @@ int run_bench(const BenchOptions& o) {
     }
 
     Workbench wb;
-    wb.session().set_memory_limit(memory_limit_bytes(o.memory_limit));
+    wb.session().set_memory_limit(o.memory_limit);
     Session& session = wb.session();
     const bool want_gpu = o.backend != "cpu", want_cpu = o.backend != "gpu";
     std::string gl = "none";
     if (want_gpu) {
         try {
-            gl = wb.gl_renderer();
-            wb.gpu().set_pass_timing(o.profile);  // a software renderer times each pass only when asked
+            gl = wb.renderer("gpu").device();
+            wb.renderer("gpu").set_pass_timing(o.profile);  // a software renderer times each pass only when asked
         } catch (const std::exception& e) {
             throw std::runtime_error(std::string("bench needs an OpenGL context for GPU columns (use --backend cpu): ") + e.what());
         }
@@ -145,9 +140,7 @@ int run_bench(const BenchOptions& o) {
 
     // What a GPU frame cell holds on this GL.
     std::string gpu_note;
-    if (want_gpu)
-        gpu_note = wb.gpu().software() ? " GPU frames: wall time to a finished frame (this GL renders on the CPU; its timer queries do not see that work)."
-                                       : " GPU frames: wall time to a finished frame (a fence), and the GPU time of its steps and passes (timer queries).";
+    if (want_gpu) gpu_note = " " + wb.renderer("gpu").timing_note();
     std::vector<BenchCell> cells;
     size_t cells_total = 0, cells_done = 0;
     for (const auto& t : tables) cells_total += t.rows.size() * t.columns.size();
@@ -214,7 +207,7 @@ int run_bench(const BenchOptions& o) {
                     const bool gpu = dev == 1;
                     if ((gpu && (!col.gpu || !want_gpu)) || (!gpu && (!col.cpu || !want_cpu))) continue;
                     RenderRequest req;
-                    req.backend = gpu ? Backend::Gpu : Backend::Cpu;
+                    req.renderer = gpu ? "gpu" : "cpu";
                     req.width = col.frame_width;
                     req.height = col.frame_height;
                     req.aovs = {"radiance"};
@@ -242,56 +235,72 @@ int run_bench(const BenchOptions& o) {
         }
     }
 
-    // [SECTION] Output
+    if (o.profile) print_profile(session.profiler());
+    return {machine, o.repeat, kSlowMs, want_gpu ? gpu_note : "", tables, cells};
+}
+
+json bench_json(const BenchResult& r, const std::string& label) {
+    json j;
+    j["machine"] = r.machine;
+    if (!label.empty()) j["label"] = label;
+    j["version"] = version_string();
+    j["repeat"] = r.repeat;
+    j["cells"] = json::array();
+    for (const auto& c : r.cells) {
+        json x{{"table", c.table}, {"row", c.row}, {"column", c.column}};
+        if (!c.step.empty()) x["step"] = c.step;
+        if (!c.info.empty()) {
+            x["info"] = c.info;
+            j["cells"].push_back(x);
+            continue;
+        }
+        x["device"] = c.device, x["median_ms"] = c.median, x["min_ms"] = c.min, x["max_ms"] = c.max;
+        if (c.gpu_time) x["gpu_time_ms"] = *c.gpu_time;
+        if (c.paper) {
+            x["paper_ms"] = *c.paper;
+            x["paper_over_ours"] = *c.paper / c.median;
+        }
+        j["cells"].push_back(x);
+    }
+    return j;
+}
+
+// [SECTION] The command: text in, formats out
+int run_bench(const BenchCommand& cmd) {
+    if (cmd.format != "md" && cmd.format != "csv" && cmd.format != "json") throw InputError("--format: '" + cmd.format + "' is not one of md|csv|json");
+    if (cmd.update_pages && (!cmd.run.rows.empty() || !cmd.run.columns.empty()))
+        throw InputError("--update-pages writes whole tables: it does not take --row or --column");
+    if (cmd.run.noise == 0.0 && !cmd.time_limit.empty()) throw InputError("--time-limit: with bench it bounds the truth table's --noise runs; add --noise");
+    BenchOptions o = cmd.run;
+    o.memory_limit = memory_limit_bytes(cmd.memory_limit);
+    if (!cmd.time_limit.empty()) o.time_limit_s = parse_duration_s(cmd.time_limit, "--time-limit");
+    const BenchResult r = measure_bench(o);
     std::ostringstream out;
-    if (o.format == "csv") {
+    if (cmd.format == "csv") {
         out << "table,row,column,device,median_ms,min_ms,max_ms,paper_ms,paper_over_ours,gpu_time_ms\n";
-        for (const auto& c : cells)
+        for (const auto& c : r.cells)
             if (!c.info.empty()) out << c.table << ",\"" << c.row << "\",\"" << c.column << "\",info,,,,,\"" << c.info << "\"\n";
             else out << c.table << ",\"" << (c.step.empty() ? c.row : c.row + " / step " + c.step) << "\",\"" << c.column << "\"," << c.device << "," << c.median << "," << c.min << "," << c.max << ","
                 << (c.paper ? std::to_string(*c.paper) : "") << "," << (c.paper ? std::to_string(*c.paper / c.median) : "") << ","
                 << (c.gpu_time ? std::to_string(*c.gpu_time) : "") << "\n";
-    } else if (o.format == "json") {
-        json j;
-        j["machine"] = machine;
-        if (!o.label.empty()) j["label"] = o.label;
-        j["version"] = version_string();
-        j["repeat"] = o.repeat;
-        j["cells"] = json::array();
-        for (const auto& c : cells) {
-            json x{{"table", c.table}, {"row", c.row}, {"column", c.column}};
-            if (!c.step.empty()) x["step"] = c.step;
-            if (!c.info.empty()) {
-                x["info"] = c.info;
-                j["cells"].push_back(x);
-                continue;
-            }
-            x["device"] = c.device, x["median_ms"] = c.median, x["min_ms"] = c.min, x["max_ms"] = c.max;
-            if (c.gpu_time) x["gpu_time_ms"] = *c.gpu_time;
-            if (c.paper) {
-                x["paper_ms"] = *c.paper;
-                x["paper_over_ours"] = *c.paper / c.median;
-            }
-            j["cells"].push_back(x);
-        }
-        out << j.dump(2) << "\n";
+    } else if (cmd.format == "json") {
+        out << bench_json(r, cmd.label).dump(2) << "\n";
     }
     // Markdown, one block per table (also what --update-pages writes into the pages, with the
     // figures of other machines kept in bench/*.json beside this run's).
-    const std::vector<OtherMachine> others = o.update_pages ? load_other_machines(o.pages_root, machine) : std::vector<OtherMachine>{};
-    const std::map<std::string, std::string> markdown = bench_markdown(tables, cells, others, {machine, o.repeat, kSlowMs, want_gpu ? gpu_note : ""});
-    if (o.format == "md")
-        for (const auto& t : tables) out << markdown.at(t.name);
-    if (o.profile) print_profile(session.profiler());
-    if (o.update_pages) {
-        for (const auto& page : update_pages(o.pages_root, markdown)) std::fprintf(stderr, "updated %s\n", page.c_str());
-    } else if (o.output) {
-        *o.output = out.str();
-    } else if (o.out.empty()) {
+    const std::vector<OtherMachine> others = cmd.update_pages ? load_other_machines(cmd.pages_root, r.machine) : std::vector<OtherMachine>{};
+    const std::map<std::string, std::string> markdown = bench_markdown(r.tables, r.cells, others, {r.machine, r.repeat, r.slow_ms, r.gpu_note});
+    if (cmd.format == "md")
+        for (const auto& t : r.tables) out << markdown.at(t.name);
+    if (cmd.update_pages) {
+        for (const auto& page : update_pages(cmd.pages_root, markdown)) std::fprintf(stderr, "updated %s\n", page.c_str());
+    } else if (cmd.output) {
+        *cmd.output = out.str();
+    } else if (cmd.out.empty()) {
         std::fputs(out.str().c_str(), stdout);
     } else {
-        write_text_atomic(o.out, out.str());
-        std::fprintf(stderr, "wrote %s\n", o.out.c_str());
+        write_text_atomic(cmd.out, out.str());
+        std::fprintf(stderr, "wrote %s\n", cmd.out.c_str());
     }
     return 0;
 }

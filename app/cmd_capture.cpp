@@ -9,7 +9,9 @@
 #include "core/scene.h"
 #include "core/strings.h"
 #include "core/technique.h"
+#include "core/truth/cache.h"
 #include "core/truth/truth.h"
+#include "core/stage_store.h"
 
 #include <algorithm>
 #include <limits>
@@ -69,14 +71,9 @@ double parse_duration_s(const std::string& text, const std::string& option) {
     return v * scale;
 }
 
-void truth_sampling(double noise, const std::string& time_limit, int spp, bool spp_given, TruthSettings& st) {
-    if (noise != 0.0 && !(noise > 0.0 && noise < 1.0))
-        throw InputError("--noise " + strprintf("%g", noise) + ": expected a relative noise between 0 and 1 (e.g. 0.01 for 1%)");
-    st.noise = noise;
-    st.time_limit_s = time_limit.empty() ? 0.0 : parse_duration_s(time_limit, "--time-limit");
-    if (spp < 1) throw InputError("--spp " + std::to_string(spp) + ": expected at least 1 sample per pixel");
-    // With a noise target or a time limit, --spp bounds the samples only when it is given.
-    st.spp = (noise > 0.0 || st.time_limit_s > 0.0) && !spp_given ? std::numeric_limits<int>::max() / 2 : spp;
+TruthSettings truth_sampling(int spp, bool spp_given, double noise, const std::string& time_limit, uint64_t seed) {
+    return truth_sampling(spp_given ? std::optional<int>(spp) : std::nullopt, noise, time_limit.empty() ? 0.0 : parse_duration_s(time_limit, "--time-limit"),
+                          seed);
 }
 
 namespace {
@@ -145,15 +142,15 @@ json capture_sidecar(const Scene& s, const std::string& file, const RenderResult
     j["aovs_available"] = aovs;
     j["aovs_rendered"] = rendered;
     j["outputs"] = written;
-    if (r.renderer == "truth") {
+    if (r.sampled) {
         json tr;
-        tr["spp"] = r.truth_spp;
+        tr["spp"] = r.sampled->spp;
         tr["seed"] = req_truth.seed;
         tr["noise_rel"] = truth_noise_rel(r.frame);
-        tr["cached_spp"] = r.truth_cached_spp;  // samples read from the truth cache (all of them: nothing rendered)
+        tr["cached_spp"] = r.sampled->cached_spp;  // samples read from the truth cache (all of them: nothing rendered)
         if (req_truth.noise > 0.0) tr["noise_target"] = req_truth.noise;
         if (req_truth.time_limit_s > 0.0) tr["time_limit_s"] = req_truth.time_limit_s;
-        tr["ended"] = to_string(r.truth_ended);  // samples, noise or time limit: what ended the sampling
+        tr["ended"] = to_string(r.sampled->ended);  // samples, noise or time limit: what ended the sampling
         j["truth"] = tr;
     } else if (r.truth) {  // the frame against its truth (--aov truth_error)
         json tr;
@@ -163,10 +160,10 @@ json capture_sidecar(const Scene& s, const std::string& file, const RenderResult
         tr["rmse_rel"] = r.truth->rmse_rel;
         tr["below_noise"] = r.truth->below_noise;
         tr["ms"] = r.truth_ms;
-        tr["cached_spp"] = r.truth_cached_spp;
+        tr["cached_spp"] = r.truth_run ? r.truth_run->cached_spp : 0;
         if (req_truth.noise > 0.0) tr["noise_target"] = req_truth.noise;
         if (req_truth.time_limit_s > 0.0) tr["time_limit_s"] = req_truth.time_limit_s;
-        tr["ended"] = to_string(r.truth_ended);
+        tr["ended"] = to_string(r.truth_run ? r.truth_run->ended : TruthEnd::Samples);
         j["truth"] = tr;
     }
     return j;
@@ -226,7 +223,7 @@ int run_truth_merge(const MergeOptions& o) {
     // A merged truth from sample 0 is kept in the truth cache too: a capture of the same scene, size
     // and seed reads it, or continues it.
     bool cached = false;
-    if (a.first == 0 && merged.build == here) cached = TruthCache().store(merged.key, a);
+    if (a.first == 0 && merged.build == here) cached = TruthCache(cache_folder("truth"), version_string()).store(merged.key, a);
     json j;
     j["preset"] = name;
     j["version"] = version_string();
@@ -270,18 +267,17 @@ int run_capture(const CaptureOptions& o) {
     int w = 0, h = 0;
     parse_size(o.size, w, h);
     RenderRequest req;
-    req.backend = parse_backend(o.backend);
+    req.renderer = o.backend;
     req.width = w;
     req.height = h;
     req.progress = tty_progress();
     req.aovs = o.aovs.empty() ? std::vector<std::string>{"radiance"} : o.aovs;  // radiance and the requested AOVs only
-    req.truth.seed = o.seed;
-    truth_sampling(o.noise, o.time_limit, o.spp, o.spp_given, req.truth);
+    req.truth = truth_sampling(o.spp, o.spp_given, o.noise, o.time_limit, o.seed);
+    const RendererDecl& renderer = RendererRegistry::instance().find(req.renderer);
     if (!o.samples.empty()) {
-        if (req.backend != Backend::Truth) throw InputError("--samples " + o.samples + ": a partial truth needs --backend truth");
         if (o.noise > 0.0 || !o.time_limit.empty()) throw InputError("--samples: a partial truth renders exactly its samples; leave out --noise and --time-limit");
         parse_samples(o.samples, req.truth.first, req.truth.spp);
-        req.truth_part = true;
+        req.partial = true;
     }
     const auto files = expand_presets(o.presets);
     // Validate everything first, so that bad input fails before any work.
@@ -290,44 +286,26 @@ int run_capture(const CaptureOptions& o) {
         Scene s = load_preset(f);
         apply_sets(s, o.sets);
         try {
-            if (req.backend == Backend::Truth) {
-                truth_stages(s);  // every object's technique has a truth
-                for (const auto& a : o.aovs)
-                    if (std::find(truth_aovs().begin(), truth_aovs().end(), a) == truth_aovs().end())
-                        throw InputError("--aov " + a + ": the truth does not write it (it writes radiance, normal, truth_stderr, exitance)");
-            } else {
-                std::vector<std::string> realtime;  // truth_error is made from the frame and the truth
-                for (const auto& a : o.aovs)
-                    if (a != "truth_error") realtime.push_back(a);
-                if (realtime.size() != o.aovs.size()) truth_stages(s);  // every object's technique has a truth
-                frame_layout(s, realtime);  // every requested AOV exists in this scene
-            }
+            check_render_request(s, req);
         } catch (const InputError& e) {
+            if (req.partial && !renderer.traits.sampled) throw;  // not about the file
             throw InputError(f + ": " + e.what());
         }
         scenes.push_back(std::move(s));
     }
-    Workbench wb;
-    if (o.no_cache) {
-        wb.set_truth_cache(TruthCache(""));
-    } else {
-        wb.session().set_store(StageStore::from_environment(version_string()));
-    }
+    RendererSetup setup = default_renderer_setup();
+    if (o.no_cache) setup.truth_folder.clear();
+    Workbench wb(setup);
+    if (!o.no_cache) wb.session().set_store(StageStore::from_environment(version_string()));
     wb.session().set_memory_limit(memory_limit_bytes(o.memory_limit));
-    if (req.backend == Backend::Gpu) {
-        try {
-            wb.gpu();
-        } catch (const std::exception& e) {
-            throw std::runtime_error(std::string("no OpenGL context for --backend gpu: ") + e.what());
-        }
-    }
+    if (renderer.traits.needs_gl) wb.renderer(req.renderer).device();  // its context, before any work
     for (size_t i = 0; i < scenes.size(); ++i) {
         const Scene& s = scenes[i];
         RenderResult r = wb.render(s, req);
         tty_progress_done();
-        if (req.truth_part) {  // the part's sums, to be joined by `mesolab truth merge`
+        if (req.partial) {  // the part's sums, to be joined by `mesolab truth merge`
             const std::string path = (fs::path(o.out_dir) / (s.name + ".samples-" + std::to_string(req.truth.first) + "-" + std::to_string(req.truth.spp) + ".truth")).string();
-            write_truth_part(path, TruthPart{s.name, r.truth_key, truth_build(version_string()), *r.truth_sums});
+            write_truth_part(path, TruthPart{s.name, r.sampled->key, truth_build(version_string()), *r.sampled->sums});
             std::printf("%-28s %4dx%-4d truth  samples %d:%d  noise_rel %.4f  render %7.2f ms  -> %s\n", s.name.c_str(), r.frame.width, r.frame.height,
                         req.truth.first, req.truth.spp, truth_noise_rel(r.frame), r.render_ms, path.c_str());
             continue;
@@ -344,11 +322,11 @@ int run_capture(const CaptureOptions& o) {
             skipped += run.status == StageStatus::Skipped;
         }
         std::printf("%-28s %4dx%-4d %-6s stages %7.2f ms (%d ran, %d cached, %d cached (disk), %d skipped)  render %7.2f ms  -> %s\n", s.name.c_str(),
-                    r.frame.width, r.frame.height, req.backend == Backend::Cpu ? "cpu" : req.backend == Backend::Gpu ? "gpu" : "truth", r.stages_ms, ran,
+                    r.frame.width, r.frame.height, req.renderer.c_str(), r.stages_ms, ran,
                     cached, stored, skipped, r.render_ms, png.c_str());
-        if (req.backend == Backend::Truth)
-            std::printf("%-28s truth: %d spp (%d from the cache), noise_rel %.4f, ended by %s\n", "", r.truth_spp, r.truth_cached_spp,
-                        truth_noise_rel(r.frame), to_string(r.truth_ended));
+        if (r.sampled)
+            std::printf("%-28s %s: %d spp (%d from the cache), noise_rel %.4f, ended by %s\n", "", req.renderer.c_str(), r.sampled->spp, r.sampled->cached_spp,
+                        truth_noise_rel(r.frame), to_string(r.sampled->ended));
     }
     if (o.profile) print_profile(wb.session().profiler());
     return 0;

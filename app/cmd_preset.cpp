@@ -5,10 +5,11 @@
 #include "core/scene.h"
 #include "core/technique.h"
 #include "gpu/context.h"
+#include "gpu/headless.h"
+#include "core/renderer.h"
+#include "core/strings.h"
 
-#include <GLFW/glfw3.h>
 #include <OpenImageIO/oiioversion.h>
-#include <imgui.h>
 #include <tbb/version.h>
 #include <cstdio>
 #include <thread>
@@ -87,6 +88,8 @@ std::vector<std::pair<std::string, std::string>> info_fields() {
     std::string techniques;
     for (const auto& t : Registry::instance().technique_names()) techniques += (techniques.empty() ? "" : " ") + t;
     r.emplace_back("techniques", techniques);
+    gpu::install_headless_renderer();
+    r.emplace_back("renderers", join(RendererRegistry::instance().names(), " "));
     try {
         auto ctx = gpu::HeadlessContext::create();
         const auto& i = ctx->info();
@@ -98,20 +101,9 @@ std::vector<std::pair<std::string, std::string>> info_fields() {
     } catch (const std::exception& e) {
         r.emplace_back("gl", std::string("unavailable: ") + e.what());
     }
-    int maj = 0, min = 0, rev = 0;
-    glfwGetVersion(&maj, &min, &rev);
-    r.emplace_back("glfw", std::to_string(maj) + "." + std::to_string(min) + "." + std::to_string(rev));
-    r.emplace_back("imgui", IMGUI_VERSION);
     r.emplace_back("openimageio", OIIO_VERSION_STRING);
     r.emplace_back("tbb", std::to_string(TBB_VERSION_MAJOR) + "." + std::to_string(TBB_VERSION_MINOR));
     return r;
 }
 
-int run_info() {
-    for (const auto& [name, value] : info_fields()) {
-        if (name == "version") std::printf("mesolab %s\n", value.c_str());
-        else std::printf("%-17s %s\n", name.c_str(), value.c_str());
-    }
-    return 0;
-}
 }  // namespace mesolab

@@ -100,11 +100,12 @@ std::vector<std::string> knob_stages(const Scene& base, const Knob& k) {
     return r;
 }
 
-Knob parse_knob(const Scene& base, const std::string& text) {
-    const auto eq = text.find('=');
-    if (eq == std::string::npos || eq == 0 || eq + 1 == text.size())
-        throw InputError("--knob expects KEY=V1,V2,... (e.g. geometry.resolution=8,16,32), got '" + text + "'");
-    Knob k{text.substr(0, eq), split(text.substr(eq + 1), ','), nullptr, {}};
+// Checks the knob's key and every value before any work.
+Knob check_knob(const Scene& base, const SweepKnob& in, const char* option) {
+    if (in.key.empty() || in.values.empty())
+        throw InputError(std::string(option) + " expects a key and its values (KEY=V1,V2,..., e.g. geometry.resolution=8,16,32), got '" + in.key + "' with " +
+                         std::to_string(in.values.size()) + " values");
+    Knob k{in.key, in.values, nullptr, {}};
     k.decl = &decl_of(base, k.key);
     for (const auto& v : k.values) {
         Scene probe = base;
@@ -116,13 +117,13 @@ Knob parse_knob(const Scene& base, const std::string& text) {
 }
 
 // The reference scene: --reference settings, else the knob's declared reference, else its most accurate value.
-Scene reference_scene(const Scene& base, const Knob& k, const std::vector<std::string>& settings, std::string& text) {
+Scene reference_scene(const Scene& base, const Knob& k, const std::vector<std::pair<std::string, std::string>>& settings, std::string& text) {
     Scene ref = base;
     const ParamDecl& decl = *k.decl;
     if (!settings.empty()) {
-        for (const auto& r : settings) {
-            apply_set(ref, r);
-            text += (text.empty() ? "" : ", ") + r;
+        for (const auto& [key, value] : settings) {
+            apply_set(ref, key, value);
+            text += (text.empty() ? "" : ", ") + key + "=" + value;
         }
     } else if (decl.reference) {
         text = k.key + "=" + value_to_text(decl, *decl.reference);
@@ -174,7 +175,7 @@ struct Measure {
         const std::string d = truth_description(s);
         if (auto it = truths.find(truth_key(d, w, h)); it != truths.end()) return it->second;
         RenderRequest tr;
-        tr.backend = Backend::Truth;
+        tr.renderer = truth_error_aov().reference;
         tr.width = w, tr.height = h;
         tr.truth = truth_settings;
         tr.aovs = {"truth_stderr"};
@@ -186,13 +187,14 @@ struct Measure {
         RenderResult r = wb.render(s, tr);
         const std::string k = truth_key(d, r.frame.width, r.frame.height);  // texture mode: the native size, not w x h
         if (auto it = truths.find(k); it != truths.end()) return it->second;
+        const SampledRun& run = *r.sampled;
         if (!quiet)
-            std::fprintf(stderr, "\r  truth: %d spp (%d from the cache), noise_rel %.4f, %.0f ms, ended by %s%30s\n", r.truth_spp, r.truth_cached_spp,
-                         truth_noise_rel(r.frame), r.render_ms, to_string(r.truth_ended), "");
+            std::fprintf(stderr, "\r  truth: %d spp (%d from the cache), noise_rel %.4f, %.0f ms, ended by %s%30s\n", run.spp, run.cached_spp,
+                         truth_noise_rel(r.frame), r.render_ms, to_string(run.ended), "");
         truth_noise = std::max(truth_noise, truth_noise_rel(r.frame));
         truth_ms += r.render_ms;
-        truth_cached_spp = r.truth_cached_spp;
-        truth_spp = std::max(truth_spp, r.truth_spp);
+        truth_cached_spp = run.cached_spp;
+        truth_spp = std::max(truth_spp, run.spp);
         return truths.emplace(k, std::move(r.frame)).first->second;
     }
 
@@ -248,11 +250,11 @@ struct Report {
 std::string header_md(const SweepOptions& o, const Scene& base, const Knob& k, const std::string& ref_text, int w, int h, const Measure& m) {
     std::ostringstream md;
     if (m.vs_truth) {
-        md << "Sweep of `" << k.key << "`" << (o.by.empty() ? "" : " by `" + o.by.substr(0, o.by.find('=')) + "`") << " on `" << base.name << "` (" << o.backend << ", " << w
+        md << "Sweep of `" << k.key << "`" << (o.by.key.empty() ? "" : " by `" + o.by.key + "`") << " on `" << base.name << "` (" << o.backend << ", " << w
            << "x" << h << ", median of " << o.repeat << " cold-cache runs) against the truth (" << m.truth_spp << " spp, seed " << m.truth_settings.seed
            << ", noise_rel " << strprintf("%.4f", m.truth_noise) << "). Error: `rmse_rel`, the RMS of the real-time radiance minus the truth's over the object's "
               "pixels, over the truth's mean there; an error within twice the truth's noise is reported as unresolved, not as a number.\n\n| "
-           << k.key << (o.by.empty() ? "" : " | " + o.by.substr(0, o.by.find('='))) << " | time (ms) | rmse_rel vs truth |\n|---|" << (o.by.empty() ? "" : "---|")
+           << k.key << (o.by.key.empty() ? "" : " | " + o.by.key) << " | time (ms) | rmse_rel vs truth |\n|---|" << (o.by.key.empty() ? "" : "---|")
            << "---|---|\n";
         return md.str();
     }
@@ -276,16 +278,16 @@ Report report(const SweepOptions& o, const Scene& base, const Knob& k, const std
     if (m.vs_truth) {
         csv << "value,by,time_ms,rmse_rel,below_noise\n";
         Report r;
-        r.plot.title = "error vs time against the truth: " + k.key + (o.by.empty() ? "" : " by " + o.by.substr(0, o.by.find('='))) + " (" + base.name + ")";
+        r.plot.title = "error vs time against the truth: " + k.key + (o.by.key.empty() ? "" : " by " + o.by.key) + " (" + base.name + ")";
         r.plot.xlabel = "time per frame incl. stages, cold cache (ms)";
         r.plot.ylabel = "relative RMSE vs the truth";
         double lo = 1e300, hi = 0;
         for (const auto& p : points) {
             csv << p.value << "," << p.by << "," << p.ms << "," << p.rel << "," << (p.below_noise ? "true" : "false") << "\n";
-            md << "| " << p.value << (o.by.empty() ? "" : " | " + p.by) << " | " << strprintf("%.3f", p.ms) << " | "
+            md << "| " << p.value << (o.by.key.empty() ? "" : " | " + p.by) << " | " << strprintf("%.3f", p.ms) << " | "
                << (p.below_noise ? strprintf("below the noise (%.2e)", p.rel) : strprintf("%.3e", p.rel)) << " |\n";
-            if (r.plot.series.empty() || r.plot.series.back().label != (o.by.empty() ? k.key : o.by.substr(0, o.by.find('=')) + "=" + p.by))
-                r.plot.series.push_back({o.by.empty() ? k.key : o.by.substr(0, o.by.find('=')) + "=" + p.by, {}, {}, {}});
+            if (r.plot.series.empty() || r.plot.series.back().label != (o.by.key.empty() ? k.key : o.by.key + "=" + p.by))
+                r.plot.series.push_back({o.by.key.empty() ? k.key : o.by.key + "=" + p.by, {}, {}, {}});
             PlotSeries& sr = r.plot.series.back();
             sr.x.push_back(p.ms), sr.y.push_back(p.rel), sr.point_labels.push_back(p.value);
             lo = std::min(lo, p.ms), hi = std::max(hi, p.ms);
@@ -335,9 +337,35 @@ std::string sweep_metric_names() {
     return r;
 }
 
-int run_sweep(const SweepOptions& o) {
-    Scene base = load_preset(o.preset);
-    apply_sets(base, o.sets);
+namespace {
+// KEY=V1,V2,... as the command line gives a knob.
+SweepKnob knob_text(const std::string& text, const char* option) {
+    const auto eq = text.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == text.size())
+        throw InputError(std::string(option) + " expects KEY=V1,V2,... (e.g. geometry.resolution=8,16,32), got '" + text + "'");
+    return {text.substr(0, eq), split(text.substr(eq + 1), ',')};
+}
+}  // namespace
+
+int run_sweep(const SweepCommand& c) {
+    Scene base = load_preset(c.preset);
+    apply_sets(base, c.sets);
+    SweepOptions o;
+    o.knob = knob_text(c.knob, "--knob");
+    if (!c.by.empty()) o.by = knob_text(c.by, "--by");
+    for (const auto& r : c.reference) {
+        const auto eq = r.find('=');
+        if (eq == std::string::npos || eq == 0) throw InputError("--reference expects KEY=VALUE, got '" + r + "'");
+        o.reference.emplace_back(r.substr(0, eq), r.substr(eq + 1));
+    }
+    parse_size(c.size, o.width, o.height);
+    o.backend = c.backend;
+    o.repeat = c.repeat;
+    o.metric = c.metric;
+    o.truth = truth_sampling(c.spp, c.spp_given, c.noise, c.time_limit, c.seed);
+    o.memory_limit = memory_limit_bytes(c.memory_limit);
+    o.out_dir = c.out_dir;
+    o.source = c.preset;
     const SweepResult r = sweep_scene(base, o, true);
     std::printf("%s", r.markdown.c_str());
     std::printf("\nwrote");
@@ -347,8 +375,8 @@ int run_sweep(const SweepOptions& o) {
 }
 
 SweepResult sweep_scene(const Scene& base, const SweepOptions& o, bool write_files) {
-    int w = 0, h = 0;
-    parse_size(o.size, w, h);
+    const int w = o.width, h = o.height;
+    if (w < 1 || h < 1 || w > 16384 || h > 16384) throw InputError("--size: " + std::to_string(w) + "x" + std::to_string(h) + " is out of range (1..16384 per side)");
     if (o.repeat < 1 || o.repeat > 100) throw InputError("--repeat: " + std::to_string(o.repeat) + " is out of range [1, 100]");
     if (write_files) plot_font();  // the plot's font (fonts-dejavu-core): an error now rather than after the measurements
     Measure m;
@@ -359,31 +387,33 @@ SweepResult sweep_scene(const Scene& base, const SweepOptions& o, bool write_fil
         try {
             m.metric->check(base);
         } catch (const InputError& e) {
-            throw InputError("--metric " + m.metric->name + ": " + (o.preset.empty() ? base.name : o.preset) + ": " + e.what());
+            throw InputError("--metric " + m.metric->name + ": " + (o.source.empty() ? base.name : o.source) + ": " + e.what());
         }
     }
     m.vs_truth = o.metric == kTruthMetric;
-    if (!o.by.empty() && !m.vs_truth) throw InputError("--by: a sweep over two knobs measures against the truth; add --metric truth");
-    truth_sampling(o.noise, o.time_limit, o.spp, o.spp_given, m.truth_settings);
-    m.truth_settings.seed = o.seed;
-    const Knob k = parse_knob(base, o.knob);
+    if (!o.by.key.empty() && !m.vs_truth) throw InputError("--by: a sweep over two knobs measures against the truth; add --metric truth");
+    m.truth_settings = o.truth;
+    const Knob k = check_knob(base, o.knob, "--knob");
     std::optional<Knob> by;
-    if (!o.by.empty()) {
-        by = parse_knob(base, o.by);
+    if (!o.by.key.empty()) {
+        by = check_knob(base, o.by, "--by");
         if (by->key == k.key) throw InputError("--by " + by->key + ": the same key as --knob");
     }
     std::string ref_text = m.vs_truth ? "the truth" : "";
 
     Workbench wb;
-    wb.session().set_memory_limit(memory_limit_bytes(o.memory_limit));
+    wb.session().set_memory_limit(o.memory_limit);
     RenderRequest req;
     req.aovs = {"radiance"};
-    req.backend = parse_backend(o.backend);
+    req.renderer = o.backend;
     req.width = w;
     req.height = h;
     req.cancel = o.cancel;
-    if (m.vs_truth && req.backend == Backend::Truth) throw InputError("--metric truth: compares a real-time backend (cpu or gpu) with the truth; --backend truth measures against a reference truth with --metric rmse");
-    if (req.backend == Backend::Truth) req.truth = m.truth_settings;
+    const RendererDecl& renderer = RendererRegistry::instance().find(req.renderer);
+    if (m.vs_truth && renderer.traits.sampled)
+        throw InputError("--metric truth: compares a real-time backend (cpu or gpu) with the truth; --backend " + req.renderer +
+                         " measures against a reference of its own with --metric rmse");
+    req.truth = m.truth_settings;
     if (!m.vs_truth) {
         const Scene ref = reference_scene(base, k, o.reference, ref_text);
         if (!o.quiet) std::fprintf(stderr, "reference: %s\n", ref_text.c_str());

@@ -1,7 +1,9 @@
 // mesolab: interactive workbench for meso-scale appearance. Subcommands: gui (default),
 // capture, bench, sweep, preset validate|schema|show, info, export, and the techniques' own
 // commands (`mesolab TECHNIQUE COMMAND`, declared by Technique::commands()).
+#include "gpu/headless.h"
 #include "gpu/renderer.h"
+#include "core/renderer.h"
 #include "app/commands.h"
 #include "app/workbench.h"
 #include "core/bench.h"
@@ -21,6 +23,7 @@ using namespace mesolab;
 
 int main(int argc, char** argv) {
     mesolab::gpu::install_gpu_compute();  // stages may run their GPU variants (e.g. microgeom.device=gpu)
+    mesolab::gpu::install_headless_renderer();  // --backend gpu
     // `mesolab PRESET` and `mesolab` alone mean `mesolab gui ...`.
     std::vector<std::string> commands = {"gui", "capture", "bench", "sweep", "preset", "truth", "info", "export", "-h", "--help", "--version"};
     for (const Technique* t : Registry::instance().techniques())
@@ -55,7 +58,9 @@ int main(int argc, char** argv) {
     c->add_option("presets", cap.presets, "Preset files or folders (every *.json below)")->required();
     c->add_option("-o,--output", cap.out_dir, "Output folder")->capture_default_str();
     c->add_option("--size", cap.size, "Frame size WxH (texture mode may use the technique's native size)")->capture_default_str();
-    c->add_option("--backend", cap.backend, "gpu (EGL, headless), cpu, or truth (the Monte-Carlo reference of the explicit geometry)")->capture_default_str();
+    std::string renderers;  // every registered renderer with its line of help
+    for (const auto& n : RendererRegistry::instance().names()) renderers += (renderers.empty() ? "" : "; ") + n + ": " + RendererRegistry::instance().get(n)->help;
+    c->add_option("--backend", cap.backend, "The renderer: " + renderers)->capture_default_str();
     auto* cap_spp = c->add_option("--spp", cap.spp, "--backend truth: samples per pixel (with --noise or --time-limit: the most, unlimited when not given)")->capture_default_str();
     c->add_option("--noise", cap.noise, "--backend truth: sample until the truth's noise_rel reaches this (e.g. 0.01), continuing the cached truth; the sidecar says what ended it");
     c->add_option("--time-limit", cap.time_limit, "--backend truth: stop sampling after this long (600, 90s, 10m, 1.5h); the samples done are kept");
@@ -80,36 +85,36 @@ int main(int argc, char** argv) {
     x->add_option("--set", exp.sets, "Override a parameter: KEY=VALUE (repeatable)");
     add_memory_limit(x, exp.memory_limit);
 
-    BenchOptions bench;
+    BenchCommand bench;
     auto* b = app.add_subcommand("bench", "Timing tables laid out like the papers' tables (all tables when none is named)");
     std::string table_names;
     for (const auto& t : bench_tables()) table_names += (table_names.empty() ? "" : ", ") + t.name;
-    b->add_option("tables", bench.tables, "Table names: " + table_names);
+    b->add_option("tables", bench.run.tables, "Table names: " + table_names);
     b->add_option("--format", bench.format, "md, csv or json")->capture_default_str();
-    b->add_option("--repeat", bench.repeat, "Runs per cell (median, min, max)")->capture_default_str();
+    b->add_option("--repeat", bench.run.repeat, "Runs per cell (median, min, max)")->capture_default_str();
     b->add_option("--label", bench.label, "With --format json: this machine's short name (e.g. H100); a file bench/NAME.json of such a run is merged into the pages by --update-pages, beside this machine's figures");
-    b->add_option("--row", bench.rows, "Only the rows whose names contain TEXT (repeatable), e.g. --row 'Bricks 1024'");
-    b->add_option("--column", bench.columns, "Only the columns whose names contain TEXT (repeatable), e.g. --column frame");
+    b->add_option("--row", bench.run.rows, "Only the rows whose names contain TEXT (repeatable), e.g. --row 'Bricks 1024'");
+    b->add_option("--column", bench.run.columns, "Only the columns whose names contain TEXT (repeatable), e.g. --column frame");
     b->add_option("-o,--output", bench.out, "Write to FILE instead of standard output");
-    b->add_option("--backend", bench.backend, "cpu, gpu or both")->capture_default_str();
-    b->add_flag("--profile", bench.profile, "Print the scoped CPU/GPU timing hierarchy at the end");
+    b->add_option("--backend", bench.run.backend, "cpu, gpu or both")->capture_default_str();
+    b->add_flag("--profile", bench.run.profile, "Print the scoped CPU/GPU timing hierarchy at the end");
     b->add_flag("--update-pages", bench.update_pages,
                 "Write each table (Markdown) between its `<!-- bench NAME -->` and `<!-- /bench -->` lines in README.md and core/*/README.md");
     b->add_option("--pages-root", bench.pages_root, "With --update-pages: the repository's root")->capture_default_str();
-    b->add_option("--mesh", bench.mesh, "A mesh file (OBJ, PLY, OFF, STL, OM) measured as its own row by the tables that take one (translucency)");
-    b->add_option("--vertices", bench.vertices, "With --mesh: simplify it to N vertices first (0: the table's default)");
-    b->add_option("--noise", bench.noise, "Table truth: measure each preset's time to this noise_rel (e.g. 0.01) instead of extrapolating a 32-sample pilot");
+    b->add_option("--mesh", bench.run.mesh, "A mesh file (OBJ, PLY, OFF, STL, OM) measured as its own row by the tables that take one (translucency)");
+    b->add_option("--vertices", bench.run.vertices, "With --mesh: simplify it to N vertices first (0: the table's default)");
+    b->add_option("--noise", bench.run.noise, "Table truth: measure each preset's time to this noise_rel (e.g. 0.01) instead of extrapolating a 32-sample pilot");
     b->add_option("--time-limit", bench.time_limit, "Table truth with --noise: give up on a preset after this long (600, 90s, 10m, 1.5h; default 10m)");
     add_memory_limit(b, bench.memory_limit);
 
-    SweepOptions sweep;
+    SweepCommand sweep;
     auto* s = app.add_subcommand("sweep", "Accuracy vs time: render a preset at each value of a knob, measure time and error against a reference");
     s->add_option("preset", sweep.preset, "Preset file")->required();
     s->add_option("--knob", sweep.knob, "KEY=V1,V2,... (e.g. geometry.resolution=8,16,32,64)")->required();
     s->add_option("--reference", sweep.reference, "KEY=V settings of the reference rendering (default: the knob's most accurate setting)");
     s->add_option("-o,--output", sweep.out_dir, "Output folder for CSV, Markdown and the plot (PNG and SVG)")->capture_default_str();
     s->add_option("--size", sweep.size, "Frame size WxH")->capture_default_str();
-    s->add_option("--backend", sweep.backend, "cpu, gpu or truth")->capture_default_str();
+    s->add_option("--backend", sweep.backend, "The renderer: " + RendererRegistry::instance().names_text())->capture_default_str();
     s->add_option("--set", sweep.sets, "Override a parameter: KEY=VALUE (repeatable)");
     s->add_option("--repeat", sweep.repeat, "Timed runs per value (median)")->capture_default_str();
     s->add_option("--metric", sweep.metric, "Error measure: " + sweep_metric_names())->capture_default_str();

@@ -55,4 +55,9 @@ std::optional<std::pair<int, int>> parse_wxh(const std::string& s) {
     if (a.ec != std::errc() || a.ptr != s.data() + x || b.ec != std::errc() || b.ptr != end) return std::nullopt;
     return std::pair{w, h};
 }
+std::string join(const std::vector<std::string>& parts, const std::string& sep) {
+    std::string r;
+    for (size_t i = 0; i < parts.size(); ++i) r += (i ? sep : "") + parts[i];
+    return r;
+}
 }  // namespace mesolab

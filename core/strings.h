@@ -18,6 +18,9 @@ std::string format_bytes(double bytes);
 // ("a,,b," -> "a", "", "b", "").
 std::vector<std::string> split(const std::string& s, char sep);
 
+// The parts with `sep` between them: join({"a", "b"}, ", ") -> "a, b".
+std::string join(const std::vector<std::string>& parts, const std::string& sep);
+
 // "WxH" (or "WXH"): two decimal integers and nothing else ("512x256" -> {512, 256}); nullopt for
 // anything else. Ranges are the caller's to check (frame sizes, goniometer grids).
 std::optional<std::pair<int, int>> parse_wxh(const std::string& s);

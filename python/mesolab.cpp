@@ -10,7 +10,7 @@
 //   Frame           a rendered frame: numpy views of its AOVs, stages, timings, save, PNG
 //   Workbench       one session (stage cache, memory budget, GL context) on one worker thread
 //   Module          __version__, info, schema, load_preset, bench, sweep
-#include "app/commands.h"
+#include "app/api.h"
 #include "app/workbench.h"
 #include "core/error.h"
 #include "core/image.h"
@@ -19,6 +19,7 @@
 #include "core/stage_store.h"
 #include "core/strings.h"
 #include "core/technique.h"
+#include "core/renderer.h"
 #include "core/truth/truth.h"
 
 #include <OpenImageIO/imageio.h>
@@ -54,12 +55,6 @@ namespace {
 // [SECTION] Values
 // A path argument: str or os.PathLike.
 std::string path_arg(const py::object& p) { return py::str(py::module_::import("os").attr("fspath")(p)).cast<std::string>(); }
-
-std::string join(const std::vector<std::string>& parts, const std::string& sep) {
-    std::string r;
-    for (size_t i = 0; i < parts.size(); ++i) r += (i ? sep : "") + parts[i];
-    return r;
-}
 
 py::object from_json(const json& j) { return py::module_::import("json").attr("loads")(j.dump()); }
 
@@ -192,30 +187,21 @@ std::string object_key(const Scene& s, const std::string& key, const py::object&
 
 // spp=, noise=, time_limit= (seconds) of a truth, checked with their Python names: spp None is 64,
 // or unlimited with a noise target or a time limit.
-void truth_sampling_arg(const py::object& spp, const py::object& noise, const py::object& time_limit, TruthSettings& st) {
-    st.noise = 0.0, st.time_limit_s = 0.0;
-    if (!noise.is_none()) {
-        st.noise = noise.cast<double>();
-        if (!(st.noise > 0.0 && st.noise < 1.0)) throw InputError("noise=" + strprintf("%g", st.noise) + ": expected a relative noise between 0 and 1 (e.g. 0.01 for 1%)");
-    }
-    if (!time_limit.is_none()) {
-        st.time_limit_s = time_limit.cast<double>();
-        if (!(st.time_limit_s > 0.0) || !std::isfinite(st.time_limit_s))
-            throw InputError("time_limit=" + strprintf("%g", st.time_limit_s) + ": expected seconds above 0");
-    }
-    const bool open_ended = st.noise > 0.0 || st.time_limit_s > 0.0;
-    st.spp = spp.is_none() ? (open_ended ? std::numeric_limits<int>::max() / 2 : 64) : spp.cast<int>();
-    if (st.spp < 1) throw InputError("spp=" + std::to_string(st.spp) + ": expected at least 1 sample per pixel");
+// The truth's sampling from Python's arguments (None: not given), checked by core's truth_sampling
+// with the Python names.
+TruthSettings truth_sampling_arg(const py::object& spp, const py::object& noise, const py::object& time_limit, uint64_t seed) {
+    return truth_sampling(spp.is_none() ? std::nullopt : std::optional<int>(spp.cast<int>()), noise.is_none() ? 0.0 : noise.cast<double>(),
+                          time_limit.is_none() ? 0.0 : time_limit.cast<double>(), seed, {"spp=", "noise=", "time_limit=", "samples="});
 }
 
 std::pair<int, int> frame_size_arg(const py::object& size) {
+    std::optional<std::pair<int, int>> given;
     if (py::isinstance<py::str>(size)) {
-        int w = 0, h = 0;
-        parse_size(size.cast<std::string>(), w, h);
-        return {w, h};
+        given = parse_wxh(size.cast<std::string>());
+        if (!given) throw InputError("size: expected (width, height) or 'WxH' (e.g. '512x512'), got '" + size.cast<std::string>() + "'");
     }
     try {
-        const auto t = size.cast<std::pair<int, int>>();
+        const auto t = given ? *given : size.cast<std::pair<int, int>>();
         if (t.first < 1 || t.second < 1 || t.first > 16384 || t.second > 16384)
             throw InputError("size: (" + std::to_string(t.first) + ", " + std::to_string(t.second) + ") is out of range (1..16384 per side)");
         return t;
@@ -412,9 +398,9 @@ struct PyFrame {
         std::error_code ec;
         fs::create_directories(dir, ec);
         if (ec) throw InputError(dir + ": could not create the folder (" + ec.message() + ")");
-        std::vector<std::string> aovs;
-        for (const auto& a : r->frame.layout)
-            if (a.name != "truth_error") aovs.push_back(a.name);
+        std::vector<std::string> names;
+        for (const auto& a : r->frame.layout) names.push_back(a.name);
+        const std::vector<std::string> aovs = rendered_aovs(names);  // a comparison AOV is written as its pictures (write_capture)
         py::list out;
         for (const auto& p : write_capture(dir, scene, "", *r, aovs, truth)) out.append(p);
         return out;
@@ -477,11 +463,10 @@ public:
         ps.check_used();
         const auto [w, h] = frame_size_arg(size);
         RenderRequest req;
-        req.backend = parse_backend(backend);
+        req.renderer = RendererRegistry::instance().find(backend, "backend=").name;
         req.width = w, req.height = h;
         req.aovs = aovs.empty() ? std::vector<std::string>{"radiance"} : aovs;
-        req.truth.seed = seed;
-        truth_sampling_arg(spp, noise, time_limit, req.truth);
+        req.truth = truth_sampling_arg(spp, noise, time_limit, seed);
         PyFrame f{nullptr, ps.scene, req.truth};
         f.r = run_on<std::shared_ptr<const RenderResult>>(worker_, progress, [&](const ProgressFn& p, const std::atomic<bool>* cancel) {
             RenderRequest rq = req;
@@ -710,25 +695,36 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
            const py::object& noise, const py::object& time_limit, const py::object& memory_limit, const py::object& progress) {
             BenchOptions o;
             if (!noise.is_none()) {
-                TruthSettings st;
-                truth_sampling_arg(py::none(), noise, time_limit.is_none() ? py::float_(600.0) : time_limit, st);
+                const TruthSettings st = truth_sampling_arg(py::none(), noise, time_limit.is_none() ? py::float_(600.0) : time_limit, 1);
                 o.noise = st.noise;
-                o.time_limit = strprintf("%.17g", st.time_limit_s);
+                o.time_limit_s = st.time_limit_s;
             } else if (!time_limit.is_none()) {
                 throw InputError("bench: time_limit= bounds the truth table's noise= runs; add noise=");
             }
             if (py::isinstance<py::str>(tables)) o.tables = {tables.cast<std::string>()};
             else if (!tables.is_none()) o.tables = tables.cast<std::vector<std::string>>();
-            o.repeat = repeat, o.backend = backend, o.rows = rows, o.columns = columns, o.format = "json", o.quiet = true;
-            if (!memory_limit.is_none()) o.memory_limit = std::to_string(memory_limit_arg(memory_limit));
-            const std::string text = run_alone<std::string>(progress, [&](const ProgressFn& p, const std::atomic<bool>* cancel) {
+            o.repeat = repeat, o.backend = backend, o.rows = rows, o.columns = columns, o.quiet = true;
+            o.memory_limit = memory_limit_arg(memory_limit);
+            const BenchResult r = run_alone<BenchResult>(progress, [&](const ProgressFn& p, const std::atomic<bool>* cancel) {
                 BenchOptions run = o;
-                std::string out;
-                run.output = &out, run.progress = p, run.cancel = cancel;
-                run_bench(run);
-                return out;
+                run.progress = p, run.cancel = cancel;
+                return measure_bench(run);
             });
-            return from_json(json::parse(text)["cells"]);
+            py::list cells;
+            for (const BenchCell& c : r.cells) {
+                py::dict d;
+                d["table"] = c.table, d["row"] = c.row, d["column"] = c.column;
+                if (!c.step.empty()) d["step"] = c.step;
+                if (!c.info.empty()) {
+                    d["info"] = c.info;
+                } else {
+                    d["device"] = c.device, d["median_ms"] = c.median, d["min_ms"] = c.min, d["max_ms"] = c.max;
+                    if (c.gpu_time) d["gpu_time_ms"] = *c.gpu_time;
+                    if (c.paper) d["paper_ms"] = *c.paper, d["paper_over_ours"] = *c.paper / c.median;
+                }
+                cells.append(d);
+            }
+            return cells;
         },
         py::arg("tables") = py::none(), py::kw_only(), py::arg("repeat") = 5, py::arg("backend") = "both", py::arg("rows") = std::vector<std::string>{},
         py::arg("columns") = std::vector<std::string>{}, py::arg("noise") = py::none(), py::arg("time_limit") = py::none(), py::arg("memory_limit") = py::none(),
@@ -745,28 +741,23 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
             scene.check_used();
             const auto [w, h] = frame_size_arg(size);
             SweepOptions o;
-            std::vector<std::string> texts;
-            for (const py::handle& v : values) texts.push_back(to_set_text(knob, v));
-            if (texts.empty()) throw InputError("sweep: values is empty; give the knob's settings, e.g. values=[8, 16, 32]");
-            o.knob = knob + "=" + join(texts, ",");
-            o.size = std::to_string(w) + "x" + std::to_string(h);
-            o.metric = metric, o.backend = backend, o.repeat = repeat, o.seed = seed, o.quiet = true;
-            TruthSettings st;
-            truth_sampling_arg(spp, noise, time_limit, st);  // checked here, with the Python names
-            o.spp = spp.is_none() ? 64 : spp.cast<int>();
-            o.spp_given = !spp.is_none();
-            o.noise = st.noise;
-            if (st.time_limit_s > 0.0) o.time_limit = strprintf("%.17g", st.time_limit_s);
+            o.knob.key = knob;
+            for (const py::handle& v : values) o.knob.values.push_back(to_set_text(knob, v));
+            if (o.knob.values.empty()) throw InputError("sweep: values is empty; give the knob's settings, e.g. values=[8, 16, 32]");
+            const std::vector<std::string>& texts = o.knob.values;
+            o.width = w, o.height = h;
+            o.metric = metric, o.backend = RendererRegistry::instance().find(backend, "backend=").name, o.repeat = repeat, o.quiet = true;
+            o.truth = truth_sampling_arg(spp, noise, time_limit, seed);  // checked here, with the Python names
             if (!reference.is_none())
-                for (const auto& [k, v] : reference.cast<py::dict>()) o.reference.push_back(k.cast<std::string>() + "=" + to_set_text(k.cast<std::string>(), v));
+                for (const auto& [k, v] : reference.cast<py::dict>()) o.reference.emplace_back(k.cast<std::string>(), to_set_text(k.cast<std::string>(), v));
             std::vector<py::object> by_list;
             if (!by.is_none()) {
                 if (by_values.is_none()) throw InputError("sweep: by= needs by_values=[...]");
-                std::vector<std::string> bt;
-                for (const py::handle& v : by_values.cast<py::sequence>()) bt.push_back(to_set_text(by.cast<std::string>(), v)), by_list.push_back(py::reinterpret_borrow<py::object>(v));
-                o.by = by.cast<std::string>() + "=" + join(bt, ",");
+                o.by.key = by.cast<std::string>();
+                for (const py::handle& v : by_values.cast<py::sequence>())
+                    o.by.values.push_back(to_set_text(o.by.key, v)), by_list.push_back(py::reinterpret_borrow<py::object>(v));
             }
-            if (!memory_limit.is_none()) o.memory_limit = std::to_string(memory_limit_arg(memory_limit));
+            o.memory_limit = memory_limit_arg(memory_limit);
             if (!out_dir.is_none()) o.out_dir = path_arg(out_dir);
             const SweepResult r = run_alone<SweepResult>(progress, [&](const ProgressFn& p, const std::atomic<bool>* cancel) {
                 SweepOptions run = o;

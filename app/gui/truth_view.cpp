@@ -1,6 +1,8 @@
 #include "app/gui/truth_view.h"
 #include "core/error.h"
+#include "core/renderer.h"
 #include "core/session.h"
+#include "app/workbench.h"
 
 #include <algorithm>
 #include <cmath>
@@ -38,8 +40,8 @@ void TruthRunner::want(const Scene& s, int width, int height, const TruthSetting
     status_.error.clear();
     status_.cancelled = false;
     status_.target = settings.spp;
-    if (!same_truth || settings.spp < acc_.spp) cancel_ = true;  // the pass under way is for another truth
-    work_ = !same_truth || acc_.spp < settings.spp;
+    if (!same_truth || settings.spp < have_spp_) cancel_ = true;  // the pass under way is for another truth
+    work_ = !same_truth || have_spp_ < settings.spp;
     cv_.notify_all();
 }
 
@@ -74,10 +76,9 @@ bool TruthRunner::wait_idle(std::chrono::milliseconds timeout) const {
 
 void TruthRunner::loop(std::stop_token st) {
     Session session;  // its own stage cache: the window's evaluations are not disturbed
+    Renderers renderers(default_renderer_setup());
     for (;;) {
         Job job;
-        TruthAccumulator from;
-        bool fresh = false;
         {
             std::unique_lock<std::mutex> lock(mutex_);
             status_.running = false;
@@ -86,36 +87,31 @@ void TruthRunner::loop(std::stop_token st) {
             if (st.stop_requested()) return;
             job = *wanted_;
             cancel_ = false;
-            fresh = !(have_ && have_->description == job.description && have_->width == job.width && have_->height == job.height &&
-                      have_->settings.seed == job.settings.seed && acc_.spp <= job.settings.spp);
-            if (!fresh) from = acc_;
             status_.running = true;
             status_.fraction = 0;
         }
+        const std::string key = job.description + "|" + std::to_string(job.width) + "x" + std::to_string(job.height) + "|" + std::to_string(job.settings.seed);
         try {
-            const Evaluation ev = session.evaluate(job.scene, truth_stages(job.scene));
-            // Passes of 1, 2, 4, ... samples: each doubles what the frame holds, up to the target.
-            int spp = fresh ? 0 : from.spp;
-            while (spp < job.settings.spp) {
-                TruthSettings pass = job.settings;
-                pass.spp = std::min(job.settings.spp, std::max(1, 2 * spp));
-                auto progress = [&](const std::string&, double f) {
-                    std::lock_guard<std::mutex> lock(mutex_);
-                    status_.fraction = f;
-                };
-                TruthAccumulator next = accumulate_truth(job.scene, ev, job.width, job.height, pass, spp > 0 ? &from : nullptr, progress, &cancel_);
-                if (cancel_) break;  // the unfinished pass is dropped; the last finished one stays
-                from = std::move(next);
-                spp = from.spp;
-                Frame frame = truth_frame(from);
+            RenderRequest req;
+            req.renderer = truth_error_aov().reference;  // the truth the window's error view compares with
+            req.width = job.width, req.height = job.height;
+            req.truth = job.settings;
+            req.cancel = &cancel_;
+            req.progress = [&](const std::string&, double f) {
+                std::lock_guard<std::mutex> lock(mutex_);
+                status_.fraction = f;
+            };
+            req.on_pass = [&](const Frame& frame, int spp) {
                 std::lock_guard<std::mutex> lock(mutex_);
                 status_.spp = spp;
                 status_.noise_rel = truth_noise_rel(frame);
-                published_ = Published{std::move(frame), job.description + "|" + std::to_string(job.width) + "x" + std::to_string(job.height) + "|" +
-                                                             std::to_string(job.settings.seed)};
-                acc_ = from;
+                published_ = Published{frame, key};
                 have_ = job;
-            }
+                have_spp_ = spp;
+            };
+            renderers.get(req.renderer).render(session, job.scene, req);
+        } catch (const Cancelled&) {
+            // the unfinished pass is dropped; the last finished one stays (published, and kept by the renderer)
         } catch (const std::exception& e) {
             std::lock_guard<std::mutex> lock(mutex_);
             status_.error = e.what();
@@ -123,7 +119,7 @@ void TruthRunner::loop(std::stop_token st) {
         }
         std::lock_guard<std::mutex> lock(mutex_);
         if (wanted_ && wanted_->description == job.description && wanted_->width == job.width && wanted_->height == job.height &&
-            wanted_->settings.seed == job.settings.seed && wanted_->settings.spp <= acc_.spp && have_ && have_->description == job.description)
+            wanted_->settings.seed == job.settings.seed && wanted_->settings.spp <= have_spp_ && have_ && have_->description == job.description)
             work_ = false;
     }
 }

@@ -1,11 +1,12 @@
 #pragma once
 // [SECTION] The window's Truth view
-//  - TruthRunner: one worker thread that renders the truth (core/truth/truth.h) of the scene on
-//    screen progressively, in passes of 1, 2, 4, ... samples per pixel up to the target, each
-//    continuing the last (the same bytes as one render of as many), and publishes a frame after
-//    every pass. A scene whose truth reads other values (truth_description), another size or
-//    seed starts over; a higher target continues. Cancel stops the pass under way and keeps the
-//    last finished one. It has its own Session, so the window's stage cache is not touched.
+//  - TruthRunner: one worker thread that asks the truth renderer (core/renderer.h, the same one
+//    `capture --backend truth` and Python use, with its disk cache) for the truth of the scene on
+//    screen progressively (RenderRequest::on_pass: passes of 1, 2, 4, ... samples per pixel up to
+//    the target, each continuing the last) and publishes a frame after every pass. A scene whose
+//    truth reads other values (truth_description), another size or seed starts over; a higher
+//    target continues. Cancel stops the pass under way and keeps the last finished one. It has its
+//    own Session, so the window's stage cache is not touched.
 // The error's colours and figure (error_colors, error_figure) are app/truth_figures.h's.
 // Nothing here needs a window (no GLFW, ImGui or GL), so tests drive it directly.
 #include "core/image.h"
@@ -73,9 +74,9 @@ private:
     std::condition_variable_any cv_;
     mutable std::condition_variable idle_cv_;
     std::optional<Job> wanted_;      // the latest request
-    std::optional<Job> have_;        // what `acc_` holds samples of (description, size, seed)
-    TruthAccumulator acc_;
-    bool work_ = false;              // wanted_ is more than acc_ holds and was not cancelled
+    std::optional<Job> have_;        // what the frame published last is of (description, size, seed)
+    int have_spp_ = 0;               // and its samples
+    bool work_ = false;              // wanted_ is more than have_ holds and was not cancelled
     Status status_;
     std::optional<Published> published_;
     std::atomic<bool> cancel_{false};

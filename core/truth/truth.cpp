@@ -21,6 +21,7 @@
 #include <functional>
 #include <mutex>
 #include <set>
+#include <sstream>
 #include <stdexcept>
 
 namespace mesolab {
@@ -358,14 +359,18 @@ const char* to_string(TruthEnd e) {
 }
 
 // [SECTION] Sampling
-void check_truth_request(const Scene& s, int width, int height, const TruthSettings& st, const std::vector<std::string>& aovs) {
-    if (st.spp < 1) throw InputError("--spp " + std::to_string(st.spp) + ": expected at least 1 sample per pixel");
+void check_truth_settings(const TruthSettings& st, const TruthOptionNames& names) {
+    if (st.spp < 1) throw InputError(std::string(names.spp) + std::to_string(st.spp) + ": expected at least 1 sample per pixel");
     if (st.first < 0 || st.first >= st.spp)
-        throw InputError("--samples " + std::to_string(st.first) + ":" + std::to_string(st.spp) + ": expected a range A:B of samples with 0 <= A < B");
+        throw InputError(std::string(names.samples) + std::to_string(st.first) + ":" + std::to_string(st.spp) + ": expected a range A:B of samples with 0 <= A < B");
     if (st.noise != 0.0 && !(st.noise > 0.0 && st.noise < 1.0))
-        throw InputError("--noise " + strprintf("%g", st.noise) + ": expected a relative noise between 0 and 1 (e.g. 0.01 for 1%)");
+        throw InputError(std::string(names.noise) + strprintf("%g", st.noise) + ": expected a relative noise between 0 and 1 (e.g. 0.01 for 1%)");
     if (!(st.time_limit_s >= 0.0) || !std::isfinite(st.time_limit_s))
-        throw InputError("--time-limit " + strprintf("%g", st.time_limit_s) + ": expected a number of seconds, 0 or more");
+        throw InputError(std::string(names.time_limit) + strprintf("%g", st.time_limit_s) + ": expected seconds above 0 (0: no limit)");
+}
+
+void check_truth_request(const Scene& s, int width, int height, const TruthSettings& st, const std::vector<std::string>& aovs) {
+    check_truth_settings(st);
     if (width < 1 || height < 1 || width > 16384 || height > 16384)
         throw InputError("frame size " + std::to_string(width) + "x" + std::to_string(height) + " is out of range (1..16384 per side)");
     for (const std::string& a : aovs)
@@ -636,7 +641,7 @@ void put_vector(std::string& out, const std::vector<T>& v) {
 }
 
 struct Reader {
-    std::ifstream in;
+    std::istream& in;
     std::string path;
     uint64_t left = 0;  // bytes left in the file
     [[noreturn]] void fail(const std::string& what) const { throw InputError(path + ": " + what); }
@@ -668,7 +673,9 @@ struct Reader {
 };
 }  // namespace
 
-void write_truth_part(const std::string& path, const TruthPart& p) {
+void write_truth_part(const std::string& path, const TruthPart& p) { write_text_atomic(path, truth_part_bytes(p)); }
+
+std::string truth_part_bytes(const TruthPart& p) {
     const TruthAccumulator& a = p.sums;
     std::string out(kPartMagic, 8);
     put_string(out, p.scene);
@@ -676,18 +683,30 @@ void write_truth_part(const std::string& path, const TruthPart& p) {
     put_string(out, p.build);
     put(out, int32_t(a.width)), put(out, int32_t(a.height)), put(out, int32_t(a.first)), put(out, int32_t(a.spp)), put(out, a.seed);
     put_vector(out, a.sum), put_vector(out, a.sum2), put_vector(out, a.exitance), put_vector(out, a.irradiance), put_vector(out, a.normal);
-    write_text_atomic(path, out);
+    return out;
+}
+
+namespace {
+TruthPart read_part(std::istream& in, uint64_t size, const std::string& path);
 }
 
 TruthPart read_truth_part(const std::string& path) {
-    Reader r;
-    r.path = path;
     std::error_code ec;
     const auto size = std::filesystem::file_size(path, ec);
     if (ec) throw InputError(path + ": cannot read it (" + ec.message() + ")");
-    r.left = size;
-    r.in.open(path, std::ios::binary);
-    if (!r.in) throw InputError(path + ": cannot open it");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path + ": cannot open it");
+    return read_part(in, size, path);
+}
+
+TruthPart truth_part_from_bytes(const std::string& bytes, const std::string& name) {
+    std::istringstream in(bytes);
+    return read_part(in, bytes.size(), name);
+}
+
+namespace {
+TruthPart read_part(std::istream& in, uint64_t size, const std::string& path) {
+    Reader r{in, path, size};
     char magic[8];
     if (size < 8 || !r.in.read(magic, 8) || std::memcmp(magic, kPartMagic, 8) != 0)
         r.fail("not a partial truth (written by `mesolab capture --backend truth --samples A:B`)");
@@ -716,6 +735,7 @@ TruthPart read_truth_part(const std::string& path) {
     if (r.left != 0) r.fail(std::to_string(r.left) + " bytes follow the end of the partial truth");
     return p;
 }
+}  // namespace
 
 TruthPart merge_truth_parts(const std::vector<std::pair<std::string, TruthPart>>& named) {
     if (named.empty()) throw InputError("truth merge: no partial truths given");

@@ -261,6 +261,18 @@ Frame render_truth(const Scene& s, const Evaluation& ev, int width, int height, 
                    const std::vector<std::string>& aovs = {}, const std::function<void(const std::string&, double)>& progress = {},
                    const std::atomic<bool>* cancel = nullptr);
 
+// How a user names the sampling options, for errors: the command line's ("--spp ") or Python's
+// ("spp=").
+struct TruthOptionNames {
+    const char* spp = "--spp ";
+    const char* noise = "--noise ";
+    const char* time_limit = "--time-limit ";
+    const char* samples = "--samples ";
+};
+// InputError for spp < 1, a sample range that is empty or starts below 0, a noise target outside
+// (0, 1) and not 0, a time limit below 0: the one check of a truth's sampling.
+void check_truth_settings(const TruthSettings& settings, const TruthOptionNames& names = {});
+
 // InputError for spp < 1, a sample range that is empty or starts below 0, a noise target outside
 // (0, 1), a negative time limit, a size out of range, an AOV the truth does not write or a technique
 // without a truth: what render_truth checks before any work.
@@ -289,7 +301,7 @@ double truth_noise_rel(const Frame& truth);
 // size, seed and sample range, and the build they were made with).
 struct TruthPart {
     std::string scene;  // Scene::name
-    std::string key;    // the truth cache's key (TruthCache::key): what the truth reads, size and seed
+    std::string key;    // the truth cache's key (truth_cache_key): what the truth reads, size and seed
     std::string build;  // truth_build()
     TruthAccumulator sums;
 };
@@ -297,6 +309,9 @@ struct TruthPart {
 void write_truth_part(const std::string& path, const TruthPart& p);
 // InputError naming the file and what is wrong: not a partial truth, truncated, inconsistent sizes.
 TruthPart read_truth_part(const std::string& path);
+// The same as bytes (the truth cache's entries); `name` names them in errors.
+std::string truth_part_bytes(const TruthPart& p);
+TruthPart truth_part_from_bytes(const std::string& bytes, const std::string& name);
 // Joins parts of one truth into one: InputError naming the two parts and what differs when they
 // are of another scene, key, size, seed or build, or when their sample ranges overlap or leave a
 // gap (in any order given; the result runs from the lowest first sample to the highest end).

@@ -184,7 +184,7 @@ TEST(Capture, SecondRenderReusesEveryStage) {
     Workbench wb;
     Scene s = load_preset(source_path("presets/basic/sphere.json"));
     RenderRequest req;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     req.width = req.height = 32;
     const RenderResult first = wb.render(s, req);
     ASSERT_NE(first.eval.run(mesolab::stages::geometry), nullptr);

@@ -238,7 +238,7 @@ TEST(BumpsynthBumpMap, DetailNoiseStaysInTheTableAndNearTheMap) {
 TEST(BumpsynthBumpMap, StagesRunOnlyWhenTheBumpMapIsUsed) {
     Workbench wb;
     RenderRequest req;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     req.width = req.height = 32;
     Scene plain = default_scene("bumpsynth");
     apply_set(plain, "geometry.type", "plane");
@@ -269,7 +269,7 @@ TEST(BumpsynthBumpMap, TextureModeRendersTheMapsOwnNormals) {
     apply_set(s, "bumpsynth.rms_slope", "0.4");
     Workbench wb;
     RenderRequest req;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     const RenderResult r = wb.render(s, req);
     const Image& nrm = r.frame.aov("normal");
     ASSERT_EQ(nrm.width, 64);
@@ -357,7 +357,7 @@ TEST(BumpsynthBumpMap, IndexMapShowsTheSameSurfaceAsMicrogeomsBumpMap) {
     apply_set(b, "bumpsynth.kd", "0.8,0.8,0.8");
     Workbench wb;
     RenderRequest req;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     const Image ig = wb.render(g, req).frame.aov("radiance"), ib = wb.render(b, req).frame.aov("radiance");
     ASSERT_EQ(ig.width, 64);
     ASSERT_EQ(ib.width, 64);

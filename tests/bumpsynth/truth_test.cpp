@@ -44,7 +44,7 @@ const char* kTexture = R"({"mode": "texture", "distance": 3.0, "orbit": [30, -90
 // truth's mean is that within 4 standard errors and 0.5% (the noise CDF G is measured, not exact).
 TEST(BumpsynthTruth, DiffuseBumpsAverageTheCosineOfTheirNdf) {
     const Scene s = scene(R"("ndf": "beckmann", "alpha_x": 0.3, "alpha_y": 0.3, "octaves_max": 4, "ks": [0, 0, 0], "kd": [0.5, 0.5, 0.5])", kOrbit);
-    const Frame f = test::render_uncached(s, test::truth_request(Backend::Truth, 32, 64)).frame;
+    const Frame f = test::render_uncached(s, test::truth_request("truth", 32, 64)).frame;
     const bumpsynth::Ndf ndf = bumpsynth::Ndf::from_lobe(bumpsynth::Lobe::anisotropic(bumpsynth::LobeKind::beckmann, 0.3f, 0.3f), 512);
     double mean_mz = 0.0;
     for (int j = 0; j < ndf.resolution(); ++j)
@@ -69,8 +69,8 @@ TEST(BumpsynthTruth, TheRealTimeSynthesisConvergesToTheTruthAsItsTableGrows) {
     Scene s = scene(R"("ndf": "beckmann", "alpha_x": 0.3, "alpha_y": 0.3, "octaves_max": 3, "ks": [0.5, 0.5, 0.5], "kd": [0.3, 0.3, 0.3])", kTexture,
                     "[30, 0]");
     Workbench wb;
-    wb.set_truth_cache(TruthCache(""));
-    const RenderRequest req = test::truth_request(Backend::Cpu, 64, 16, {"truth_error"});
+    wb.set_truth_cache("");
+    const RenderRequest req = test::truth_request("cpu", 64, 16, {"truth_error"});
     std::vector<TruthComparison> r;
     for (int lut : {16, 4096}) {
         apply_set(s, "bumpsynth.lut_size", std::to_string(lut));
@@ -114,13 +114,13 @@ TEST(BumpsynthTruth, FootprintSplittingKeepsThePlainEstimatorsMean) {
     const Scene s = glossy_bumps();
     constexpr int kSize = 24;
     Workbench wb;
-    wb.set_truth_cache(TruthCache(""));
+    wb.set_truth_cache("");
     Frame plain;
     {
         test::PlainEstimator p;
-        plain = wb.render(s, test::truth_request(Backend::Truth, kSize, 256, {"truth_stderr"}, 11)).frame;
+        plain = wb.render(s, test::truth_request("truth", kSize, 256, {"truth_stderr"}, 11)).frame;
     }
-    const Frame split = wb.render(s, test::truth_request(Backend::Truth, kSize, 64, {"truth_stderr"}, 12)).frame;
+    const Frame split = wb.render(s, test::truth_request("truth", kSize, 64, {"truth_stderr"}, 12)).frame;
     std::vector<double> z;
     for (int y = 0; y < kSize; ++y)
         for (int x = 0; x < kSize; ++x) {
@@ -151,8 +151,8 @@ TEST(BumpsynthTruth, FootprintSplittingIsDeterministicAndItsStandardErrorHonest)
     const Scene s = glossy_bumps();
     constexpr int kSize = 16, kSeeds = 6;
     Workbench wb;  // one for every truth here: the stages once, no truth from the cache
-    wb.set_truth_cache(TruthCache(""));
-    auto truth = [&](uint64_t seed) { return wb.render(s, test::truth_request(Backend::Truth, kSize, 4, {"truth_stderr"}, seed)).frame; };
+    wb.set_truth_cache("");
+    auto truth = [&](uint64_t seed) { return wb.render(s, test::truth_request("truth", kSize, 4, {"truth_stderr"}, seed)).frame; };
     Frame one, four;
     {
         tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);

@@ -46,7 +46,7 @@ bool all_finite(const Frame& f) {
 
 RenderRequest cpu_request(int w, int h) {
     RenderRequest r;
-    r.backend = Backend::Cpu;
+    r.renderer = "cpu";
     r.width = w;
     r.height = h;
     return r;

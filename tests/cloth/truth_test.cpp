@@ -36,7 +36,7 @@ Scene scene(const std::string& material, float sky = 0.f) {
 TEST(ClothTruth, WhiteYarnUnderAUniformSkyIsOne) {
     for (const char* stitch : {"knit", "weave"}) {
         const Scene s = scene(std::string(R"("stitch": ")") + stitch + R"(", "repeat": 3, "color_a": [1, 1, 1], "color_b": [1, 1, 1])", 1.f);
-        const Frame f = test::render_uncached(s, test::truth_request(Backend::Truth, 32, 16)).frame;
+        const Frame f = test::render_uncached(s, test::truth_request("truth", 32, 16)).frame;
         const test::ObjectMean m = test::object_mean(f);
         std::printf("%s: %.5f +- %.5f over %d pixels\n", stitch, m.mean, m.stderr_mean, m.pixels);
         ASSERT_GT(m.pixels, 200) << stitch;
@@ -57,7 +57,7 @@ TEST(ClothTruth, ReadsNoAccuracyKnob) {
 TEST(ClothTruth, RefusesSamplesOnlyAndTooLargeFabrics) {
     Scene s = scene(R"("stitch": "knit", "samples": "cloth/stitch-knit.json")");
     try {
-        test::render_uncached(s, test::truth_request(Backend::Truth, 8, 1));
+        test::render_uncached(s, test::truth_request("truth", 8, 1));
         ADD_FAILURE() << "a samples-only fabric has no truth";
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("cloth.samples"), std::string::npos) << e.what();

@@ -92,9 +92,9 @@ TEST(Gallery, EveryPresetAgreesOnBothBackendsAndMatchesItsScreenshot) {
             for (const std::string& name : Registry::instance().technique(o.technique)->agreement().choices)
                 if (std::find(req.aovs.begin(), req.aovs.end(), name) == req.aovs.end()) req.aovs.push_back(name);
         req.coverage = true;
-        req.backend = Backend::Cpu;
+        req.renderer = "cpu";
         const RenderResult cpu = wb.render(s, req);
-        req.backend = Backend::Gpu;
+        req.renderer = "gpu";
         const RenderResult gpu = wb.render(s, req);
         // Each pixel is held to the tolerances of the technique of the object it shows.
         test::expect_frames_agree(s, cpu.frame, gpu.frame, {"radiance", "normal"});

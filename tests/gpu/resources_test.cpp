@@ -32,7 +32,7 @@ Image solid(float r, float g, float b) {
 // must get a texture of its own content, never the old one's.
 TEST(GpuResources, ANewResultAtAFreedResultsAddressGetsItsOwnTexture) {
     auto ctx = HeadlessContext::create();
-    Renderer r;
+    gpu::Renderer r;
     Image storage = solid(1.f, 0.f, 0.f);
     std::shared_ptr<const Image> first(&storage, [](const Image*) {});
     const std::vector<float> red = read_texture(r.texture(first), 2, 2);

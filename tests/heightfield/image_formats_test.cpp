@@ -99,7 +99,7 @@ TEST(Heightfield, A16BitTiffThroughTheStagesUsesHeightScaleOverTexelSize) {
     apply_set(s, "microgeom.depth=0");
     Workbench wb;
     RenderRequest req;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     const RenderResult r = wb.render(s, req);
     EXPECT_EQ(r.frame.width, kW);
     const auto field = r.eval.get(microgeom::stages::heightfield, 0);

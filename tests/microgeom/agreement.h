@@ -42,12 +42,12 @@ inline Heightfield procedural_field(const char* name, int res, bool periodic = P
 struct DeviceRenders {
     RenderResult cpu, gpu;
 };
-inline DeviceRenders render_on_both_devices(std::initializer_list<const char*> sets, Backend backend) {
+inline DeviceRenders render_on_both_devices(std::initializer_list<const char*> sets, const std::string& backend) {
     Scene s = load_preset(source_path("presets/microgeom/bricks-texture.json"));
     for (const char* kv : sets) apply_set(s, kv);
     Workbench wb;
     RenderRequest req;
-    req.backend = backend;
+    req.renderer = backend;
     req.coverage = true;
     DeviceRenders r;
     r.cpu = wb.render(s, req);

@@ -78,7 +78,7 @@ TEST(CpuGpu, AgreeWithEllipseShadows) {
     const Scene s = preset_with("presets/microgeom/bricks-texture.json", {"microgeom.shadows=ellipse"});
     const auto [cpu, gpu] = expect_agreement(wb, "bricks texture, ellipse", s, true);
     RenderRequest req;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     const Frame exact = wb.render(preset_with("presets/microgeom/bricks-texture.json", {"microgeom.shadows=exact"}), req).frame;
     const double vs_exact = max_difference(cpu.aov("shadow"), exact.aov("shadow"));
     std::printf("[ cpu/gpu ] ellipse vs exact shadow: largest difference %.3f\n", vs_exact);
@@ -117,7 +117,7 @@ TEST(CpuGpu, AgreeWithBlinnPhong) {
     apply_set(s, "camera.orbit=45,210");
     const auto [cpu, gpu] = expect_agreement(wb, "bricks texture, blinn-phong", s, true);
     RenderRequest req;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     Scene lambert = s;
     apply_set(lambert, "microgeom.brdf=lambert");
     const double vs_lambert = max_difference(cpu.aov("direct"), wb.render(lambert, req).frame.aov("direct"));
@@ -135,7 +135,7 @@ TEST(CpuGpu, AgreeWithAPointLight) {
     // The branch is taken: on a flat field a directional light gives a uniform direct AOV, the
     // point light (distance and angle varying over the plane) does not.
     RenderRequest req;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     const Frame flat = wb.render(preset_with("presets/microgeom/bricks-texture.json", {"light.type=point", "light.position=0.4,-0.3,0.8", "light.intensity=2",
                                                                                        "microgeom.heightfield=flat", "microgeom.resolution=32"}),
                                  req).frame;

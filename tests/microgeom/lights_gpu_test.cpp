@@ -232,7 +232,7 @@ TEST(LightsGpu, BrdfLevelOfDetailOnDeviceGpuMatchesDeviceCpu) {
     if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     // The BRDF level shades a smooth sphere.
     const test::DeviceRenders r = test::render_on_both_devices(
-        {"microgeom.resolution=32", "microgeom.lod=brdf", "microgeom.brdf_resolution=5", "camera.mode=orbit", "geometry.type=sphere"}, Backend::Cpu);
+        {"microgeom.resolution=32", "microgeom.lod=brdf", "microgeom.brdf_resolution=5", "camera.mode=orbit", "geometry.type=sphere"}, "cpu");
     const RenderResult &cpu = r.cpu, &gpu = r.gpu;
     test::expect_ran_on_the_gpu(gpu, {microgeom::stages::brdf});
     const SimulatedBrdf* bc = cpu.eval.get(microgeom::stages::brdf, 0).get();
@@ -297,7 +297,7 @@ TEST(LightsGpu, ChunkedDirectionsGiveTheSameResults) {
 TEST(LightsGpu, EveryPrecomputeRunsOnTheGpuThroughTheStages) {
     if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
     const test::DeviceRenders r = test::render_on_both_devices(
-        {"microgeom.resolution=48", "microgeom.curvature_u=40", "microgeom.curvature_v=-20", "microgeom.shadows=ellipse"}, Backend::Cpu);
+        {"microgeom.resolution=48", "microgeom.curvature_u=40", "microgeom.curvature_v=-20", "microgeom.shadows=ellipse"}, "cpu");
     test::expect_ran_on_the_gpu(r.gpu, {microgeom::stages::visibility, microgeom::stages::importance, microgeom::stages::ellipses_curved, microgeom::stages::ellipses,
                                         microgeom::stages::scatter, microgeom::stages::scatter_env});
     test::expect_frames_agree(r.cpu.frame, r.gpu.frame, {"radiance", "direct", "indirect", "shadow"}, test::agreement_of("microgeom"));

@@ -98,7 +98,7 @@ TEST(Lod, BumpImageAverageEqualsTheSimulatedBrdf) {
             Scene bump = texture_scene("bump", field, 32), brdf = texture_scene("brdf", field, 32);
             for (Scene* s : {&bump, &brdf}) apply_set(*s, "light.direction", light);
             RenderRequest req;
-            req.backend = Backend::Cpu;
+            req.renderer = "cpu";
             const Frame fa = wb.render(bump, req).frame, fb = wb.render(brdf, req).frame;
             const Image &a = fa.aov("radiance"), &b = fb.aov("radiance");
             const bool node = std::string(light).rfind("38.57", 0) == 0;
@@ -125,7 +125,7 @@ TEST(Lod, GeometryAndBumpAgreeOnAverage) {
     Scene geo = bump;
     for (auto& o : bump.objects) o.material.set("lod", std::string("bump"));
     RenderRequest req;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     req.width = req.height = 256;
     const Frame fa = wb.render(geo, req).frame, fb = wb.render(bump, req).frame;
     const Image &a = fa.aov("radiance"), &b = fb.aov("radiance"), &na = fa.aov("normal"), &nb = fb.aov("normal");

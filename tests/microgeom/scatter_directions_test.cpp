@@ -47,9 +47,9 @@ Scene small_sphere() {
     return s;
 }
 
-RenderResult render(Workbench& wb, const Scene& s, Backend backend = Backend::Cpu) {
+RenderResult render(Workbench& wb, const Scene& s, const std::string& backend = "cpu") {
     RenderRequest req;
-    req.backend = backend;
+    req.renderer = backend;
     req.width = req.height = 64;
     return wb.render(s, req);
 }

@@ -110,7 +110,7 @@ TEST(ScatterGpu, RunsFromAWorkerThreadBesideARenderingThread) {
     Scene scene = default_scene("basic");
     Workbench wb;
     RenderRequest req;
-    req.backend = Backend::Gpu;
+    req.renderer = "gpu";
     req.width = req.height = 64;
     const RenderResult r = wb.render(scene, req);
     worker.join();
@@ -124,7 +124,7 @@ TEST(ScatterGpu, RunsFromAWorkerThreadBesideARenderingThread) {
 // device = cpu renders, with the GPU backend drawing afterwards on its own context.
 TEST(ScatterGpu, DeviceGpuThroughTheStagesMatchesDeviceCpu) {
     if (!test::have_compute_gl()) GTEST_SKIP() << "no OpenGL context";
-    const test::DeviceRenders r = test::render_on_both_devices({"microgeom.resolution=64"}, Backend::Gpu);
+    const test::DeviceRenders r = test::render_on_both_devices({"microgeom.resolution=64"}, "gpu");
     test::expect_ran_on_the_gpu(r.gpu, {microgeom::stages::visibility, microgeom::stages::scatter, microgeom::stages::scatter_env});
     test::expect_frames_agree(r.cpu.frame, r.gpu.frame, {"radiance", "direct", "indirect", "shadow"}, test::agreement_of("microgeom"));
 }

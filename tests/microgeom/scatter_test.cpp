@@ -80,7 +80,7 @@ TEST(FlatField, NoShadowsNoIndirectAnalyticLambert) {
         apply_set(s, set);
     Workbench wb;
     RenderRequest req;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     const Frame f = wb.render(s, req).frame;
     ASSERT_EQ(f.width, 32);
     const vec3 rho(0.5f, 0.4f, 0.3f), env(0.2f, 0.1f, 0.05f);
@@ -117,11 +117,11 @@ TEST(FlatField, BlinnPhongAnalyticLambertPlusLobe) {
         const glm::dvec3 direct = (rho / double(kPi) + lobe) * E * wi.z, indirect = rho * env;
         lobe_ratio_max = std::max(lobe_ratio_max, lobe.x / (rho.x / double(kPi)));
         lobe_ratio_min = std::min(lobe_ratio_min, lobe.x / (rho.x / double(kPi)));
-        for (Backend backend : {Backend::Cpu, Backend::Gpu}) {
-            SCOPED_TRACE(std::string(backend == Backend::Cpu ? "cpu" : "gpu") + " view " + std::to_string(view.x) + "," + std::to_string(view.y));
-            const double tol = backend == Backend::Cpu ? 1e-5 : 1e-4;
+        for (std::string backend : {"cpu", "gpu"}) {
+            SCOPED_TRACE(std::string(backend == std::string("cpu") ? "cpu" : "gpu") + " view " + std::to_string(view.x) + "," + std::to_string(view.y));
+            const double tol = backend == std::string("cpu") ? 1e-5 : 1e-4;
             RenderRequest req;
-            req.backend = backend;
+            req.renderer = backend;
             const Frame f = wb.render(s, req).frame;
             ASSERT_EQ(f.width, 16);
             double worst = 0;
@@ -133,7 +133,7 @@ TEST(FlatField, BlinnPhongAnalyticLambertPlusLobe) {
                         ASSERT_NEAR(f.aov("direct").at(x, y)[c], direct[c], tol * direct[c]) << x << "," << y;
                         ASSERT_NEAR(f.aov("indirect").at(x, y)[c], indirect[c], tol * indirect[c]) << x << "," << y;
                     }
-            std::printf("[ blinn-phong ] %s view (%g, %g): L = %.5f %.5f %.5f, worst relative error %.2e\n", backend == Backend::Cpu ? "cpu" : "gpu",
+            std::printf("[ blinn-phong ] %s view (%g, %g): L = %.5f %.5f %.5f, worst relative error %.2e\n", backend == std::string("cpu") ? "cpu" : "gpu",
                         double(view.x), double(view.y), direct.x + indirect.x, direct.y + indirect.y, direct.z + indirect.z, worst);
         }
     }
@@ -160,7 +160,7 @@ TEST(HardCases, StayFinite) {
         for (const char* set : c.sets)
             if (set) apply_set(s, set);
         RenderRequest req;
-        req.backend = Backend::Cpu;
+        req.renderer = "cpu";
         const Frame f = wb.render(s, req).frame;
         for (const char* aov : {"radiance", "normal", "direct", "indirect", "shadow"}) {
             ASSERT_TRUE(f.has(aov)) << aov << " with " << c.sets[0];
@@ -184,7 +184,7 @@ TEST(HardCases, SpikeOfOneTexel) {
     apply_set(s, "light.direction=60,0");
     Workbench wb;
     RenderRequest req;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     const Frame f = wb.render(s, req).frame;
     // The spike casts a shadow towards -x: texels left of it, in its row, see less light.
     EXPECT_LT(f.aov("shadow").at(3, 7)[0], 0.5f);
@@ -232,7 +232,7 @@ TEST(Stages, ChangingTheCurvatureNeverRecomputesVisibility) {
     const uint64_t vis = g.key(s, microgeom::stages::visibility), fits = g.key(s, microgeom::stages::ellipses_curved);
     Workbench wb;
     RenderRequest req;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     std::vector<float> prev = wb.render(s, req).frame.aov("radiance").data;
     for (const char* set : {"microgeom.curvature_u=-43", "microgeom.curvature_v=29", "microgeom.curvature_u=0", "microgeom.curvature_v=-11"}) {
         SCOPED_TRACE(set);
@@ -284,9 +284,9 @@ TEST(CpuGpu, EveryLightIsScattered) {
     a["lights"].erase(1);
     b["lights"].erase(0);
     Workbench wb;
-    for (Backend backend : {Backend::Cpu, Backend::Gpu}) {
+    for (std::string backend : {"cpu", "gpu"}) {
         RenderRequest req;
-        req.backend = backend;
+        req.renderer = backend;
         auto indirect = [&](const json& j) { return wb.render(scene_from_json(j, "test", "."), req).frame.aov("indirect").data; };
         const std::vector<float> both = indirect(two), only_a = indirect(a), only_b = indirect(b);
         ASSERT_EQ(both.size(), only_a.size());
@@ -296,7 +296,7 @@ TEST(CpuGpu, EveryLightIsScattered) {
             max_b = std::max(max_b, double(only_b[k]));
         }
         EXPECT_GT(max_b, 1e-3) << "the second light alone must scatter visibly";
-        EXPECT_LT(max_err, 1e-5) << (backend == Backend::Cpu ? "cpu" : "gpu");
+        EXPECT_LT(max_err, 1e-5) << (backend == std::string("cpu") ? "cpu" : "gpu");
     }
     const auto [cpu, gpu] = render_cpu_and_gpu(wb, scene_from_json(two, "test", "."));
     expect_frames_agree(cpu, gpu, {"radiance", "direct", "indirect", "shadow"}, {.tight = 1e-4, .frac_tight = 1.0, .loose = 1e-4, .frac_loose = 1.0, .interior_max = 1e-4});
@@ -387,7 +387,7 @@ TEST(Curvature, ZeroReproducesTheFlatResultExactly) {
     apply_set(s, "microgeom.resolution=24");
     Workbench wb;
     RenderRequest req;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     const RenderResult flat = wb.render(s, req);
     ASSERT_NE(flat.eval.run(microgeom::stages::importance), nullptr);
     EXPECT_EQ(flat.eval.run(microgeom::stages::importance)->status, StageStatus::Skipped);
@@ -469,12 +469,12 @@ TEST(Curvature, FoldingIsFlaggedNotHidden) {
 // exactly the number of 1s in the `folded` AOV (values 0 or 1 only), on both backends; a gentle
 // bend and curvature 0 give no warning and an all-zero AOV.
 TEST(Curvature, FoldOverIsWarnedAndMaskedThroughTheStages) {
-    auto render = [](Workbench& wb, Backend backend, const char* curvature) {
+    auto render = [](Workbench& wb, const std::string& backend, const char* curvature) {
         Scene s = default_scene("microgeom");
         for (const char* set : {"camera.mode=texture", "geometry.type=plane", "microgeom.heightfield=bricks", "microgeom.resolution=32"}) apply_set(s, set);
         apply_set(s, curvature);
         RenderRequest req;
-        req.backend = backend;
+        req.renderer = backend;
         return wb.render(s, req);
     };
     auto fold_warnings = [](const Evaluation& ev) {
@@ -485,8 +485,8 @@ TEST(Curvature, FoldOverIsWarnedAndMaskedThroughTheStages) {
         return found;
     };
     Workbench wb;
-    for (Backend backend : {Backend::Cpu, Backend::Gpu}) {
-        SCOPED_TRACE(backend == Backend::Cpu ? "cpu" : "gpu");
+    for (std::string backend : {"cpu", "gpu"}) {
+        SCOPED_TRACE(backend == std::string("cpu") ? "cpu" : "gpu");
         const RenderResult bent = render(wb, backend, "microgeom.curvature_u=200");
         const std::vector<std::string> warnings = fold_warnings(bent.eval);
         ASSERT_EQ(warnings.size(), 1u);
@@ -503,7 +503,7 @@ TEST(Curvature, FoldOverIsWarnedAndMaskedThroughTheStages) {
         const size_t at = warnings[0].find(" at ");
         ASSERT_NE(at, std::string::npos);
         ASSERT_EQ(std::sscanf(warnings[0].c_str() + at, " at %zu of %zu texels", &count, &texels), 2) << warnings[0];
-        std::printf("[ fold-over ] %s: %zu of %zu texels folded; warning: %s\n", backend == Backend::Cpu ? "cpu" : "gpu", ones, folded.data.size(),
+        std::printf("[ fold-over ] %s: %zu of %zu texels folded; warning: %s\n", backend == std::string("cpu") ? "cpu" : "gpu", ones, folded.data.size(),
                     warnings[0].c_str());
         EXPECT_EQ(texels, 32u * 32u);
         EXPECT_EQ(count, ones) << "the warning and the AOV disagree";

@@ -3,7 +3,7 @@
 // shape under a uniform sky is 1 (every bounce kept); the surface passes through the texel
 // centres; the real-time scattering converges towards the truth on a V-groove as its depth grows
 // (the paper's claim), to a floor the page states; the truth reads no accuracy knob.
-#include "app/truth_cache.h"
+#include "core/truth/cache.h"
 #include "app/workbench.h"
 #include "core/error.h"
 #include "core/heightfield/heightfield.h"
@@ -32,7 +32,7 @@ Scene scene(const std::string& material, const std::string& lights, float env, c
     return scene_from_json(nlohmann::json::parse(text), "microgeom-truth", test::source_path("presets"));
 }
 
-RenderResult render(const Scene& s, Backend backend, int size, int spp, std::vector<std::string> aovs = {}) {
+RenderResult render(const Scene& s, const std::string& backend, int size, int spp, std::vector<std::string> aovs = {}) {
     return test::render_uncached(s, test::truth_request(backend, size, spp, std::move(aovs)));
 }
 
@@ -72,7 +72,7 @@ TEST(MicrogeomTruth, TheSurfacePassesThroughTheTexelCentres) {
 TEST(MicrogeomTruth, AFlatFieldIsLambertsClosedForm) {
     const Scene s = scene(R"("heightfield": "gaussian", "resolution": 16, "height_scale": 0, "albedo": [0.5, 0.25, 0.125])",
                           R"([{"type": "directional", "direction": [60, 30], "intensity": 2, "color": [1, 1, 1]}])", 0.f, "[20, -60]");
-    const Frame f = render(s, Backend::Truth, 32, 2).frame;
+    const Frame f = render(s, "truth", 32, 2).frame;
     EXPECT_GT(test::expect_object_radiance(f, vec3(0.5f, 0.25f, 0.125f) / kPi, 1e-6f), 500);  // E cos θ = 2 x 0.5
 }
 
@@ -83,7 +83,7 @@ TEST(MicrogeomTruth, AWhiteFieldOfAnyShapeUnderAUniformSkyIsOne) {
     for (const char* field : {R"("heightfield": "vgrooves", "resolution": 32, "vgroove_angle": 60)",
                               R"("heightfield": "gaussian", "resolution": 32, "rms_slope": 1.5, "correlation": 2)"}) {
         const Scene s = scene(std::string(field) + R"(, "albedo": [1, 1, 1], "tiling": 2)", "[]", 1.f, "[40, -60]");
-        const test::ObjectMean m = test::object_mean(render(s, Backend::Truth, 32, 16, {"truth_stderr"}).frame);
+        const test::ObjectMean m = test::object_mean(render(s, "truth", 32, 16, {"truth_stderr"}).frame);
         ASSERT_GT(m.pixels, 300) << field;
         const double mean = m.mean, se_mean = m.stderr_mean;
         std::printf("%s: mean %.5f, standard error %.5f\n", field, mean, se_mean);
@@ -99,8 +99,8 @@ TEST(MicrogeomTruth, AWhiteFieldOfAnyShapeUnderAUniformSkyIsOne) {
 TEST(MicrogeomTruth, ScatteringConvergesTowardsTheTruthOnAVGroove) {
     Scene s = scene(R"("heightfield": "vgrooves", "resolution": 32, "albedo": [0.8, 0.8, 0.8], "tiling": 1)", "[]", 1.f);
     Workbench wb;  // one truth for every depth
-    wb.set_truth_cache(TruthCache(""));
-    const RenderRequest req = test::truth_request(Backend::Cpu, 48, 64, {"truth_error"});
+    wb.set_truth_cache("");
+    const RenderRequest req = test::truth_request("cpu", 48, 64, {"truth_error"});
     std::vector<double> err;
     for (int depth : {0, 1, 2, 4}) {
         apply_set(s, "microgeom.depth", std::to_string(depth));
@@ -126,7 +126,7 @@ TEST(MicrogeomTruth, ReadsNoAccuracyKnobAndRefusesAMeshBase) {
     apply_set(mesh, "geometry.type", "mesh");
     apply_set(mesh, "geometry.path", test::source_path("presets/translucency/meshes/stanford-bunny.obj"));
     try {
-        render(mesh, Backend::Truth, 8, 1);
+        render(mesh, "truth", 8, 1);
         ADD_FAILURE() << "a mesh base has no truth";
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("procedural base"), std::string::npos) << e.what();
@@ -166,14 +166,14 @@ TEST(MicrogeomTruth, TextureModeTexelsSeeTheirNeighboursAcrossTheBorder) {
     Scene flat = scene(R"("heightfield": "gaussian", "resolution": 16, "height_scale": 0, "albedo": [0.5, 0.5, 0.5])",
                        R"([{"type": "directional", "direction": [60, 30], "intensity": 2, "color": [1, 1, 1]}])", 0.f);
     apply_set(flat, "camera.mode", "texture");
-    const RenderResult f = render(flat, Backend::Truth, 64, 2);
+    const RenderResult f = render(flat, "truth", 64, 2);
     ASSERT_EQ(f.frame.width, 16);  // the field's own size, as the real-time texture mode
     for (int y = 0; y < 16; ++y)
         for (int x = 0; x < 16; ++x) EXPECT_NEAR(f.frame.aov("radiance").at(x, y)[0], 0.5f / kPi, 1e-6f) << x << "," << y;
 
     Scene grooves = scene(R"("heightfield": "vgrooves", "resolution": 32, "albedo": [0.8, 0.8, 0.8])", "[]", 1.f);
     apply_set(grooves, "camera.mode", "texture");
-    const Frame g = render(grooves, Backend::Truth, 32, 256, {"truth_stderr"}).frame;
+    const Frame g = render(grooves, "truth", 32, 256, {"truth_stderr"}).frame;
     ASSERT_EQ(g.width, 32);
     for (int phase = 0; phase < 8; ++phase) {
         double border = 0, inner = 0, var = 0;
@@ -189,7 +189,7 @@ TEST(MicrogeomTruth, TextureModeTexelsSeeTheirNeighboursAcrossTheBorder) {
     // Seen from above, texel by texel, the scattering converges onto the truth: at depth 4 the
     // real-time texture is within the truth's noise (measured: 1.2% against a noise of 1.0%).
     apply_set(grooves, "microgeom.depth", "4");
-    const RenderResult rt = render(grooves, Backend::Cpu, 32, 256, {"truth_error"});
+    const RenderResult rt = render(grooves, "cpu", 32, 256, {"truth_error"});
     ASSERT_TRUE(rt.truth);
     std::printf("texture mode, depth 4: rmse_rel %.4f, truth noise %.4f\n", rt.truth->rmse_rel, rt.truth->noise_rel);
     EXPECT_TRUE(rt.truth->below_noise);

@@ -225,7 +225,7 @@ TEST(VisibilityKept, StagesRenderTheSameFrameWhetherSiIsKeptOrNot) {
         for (const char* set : {"microgeom.resolution=64", "microgeom.device=gpu"}) apply_set(scene, set);
         Workbench wb;  // a cache of its own: S_i computed anew
         RenderRequest req;
-        req.backend = Backend::Cpu;
+        req.renderer = "cpu";
         RenderResult r = wb.render(scene, req);
         const Evaluation ev = wb.evaluate(scene, {microgeom::stages::visibility});
         EXPECT_EQ(bool(ev.get(microgeom::stages::visibility, 0)->device), k == gpu::KeepOnGpu::Always);

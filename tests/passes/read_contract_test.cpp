@@ -46,11 +46,11 @@ TEST(ReadContract, IsCheckedInEveryTestRun) { EXPECT_TRUE(check_reads_by_default
 
 TEST(ReadContract, AFrameStepReadingAnUndeclaredKeyIsRefusedOnBothPaths) {
     const Scene s = probe_scene();
-    for (Backend b : {Backend::Cpu, Backend::Gpu}) {
-        SCOPED_TRACE(b == Backend::Cpu ? "cpu" : "gpu");
+    for (std::string b : {"cpu", "gpu"}) {
+        SCOPED_TRACE(b == "cpu" ? "cpu" : "gpu");
         Workbench wb;
         RenderRequest req;
-        req.backend = b;
+        req.renderer = b;
         req.width = req.height = 32;
         EXPECT_NO_THROW(wb.render(s, req)) << "declared reads pass";
         wb.forget_frame_steps();
@@ -64,7 +64,7 @@ TEST(ReadContract, AFrameStepsReadOnTbbWorkerThreadsIsRefused) {
     const Scene s = probe_scene();
     Workbench wb;
     RenderRequest req;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     req.width = req.height = 32;
     SneakFor sneak(Sneak::InStepWorkers);
     const std::string msg = refusal([&] { wb.render(s, req); });

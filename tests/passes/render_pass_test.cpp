@@ -91,8 +91,8 @@ TEST(RenderPass, AFrameHoldsRadianceAndTheRequestedAovsOnly) {
     RenderRequest req;
     req.width = req.height = 48;
     req.aovs = {"shadow"};
-    for (Backend b : {Backend::Cpu, Backend::Gpu}) {
-        req.backend = b;
+    for (std::string b : {"cpu", "gpu"}) {
+        req.renderer = b;
         const Frame f = wb.render(s, req).frame;
         ASSERT_EQ(f.layout.size(), 2u);
         EXPECT_EQ(f.layout[0].name, "radiance");
@@ -140,7 +140,7 @@ TEST(RenderPass, EveryTechniqueAndEveryAovStaysWithinTheDrawBuffers) {
 
     // Forced into batches of two attachments, the GPU frame is the same, byte for byte.
     wb.gpu().set_max_attachments(2);
-    req.backend = Backend::Gpu;
+    req.renderer = "gpu";
     const Frame batched = wb.render(s, req).frame;
     EXPECT_EQ(wb.gpu().last_batches(), int((req.aovs.size() + 1) / 2));
     for (const auto& a : req.aovs) EXPECT_EQ(batched.aov(a).data, gpu.aov(a).data) << a;
@@ -180,8 +180,8 @@ TEST(FrameSteps, AreReusedWhileTheirInputsHold) {
     Scene s = probe_scene();
     RenderRequest req;
     req.width = req.height = 64;
-    for (Backend b : {Backend::Cpu, Backend::Gpu}) {
-        req.backend = b;
+    for (std::string b : {"cpu", "gpu"}) {
+        req.renderer = b;
         const Frame first = wb.render(s, req).frame;
         Scene moved = s;
         apply_set(moved, "camera.orbit=40,10");  // not an input of either step
@@ -210,21 +210,21 @@ TEST(FrameSteps, AreTimedAsTheirOwnRows) {
     const Scene s = probe_scene();
     RenderRequest req;
     req.width = req.height = 32;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     wb.render(s, req);
     TimingStat st;
     EXPECT_TRUE(wb.session().profiler().find("frame.cpu/step.probe.illumination", st));
     EXPECT_TRUE(wb.session().profiler().find("frame.cpu/step.probe.blurred", st));
-    req.backend = Backend::Gpu;
+    req.renderer = "gpu";
     wb.render(s, req);
     EXPECT_TRUE(wb.session().profiler().find("frame.gpu/step.probe.illumination", st));
 }
 
 TEST(FrameSteps, BenchAndTheCaptureSidecarListThem) {
     TempDirForPasses dir;
-    BenchOptions b;
-    b.tables = {"probe"};
-    b.repeat = 2;
+    BenchCommand b;
+    b.run.tables = {"probe"};
+    b.run.repeat = 2;
     b.out = dir / "bench.md";
     ASSERT_EQ(run_bench(b), 0);
     const std::string md = test::slurp(dir / "bench.md");
@@ -255,7 +255,7 @@ TEST(GpuTimings, AFramesTimeIsTheSumOfItsStepsAndPasses) {
     const Scene s = probe_scene();
     RenderRequest req;
     req.width = req.height = 48;
-    req.backend = Backend::Gpu;
+    req.renderer = "gpu";
     wb.gpu().set_pass_timing(true);
     wb.render(s, req);
     wb.forget_frame_steps();
@@ -285,27 +285,27 @@ TEST(GpuTimings, AFramesTimeIsTheSumOfItsStepsAndPasses) {
 // --update-pages (whole tables) refuses them.
 TEST(GpuTimings, BenchMeasuresOnlyTheRowsAndColumnsAskedFor) {
     TempDirForPasses dir;
-    BenchOptions b;
-    b.tables = {"basic"};  // three rows (sphere 64, sphere 512, torus 256), three columns
-    b.repeat = 1;
-    b.backend = "cpu";
+    BenchCommand b;
+    b.run.tables = {"basic"};  // three rows (sphere 64, sphere 512, torus 256), three columns
+    b.run.repeat = 1;
+    b.run.backend = "cpu";
     b.format = "json";
-    b.rows = {"sphere 64"};
-    b.columns = {"tessellate"};
+    b.run.rows = {"sphere 64"};
+    b.run.columns = {"tessellate"};
     b.out = dir / "bench.json";
     ASSERT_EQ(run_bench(b), 0);
     const json j = json::parse(test::slurp(dir / "bench.json"));
     ASSERT_EQ(j["cells"].size(), 1u) << j.dump();
     EXPECT_EQ(j["cells"][0]["row"], "sphere 64");
     EXPECT_EQ(j["cells"][0]["column"], "tessellate");
-    b.rows = {"no such row"};
+    b.run.rows = {"no such row"};
     try {
         run_bench(b);
         ADD_FAILURE() << "an unmatched --row was accepted";
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("'torus 256'"), std::string::npos) << e.what();
     }
-    b.rows = {"sphere 64"};
+    b.run.rows = {"sphere 64"};
     b.update_pages = true;
     EXPECT_THROW(run_bench(b), InputError);
 }
@@ -321,10 +321,10 @@ TEST(GpuTimings, PagesKeepAnotherMachinesFiguresBesideThisOnes) {
         "cells": [{"table": "probe", "row": "sphere", "column": "frame 64x64", "device": "gpu", "median_ms": 0.25, "min_ms": 0.2, "max_ms": 0.3, "gpu_time_ms": 0.05},
                   {"table": "probe", "row": "sphere", "column": "frame 64x64", "step": "probe.blurred", "device": "gpu", "median_ms": 0.01, "min_ms": 0.01, "max_ms": 0.02},
                   {"table": "elsewhere", "row": "x", "column": "y", "device": "cpu", "median_ms": 1, "min_ms": 1, "max_ms": 1}]})");
-    BenchOptions b;
-    b.tables = {"probe"};
-    b.repeat = 1;
-    b.backend = "cpu";
+    BenchCommand b;
+    b.run.tables = {"probe"};
+    b.run.repeat = 1;
+    b.run.backend = "cpu";
     b.update_pages = true;
     b.pages_root = dir.path.string();
     for (int run = 0; run < 2; ++run) {
@@ -356,7 +356,7 @@ TEST(GpuTimings, AFailedFrameLeavesTheTimelineClean) {
     while (bad.lights.size() < 9) bad.lights.push_back(bad.lights.front());
     RenderRequest req;
     req.width = req.height = 32;
-    req.backend = Backend::Gpu;
+    req.renderer = "gpu";
     EXPECT_THROW(wb.render(bad, req), InputError);
     const RenderResult r = wb.render(default_scene("basic"), req);
     EXPECT_TRUE(std::isfinite(r.gpu_ms)) << r.gpu_ms;

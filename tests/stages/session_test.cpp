@@ -58,7 +58,7 @@ TEST(Sessions, TwoSessionsOnTwoThreadsGiveTheSameBytesAsEachAlone) {
     apply_set(b, "bumpsynth.lut_size=64");
     apply_set(b, "bumpsynth.ndf_resolution=64");
     RenderRequest req;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     req.width = 96;
     req.height = 64;
     Frame alone_a, alone_b;
@@ -93,7 +93,7 @@ TEST(Sessions, TwoSessionsOnTwoThreadsRenderTheSameGpuFramesAsEachAlone) {
     apply_set(b, "microgeom.resolution=16");
     apply_set(b, "microgeom.directions=32");
     RenderRequest req;
-    req.backend = Backend::Gpu;
+    req.renderer = "gpu";
     req.width = 96;
     req.height = 64;
     Frame alone_a, alone_b;
@@ -308,7 +308,7 @@ TEST(Memory, AFrameAboveTheBudgetStopsBeforeItIsAllocated) {
     Workbench wb;
     wb.session().set_memory_limit(64ull << 20);
     RenderRequest req;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     req.width = req.height = 4096;  // 16.8 M pixels: over 800 MB for the G-buffer alone
     try {
         wb.render(default_scene("basic"), req);

@@ -23,9 +23,9 @@ inline std::pair<Frame, Frame> render_cpu_and_gpu(Workbench& wb, const Scene& s,
     req.coverage = true;
     if (width > 0) req.width = width;
     if (height > 0) req.height = height;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     Frame cpu = wb.render(s, req).frame;
-    req.backend = Backend::Gpu;
+    req.renderer = "gpu";
     Frame gpu = wb.render(s, req).frame;
     return {std::move(cpu), std::move(gpu)};
 }

@@ -1,7 +1,7 @@
 #pragma once
 // Helpers for tests of the truth (core/truth/truth.h): which pixels show an object, and the mean
 // radiance over them with its standard error.
-#include "app/truth_cache.h"
+#include "core/truth/cache.h"
 #include "app/workbench.h"
 #include "core/render.h"
 #include "core/scene.h"
@@ -20,9 +20,9 @@
 namespace mesolab::test {
 
 // A request of `size` x `size` on `backend` with a truth of `spp` samples and `seed`.
-inline RenderRequest truth_request(Backend backend, int size, int spp, std::vector<std::string> aovs = {}, uint64_t seed = 1) {
+inline RenderRequest truth_request(const std::string& backend, int size, int spp, std::vector<std::string> aovs = {}, uint64_t seed = 1) {
     RenderRequest req;
-    req.backend = backend;
+    req.renderer = backend;
     req.width = req.height = size;
     req.truth.spp = spp;
     req.truth.seed = seed;
@@ -34,7 +34,7 @@ inline RenderRequest truth_request(Backend backend, int size, int spp, std::vect
 // another's truth from the cache).
 inline RenderResult render_uncached(const Scene& s, const RenderRequest& req) {
     Workbench wb;
-    wb.set_truth_cache(TruthCache(""));
+    wb.set_truth_cache("");
     return wb.render(s, req);
 }
 

@@ -144,13 +144,13 @@ TEST(TranslucencyCpuGpu, AgreeAboveSixtyFiveThousandVertices) {
     req.width = 160, req.height = 120;
     req.aovs = {"radiance", "global"};
     req.coverage = true;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     const RenderResult cpu = wb.render(s, req);
     const auto F = cpu.eval.get(translucency::stages::factors, 0);
     ASSERT_TRUE(F);
     ASSERT_GT(F->n, 65536);
     ASSERT_EQ(F->col_hi.size(), F->pairs());
-    req.backend = Backend::Gpu;
+    req.renderer = "gpu";
     const Frame gpu = wb.render(s, req).frame;
     test::expect_frames_agree(cpu.frame, gpu, {"radiance", "global"}, test::agreement_of("translucency"));
 }
@@ -189,7 +189,7 @@ TEST(TranslucencyCpuGpu, PartsShownAfterRadianceOnlyFramesAreCurrent) {
     Scene s = small_sphere();
     RenderRequest req;
     req.width = 160, req.height = 120;
-    req.backend = Backend::Gpu;
+    req.renderer = "gpu";
     req.aovs = {"radiance"};
     wb.render(s, req);
     apply_set(s, "light.direction", "40,120");  // the steps rerun, for radiance alone
@@ -198,7 +198,7 @@ TEST(TranslucencyCpuGpu, PartsShownAfterRadianceOnlyFramesAreCurrent) {
     req.coverage = true;
     const RenderResult gpu = wb.render(s, req);
     for (const auto& st : gpu.frame.steps) EXPECT_EQ(st.status, StageStatus::Cached) << st.name;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     const Frame cpu = wb.render(s, req).frame;
     test::expect_frames_agree(cpu, gpu.frame, {"radiance", "irradiance", "local", "global"}, test::agreement_of("translucency"));
 }
@@ -208,7 +208,7 @@ TEST(TranslucencyStages, MovingALightRecomputesNoStageAndRerunsTheFramePasses) {
     Workbench wb;
     Scene s = small_sphere();
     RenderRequest req;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     req.width = req.height = 64;
     const RenderResult first = wb.render(s, req);
     for (const StageName& st : std::vector<StageName>{translucency::stages::mesh, translucency::stages::atlas, translucency::stages::kernels, translucency::stages::factors, translucency::stages::blend,
@@ -248,7 +248,7 @@ TEST(TranslucencyAccuracy, BlendingBringsTheRadiosityCloserToTheReferenceOnASpot
     apply_set(s, "camera.mode", "texture");
     apply_set(s, "translucency.compare", "true");
     RenderRequest req;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     req.aovs = {"radiosity", "reference", "error"};
     const Frame blended = wb.render(s, req).frame;
     apply_set(s, "translucency.blend", "false");
@@ -331,7 +331,7 @@ TEST(TranslucencyHardCases, BadSettingsAreErrorsNamingTheKey) {
     apply_set(b, "translucency.atlas_size", "128");
     apply_set(b, "translucency.albedo_map", test::source_path("presets/basic/maps/sky.exr"));
     RenderRequest req;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     req.width = req.height = 32;
     try {
         wb.render(b, req);
@@ -349,7 +349,7 @@ TEST(TranslucencyTexture, AlbedoMapAndVeinsScaleTheRadianceNotTheRadiosity) {
     Scene s = spot(256);
     apply_set(s, "camera.mode", "texture");
     RenderRequest req;
-    req.backend = Backend::Cpu;
+    req.renderer = "cpu";
     req.aovs = {"radiosity"};
     const RenderResult plain = wb.render(s, req);
     EXPECT_EQ(plain.eval.run(translucency::stages::albedo)->status, StageStatus::Skipped);

@@ -319,7 +319,7 @@ TEST(TranslucencyTruthExitance, TheIrradianceIsThePowerEnteringTheMedium) {
         "objects": [{"name": "slab", "geometry": {"type": "mesh", "path": ")" + write_slab(dir.path.string(), "coarse", 1, 1) + R"("},
         "material": {"technique": "translucency", "material": "skin1", "mm_per_unit": 150, "vertices": 0}}]})";
     const Scene s = scene_from_json(nlohmann::json::parse(text), "slab", dir.path.string());
-    const Frame f = test::render_uncached(s, test::truth_request(Backend::Truth, 16, 1, {"irradiance"})).frame;
+    const Frame f = test::render_uncached(s, test::truth_request("truth", 16, 1, {"irradiance"})).frame;
     Session session;
     const Lighting lighting = make_lighting(s, session.evaluate(s, truth_stages(s)));
     ASSERT_EQ(lighting.lights.size(), 1u);

@@ -3,7 +3,7 @@
 // (η = 1) lets every bit of entered power out, so under a uniform sky of radiance 1 it glows at
 // exactly 1 (within the exitance estimate's edge loss on coarse facets); absorption darkens it; the photons' sums are the same
 // bytes at any thread count; an open mesh is refused by name.
-#include "app/truth_cache.h"
+#include "core/truth/cache.h"
 #include "app/workbench.h"
 #include "core/error.h"
 #include "core/scene.h"
@@ -34,7 +34,7 @@ Scene ball(const std::string& medium, const std::string& lights, float env, cons
 }
 
 Frame truth(const Scene& s, int size, int spp) {
-    return test::render_uncached(s, test::truth_request(Backend::Truth, size, spp, {"truth_stderr"})).frame;
+    return test::render_uncached(s, test::truth_request("truth", size, spp, {"truth_stderr"})).frame;
 }
 }  // namespace
 
@@ -47,7 +47,7 @@ TEST(TranslucencyTruth, ANonAbsorbingIndexMatchedBallInAUniformSkyGlowsAtOne) {
     constexpr int kSeeds = 8;
     std::vector<std::array<double, 3>> means;
     for (int k = 0; k < kSeeds; ++k) {
-        const Frame f = test::render_uncached(s, test::truth_request(Backend::Truth, 32, 4, {}, uint64_t(10 + k))).frame;
+        const Frame f = test::render_uncached(s, test::truth_request("truth", 32, 4, {}, uint64_t(10 + k))).frame;
         std::array<double, 3> m{};
         for (int c = 0; c < 3; ++c) m[size_t(c)] = test::object_mean(f, c).mean;
         ASSERT_GT(test::object_mean(f).pixels, 200);
@@ -137,8 +137,8 @@ TEST(TranslucencyTruth, TheDipoleOnALargeFlatSlabIsWithinAFewPercentOfTheTruth) 
         "objects": [{"name": "slab", "geometry": {"type": "mesh", "path": ")" + mesh + R"("}, "material": {"technique": "translucency",
         "material": "custom", "sigma_s": [2, 2, 2], "sigma_a": [0.5, 0.5, 0.5], "eta": 1.3, "mm_per_unit": 20, "vertices": 0}}]})";
     const Scene s = scene_from_json(nlohmann::json::parse(text), "slab", dir.path);
-    const RenderResult rt = test::render_uncached(s, test::truth_request(Backend::Cpu, 32, 6, {"exitance"}));
-    const Frame t = test::render_uncached(s, test::truth_request(Backend::Truth, 32, 6, {"exitance"})).frame;
+    const RenderResult rt = test::render_uncached(s, test::truth_request("cpu", 32, 6, {"exitance"}));
+    const Frame t = test::render_uncached(s, test::truth_request("truth", 32, 6, {"exitance"})).frame;
     const double m_rt = central_mean(rt.frame, "exitance", 1), m_truth = central_mean(t, "exitance", 1);
     std::printf("slab exitance: real-time %.4f, truth %.4f, ratio %.4f\n", m_rt, m_truth, m_rt / m_truth);
     EXPECT_GT(m_truth, 0.1);

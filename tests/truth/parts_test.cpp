@@ -3,7 +3,7 @@
 // and a translucent one, whose photon batches are per sample); merging refuses parts of another
 // scene, seed, size or build, overlaps and gaps, and a bad file, each by name; a noise target stops
 // at the noise and says so, a time limit stops in time, and both continue a cached truth.
-#include "app/truth_cache.h"
+#include "core/truth/cache.h"
 #include "app/workbench.h"
 #include "core/error.h"
 #include "core/file.h"
@@ -54,7 +54,7 @@ TruthPart part(const Scene& s, int first, int end, uint64_t seed = 5) {
     st.first = first, st.spp = end, st.seed = seed;
     TruthPart p;
     p.scene = s.name;
-    p.key = TruthCache("").key(s, kSize, kSize, seed);
+    p.key = truth_cache_key(version_string(), s, kSize, kSize, seed);
     p.build = truth_build(version_string());
     p.sums = accumulate_truth(s, ev, kSize, kSize, st);
     return p;
@@ -236,17 +236,17 @@ TEST(TruthNoise, TheWorkbenchContinuesTheCachedTruthToTheTarget) {
     const Scene s = basic_scene();
     test::TempDir dir("truth-noise-cache");
     Workbench wb;
-    wb.set_truth_cache(TruthCache(dir.path.string()));
-    RenderRequest req = test::truth_request(Backend::Truth, kSize, 8, {"truth_stderr"}, 4);
+    wb.set_truth_cache(dir.path.string());
+    RenderRequest req = test::truth_request("truth", kSize, 8, {"truth_stderr"}, 4);
     const RenderResult eight = wb.render(s, req);
-    EXPECT_EQ(eight.truth_spp, 8);
-    EXPECT_EQ(eight.truth_ended, TruthEnd::Samples);
+    EXPECT_EQ(eight.sampled->spp, 8);
+    EXPECT_EQ(eight.sampled->ended, TruthEnd::Samples);
     req.truth.spp = 1 << 20, req.truth.noise = 0.05;
     const RenderResult target = wb.render(s, req);
-    EXPECT_EQ(target.truth_cached_spp, 8);
-    EXPECT_EQ(target.truth_ended, TruthEnd::Noise);
+    EXPECT_EQ(target.sampled->cached_spp, 8);
+    EXPECT_EQ(target.sampled->ended, TruthEnd::Noise);
     EXPECT_LE(truth_noise_rel(target.frame), 0.05);
     const RenderResult again = wb.render(s, req);
-    EXPECT_EQ(again.truth_cached_spp, target.truth_spp);  // nothing rendered
+    EXPECT_EQ(again.sampled->cached_spp, target.sampled->spp);  // nothing rendered
     EXPECT_EQ(again.frame.aov("radiance").data, target.frame.aov("radiance").data);
 }

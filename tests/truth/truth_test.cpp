@@ -32,7 +32,7 @@ Scene scene(const std::string& objects, const std::string& lights, float env, co
 }
 
 Frame truth(const Scene& s, int size, int spp, uint64_t seed = 1) {
-    return test::render_uncached(s, test::truth_request(Backend::Truth, size, spp, {"truth_stderr"}, seed)).frame;
+    return test::render_uncached(s, test::truth_request("truth", size, spp, {"truth_stderr"}, seed)).frame;
 }
 
 using test::shows_object;
@@ -176,8 +176,8 @@ TEST(TruthError, IsZeroWhereTheRealTimePathIsExactAndShowsTheMissingShadow) {
     const std::string light = R"([{"type": "directional", "direction": [0, 0], "intensity": 3, "color": [1, 1, 1]}])";
     const std::string camera = R"({"mode": "orbit", "distance": 14.0, "orbit": [35, -90], "fov": 40})";
     Workbench wb;
-    wb.set_truth_cache(TruthCache(""));
-    const RenderRequest req = test::truth_request(Backend::Cpu, 48, 4, {"truth_error"});
+    wb.set_truth_cache("");
+    const RenderRequest req = test::truth_request("cpu", 48, 4, {"truth_error"});
     const RenderResult exact = wb.render(scene("[" + plane + "]", light, 0.f, camera), req);
     ASSERT_TRUE(exact.truth);
     ASSERT_TRUE(exact.frame.has("truth_error"));
@@ -231,28 +231,28 @@ TEST(TruthCache, ContinuesAndReusesTruthsKeyedByWhatTheyRead) {
     const std::string folder = (std::filesystem::temp_directory_path() / ("mesolab-truth-cache-" + std::to_string(::getpid()))).string();
     std::filesystem::remove_all(folder);
     Workbench wb;
-    wb.set_truth_cache(TruthCache(folder));
+    wb.set_truth_cache(folder);
     RenderRequest req;
-    req.backend = Backend::Truth;
+    req.renderer = "truth";
     req.width = req.height = 16;
     req.truth.seed = 3;
     req.aovs = {"truth_stderr"};
     req.truth.spp = 5;
     const RenderResult five = wb.render(s, req);
-    EXPECT_EQ(five.truth_cached_spp, 0);
+    EXPECT_EQ(five.sampled->cached_spp, 0);
     req.truth.spp = 12;
     const RenderResult twelve = wb.render(s, req);
-    EXPECT_EQ(twelve.truth_cached_spp, 5);  // continued from the 5 on disk
+    EXPECT_EQ(twelve.sampled->cached_spp, 5);  // continued from the 5 on disk
     for (const char* aov : {"radiance", "normal", "truth_stderr"}) EXPECT_EQ(twelve.frame.aov(aov).data, fresh.aov(aov).data) << aov;
     const RenderResult again = wb.render(s, req);
-    EXPECT_EQ(again.truth_cached_spp, 12);  // nothing rendered
+    EXPECT_EQ(again.sampled->cached_spp, 12);  // nothing rendered
     EXPECT_EQ(again.frame.aov("radiance").data, fresh.aov("radiance").data);
     Scene moved = s;
     apply_set(moved, "light.direction", "41,10");
-    EXPECT_EQ(wb.render(moved, req).truth_cached_spp, 0);
+    EXPECT_EQ(wb.render(moved, req).sampled->cached_spp, 0);
     req.truth.spp = 4;  // fewer than kept: rendered afresh (the same seed's first 4 samples)
     const RenderResult four = wb.render(s, req);
-    EXPECT_EQ(four.truth_cached_spp, 0);
+    EXPECT_EQ(four.sampled->cached_spp, 0);
     EXPECT_EQ(four.frame.aov("radiance").data, truth(s, 16, 4, 3).aov("radiance").data);
     std::filesystem::remove_all(folder);
 }
@@ -262,7 +262,7 @@ TEST(TruthCache, ContinuesAndReusesTruthsKeyedByWhatTheyRead) {
 // both paths, texel by texel, at the plane's own texture size.
 TEST(TruthTexture, APlanesTexelsAreExactOnBothPaths) {
     const Scene s = load_preset(test::source_path("presets/basic/plane-texture.json"));
-    const RenderResult r = test::render_uncached(s, test::truth_request(Backend::Cpu, 64, 2, {"truth_error"}));
+    const RenderResult r = test::render_uncached(s, test::truth_request("cpu", 64, 2, {"truth_error"}));
     ASSERT_TRUE(r.truth);
     EXPECT_LT(r.truth->rmse_rel, 1e-5);
     int shown = 0;

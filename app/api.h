@@ -1,0 +1,118 @@
+#pragma once
+// [SECTION] mesolab as a C++ library
+// What the command line (app/main.cpp, app/commands.h) and the Python module (python/mesolab.cpp)
+// both call, with typed values: no option text goes in, no printed text comes back.
+//  - Scenes: core/scene.h (load_preset, apply_set: the one place where a text value becomes a
+//    typed one), core/param.h.
+//  - Rendering: Workbench (app/workbench.h) over the renderers of core/renderer.h, a
+//    RenderRequest in, a RenderResult out; write_capture for the files `capture` writes.
+//  - Timing tables: measure_bench -> BenchResult (cells as values; bench_markdown and the JSON
+//    writer format them).
+//  - Accuracy against time: sweep_scene -> SweepResult (points as values).
+// This library does not link the window, the panels or ImGui (the target mesolab_lib).
+#include "app/bench_pages.h"
+#include "app/workbench.h"
+#include "core/bench.h"
+#include "core/param.h"
+#include "core/scene.h"
+#include "core/truth/truth.h"
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace mesolab {
+
+class ParamGroup;
+
+// [SECTION] Timing tables
+struct BenchOptions {
+    std::vector<std::string> tables;  // bench_tables() names; empty: all
+    int repeat = 5;                   // runs per cell, 1..1000
+    std::string backend = "both";     // the devices of the columns: cpu, gpu or both
+    bool profile = false;             // the scoped CPU/GPU timing hierarchy (print_profile) at the end
+    std::string mesh;                 // a row for this mesh in the tables that take one ("" : none)
+    int vertices = 0;                 // simplify it to this many vertices (0: the table's choice)
+    double noise = 0;                 // table truth: measure each preset's time to this noise_rel (0: a pilot, extrapolated)
+    double time_limit_s = 600;        // table truth with noise: the most time per preset (seconds)
+    std::vector<std::string> rows, columns;  // only the rows and columns whose names contain one of these
+    uint64_t memory_limit = 0;        // bytes; a stage above it stops (InputError); 0: the available memory
+    // Progress per cell ("bench TABLE: ROW / COLUMN", fraction of cells done), a flag that stops
+    // between runs (Cancelled), no per-cell lines on stderr.
+    std::function<void(const std::string&, double)> progress;
+    const std::atomic<bool>* cancel = nullptr;
+    bool quiet = false;
+};
+
+struct BenchResult {
+    std::string machine;   // CPU model, threads, GL renderer
+    int repeat = 0;
+    double slow_ms = 0;    // stage cells slower than this were measured once
+    std::string gpu_note;  // what the GPU cells mean on this GL ("" without GPU cells)
+    std::vector<BenchTable> tables;  // as measured (rows and columns filtered)
+    std::vector<BenchCell> cells;
+};
+// Measures the tables. InputError for an unknown table, a filter that matches nothing, bad
+// settings; Cancelled when o.cancel was set.
+BenchResult measure_bench(const BenchOptions& o);
+// `bench --format json`'s document: {machine, label, version, repeat, cells: [...]}.
+json bench_json(const BenchResult& r, const std::string& label = "");
+
+// [SECTION] Accuracy against time
+// A parameter and its settings, each as preset text (apply_set reads them; e.g. "16", "true").
+struct SweepKnob {
+    std::string key;
+    std::vector<std::string> values;
+};
+
+struct SweepOptions {
+    SweepKnob knob;
+    SweepKnob by;                         // a second knob (a grid; metric "truth"); key "": none
+    std::vector<std::pair<std::string, std::string>> reference;  // KEY, VALUE of the reference rendering (default: the knob's most accurate setting)
+    int width = 256, height = 256;
+    std::string backend = "cpu";          // a renderer's name (core/renderer.h)
+    int repeat = 3;                       // timed runs per value (median), 1..100
+    std::string metric = "rmse";          // rmse, truth or a technique's (Technique::sweep_metrics)
+    TruthSettings truth;                  // the truth's sampling (metric "truth", backend "truth"): core's truth_sampling
+    uint64_t memory_limit = 0;            // bytes; 0: the available memory
+    std::string out_dir = "screenshots/sweeps";  // where sweep_scene writes its files (write_files)
+    std::string source;                   // the preset's file, for messages ("": the scene's name)
+    std::function<void(const std::string&, double)> progress;
+    const std::atomic<bool>* cancel = nullptr;
+    bool quiet = false;
+};
+
+// One measured setting of a sweep.
+struct SweepPoint {
+    std::string value;
+    double ms = 0;       // median time per frame including its stages, from a cold cache
+    double err = 0;      // the metric's error (rmse: radiance RMSE; truth: rmse_rel; a technique's metric)
+    double rel = 0;      // relative RMSE (rmse, truth)
+    double knob_ms = 0;  // of ms: the stages the knob controls
+    bool below_noise = false;  // metric truth: the truth cannot resolve the error
+    std::string by;            // the second knob's value
+};
+struct SweepResult {
+    std::vector<SweepPoint> points;
+    std::string metric;      // the error's name: rmse, rmse_rel or the technique metric's
+    std::string reference;   // what the errors are measured against ("camera.x=..." or "the truth")
+    std::string markdown;    // the table `mesolab sweep` prints
+    std::vector<std::string> written;  // files written (with write_files): CSV, Markdown, PNG and SVG plot
+};
+// The sweep of `base`; the files go to o.out_dir only when write_files.
+SweepResult sweep_scene(const Scene& base, const SweepOptions& o, bool write_files);
+std::string sweep_metric_names();  // "rmse (default: ...), bumpsynth.ndf_histogram" for help texts and errors
+
+// [SECTION] Descriptions
+// The parameter groups `preset schema TECHNIQUE` lists: all for "", else the technique's or the
+// scene group's (camera, light, env, geometry, effects); InputError starting with `what` otherwise.
+std::vector<const ParamGroup*> schema_groups(const std::string& technique, const std::string& what);
+// What `mesolab info` prints, as (name, value) pairs in its order: version, cpu threads, techniques,
+// renderers, the headless GL context's platform, vendor, renderer and versions (or "gl": why there
+// is none), library versions.
+std::vector<std::pair<std::string, std::string>> info_fields();
+std::string export_names();  // "btf (microgeom), ..." for help texts
+}  // namespace mesolab
