@@ -32,8 +32,9 @@ public:
         run.key = truth_cache_key(version_, s, size.x, size.y, st.seed);
         std::optional<TruthAccumulator> from;
         if (!req.partial) {
-            if (last_ && last_key_ == run.key) from = *last_;
+            if (last_ && last_key_ == run.key) from = std::move(last_);
             else from = cache_.load(run.key);
+            last_.reset();
         }
         const bool keep_file = from && from->spp > st.spp;  // a truth of more samples than asked stays on disk
         if (from && !from->continues(size.x, size.y, st.seed, st.first, st.spp)) from.reset();
@@ -44,8 +45,10 @@ public:
         auto keep = [&](const TruthAccumulator& a) {
             if (req.partial) return;
             if (a.spp != held && !keep_file) cache_.store(run.key, a);
-            last_ = a;
-            last_key_ = run.key;
+            if (cache_.folder().empty()) {  // no disk: the next, larger request continues it from memory
+                last_ = a;
+                last_key_ = run.key;
+            }
         };
         TruthAccumulator a;
         if (!req.on_pass || req.partial) {
@@ -97,7 +100,7 @@ public:
 private:
     std::string version_;
     TruthCache cache_;
-    std::optional<TruthAccumulator> last_;  // the last truth rendered (not a partial one)
+    std::optional<TruthAccumulator> last_;  // without a disk cache: the last truth rendered (not a partial one)
     std::string last_key_;
 };
 
