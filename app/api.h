@@ -106,6 +106,56 @@ struct SweepResult {
 SweepResult sweep_scene(const Scene& base, const SweepOptions& o, bool write_files);
 std::string sweep_metric_names();  // "rmse (default: ...), bumpsynth.ndf_histogram" for help texts and errors
 
+// [SECTION] The accuracy-time frontier
+// Every accuracy knob (ParamDecl::accuracy) of the scene's techniques and of its geometry, each on
+// a coarse grid around the preset's value with the others as the preset has them, then all of them
+// together a step cheaper or dearer at a time (the diagonal, where the frontier usually runs),
+// within a time budget; each setting rendered and timed (its precomputation, the stages from a cold
+// cache, once; the frame, the median of `repeat` frames with the stages cached) and measured
+// against one truth per viewing distance (the truth cache keeps it). The frontier is the lower
+// envelope of error against frame time.
+struct FrontierOptions {
+    int width = 128, height = 128;
+    std::string backend = "cpu";          // a real-time renderer's name
+    std::vector<double> distances;        // camera.distance values (orbit camera); empty: the preset's
+    TruthSettings truth;                  // the truth's sampling (core's truth_sampling)
+    double budget_s = 600;                // stops starting new settings after this long (the truths not counted)
+    int repeat = 3;                       // frames per setting (median), 1..100
+    uint64_t memory_limit = 0;            // bytes; 0: the available memory
+    std::string out_dir;                  // where frontier_scene writes its files (write_files)
+    std::string source;                   // the preset's file, for messages
+    std::function<void(const std::string&, double)> progress;
+    const std::atomic<bool>* cancel = nullptr;
+    bool quiet = false;
+};
+
+struct FrontierPoint {
+    double distance = 0;      // camera.distance
+    std::string method;       // the technique's method (today its paper's: the technique's name)
+    std::vector<std::pair<std::string, std::string>> settings;  // KEY, VALUE of its accuracy knobs, in knob order
+    std::string varied;       // what this point changes from the preset: "KEY=VALUE", "all x0.5", or "preset"
+    double frame_ms = 0;      // median frame time with its stages cached
+    double precompute_ms = 0; // the stages from a cold cache (read from nowhere: the store is not used)
+    double rmse_rel = 0;      // against the truth at this distance
+    bool below_noise = false; // within twice the truth's noise: not resolved
+    bool on_frontier = false; // no faster-or-equal point has a lower error
+};
+
+struct FrontierResult {
+    std::string scene, machine, backend;
+    std::vector<std::string> knobs;    // the accuracy knobs varied
+    std::vector<FrontierPoint> points; // in the order measured
+    std::vector<double> truth_noise;   // per distance (as `distances`), the truth's noise_rel
+    std::vector<double> distances;
+    bool budget_reached = false;       // settings were left out for the budget
+    std::string markdown;              // the table the command prints
+    std::vector<std::string> written;  // Markdown, CSV, JSON, and a PNG and SVG plot per distance (write_files)
+};
+FrontierResult frontier_scene(const Scene& base, const FrontierOptions& o, bool write_files);
+// Marks the lower envelope: a point is on the frontier when no point of the same distance that is
+// as fast or faster has a lower error.
+void mark_frontier(std::vector<FrontierPoint>& points);
+
 // [SECTION] Descriptions
 // The parameter groups `preset schema TECHNIQUE` lists: all for "", else the technique's or the
 // scene group's (camera, light, env, geometry, effects); InputError starting with `what` otherwise.

@@ -84,6 +84,25 @@ struct SweepCommand {
 };
 int run_sweep(const SweepCommand& o);
 
+// `mesolab frontier`: the library's frontier_scene (app/api.h) from the command line's text.
+struct FrontierCommand {
+    std::string preset;
+    std::string out_dir = "screenshots/frontier";
+    std::string size = "128x128";
+    std::string backend = "cpu";
+    std::vector<double> distances;
+    std::vector<std::string> sets;
+    int spp = 64;
+    bool spp_given = false;
+    uint64_t seed = 1;
+    double noise = 0;
+    std::string time_limit;
+    double budget_min = 10;
+    int repeat = 3;
+    std::string memory_limit;
+};
+int run_frontier(const FrontierCommand& o);
+
 struct ExportOptions {
     std::string memory_limit;  // --memory-limit: a stage above it stops with exit status 2 (empty: the available memory)
     std::string name;                  // a technique's export, e.g. btf

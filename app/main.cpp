@@ -25,7 +25,7 @@ int main(int argc, char** argv) {
     mesolab::gpu::install_gpu_compute();  // stages may run their GPU variants (e.g. microgeom.device=gpu)
     mesolab::gpu::install_headless_renderer();  // --backend gpu
     // `mesolab PRESET` and `mesolab` alone mean `mesolab gui ...`.
-    std::vector<std::string> commands = {"gui", "capture", "bench", "sweep", "preset", "truth", "info", "export", "-h", "--help", "--version"};
+    std::vector<std::string> commands = {"gui", "capture", "bench", "sweep", "frontier", "preset", "truth", "info", "export", "-h", "--help", "--version"};
     for (const Technique* t : Registry::instance().techniques())
         if (!t->commands().empty()) commands.push_back(t->name());
     std::vector<char*> args(argv, argv + argc);
@@ -125,6 +125,23 @@ int main(int argc, char** argv) {
     s->add_option("--seed", sweep.seed, "The truth's seed")->capture_default_str();
     add_memory_limit(s, sweep.memory_limit);
 
+    FrontierCommand frontier;
+    auto* f = app.add_subcommand("frontier", "Accuracy against time: every accuracy knob of the scene's methods on a coarse grid and all together, "
+                                             "timed and measured against one truth per distance; the lower envelope drawn (PNG, SVG) and tabled (Markdown, CSV, JSON)");
+    f->add_option("preset", frontier.preset, "Preset file")->required();
+    f->add_option("-o,--output", frontier.out_dir, "Output folder")->capture_default_str();
+    f->add_option("--size", frontier.size, "Frame size WxH")->capture_default_str();
+    f->add_option("--backend", frontier.backend, "The real-time renderer timed: cpu or gpu")->capture_default_str();
+    f->add_option("--distance", frontier.distances, "camera.distance (orbit camera), repeatable: one truth and one plot per distance (default: the preset's)");
+    f->add_option("--set", frontier.sets, "Override a parameter: KEY=VALUE (repeatable)");
+    auto* frontier_spp = f->add_option("--spp", frontier.spp, "The truth's samples per pixel (with --noise: the most)")->capture_default_str();
+    f->add_option("--noise", frontier.noise, "The truth samples until its noise_rel reaches this (e.g. 0.01)");
+    f->add_option("--time-limit", frontier.time_limit, "The truth stops sampling after this long (600, 90s, 10m, 1.5h)");
+    f->add_option("--seed", frontier.seed, "The truth's seed")->capture_default_str();
+    f->add_option("--budget", frontier.budget_min, "Minutes: no new setting starts after this (the truths not counted)")->capture_default_str();
+    f->add_option("--repeat", frontier.repeat, "Frames per setting (median)")->capture_default_str();
+    add_memory_limit(f, frontier.memory_limit);
+
     auto* p = app.add_subcommand("preset", "Validate, describe and show presets");
     p->require_subcommand(1);
     std::vector<std::string> validate_files;
@@ -206,6 +223,10 @@ int main(int argc, char** argv) {
         if (s->parsed()) {
             sweep.spp_given = sweep_spp->count() > 0;
             return run_sweep(sweep);
+        }
+        if (f->parsed()) {
+            frontier.spp_given = frontier_spp->count() > 0;
+            return run_frontier(frontier);
         }
         if (pv->parsed()) return run_preset_validate(validate_files);
         if (ps->parsed()) return run_preset_schema(schema_tech, schema_json);

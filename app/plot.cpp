@@ -485,6 +485,7 @@ void draw_chart(Canvas& cv, const PlotSpec& spec, int width, int height) {
         return srgb(p[0], p[1], p[2]);
     };
     for (size_t si = 0; si < pts.size(); ++si) {
+        if (!spec.series[si].line) continue;
         std::vector<std::array<double, 2>> line;
         for (const Point& p : pts[si]) line.push_back({px(p.x), py(p.y)});
         cv.polyline(line, 0.75 * s + 0.5, color_of(si), plot_clip);

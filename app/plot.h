@@ -15,6 +15,7 @@ struct PlotSeries {
     std::string label;
     std::vector<double> x, y;
     std::vector<std::string> point_labels;  // optional, one per point (e.g. the knob value)
+    bool line = true;                       // false: markers only (a scatter)
 };
 
 struct PlotSpec {

@@ -733,6 +733,44 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
         "({table, row, column, device, median_ms, min_ms, max_ms, ...}). noise= (table 'truth'): each preset's time to that noise_rel, "
         "measured, giving up after time_limit= seconds (600 by default).");
     m.def(
+        "frontier",
+        [](const PyScene& scene, const py::object& size, const std::string& backend, const std::vector<double>& distances, const py::object& spp,
+           uint64_t seed, const py::object& noise, const py::object& time_limit, double budget, int repeat, const py::object& out_dir,
+           const py::object& memory_limit, const py::object& progress) {
+            scene.check_used();
+            const auto [w, h] = frame_size_arg(size);
+            FrontierOptions o;
+            o.width = w, o.height = h;
+            o.backend = RendererRegistry::instance().find(backend, "backend=").name;
+            o.distances = distances;
+            o.truth = truth_sampling_arg(spp, noise, time_limit, seed);
+            if (!(budget >= 0.0)) throw InputError("budget=" + strprintf("%g", budget) + ": expected seconds, 0 or more");
+            o.budget_s = budget, o.repeat = repeat, o.quiet = true;
+            o.memory_limit = memory_limit_arg(memory_limit);
+            if (!out_dir.is_none()) o.out_dir = path_arg(out_dir);
+            const FrontierResult r = run_alone<FrontierResult>(progress, [&](const ProgressFn& p, const std::atomic<bool>* cancel) {
+                FrontierOptions run = o;
+                run.progress = p, run.cancel = cancel;
+                return frontier_scene(scene.scene, run, !out_dir.is_none());
+            });
+            py::list out;
+            for (const FrontierPoint& p : r.points) {
+                py::dict d, knobs;
+                for (const auto& [k, v] : p.settings) knobs[py::str(k)] = v;
+                d["distance"] = p.distance, d["method"] = p.method, d["setting"] = p.varied, d["knobs"] = knobs;
+                d["frame_ms"] = p.frame_ms, d["precompute_ms"] = p.precompute_ms, d["rmse_rel"] = p.rmse_rel;
+                d["below_noise"] = p.below_noise, d["on_frontier"] = p.on_frontier;
+                out.append(d);
+            }
+            return out;
+        },
+        py::arg("scene"), py::kw_only(), py::arg("size") = py::make_tuple(128, 128), py::arg("backend") = "cpu", py::arg("distances") = std::vector<double>{},
+        py::arg("spp") = py::none(), py::arg("seed") = 1, py::arg("noise") = py::none(), py::arg("time_limit") = py::none(), py::arg("budget") = 600.0,
+        py::arg("repeat") = 3, py::arg("out_dir") = py::none(), py::arg("memory_limit") = py::none(), py::arg("progress") = py::none(),
+        "The accuracy-time frontier, as `mesolab frontier`: every accuracy knob of the scene's methods on a coarse grid and all together, each setting "
+        "timed (frame_ms with its stages cached, precompute_ms from a cold cache) and measured against one truth per distance (rmse_rel); "
+        "[{distance, method, setting, knobs, frame_ms, precompute_ms, rmse_rel, below_noise, on_frontier}]. budget= seconds; files only with out_dir=.");
+    m.def(
         "sweep",
         [](const PyScene& scene, const std::string& knob, const py::sequence& values, const py::object& size, const std::string& metric,
            const std::string& backend, int repeat, const py::object& reference, const py::object& by, const py::object& by_values, const py::object& spp,

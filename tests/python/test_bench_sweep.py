@@ -54,3 +54,16 @@ def test_a_raising_progress_callback_stops_bench_and_sweep(mesolab):
     with pytest.raises(Stop, match="sweep geometry.resolution"):
         mesolab.sweep(s, knob="geometry.resolution", values=[8, 512], size=(64, 64), repeat=20, progress=stop)
     assert len(calls) == 2
+
+
+def test_frontier_returns_points_on_one_truth(mesolab, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    s = mesolab.load_preset(PRESETS / "basic" / "sphere.json")
+    points = mesolab.frontier(s, size=(24, 24), spp=4, repeat=1, distances=[3.0, 6.0])
+    assert {p["distance"] for p in points} == {3.0, 6.0}
+    assert all(p["frame_ms"] > 0 and p["rmse_rel"] > 0 for p in points)
+    assert points[0]["setting"] == "preset" and points[0]["knobs"] == {"geometry.resolution": "96"}
+    assert any(p["on_frontier"] for p in points)
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(mesolab.InputError, match="real-time renderer"):
+        mesolab.frontier(s, backend="truth", budget=0)

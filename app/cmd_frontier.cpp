@@ -1,0 +1,319 @@
+// mesolab frontier: the accuracy-time frontier of a scene's methods against one truth per viewing
+// distance (app/api.h, FrontierOptions).
+#include "app/api.h"
+#include "app/commands.h"
+#include "app/plot.h"
+#include "app/plot_text.h"
+#include "core/error.h"
+#include "core/file.h"
+#include "core/image.h"
+#include "core/profile.h"
+#include "core/renderer.h"
+#include "core/scene.h"
+#include "core/strings.h"
+#include "core/technique.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <numeric>
+#include <sstream>
+#include <thread>
+
+namespace fs = std::filesystem;
+
+namespace mesolab {
+namespace {
+
+// [SECTION] Knobs
+struct AccuracyKnob {
+    std::string key;
+    const ParamDecl* decl = nullptr;
+    double value = 0;  // the preset's
+};
+
+// Every numeric accuracy knob the scene uses: its techniques' (TECHNIQUE.*) and its geometry's.
+std::vector<AccuracyKnob> accuracy_knobs(const Scene& s) {
+    std::vector<AccuracyKnob> r;
+    std::vector<std::string> groups = {"geometry"};
+    for (const auto& o : s.objects) groups.push_back(o.technique);
+    for (const std::string& key : public_keys(s)) {
+        // TECHNIQUE.* of the scene's techniques and geometry.* (the same parameters addressed per object are left out)
+        if (std::find(groups.begin(), groups.end(), key.substr(0, key.find('.'))) == groups.end()) continue;
+        const ParamDecl& d = decl_of(s, key);
+        if (d.accuracy == Accuracy::None || (d.type != ParamType::Int && d.type != ParamType::Float)) continue;
+        try {
+            check_set_used(s, key);
+        } catch (const InputError&) {
+            continue;  // not used with these settings (e.g. geometry.resolution of a mesh)
+        }
+        const Value v = get_public_value(s, key);
+        const double x = d.type == ParamType::Int ? double(std::get<int64_t>(v)) : std::get<double>(v);
+        if (std::find_if(r.begin(), r.end(), [&](const AccuracyKnob& k) { return k.key == key; }) == r.end()) r.push_back({key, &d, x});
+    }
+    return r;
+}
+
+// The knob's setting `f` times more accurate than the preset's (f < 1: cheaper), within its range
+// and no further than its converged setting; as preset text.
+std::string knob_value(const AccuracyKnob& k, double f) {
+    const ParamDecl& d = *k.decl;
+    double x = d.accuracy == Accuracy::Higher ? k.value * f : k.value / f;
+    if (k.value == 0.0 && d.accuracy == Accuracy::Lower) x = f >= 1.0 ? 0.0 : 1e-4 / f;  // a threshold at 0: coarser is a small positive one
+    double hi = d.max, lo = d.min;
+    if (d.reference) {
+        const double ref = d.type == ParamType::Int ? double(std::get<int64_t>(*d.reference)) : std::get<double>(*d.reference);
+        if (d.accuracy == Accuracy::Higher) hi = std::min(hi, std::max(ref, k.value));
+        else lo = std::max(lo, std::min(ref, k.value));
+    }
+    x = std::clamp(x, lo, hi);
+    if (d.type == ParamType::Int) return std::to_string(std::max<int64_t>(int64_t(std::llround(x)), int64_t(std::ceil(lo))));
+    return strprintf("%.6g", x);
+}
+
+std::string cpu_model() {
+    std::ifstream in("/proc/cpuinfo");
+    std::string line;
+    while (std::getline(in, line))
+        if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
+    return "unknown CPU";
+}
+
+std::string methods_of(const Scene& s) {
+    std::vector<std::string> m;
+    for (const auto& o : s.objects)
+        if (std::find(m.begin(), m.end(), o.technique) == m.end()) m.push_back(o.technique);
+    return join(m, "+");
+}
+}  // namespace
+
+// [SECTION] The frontier
+void mark_frontier(std::vector<FrontierPoint>& points) {
+    std::map<double, std::vector<size_t>> by_distance;
+    for (size_t i = 0; i < points.size(); ++i) by_distance[points[i].distance].push_back(i);
+    for (auto& [d, idx] : by_distance) {
+        std::sort(idx.begin(), idx.end(), [&](size_t a, size_t b) {
+            return points[a].frame_ms != points[b].frame_ms ? points[a].frame_ms < points[b].frame_ms : points[a].rmse_rel < points[b].rmse_rel;
+        });
+        double best = std::numeric_limits<double>::infinity();
+        for (size_t i : idx) {
+            points[i].on_frontier = points[i].rmse_rel < best;
+            best = std::min(best, points[i].rmse_rel);
+        }
+    }
+}
+
+FrontierResult frontier_scene(const Scene& base, const FrontierOptions& o, bool write_files) {
+    using Clock = std::chrono::steady_clock;
+    if (o.width < 1 || o.height < 1 || o.width > 16384 || o.height > 16384)
+        throw InputError("--size: " + std::to_string(o.width) + "x" + std::to_string(o.height) + " is out of range (1..16384 per side)");
+    if (o.repeat < 1 || o.repeat > 100) throw InputError("--repeat: " + std::to_string(o.repeat) + " is out of range [1, 100]");
+    if (!(o.budget_s >= 0.0)) throw InputError("--budget: expected minutes, 0 or more");
+    const RendererDecl& renderer = RendererRegistry::instance().find(o.backend);
+    if (!renderer.traits.realtime) throw InputError("--backend " + o.backend + ": the frontier times a real-time renderer (" + [] {
+        std::vector<std::string> n;
+        for (const auto& name : RendererRegistry::instance().names())
+            if (RendererRegistry::instance().get(name)->traits.realtime) n.push_back(name);
+        return join(n, ", ");
+    }() + ") against the truth");
+    truth_stages(base);  // every technique of the scene has a truth
+    if (write_files) plot_font();
+    const std::vector<AccuracyKnob> knobs = accuracy_knobs(base);
+    if (knobs.empty()) throw InputError((o.source.empty() ? base.name : o.source) + ": the scene uses no accuracy knob (none to trade against time)");
+    std::vector<double> distances = o.distances;
+    if (distances.empty()) distances = {std::get<double>(get_public_value(base, "camera.distance"))};
+    else if (get_public(base, "camera.mode") != "orbit") throw InputError("--distance: moves an orbit camera; this scene's camera.mode is " + get_public(base, "camera.mode"));
+
+    // The settings, most informative first: the preset, the diagonal, then each knob alone.
+    struct Setting {
+        std::string varied;
+        std::vector<std::pair<std::string, std::string>> values;
+    };
+    std::vector<Setting> settings;
+    std::vector<std::pair<std::string, std::string>> preset;
+    for (const auto& k : knobs) preset.emplace_back(k.key, knob_value(k, 1.0));
+    settings.push_back({"preset", preset});
+    for (double f : {0.25, 0.5, 2.0, 4.0}) {
+        Setting st{"all x" + strprintf("%g", f), {}};
+        for (const auto& k : knobs) st.values.emplace_back(k.key, knob_value(k, f));
+        if (st.values != preset) settings.push_back(st);
+    }
+    for (size_t i = 0; i < knobs.size(); ++i)
+        for (double f : {0.25, 0.5, 2.0, 4.0}) {
+            Setting st{"", preset};
+            st.values[i].second = knob_value(knobs[i], f);
+            st.varied = knobs[i].key + "=" + st.values[i].second;
+            const bool seen = std::any_of(settings.begin(), settings.end(), [&](const Setting& x) { return x.values == st.values; });
+            if (!seen) settings.push_back(st);
+        }
+    for (const auto& st : settings) {  // every value checked before any work
+        Scene probe = base;
+        for (const auto& [k, v] : st.values) apply_set(probe, k, v);
+    }
+
+    FrontierResult res;
+    res.scene = base.name;
+    res.backend = o.backend;
+    res.distances = distances;
+    for (const auto& k : knobs) res.knobs.push_back(k.key);
+    Workbench wb;
+    wb.session().set_memory_limit(o.memory_limit);
+    res.machine = cpu_model() + ", " + std::to_string(std::thread::hardware_concurrency()) + " threads" +
+                  (renderer.traits.needs_gl ? "; GL: " + wb.renderer(o.backend).device() : "");
+    const auto t0 = Clock::now();
+    const size_t total = distances.size() * settings.size();
+    size_t done = 0;
+    for (double d : distances) {
+        std::map<std::string, Frame> truths;  // by what the truth reads and the frame size
+        double noise = 0;
+        for (const Setting& st : settings) {
+            if (o.cancel && o.cancel->load()) throw Cancelled();
+            if (std::chrono::duration<double>(Clock::now() - t0).count() > o.budget_s && st.varied != "preset") {
+                res.budget_reached = true;
+                ++done;
+                continue;
+            }
+            Scene s = base;
+            if (!o.distances.empty()) apply_set(s, "camera.distance", strprintf("%.9g", d));
+            for (const auto& [k, v] : st.values) apply_set(s, k, v);
+            if (o.progress) o.progress("frontier d=" + strprintf("%g", d) + ": " + st.varied, double(done) / double(total));
+            RenderRequest req;
+            req.renderer = o.backend;
+            req.width = o.width, req.height = o.height;
+            req.aovs = {"radiance"};
+            req.cancel = o.cancel;
+            wb.session().cache().clear();  // its precomputation from a cold cache
+            wb.forget_frame_steps();
+            RenderResult r = wb.render(s, req);
+            FrontierPoint p;
+            p.distance = d;
+            p.method = methods_of(s);
+            p.settings = st.values;
+            p.varied = st.varied;
+            p.precompute_ms = r.stages_ms;
+            std::vector<double> frames;
+            for (int i = 0; i < o.repeat; ++i) {
+                wb.forget_frame_steps();  // a frame's steps are part of its time
+                r = wb.render(s, req);
+                frames.push_back(r.render_ms);
+            }
+            p.frame_ms = median_of(frames);
+            // The truth of what this setting's scene describes, at the frame's size (texture mode: its native size).
+            const std::string tkey = truth_description(s) + "@" + std::to_string(r.frame.width) + "x" + std::to_string(r.frame.height);
+            auto it = truths.find(tkey);
+            if (it == truths.end()) {
+                RenderRequest tr;
+                tr.renderer = truth_error_aov().reference;
+                tr.width = r.frame.width, tr.height = r.frame.height;
+                tr.truth = o.truth;
+                tr.aovs = {"truth_stderr"};
+                tr.cancel = o.cancel;
+                it = truths.emplace(tkey, wb.render(s, tr).frame).first;
+                noise = std::max(noise, truth_noise_rel(it->second));
+            }
+            const TruthComparison c = compare_to_truth(r.frame, it->second, o.truth);
+            p.rmse_rel = c.rmse_rel;
+            p.below_noise = c.below_noise;
+            res.points.push_back(p);
+            ++done;
+            if (!o.quiet)
+                std::fprintf(stderr, "  d=%-6g %-36s frame %9.3f ms  precompute %9.1f ms  rmse_rel %.4f%s\n", d, p.varied.c_str(), p.frame_ms, p.precompute_ms,
+                             p.rmse_rel, p.below_noise ? " (below the truth's noise)" : "");
+        }
+        res.truth_noise.push_back(noise);
+    }
+    mark_frontier(res.points);
+
+    // [SECTION] Outputs
+    std::ostringstream md, csv;
+    md << "Frontier of `" << base.name << "` (" << o.backend << ", " << o.width << "x" << o.height << "; " << res.machine << "): each accuracy knob ("
+       << join(res.knobs, ", ") << ") on a coarse grid around the preset and all of them together; frame time the median of " << o.repeat
+       << " frames with the stages cached, precomputation the stages from a cold cache; error `rmse_rel` against the truth (" << o.truth.seed
+       << " seed). ★: on the frontier (no point as fast or faster has a lower error).";
+    if (res.budget_reached) md << " The budget ended the run before every setting was measured.";
+    md << "\n\n| distance | method | setting | frame (ms) | precompute (ms) | rmse_rel | |\n|---|---|---|---|---|---|---|\n";
+    csv << "distance,method,setting," << join(res.knobs, ",") << ",frame_ms,precompute_ms,rmse_rel,below_noise,on_frontier\n";
+    json j;
+    j["scene"] = base.name, j["machine"] = res.machine, j["backend"] = o.backend, j["size"] = json::array({o.width, o.height});
+    j["knobs"] = res.knobs, j["distances"] = distances, j["truth_noise_rel"] = res.truth_noise, j["budget_reached"] = res.budget_reached;
+    j["points"] = json::array();
+    for (const auto& p : res.points) {
+        md << "| " << strprintf("%g", p.distance) << " | " << p.method << " | `" << p.varied << "` | " << strprintf("%.3f", p.frame_ms) << " | "
+           << strprintf("%.1f", p.precompute_ms) << " | " << (p.below_noise ? strprintf("below the noise (%.4f)", p.rmse_rel) : strprintf("%.4f", p.rmse_rel))
+           << " | " << (p.on_frontier ? "★" : "") << " |\n";
+        csv << p.distance << "," << p.method << ",\"" << p.varied << "\"";
+        json x{{"distance", p.distance}, {"method", p.method}, {"setting", p.varied}, {"frame_ms", p.frame_ms}, {"precompute_ms", p.precompute_ms},
+               {"rmse_rel", p.rmse_rel}, {"below_noise", p.below_noise}, {"on_frontier", p.on_frontier}};
+        json knobs_json = json::object();
+        for (const auto& [k, v] : p.settings) csv << "," << v, knobs_json[k] = v;
+        x["knobs"] = knobs_json;
+        j["points"].push_back(x);
+        csv << "," << p.frame_ms << "," << p.precompute_ms << "," << p.rmse_rel << "," << (p.below_noise ? "true" : "false") << ","
+            << (p.on_frontier ? "true" : "false") << "\n";
+    }
+    res.markdown = md.str();
+    if (write_files) {
+        fs::create_directories(o.out_dir);
+        const std::string stem = (fs::path(o.out_dir) / (base.name + ".frontier")).string();
+        write_text_atomic(stem + ".md", res.markdown);
+        write_text_atomic(stem + ".csv", csv.str());
+        write_text_atomic(stem + ".json", j.dump(2) + "\n");
+        res.written = {stem + ".md", stem + ".csv", stem + ".json"};
+        for (size_t di = 0; di < distances.size(); ++di) {
+            const double d = distances[di];
+            PlotSpec plot;
+            plot.title = "accuracy against time: " + base.name + " at distance " + strprintf("%g", d) + " (" + o.backend + ")";
+            plot.xlabel = "frame time, stages cached (ms)";
+            plot.ylabel = "relative RMSE vs the truth";
+            PlotSeries all{"settings (" + methods_of(base) + ")", {}, {}, {}, false}, below{"below the truth's noise", {}, {}, {}, false},
+                front{"frontier", {}, {}, {}, true};
+            std::vector<const FrontierPoint*> fp;
+            double lo = 1e300, hi = 0;
+            for (const auto& p : res.points) {
+                if (p.distance != d) continue;
+                PlotSeries& s = p.below_noise ? below : all;
+                s.x.push_back(p.frame_ms), s.y.push_back(p.rmse_rel), s.point_labels.push_back(p.varied == "preset" ? "preset" : "");
+                if (p.on_frontier) fp.push_back(&p);
+                lo = std::min(lo, p.frame_ms), hi = std::max(hi, p.frame_ms);
+            }
+            std::sort(fp.begin(), fp.end(), [](auto* a, auto* b) { return a->frame_ms < b->frame_ms; });
+            for (auto* p : fp) front.x.push_back(p->frame_ms), front.y.push_back(p->rmse_rel), front.point_labels.push_back("");
+            plot.series = {front, all};
+            if (!below.x.empty()) plot.series.push_back(below);
+            if (hi > 0) plot.series.push_back({"truth's noise floor (2 noise_rel)", {lo, hi}, {2.0 * res.truth_noise[di], 2.0 * res.truth_noise[di]}, {}});
+            const std::string ps = stem + (distances.size() > 1 ? ".d" + strprintf("%g", d) : std::string());
+            write_png_srgb(ps + ".png", render_plot(plot));
+            write_text_atomic(ps + ".svg", render_plot_svg(plot));
+            res.written.push_back(ps + ".png");
+            res.written.push_back(ps + ".svg");
+        }
+    }
+    return res;
+}
+
+// [SECTION] The command
+int run_frontier(const FrontierCommand& c) {
+    Scene base = load_preset(c.preset);
+    apply_sets(base, c.sets);
+    FrontierOptions o;
+    parse_size(c.size, o.width, o.height);
+    o.backend = c.backend;
+    o.distances = c.distances;
+    o.truth = truth_sampling(c.spp, c.spp_given, c.noise, c.time_limit, c.seed);
+    if (!(c.budget_min >= 0.0)) throw InputError("--budget " + strprintf("%g", c.budget_min) + ": expected minutes, 0 or more");
+    o.budget_s = c.budget_min * 60.0;
+    o.repeat = c.repeat;
+    o.memory_limit = memory_limit_bytes(c.memory_limit);
+    o.out_dir = c.out_dir;
+    o.source = c.preset;
+    const FrontierResult r = frontier_scene(base, o, true);
+    std::printf("%s\nwrote", r.markdown.c_str());
+    for (size_t i = 0; i < r.written.size(); ++i) std::printf("%s %s", i ? "," : "", r.written[i].c_str());
+    std::printf("\n");
+    return 0;
+}
+}  // namespace mesolab

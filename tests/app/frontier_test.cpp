@@ -1,0 +1,122 @@
+// The accuracy-time frontier (app/api.h, frontier_scene; `mesolab frontier`): the lower envelope
+// is the one no faster point beats; every setting is measured against the truth of its distance
+// (one per physical description), with the grid around the preset and the diagonal; files and
+// plots per distance; the budget and bad input.
+#include "app/api.h"
+#include "app/commands.h"
+#include "core/error.h"
+#include "core/scene.h"
+#include "support/cli.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <limits>
+
+using namespace mesolab;
+
+namespace {
+FrontierPoint point(double d, double ms, double err) {
+    FrontierPoint p;
+    p.distance = d, p.frame_ms = ms, p.rmse_rel = err;
+    return p;
+}
+
+FrontierOptions small() {
+    FrontierOptions o;
+    o.width = o.height = 32;
+    o.truth.spp = 8;
+    o.repeat = 1;
+    o.quiet = true;
+    return o;
+}
+}  // namespace
+
+TEST(Frontier, TheEnvelopeIsWhatNoFasterPointBeats) {
+    std::vector<FrontierPoint> p = {point(1, 1.0, 0.5), point(1, 2.0, 0.6), point(1, 3.0, 0.2), point(1, 0.5, 0.9), point(1, 4.0, 0.2),
+                                    point(2, 2.0, 0.8), point(2, 1.0, 0.1)};
+    mark_frontier(p);
+    EXPECT_TRUE(p[0].on_frontier);
+    EXPECT_FALSE(p[1].on_frontier) << "slower and worse than a point before it";
+    EXPECT_TRUE(p[2].on_frontier);
+    EXPECT_TRUE(p[3].on_frontier) << "the fastest is always on it";
+    EXPECT_FALSE(p[4].on_frontier) << "as accurate as a faster one";
+    EXPECT_TRUE(p[6].on_frontier);
+    EXPECT_FALSE(p[5].on_frontier) << "each distance has its own frontier";
+}
+
+TEST(Frontier, EverySettingIsMeasuredAgainstItsDistancesTruth) {
+    const Scene s = load_preset(test::source_path("presets/basic/sphere.json"));
+    FrontierOptions o = small();
+    o.distances = {3.0, 8.0};
+    test::TempDir dir("frontier");
+    o.out_dir = dir.path.string();
+    const FrontierResult r = frontier_scene(s, o, true);
+    EXPECT_EQ(r.knobs, std::vector<std::string>{"geometry.resolution"});
+    ASSERT_EQ(r.points.size(), 10u) << "the preset and four steps of its one knob, at two distances";
+    ASSERT_EQ(r.truth_noise.size(), 2u);
+    for (double n : r.truth_noise) EXPECT_GT(n, 0.0);
+    for (size_t d = 0; d < 2; ++d) {
+        double best = std::numeric_limits<double>::infinity();
+        std::vector<const FrontierPoint*> at;
+        for (const auto& p : r.points)
+            if (p.distance == o.distances[d]) at.push_back(&p);
+        ASSERT_EQ(at.size(), 5u);
+        EXPECT_EQ(at.front()->varied, "preset");
+        std::sort(at.begin(), at.end(), [](auto* a, auto* b) { return a->frame_ms < b->frame_ms; });
+        for (const FrontierPoint* p : at) {
+            EXPECT_GT(p->frame_ms, 0.0);
+            EXPECT_GE(p->precompute_ms, 0.0);
+            EXPECT_TRUE(std::isfinite(p->rmse_rel) && p->rmse_rel > 0.0);
+            EXPECT_EQ(p->on_frontier, p->rmse_rel < best) << p->varied;
+            best = std::min(best, p->rmse_rel);
+        }
+    }
+    // The coarsest tessellation is further from the truth than the finest, near.
+    double coarse = 0, fine = 0;
+    for (const auto& p : r.points)
+        if (p.distance == 3.0) {
+            if (p.varied == "all x0.25") coarse = p.rmse_rel;
+            if (p.varied == "all x4") fine = p.rmse_rel;
+        }
+    EXPECT_GT(coarse, fine);
+    for (const char* f : {"basic-sphere.frontier.md", "basic-sphere.frontier.csv", "basic-sphere.frontier.json", "basic-sphere.frontier.d3.png",
+                          "basic-sphere.frontier.d8.svg"})
+        EXPECT_TRUE(std::filesystem::exists(dir.path / f)) << f;
+    const nlohmann::json j = nlohmann::json::parse(test::slurp(dir / "basic-sphere.frontier.json"));
+    EXPECT_EQ(j["points"].size(), 10u);
+    EXPECT_EQ(j["points"][0]["knobs"]["geometry.resolution"], "96");
+}
+
+TEST(Frontier, TheBudgetLeavesOnlyThePresetAndBadInputIsSaid) {
+    const Scene s = load_preset(test::source_path("presets/basic/sphere.json"));
+    FrontierOptions o = small();
+    o.budget_s = 0;
+    const FrontierResult r = frontier_scene(s, o, false);
+    ASSERT_EQ(r.points.size(), 1u);
+    EXPECT_EQ(r.points[0].varied, "preset");
+    EXPECT_TRUE(r.budget_reached);
+    o.backend = "truth";
+    EXPECT_THROW(frontier_scene(s, o, false), InputError);
+    o.backend = "cpu";
+    Scene tex = load_preset(test::source_path("presets/basic/plane-texture.json"));
+    o.distances = {2.0};
+    try {
+        frontier_scene(tex, o, false);
+        ADD_FAILURE() << "--distance on a texture-space camera was accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("camera.mode"), std::string::npos) << e.what();
+    }
+}
+
+TEST(Frontier, TheCommandWritesItsTableAndPlots) {
+    test::TempDir dir("frontier-cli");
+    const test::CliResult r = test::run_mesolab("frontier presets/basic/sphere.json --size 24x24 --spp 4 --repeat 1 --budget 0 -o '" + dir.path.string() + "'");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("| 3.2 | basic | `preset` |"), std::string::npos) << r.out;
+    EXPECT_TRUE(std::filesystem::exists(dir.path / "basic-sphere.frontier.png"));
+    const test::CliResult bad = test::run_mesolab("frontier presets/basic/sphere.json --backend truth -o '" + dir.path.string() + "'");
+    EXPECT_EQ(bad.status, 2);
+    EXPECT_NE(bad.err.find("real-time renderer"), std::string::npos) << bad.err;
+}
