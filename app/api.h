@@ -125,6 +125,7 @@ struct FrontierOptions {
     std::string out_dir;                  // where frontier_scene writes its files (write_files)
     std::string source;                   // the preset's file, for messages
     std::function<void(const std::string&, double)> progress;
+    std::function<void(const struct FrontierPoint&)> on_point;  // each point as it is measured (the window draws them as they come)
     const std::atomic<bool>* cancel = nullptr;
     bool quiet = false;
 };

@@ -219,6 +219,7 @@ FrontierResult frontier_scene(const Scene& base, const FrontierOptions& o, bool 
             p.rmse_rel = c.rmse_rel;
             p.below_noise = c.below_noise;
             res.points.push_back(p);
+            if (o.on_point) o.on_point(p);
             ++done;
             if (!o.quiet)
                 std::fprintf(stderr, "  d=%-6g %-36s frame %9.3f ms  precompute %9.1f ms  rmse_rel %.4f%s\n", d, p.varied.c_str(), p.frame_ms, p.precompute_ms,
@@ -282,8 +283,9 @@ FrontierResult frontier_scene(const Scene& base, const FrontierOptions& o, bool 
             }
             std::sort(fp.begin(), fp.end(), [](auto* a, auto* b) { return a->frame_ms < b->frame_ms; });
             for (auto* p : fp) front.x.push_back(p->frame_ms), front.y.push_back(p->rmse_rel), front.point_labels.push_back("");
-            plot.series = {front, all};
+            plot.series = {all};  // the frontier last of the points: drawn over them
             if (!below.x.empty()) plot.series.push_back(below);
+            plot.series.push_back(front);
             if (hi > 0) plot.series.push_back({"truth's noise floor (2 noise_rel)", {lo, hi}, {2.0 * res.truth_noise[di], 2.0 * res.truth_noise[di]}, {}});
             const std::string ps = stem + (distances.size() > 1 ? ".d" + strprintf("%g", d) : std::string());
             write_png_srgb(ps + ".png", render_plot(plot));

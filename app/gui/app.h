@@ -7,6 +7,7 @@
 #include "app/gui/evaluator.h"
 #include "app/gui/script.h"
 #include "app/gui/state.h"
+#include "app/gui/frontier_view.h"
 #include "app/gui/truth_view.h"
 #include "app/gui/viewport.h"
 #include "app/gui/window.h"
@@ -94,6 +95,8 @@ private:
     void viewport_window();
     void side_windows();
     void timings_window();
+    void frontier_window();  // app/gui/frontier_panel.cpp
+    void start_frontier();   // measures the scene's frontier with the view's settings
     void status_bar();
     void modals();
     void shortcuts();
@@ -138,6 +141,7 @@ private:
     uint64_t frames_drawn_ = 0;    // real-time renders and display passes: the truth is asked for again after each
     uint64_t truth_asked_at_ = ~uint64_t(0);
     void update_truth_view(bool display_changed);
+    FrontierRunner frontier_;      // the Frontier view's worker (its own workbench)
     panels::PanelRegistry technique_panels_;                                    // the panels' declarations
     std::map<std::string, std::unique_ptr<panels::TechniquePanel>> panels_;  // this window's panels, by technique
     void reset_panels() {

@@ -20,6 +20,7 @@
 //  - app/gui/script.h     script files and their commands, stepped once per frame
 //  - app/gui/viewport.h   the viewport window, camera input, overlays; rendering, previews
 //  - app/gui/window.h     GLFW, the window, ImGui and its style, the default layout
+//  - app/gui/frontier_view.h, frontier_panel.cpp  the Frontier view: its worker, its plot
 //  - app/gui/app.h        the Gui class; here its frame loop, actions (load, save, paste,
 //                         screenshots), errors; app/gui/menus.cpp its menus, windows, dialogs
 //
@@ -170,12 +171,19 @@ void Gui::poll_evaluator() {
 
 bool Gui::settled() const {
     if (!state_.settled(evaluator_.idle())) return false;
+    if (state_.ui.frontier.open && frontier_.status().running) return false;
     if (state_.ui.truth.show == UiState::TruthView::Show::RealTime) return true;
     const TruthRunner::Status ts = truth_.status();
     return !ts.error.empty() || (!ts.running && state_.ui.truth.on_screen);
 }
 
 void Gui::view(const std::string& what, int spp) {
+    if (what == "frontier") {  // the Frontier view, measuring the scene now (wait: until it is done)
+        if (spp > 0) state_.ui.frontier.spp = spp;
+        state_.ui.frontier.open = true;
+        start_frontier();
+        return;
+    }
     using Show = UiState::TruthView::Show;
     UiState::TruthView& tv = state_.ui.truth;
     tv.show = what == "truth" ? Show::Truth : what == "error" ? Show::Error : Show::RealTime;
@@ -188,7 +196,7 @@ void Gui::view(const std::string& what, int spp) {
 // [SECTION] Frame loop
 void Gui::wait_or_poll() {
     const bool shot_pending = state_.ui.window_shot.kind == UiState::WindowShot::Kind::Requested;
-    if (scripted_ || busy_frames_ > 0 || evaluator_.busy() || truth_.status().running || state_.ui.toast.visible() || state_.frame.outdated || ImGui::IsAnyMouseDown() || shot_pending) {
+    if (scripted_ || busy_frames_ > 0 || evaluator_.busy() || truth_.status().running || frontier_.status().running || state_.ui.toast.visible() || state_.frame.outdated || ImGui::IsAnyMouseDown() || shot_pending) {
         glfwPollEvents();
         if (busy_frames_ > 0) --busy_frames_;
     } else {
@@ -278,6 +286,7 @@ void Gui::build_ui() {
         viewport_window();
         side_windows();
         timings_window();
+        frontier_window();
         status_bar();
         modals();
         shortcuts();

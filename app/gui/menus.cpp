@@ -58,6 +58,9 @@ void Gui::menu_bar() {
             state_.frame.display_outdated = true;  // back to the real-time frame until the truth is there
         }
         ImGui::Separator();
+        ImGui::MenuItem("Frontier...", nullptr, &state_.ui.frontier.open);
+        if (ImGui::IsItemHovered()) ImGui::SetTooltip("The accuracy-time frontier of the scene's methods against the truth, measured in the background");
+        ImGui::Separator();
         if (ImGui::MenuItem("Reset layout")) state_.ui.layout.relayout = true;
         ImGui::EndMenu();
     }

@@ -20,7 +20,7 @@ std::string trim(const std::string& s) {
 }
 
 const char* const kScriptVerbs =
-    "load PRESET, set KEY=VALUE, frames N, wait, screenshot PATH, window-screenshot PATH, size WxH, view real-time|truth|error [SPP], quit";
+    "load PRESET, set KEY=VALUE, frames N, wait, screenshot PATH, window-screenshot PATH, size WxH, view real-time|truth|error|frontier [SPP], quit";
 }  // namespace
 
 // [SECTION] Parsing
@@ -60,7 +60,8 @@ std::vector<ScriptCommand> parse_script(const std::string& path) {
         } else if (c.verb == "view") {
             const auto sp2 = c.arg.find_first_of(" \t");
             const std::string what = c.arg.substr(0, sp2), spp = sp2 == std::string::npos ? "" : trim(c.arg.substr(sp2));
-            if (what != "real-time" && what != "truth" && what != "error") throw bad("'view' expects real-time, truth or error, got '" + what + "'");
+            if (what != "real-time" && what != "truth" && what != "error" && what != "frontier")
+                throw bad("'view' expects real-time, truth, error or frontier, got '" + what + "'");
             c.n = 0;
             if (!spp.empty()) {
                 size_t used = 0;

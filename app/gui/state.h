@@ -122,6 +122,13 @@ struct UiState {
         bool on_screen = false;   // the truth (or the error) is what the viewport shows now
         float error_scale = 1.f;  // the error view's legend: colours saturate at ±this
     };
+    // The Frontier view (app/gui/frontier_view.h): the current scene's accuracy-time frontier.
+    struct FrontierView {
+        bool open = false;        // its window is shown
+        float budget_min = 2.f;   // no new setting starts after this
+        int size = 128;           // frame size (square)
+        int spp = 64;             // the truth's samples
+    };
     struct Layout {
         bool relayout = true;      // put the windows back in their default places this frame
         vec2 display{0, 0};        // the display size laid out for
@@ -135,6 +142,7 @@ struct UiState {
     WindowShot window_shot;
     Viewport viewport;
     TruthView truth;
+    FrontierView frontier;
     Layout layout;
     bool close_confirmed = false;  // the user chose to quit with unsaved changes
 

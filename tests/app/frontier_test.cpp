@@ -4,6 +4,7 @@
 // plots per distance; the budget and bad input.
 #include "app/api.h"
 #include "app/commands.h"
+#include "app/gui/frontier_view.h"
 #include "core/error.h"
 #include "core/scene.h"
 #include "support/cli.h"
@@ -12,7 +13,9 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <chrono>
 #include <limits>
+#include <thread>
 
 using namespace mesolab;
 
@@ -119,4 +122,32 @@ TEST(Frontier, TheCommandWritesItsTableAndPlots) {
     const test::CliResult bad = test::run_mesolab("frontier presets/basic/sphere.json --backend truth -o '" + dir.path.string() + "'");
     EXPECT_EQ(bad.status, 2);
     EXPECT_NE(bad.err.find("real-time renderer"), std::string::npos) << bad.err;
+}
+
+// The window's worker: the points arrive as they are measured, the frontier marked among them;
+// cancel keeps what was measured; a bad scene is said in the status.
+TEST(FrontierView, PointsArriveMarkedAndCancelKeepsThem) {
+    using namespace std::chrono_literals;
+    const Scene s = load_preset(test::source_path("presets/basic/sphere.json"));
+    gui::FrontierRunner r;
+    FrontierOptions o = small();
+    r.start(s, o);
+    ASSERT_TRUE(r.wait_idle(120s));
+    const std::vector<FrontierPoint> all = r.points();
+    ASSERT_EQ(all.size(), 5u);
+    EXPECT_TRUE(std::any_of(all.begin(), all.end(), [](const FrontierPoint& p) { return p.on_frontier; }));
+    EXPECT_GT(r.status().truth_noise, 0.0);
+    EXPECT_TRUE(r.status().error.empty()) << r.status().error;
+    o.repeat = 100;  // slow enough to be cancelled part-way
+    r.start(s, o);
+    for (int i = 0; i < 2000 && r.points().empty(); ++i) std::this_thread::sleep_for(5ms);
+    r.cancel();
+    ASSERT_TRUE(r.wait_idle(120s));
+    EXPECT_TRUE(r.status().cancelled);
+    EXPECT_GE(r.points().size(), 1u);
+    EXPECT_LT(r.points().size(), 5u);
+    o.backend = "truth";
+    r.start(s, o);
+    ASSERT_TRUE(r.wait_idle(60s));
+    EXPECT_NE(r.status().error.find("real-time renderer"), std::string::npos) << r.status().error;
 }
