@@ -110,7 +110,8 @@ std::string sweep_metric_names();  // "rmse (default: ...), bumpsynth.ndf_histog
 // Every accuracy knob (ParamDecl::accuracy) of the scene's techniques and of its geometry, each on
 // a coarse grid around the preset's value with the others as the preset has them, then all of them
 // together a step cheaper or dearer at a time (the diagonal, where the frontier usually runs),
-// within a time budget; each setting rendered and timed (its precomputation, the stages from a cold
+// then, between each two neighbours on the frontier, every knob at the geometric mean of theirs;
+// all within a time budget; each setting rendered and timed (its precomputation, the stages from a cold
 // cache, once; the frame, the median of `repeat` frames with the stages cached) and measured
 // against one truth per viewing distance (the truth cache keeps it). The frontier is the lower
 // envelope of error against frame time.
@@ -119,7 +120,7 @@ struct FrontierOptions {
     std::string backend = "cpu";          // a real-time renderer's name
     std::vector<double> distances;        // camera.distance values (orbit camera); empty: the preset's
     TruthSettings truth;                  // the truth's sampling (core's truth_sampling)
-    double budget_s = 600;                // stops starting new settings after this long (the truths not counted)
+    double budget_s = 600;                // stops starting new settings after this long, shared evenly by the distances (each starts with its preset)
     int repeat = 3;                       // frames per setting (median), 1..100
     uint64_t memory_limit = 0;            // bytes; 0: the available memory
     std::string out_dir;                  // where frontier_scene writes its files (write_files)
@@ -134,7 +135,7 @@ struct FrontierPoint {
     double distance = 0;      // camera.distance
     std::string method;       // the technique's method (today its paper's: the technique's name)
     std::vector<std::pair<std::string, std::string>> settings;  // KEY, VALUE of its accuracy knobs, in knob order
-    std::string varied;       // what this point changes from the preset: "KEY=VALUE", "all x0.5", or "preset"
+    std::string varied;       // what this point changes from the preset: "KEY=VALUE", "all x0.5", "between A and B" or "preset"
     double frame_ms = 0;      // median frame time with its stages cached
     double precompute_ms = 0; // the stages from a cold cache (read from nowhere: the store is not used)
     double rmse_rel = 0;      // against the truth at this distance

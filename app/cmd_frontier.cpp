@@ -22,6 +22,7 @@
 #include <map>
 #include <numeric>
 #include <sstream>
+#include <atomic>
 #include <thread>
 
 namespace fs = std::filesystem;
@@ -164,31 +165,54 @@ FrontierResult frontier_scene(const Scene& base, const FrontierOptions& o, bool 
     wb.session().set_memory_limit(o.memory_limit);
     res.machine = cpu_model() + ", " + std::to_string(std::thread::hardware_concurrency()) + " threads" +
                   (renderer.traits.needs_gl ? "; GL: " + wb.renderer(o.backend).device() : "");
-    const auto t0 = Clock::now();
     const size_t total = distances.size() * settings.size();
     size_t done = 0;
     for (double d : distances) {
         std::map<std::string, Frame> truths;  // by what the truth reads and the frame size
         double noise = 0;
-        for (const Setting& st : settings) {
+        const size_t first = res.points.size();
+        const auto t_d = Clock::now();  // the budget is shared evenly by the distances
+        const double budget_d = o.budget_s / double(distances.size());
+        // Renders, times and measures one setting at this distance; false when the budget is spent.
+        auto measure = [&](const Setting& st) {
             if (o.cancel && o.cancel->load()) throw Cancelled();
-            if (std::chrono::duration<double>(Clock::now() - t0).count() > o.budget_s && st.varied != "preset") {
+            if (std::chrono::duration<double>(Clock::now() - t_d).count() > budget_d && st.varied != "preset") {
                 res.budget_reached = true;
-                ++done;
-                continue;
+                return false;
             }
             Scene s = base;
             if (!o.distances.empty()) apply_set(s, "camera.distance", strprintf("%.9g", d));
             for (const auto& [k, v] : st.values) apply_set(s, k, v);
-            if (o.progress) o.progress("frontier d=" + strprintf("%g", d) + ": " + st.varied, double(done) / double(total));
+            if (o.progress) o.progress("frontier d=" + strprintf("%g", d) + ": " + st.varied, std::min(1.0, double(done) / double(total)));
+            // A setting still running when the budget ends is stopped (the preset is always measured).
+            std::atomic<bool> stop{false};
+            std::jthread watch([&](std::stop_token done_token) {
+                const auto deadline = t_d + std::chrono::duration<double>(budget_d);
+                while (!done_token.stop_requested()) {
+                    if ((o.cancel && o.cancel->load()) || (st.varied != "preset" && Clock::now() > deadline)) {
+                        stop = true;
+                        return;
+                    }
+                    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+                }
+            });
             RenderRequest req;
             req.renderer = o.backend;
             req.width = o.width, req.height = o.height;
             req.aovs = {"radiance"};
-            req.cancel = o.cancel;
+            req.cancel = &stop;
             wb.session().cache().clear();  // its precomputation from a cold cache
             wb.forget_frame_steps();
-            RenderResult r = wb.render(s, req);
+            RenderResult r;
+            try {
+                r = wb.render(s, req);
+            } catch (const Cancelled&) {
+                if (o.cancel && o.cancel->load()) throw;
+                res.budget_reached = true;  // stopped by the budget: not measured
+                return false;
+            }
+            watch.request_stop();
+            req.cancel = o.cancel;  // measured: its frames and its truth finish
             FrontierPoint p;
             p.distance = d;
             p.method = methods_of(s);
@@ -197,6 +221,7 @@ FrontierResult frontier_scene(const Scene& base, const FrontierOptions& o, bool 
             p.precompute_ms = r.stages_ms;
             std::vector<double> frames;
             for (int i = 0; i < o.repeat; ++i) {
+                if (o.cancel && o.cancel->load()) throw Cancelled();
                 wb.forget_frame_steps();  // a frame's steps are part of its time
                 r = wb.render(s, req);
                 frames.push_back(r.render_ms);
@@ -220,11 +245,33 @@ FrontierResult frontier_scene(const Scene& base, const FrontierOptions& o, bool 
             p.below_noise = c.below_noise;
             res.points.push_back(p);
             if (o.on_point) o.on_point(p);
-            ++done;
             if (!o.quiet)
                 std::fprintf(stderr, "  d=%-6g %-36s frame %9.3f ms  precompute %9.1f ms  rmse_rel %.4f%s\n", d, p.varied.c_str(), p.frame_ms, p.precompute_ms,
                              p.rmse_rel, p.below_noise ? " (below the truth's noise)" : "");
+            return true;
+        };
+        for (const Setting& st : settings) measure(st), ++done;
+        // Refinement near the frontier: between two neighbours on it, every knob at the geometric
+        // mean of their values (once; a setting already measured is not measured again).
+        std::vector<FrontierPoint> here(res.points.begin() + std::ptrdiff_t(first), res.points.end());
+        mark_frontier(here);
+        std::vector<const FrontierPoint*> front;
+        for (const auto& p : here)
+            if (p.on_frontier) front.push_back(&p);
+        std::sort(front.begin(), front.end(), [](auto* x, auto* y) { return x->frame_ms < y->frame_ms; });
+        std::vector<Setting> between;
+        for (size_t i = 1; i < front.size(); ++i) {
+            Setting st{"between " + front[i - 1]->varied + " and " + front[i]->varied, front[i - 1]->settings};
+            for (size_t k = 0; k < knobs.size(); ++k) {
+                const double x = std::stod(front[i - 1]->settings[k].second), y = std::stod(front[i]->settings[k].second);
+                const double mid = x > 0.0 && y > 0.0 ? std::sqrt(x * y) : 0.5 * (x + y);
+                st.values[k].second = knobs[k].decl->type == ParamType::Int ? std::to_string(std::llround(mid)) : strprintf("%.6g", mid);
+            }
+            const bool seen = std::any_of(here.begin(), here.end(), [&](const FrontierPoint& p) { return p.settings == st.values; }) ||
+                              std::any_of(between.begin(), between.end(), [&](const Setting& x) { return x.values == st.values; });
+            if (!seen) between.push_back(st);
         }
+        for (const Setting& st : between) measure(st);
         res.truth_noise.push_back(noise);
     }
     mark_frontier(res.points);
@@ -232,7 +279,7 @@ FrontierResult frontier_scene(const Scene& base, const FrontierOptions& o, bool 
     // [SECTION] Outputs
     std::ostringstream md, csv;
     md << "Frontier of `" << base.name << "` (" << o.backend << ", " << o.width << "x" << o.height << "; " << res.machine << "): each accuracy knob ("
-       << join(res.knobs, ", ") << ") on a coarse grid around the preset and all of them together; frame time the median of " << o.repeat
+       << join(res.knobs, ", ") << ") on a coarse grid around the preset and all of them together, then between neighbours on the frontier; frame time the median of " << o.repeat
        << " frames with the stages cached, precomputation the stages from a cold cache; error `rmse_rel` against the truth (" << o.truth.seed
        << " seed). ★: on the frontier (no point as fast or faster has a lower error).";
     if (res.budget_reached) md << " The budget ended the run before every setting was measured.";

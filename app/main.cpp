@@ -138,7 +138,7 @@ int main(int argc, char** argv) {
     f->add_option("--noise", frontier.noise, "The truth samples until its noise_rel reaches this (e.g. 0.01)");
     f->add_option("--time-limit", frontier.time_limit, "The truth stops sampling after this long (600, 90s, 10m, 1.5h)");
     f->add_option("--seed", frontier.seed, "The truth's seed")->capture_default_str();
-    f->add_option("--budget", frontier.budget_min, "Minutes: no new setting starts after this (the truths not counted)")->capture_default_str();
+    f->add_option("--budget", frontier.budget_min, "Minutes: no new setting starts after this, shared evenly by the distances (the truth's time included)")->capture_default_str();
     f->add_option("--repeat", frontier.repeat, "Frames per setting (median)")->capture_default_str();
     add_memory_limit(f, frontier.memory_limit);
 

@@ -55,7 +55,7 @@ void Gui::frontier_window() {
     const FrontierRunner::Status st = frontier_.status();
     ImGui::SetNextItemWidth(ImGui::GetFontSize() * 7.f);
     ImGui::SliderFloat("budget", &fv.budget_min, 0.f, 60.f, "%.1f min", ImGuiSliderFlags_Logarithmic);
-    if (ImGui::IsItemHovered()) ImGui::SetTooltip("No new setting starts after this long (the truth not counted)");
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("No new setting starts after this long (the truth's time included)");
     ImGui::SameLine();
     ImGui::SetNextItemWidth(ImGui::GetFontSize() * 6.f);
     ImGui::SliderInt("size", &fv.size, 16, 512, "%d px");

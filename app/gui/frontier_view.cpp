@@ -15,6 +15,7 @@ void FrontierRunner::start(const Scene& s, const FrontierOptions& o) {
     std::lock_guard<std::mutex> lock(mutex_);
     cancel_ = true;  // the run under way, if any, stops at its next check
     job_ = Job{s, o};
+    points_.clear();  // the new run's points replace the last's
     status_.running = true;  // queued
     status_.error.clear();
     status_.cancelled = false;

@@ -57,7 +57,7 @@ TEST(Frontier, EverySettingIsMeasuredAgainstItsDistancesTruth) {
     o.out_dir = dir.path.string();
     const FrontierResult r = frontier_scene(s, o, true);
     EXPECT_EQ(r.knobs, std::vector<std::string>{"geometry.resolution"});
-    ASSERT_EQ(r.points.size(), 10u) << "the preset and four steps of its one knob, at two distances";
+    ASSERT_GE(r.points.size(), 10u) << "the preset and four steps of its one knob, at two distances, then refinements";
     ASSERT_EQ(r.truth_noise.size(), 2u);
     for (double n : r.truth_noise) EXPECT_GT(n, 0.0);
     for (size_t d = 0; d < 2; ++d) {
@@ -65,8 +65,9 @@ TEST(Frontier, EverySettingIsMeasuredAgainstItsDistancesTruth) {
         std::vector<const FrontierPoint*> at;
         for (const auto& p : r.points)
             if (p.distance == o.distances[d]) at.push_back(&p);
-        ASSERT_EQ(at.size(), 5u);
+        ASSERT_GE(at.size(), 5u);
         EXPECT_EQ(at.front()->varied, "preset");
+        for (size_t i = 5; i < at.size(); ++i) EXPECT_EQ(at[i]->varied.rfind("between ", 0), 0u) << at[i]->varied;
         std::sort(at.begin(), at.end(), [](auto* a, auto* b) { return a->frame_ms < b->frame_ms; });
         for (const FrontierPoint* p : at) {
             EXPECT_GT(p->frame_ms, 0.0);
@@ -88,7 +89,7 @@ TEST(Frontier, EverySettingIsMeasuredAgainstItsDistancesTruth) {
                           "basic-sphere.frontier.d8.svg"})
         EXPECT_TRUE(std::filesystem::exists(dir.path / f)) << f;
     const nlohmann::json j = nlohmann::json::parse(test::slurp(dir / "basic-sphere.frontier.json"));
-    EXPECT_EQ(j["points"].size(), 10u);
+    EXPECT_EQ(j["points"].size(), r.points.size());
     EXPECT_EQ(j["points"][0]["knobs"]["geometry.resolution"], "96");
 }
 
@@ -134,18 +135,19 @@ TEST(FrontierView, PointsArriveMarkedAndCancelKeepsThem) {
     r.start(s, o);
     ASSERT_TRUE(r.wait_idle(120s));
     const std::vector<FrontierPoint> all = r.points();
-    ASSERT_EQ(all.size(), 5u);
+    ASSERT_GE(all.size(), 5u);
     EXPECT_TRUE(std::any_of(all.begin(), all.end(), [](const FrontierPoint& p) { return p.on_frontier; }));
     EXPECT_GT(r.status().truth_noise, 0.0);
     EXPECT_TRUE(r.status().error.empty()) << r.status().error;
-    o.repeat = 100;  // slow enough to be cancelled part-way
+    o.width = o.height = 256;
+    o.repeat = 100;  // slow enough to be cancelled part-way: a setting takes a good part of a second
     r.start(s, o);
     for (int i = 0; i < 2000 && r.points().empty(); ++i) std::this_thread::sleep_for(5ms);
     r.cancel();
     ASSERT_TRUE(r.wait_idle(120s));
     EXPECT_TRUE(r.status().cancelled);
     EXPECT_GE(r.points().size(), 1u);
-    EXPECT_LT(r.points().size(), 5u);
+    EXPECT_LT(r.points().size(), all.size());
     o.backend = "truth";
     r.start(s, o);
     ASSERT_TRUE(r.wait_idle(60s));
