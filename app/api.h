@@ -8,7 +8,7 @@
 //    RenderRequest in, a RenderResult out; write_capture for the files `capture` writes.
 //  - Timing tables: measure_bench -> BenchResult (cells as values; bench_markdown and the JSON
 //    writer format them).
-//  - Accuracy against time: sweep_scene -> SweepResult (points as values).
+//  - Accuracy against time: sweep_scene -> SweepResult, frontier_scene -> FrontierResult (points as values).
 // This library does not link the window, the panels or ImGui (the target mesolab_lib).
 #include "app/bench_pages.h"
 #include "app/workbench.h"
@@ -150,6 +150,7 @@ struct FrontierResult {
     std::vector<double> truth_noise;   // per distance (as `distances`), the truth's noise_rel
     std::vector<double> distances;
     bool budget_reached = false;       // settings were left out for the budget
+    std::vector<std::string> skipped;  // settings a stage refused ("SETTING: why"), left out
     std::string markdown;              // the table the command prints
     std::vector<std::string> written;  // Markdown, CSV, JSON, and a PNG and SVG plot per distance (write_files)
 };

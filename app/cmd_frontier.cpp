@@ -59,6 +59,14 @@ std::vector<AccuracyKnob> accuracy_knobs(const Scene& s) {
     return r;
 }
 
+// An integer setting with the preset's parity (a kernel width that must be odd stays odd; the
+// other knobs do not mind), within the knob's range.
+std::string int_setting(const AccuracyKnob& k, double x, double hi) {
+    int64_t n = std::max<int64_t>(int64_t(std::llround(x)), int64_t(std::ceil(k.decl->min)));
+    if ((n - int64_t(std::llround(k.value))) % 2 != 0) n += double(n + 1) <= hi ? 1 : -1;
+    return std::to_string(n);
+}
+
 // The knob's setting `f` times more accurate than the preset's (f < 1: cheaper), within its range
 // and no further than its converged setting; as preset text.
 std::string knob_value(const AccuracyKnob& k, double f) {
@@ -72,7 +80,7 @@ std::string knob_value(const AccuracyKnob& k, double f) {
         else lo = std::max(lo, std::min(ref, k.value));
     }
     x = std::clamp(x, lo, hi);
-    if (d.type == ParamType::Int) return std::to_string(std::max<int64_t>(int64_t(std::llround(x)), int64_t(std::ceil(lo))));
+    if (d.type == ParamType::Int) return int_setting(k, x, hi);
     return strprintf("%.6g", x);
 }
 
@@ -210,6 +218,12 @@ FrontierResult frontier_scene(const Scene& base, const FrontierOptions& o, bool 
                 if (o.cancel && o.cancel->load()) throw;
                 res.budget_reached = true;  // stopped by the budget: not measured
                 return false;
+            } catch (const InputError& e) {
+                // A combination a stage refuses (e.g. an even kernel width): said, and the run goes on.
+                if (st.varied == "preset") throw;
+                res.skipped.push_back(st.varied + ": " + e.what());
+                if (!o.quiet) std::fprintf(stderr, "  d=%-6g %-36s not a valid setting: %s\n", d, st.varied.c_str(), e.what());
+                return true;
             }
             watch.request_stop();
             req.cancel = o.cancel;  // measured: its frames and its truth finish
@@ -265,7 +279,7 @@ FrontierResult frontier_scene(const Scene& base, const FrontierOptions& o, bool 
             for (size_t k = 0; k < knobs.size(); ++k) {
                 const double x = std::stod(front[i - 1]->settings[k].second), y = std::stod(front[i]->settings[k].second);
                 const double mid = x > 0.0 && y > 0.0 ? std::sqrt(x * y) : 0.5 * (x + y);
-                st.values[k].second = knobs[k].decl->type == ParamType::Int ? std::to_string(std::llround(mid)) : strprintf("%.6g", mid);
+                st.values[k].second = knobs[k].decl->type == ParamType::Int ? int_setting(knobs[k], mid, knobs[k].decl->max) : strprintf("%.6g", mid);
             }
             const bool seen = std::any_of(here.begin(), here.end(), [&](const FrontierPoint& p) { return p.settings == st.values; }) ||
                               std::any_of(between.begin(), between.end(), [&](const Setting& x) { return x.values == st.values; });
@@ -283,11 +297,13 @@ FrontierResult frontier_scene(const Scene& base, const FrontierOptions& o, bool 
        << " frames with the stages cached, precomputation the stages from a cold cache; error `rmse_rel` against the truth (" << o.truth.seed
        << " seed). ★: on the frontier (no point as fast or faster has a lower error).";
     if (res.budget_reached) md << " The budget ended the run before every setting was measured.";
+    for (const auto& k : res.skipped) md << " Not a valid setting, left out: " << k << ".";
     md << "\n\n| distance | method | setting | frame (ms) | precompute (ms) | rmse_rel | |\n|---|---|---|---|---|---|---|\n";
     csv << "distance,method,setting," << join(res.knobs, ",") << ",frame_ms,precompute_ms,rmse_rel,below_noise,on_frontier\n";
     json j;
     j["scene"] = base.name, j["machine"] = res.machine, j["backend"] = o.backend, j["size"] = json::array({o.width, o.height});
     j["knobs"] = res.knobs, j["distances"] = distances, j["truth_noise_rel"] = res.truth_noise, j["budget_reached"] = res.budget_reached;
+    j["skipped"] = res.skipped;
     j["points"] = json::array();
     for (const auto& p : res.points) {
         md << "| " << strprintf("%g", p.distance) << " | " << p.method << " | `" << p.varied << "` | " << strprintf("%.3f", p.frame_ms) << " | "
