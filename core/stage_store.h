@@ -9,7 +9,7 @@
 // The read contract (core/read_contract.h) is what makes that key trustworthy.
 //
 // The cache's root is $MESOLAB_CACHE_DIR, else $XDG_CACHE_HOME/mesolab, else ~/.cache/mesolab,
-// with a folder per kind: stages/ (this store), truth/ (the truths, app/truth_cache.h) and
+// with a folder per kind: stages/ (this store), truth/ (the truths, core/truth/cache.h) and
 // arrays/ (the Python module's array inputs, which presets name and which are never evicted).
 //
 // Entries are written through a temporary file and a rename, so two processes writing the same
