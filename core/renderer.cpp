@@ -60,19 +60,21 @@ RendererRegistry& RendererRegistry::instance() {
 }
 
 void RendererRegistry::add(RendererDecl d) {
-    if (d.name.empty() || !d.make || !d.check) throw std::logic_error("RendererRegistry::add: a renderer needs a name and a factory");
+    if (d.name.empty() || !d.make || !d.check) throw std::logic_error("RendererRegistry::add: a renderer needs a name, a factory and a check");
     for (auto& x : decls_)
-        if (x.name == d.name) {
-            x = std::move(d);
+        if (x->name == d.name) {
+            *x = std::move(d);
             return;
         }
     // The GPU first: it is the command line's default.
-    decls_.insert(d.traits.needs_gl ? decls_.begin() : decls_.end(), std::move(d));
+    const bool first = d.traits.needs_gl;
+    auto p = std::make_unique<RendererDecl>(std::move(d));
+    decls_.insert(first ? decls_.begin() : decls_.end(), std::move(p));
 }
 
 const RendererDecl* RendererRegistry::get(const std::string& name) const {
     for (const auto& d : decls_)
-        if (d.name == name) return &d;
+        if (d->name == name) return d.get();
     return nullptr;
 }
 
@@ -83,7 +85,7 @@ const RendererDecl& RendererRegistry::find(const std::string& name, const std::s
 
 std::vector<std::string> RendererRegistry::names() const {
     std::vector<std::string> n;
-    for (const auto& d : decls_) n.push_back(d.name);
+    for (const auto& d : decls_) n.push_back(d->name);
     return n;
 }
 

@@ -121,7 +121,8 @@ struct RendererDecl {
 class RendererRegistry {
 public:
     static RendererRegistry& instance();
-    // Adds (or replaces) a renderer; the built-in cpu and truth are there from the start.
+    // Adds (or replaces) a renderer; the built-in cpu and truth are there from the start. A
+    // declaration find() or get() returned stays valid.
     void add(RendererDecl d);
     // InputError naming `what` (e.g. "--backend") and the registered names when there is none.
     const RendererDecl& find(const std::string& name, const std::string& what = "--backend") const;
@@ -131,7 +132,7 @@ public:
 
 private:
     RendererRegistry();
-    std::vector<RendererDecl> decls_;
+    std::vector<std::unique_ptr<RendererDecl>> decls_;  // stable: a reference find() gave stays valid when more are added
 };
 
 // The renderers of one session, made on first use and kept (a GL context, frame-step caches).
