@@ -29,6 +29,9 @@ namespace mesolab {
 class ParamGroup;
 
 // [SECTION] Timing tables
+// The CPU's model name as the system gives it (/proc/cpuinfo), named beside every figure measured.
+std::string cpu_model();
+
 struct BenchOptions {
     std::vector<std::string> tables;  // bench_tables() names; empty: all
     int repeat = 5;                   // runs per cell, 1..1000
@@ -107,7 +110,9 @@ SweepResult sweep_scene(const Scene& base, const SweepOptions& o, bool write_fil
 std::string sweep_metric_names();  // "rmse (default: ...), bumpsynth.ndf_histogram" for help texts and errors
 
 // [SECTION] The accuracy-time frontier
-// Every accuracy knob (ParamDecl::accuracy) of the scene's techniques and of its geometry, each on
+// For every method of the scene's techniques (`<technique>.method`: the scene's own, then each
+// other with the rest as the scene has them), every accuracy knob (ParamDecl::accuracy) that the
+// method uses and of the scene's geometry, each on
 // a coarse grid around the preset's value with the others as the preset has them, then all of them
 // together a step cheaper or dearer at a time (the diagonal, where the frontier usually runs),
 // then, between each two neighbours on the frontier, every knob at the geometric mean of theirs;
@@ -133,8 +138,8 @@ struct FrontierOptions {
 
 struct FrontierPoint {
     double distance = 0;      // camera.distance
-    std::string method;       // the technique's method (today its paper's: the technique's name)
-    std::vector<std::pair<std::string, std::string>> settings;  // KEY, VALUE of its accuracy knobs, in knob order
+    std::string method;       // its methods (`<technique>.method` of the scene's techniques, "+"-joined; a technique without methods by name)
+    std::vector<std::pair<std::string, std::string>> settings;  // KEY, VALUE: each TECHNIQUE.method, then the method's accuracy knobs
     std::string varied;       // what this point changes from the preset: "KEY=VALUE", "all x0.5", "between A and B" or "preset"
     double frame_ms = 0;      // median frame time with its stages cached
     double precompute_ms = 0; // the stages from a cold cache (read from nowhere: the store is not used)
@@ -145,7 +150,7 @@ struct FrontierPoint {
 
 struct FrontierResult {
     std::string scene, machine, backend;
-    std::vector<std::string> knobs;    // the accuracy knobs varied
+    std::vector<std::string> knobs;    // the method keys and the accuracy knobs varied (of any method)
     std::vector<FrontierPoint> points; // in the order measured
     std::vector<double> truth_noise;   // per distance (as `distances`), the truth's noise_rel
     std::vector<double> distances;

@@ -20,7 +20,6 @@
 #include <thread>
 
 namespace mesolab {
-namespace {
 
 std::string cpu_model() {
     std::ifstream in("/proc/cpuinfo");
@@ -29,6 +28,8 @@ std::string cpu_model() {
         if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
     return "unknown CPU";
 }
+
+namespace {
 
 constexpr double kSlowMs = 10000;  // stage cells slower than this are measured once
 

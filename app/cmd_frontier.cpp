@@ -84,19 +84,45 @@ std::string knob_value(const AccuracyKnob& k, double f) {
     return strprintf("%.6g", x);
 }
 
-std::string cpu_model() {
-    std::ifstream in("/proc/cpuinfo");
-    std::string line;
-    while (std::getline(in, line))
-        if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
-    return "unknown CPU";
+// [SECTION] Methods
+// One way of computing the scene: `<technique>.method` set for each of its techniques.
+struct MethodChoice {
+    std::string label;  // the methods, "+"-joined in object order ("heidrich", "pom")
+    std::vector<std::pair<std::string, std::string>> sets;  // TECHNIQUE.method, VALUE
+};
+
+std::string method_label(const Scene& s) {
+    std::vector<std::string> m;
+    for (const auto& o : s.objects) {
+        const Technique* t = Registry::instance().technique(o.technique);
+        const std::string name = t && !t->paper_method().empty() ? o.material.get_string("method") : o.technique;
+        if (std::find(m.begin(), m.end(), name) == m.end()) m.push_back(name);
+    }
+    return join(m, "+");
 }
 
-std::string methods_of(const Scene& s) {
-    std::vector<std::string> m;
-    for (const auto& o : s.objects)
-        if (std::find(m.begin(), m.end(), o.technique) == m.end()) m.push_back(o.technique);
-    return join(m, "+");
+// The scene's own methods first, then, for each of its techniques with other methods, each other
+// method with the rest as the scene has them.
+std::vector<MethodChoice> method_choices(const Scene& base) {
+    std::vector<const Technique*> techniques;
+    for (const auto& o : base.objects) {
+        const Technique* t = Registry::instance().technique(o.technique);
+        if (t && !t->paper_method().empty() && std::find(techniques.begin(), techniques.end(), t) == techniques.end()) techniques.push_back(t);
+    }
+    std::vector<MethodChoice> r{{method_label(base), {}}};
+    for (const Technique* t : techniques) {
+        const std::string key = t->name() + ".method", current = get_public(base, key);
+        r.front().sets.emplace_back(key, current);
+        for (const std::string& m : t->method_names()) {
+            if (m == current) continue;
+            Scene s = base;
+            apply_set(s, key, m);
+            MethodChoice c{method_label(s), {}};
+            for (const Technique* u : techniques) c.sets.emplace_back(u->name() + ".method", u == t ? m : get_public(base, u->name() + ".method"));
+            r.push_back(std::move(c));
+        }
+    }
+    return r;
 }
 }  // namespace
 
@@ -131,44 +157,66 @@ FrontierResult frontier_scene(const Scene& base, const FrontierOptions& o, bool 
     }() + ") against the truth");
     truth_stages(base);  // every technique of the scene has a truth
     if (write_files) plot_font();
-    const std::vector<AccuracyKnob> knobs = accuracy_knobs(base);
-    if (knobs.empty()) throw InputError((o.source.empty() ? base.name : o.source) + ": the scene uses no accuracy knob (none to trade against time)");
     std::vector<double> distances = o.distances;
     if (distances.empty()) distances = {std::get<double>(get_public_value(base, "camera.distance"))};
     else if (get_public(base, "camera.mode") != "orbit") throw InputError("--distance: moves an orbit camera; this scene's camera.mode is " + get_public(base, "camera.mode"));
 
-    // The settings, most informative first: the preset, the diagonal, then each knob alone.
+    // Per method: its accuracy knobs and its settings, most informative first: the preset, the
+    // diagonal, then each knob alone. The methods take turns, so that a budget cuts them alike.
     struct Setting {
+        size_t method = 0;  // index into `methods`
         std::string varied;
-        std::vector<std::pair<std::string, std::string>> values;
+        std::vector<std::pair<std::string, std::string>> values;  // the method's knobs
     };
-    std::vector<Setting> settings;
-    std::vector<std::pair<std::string, std::string>> preset;
-    for (const auto& k : knobs) preset.emplace_back(k.key, knob_value(k, 1.0));
-    settings.push_back({"preset", preset});
-    for (double f : {0.25, 0.5, 2.0, 4.0}) {
-        Setting st{"all x" + strprintf("%g", f), {}};
-        for (const auto& k : knobs) st.values.emplace_back(k.key, knob_value(k, f));
-        if (st.values != preset) settings.push_back(st);
-    }
-    for (size_t i = 0; i < knobs.size(); ++i)
+    const std::vector<MethodChoice> methods = method_choices(base);
+    std::vector<std::vector<AccuracyKnob>> knobs_of(methods.size());
+    std::vector<std::vector<Setting>> per_method(methods.size());
+    for (size_t mi = 0; mi < methods.size(); ++mi) {
+        Scene sm = base;
+        for (const auto& [k, v] : methods[mi].sets) apply_set(sm, k, v);
+        const std::vector<AccuracyKnob>& knobs = knobs_of[mi] = accuracy_knobs(sm);
+        if (knobs.empty() && mi == 0)
+            throw InputError((o.source.empty() ? base.name : o.source) + ": the scene uses no accuracy knob (none to trade against time)");
+        std::vector<Setting>& settings = per_method[mi];
+        std::vector<std::pair<std::string, std::string>> preset;
+        for (const auto& k : knobs) preset.emplace_back(k.key, knob_value(k, 1.0));
+        settings.push_back({mi, "preset", preset});
         for (double f : {0.25, 0.5, 2.0, 4.0}) {
-            Setting st{"", preset};
-            st.values[i].second = knob_value(knobs[i], f);
-            st.varied = knobs[i].key + "=" + st.values[i].second;
-            const bool seen = std::any_of(settings.begin(), settings.end(), [&](const Setting& x) { return x.values == st.values; });
-            if (!seen) settings.push_back(st);
+            Setting st{mi, "all x" + strprintf("%g", f), {}};
+            for (const auto& k : knobs) st.values.emplace_back(k.key, knob_value(k, f));
+            if (st.values != preset) settings.push_back(st);
         }
-    for (const auto& st : settings) {  // every value checked before any work
-        Scene probe = base;
-        for (const auto& [k, v] : st.values) apply_set(probe, k, v);
+        for (size_t i = 0; i < knobs.size(); ++i)
+            for (double f : {0.25, 0.5, 2.0, 4.0}) {
+                Setting st{mi, "", preset};
+                st.values[i].second = knob_value(knobs[i], f);
+                st.varied = knobs[i].key + "=" + st.values[i].second;
+                const bool seen = std::any_of(settings.begin(), settings.end(), [&](const Setting& x) { return x.values == st.values; });
+                if (!seen) settings.push_back(st);
+            }
+        for (const auto& st : settings) {  // every value checked before any work
+            Scene probe = sm;
+            for (const auto& [k, v] : st.values) apply_set(probe, k, v);
+        }
+    }
+    std::vector<Setting> settings;
+    for (size_t i = 0;; ++i) {
+        bool any = false;
+        for (const auto& list : per_method)
+            if (i < list.size()) settings.push_back(list[i]), any = true;
+        if (!any) break;
     }
 
     FrontierResult res;
     res.scene = base.name;
     res.backend = o.backend;
     res.distances = distances;
-    for (const auto& k : knobs) res.knobs.push_back(k.key);
+    for (const auto& m : methods)
+        for (const auto& [k, v] : m.sets)
+            if (std::find(res.knobs.begin(), res.knobs.end(), k) == res.knobs.end()) res.knobs.push_back(k);
+    for (const auto& knobs : knobs_of)
+        for (const auto& k : knobs)
+            if (std::find(res.knobs.begin(), res.knobs.end(), k.key) == res.knobs.end()) res.knobs.push_back(k.key);
     Workbench wb;
     wb.session().set_memory_limit(o.memory_limit);
     res.machine = cpu_model() + ", " + std::to_string(std::thread::hardware_concurrency()) + " threads" +
@@ -184,20 +232,23 @@ FrontierResult frontier_scene(const Scene& base, const FrontierOptions& o, bool 
         // Renders, times and measures one setting at this distance; false when the budget is spent.
         auto measure = [&](const Setting& st) {
             if (o.cancel && o.cancel->load()) throw Cancelled();
-            if (std::chrono::duration<double>(Clock::now() - t_d).count() > budget_d && st.varied != "preset") {
+            const bool preset = st.varied == "preset";  // each method's preset setting is always measured
+            if (std::chrono::duration<double>(Clock::now() - t_d).count() > budget_d && !preset) {
                 res.budget_reached = true;
                 return false;
             }
             Scene s = base;
             if (!o.distances.empty()) apply_set(s, "camera.distance", strprintf("%.9g", d));
+            for (const auto& [k, v] : methods[st.method].sets) apply_set(s, k, v);
             for (const auto& [k, v] : st.values) apply_set(s, k, v);
-            if (o.progress) o.progress("frontier d=" + strprintf("%g", d) + ": " + st.varied, std::min(1.0, double(done) / double(total)));
+            const std::string what = methods[st.method].label + " " + st.varied;
+            if (o.progress) o.progress("frontier d=" + strprintf("%g", d) + ": " + what, std::min(1.0, double(done) / double(total)));
             // A setting still running when the budget ends is stopped (the preset is always measured).
             std::atomic<bool> stop{false};
             std::jthread watch([&](std::stop_token done_token) {
                 const auto deadline = t_d + std::chrono::duration<double>(budget_d);
                 while (!done_token.stop_requested()) {
-                    if ((o.cancel && o.cancel->load()) || (st.varied != "preset" && Clock::now() > deadline)) {
+                    if ((o.cancel && o.cancel->load()) || (!preset && Clock::now() > deadline)) {
                         stop = true;
                         return;
                     }
@@ -220,17 +271,18 @@ FrontierResult frontier_scene(const Scene& base, const FrontierOptions& o, bool 
                 return false;
             } catch (const InputError& e) {
                 // A combination a stage refuses (e.g. an even kernel width): said, and the run goes on.
-                if (st.varied == "preset") throw;
-                res.skipped.push_back(st.varied + ": " + e.what());
-                if (!o.quiet) std::fprintf(stderr, "  d=%-6g %-36s not a valid setting: %s\n", d, st.varied.c_str(), e.what());
+                if (preset) throw;
+                res.skipped.push_back(what + ": " + e.what());
+                if (!o.quiet) std::fprintf(stderr, "  d=%-6g %-36s not a valid setting: %s\n", d, what.c_str(), e.what());
                 return true;
             }
             watch.request_stop();
             req.cancel = o.cancel;  // measured: its frames and its truth finish
             FrontierPoint p;
             p.distance = d;
-            p.method = methods_of(s);
-            p.settings = st.values;
+            p.method = methods[st.method].label;
+            p.settings = methods[st.method].sets;
+            p.settings.insert(p.settings.end(), st.values.begin(), st.values.end());
             p.varied = st.varied;
             p.precompute_ms = r.stages_ms;
             std::vector<double> frames;
@@ -260,30 +312,43 @@ FrontierResult frontier_scene(const Scene& base, const FrontierOptions& o, bool 
             res.points.push_back(p);
             if (o.on_point) o.on_point(p);
             if (!o.quiet)
-                std::fprintf(stderr, "  d=%-6g %-36s frame %9.3f ms  precompute %9.1f ms  rmse_rel %.4f%s\n", d, p.varied.c_str(), p.frame_ms, p.precompute_ms,
+                std::fprintf(stderr, "  d=%-6g %-36s frame %9.3f ms  precompute %9.1f ms  rmse_rel %.4f%s\n", d, what.c_str(), p.frame_ms, p.precompute_ms,
                              p.rmse_rel, p.below_noise ? " (below the truth's noise)" : "");
             return true;
         };
         for (const Setting& st : settings) measure(st), ++done;
-        // Refinement near the frontier: between two neighbours on it, every knob at the geometric
-        // mean of their values (once; a setting already measured is not measured again).
-        std::vector<FrontierPoint> here(res.points.begin() + std::ptrdiff_t(first), res.points.end());
-        mark_frontier(here);
-        std::vector<const FrontierPoint*> front;
-        for (const auto& p : here)
-            if (p.on_frontier) front.push_back(&p);
-        std::sort(front.begin(), front.end(), [](auto* x, auto* y) { return x->frame_ms < y->frame_ms; });
+        // Refinement near each method's frontier: between two neighbours on it, every knob at the
+        // geometric mean of their values (once; a setting already measured is not measured again).
+        const std::vector<FrontierPoint> here(res.points.begin() + std::ptrdiff_t(first), res.points.end());
+        const auto knob_of = [](const FrontierPoint& p, const std::string& key) {
+            for (const auto& [k, v] : p.settings)
+                if (k == key) return std::stod(v);
+            throw std::logic_error("frontier: no setting of " + key);
+        };
         std::vector<Setting> between;
-        for (size_t i = 1; i < front.size(); ++i) {
-            Setting st{"between " + front[i - 1]->varied + " and " + front[i]->varied, front[i - 1]->settings};
-            for (size_t k = 0; k < knobs.size(); ++k) {
-                const double x = std::stod(front[i - 1]->settings[k].second), y = std::stod(front[i]->settings[k].second);
-                const double mid = x > 0.0 && y > 0.0 ? std::sqrt(x * y) : 0.5 * (x + y);
-                st.values[k].second = knobs[k].decl->type == ParamType::Int ? int_setting(knobs[k], mid, knobs[k].decl->max) : strprintf("%.6g", mid);
+        for (size_t mi = 0; mi < methods.size(); ++mi) {
+            std::vector<FrontierPoint> mine;
+            for (const auto& p : here)
+                if (p.method == methods[mi].label) mine.push_back(p);
+            mark_frontier(mine);
+            std::vector<const FrontierPoint*> front;
+            for (const auto& p : mine)
+                if (p.on_frontier) front.push_back(&p);
+            std::sort(front.begin(), front.end(), [](auto* x, auto* y) { return x->frame_ms < y->frame_ms; });
+            const std::vector<AccuracyKnob>& knobs = knobs_of[mi];
+            for (size_t i = 1; i < front.size(); ++i) {
+                Setting st{mi, "between " + front[i - 1]->varied + " and " + front[i]->varied, {}};
+                for (const AccuracyKnob& k : knobs) {
+                    const double x = knob_of(*front[i - 1], k.key), y = knob_of(*front[i], k.key);
+                    const double mid = x > 0.0 && y > 0.0 ? std::sqrt(x * y) : 0.5 * (x + y);
+                    st.values.emplace_back(k.key, k.decl->type == ParamType::Int ? int_setting(k, mid, k.decl->max) : strprintf("%.6g", mid));
+                }
+                std::vector<std::pair<std::string, std::string>> all = methods[mi].sets;
+                all.insert(all.end(), st.values.begin(), st.values.end());
+                const bool seen = std::any_of(here.begin(), here.end(), [&](const FrontierPoint& p) { return p.settings == all; }) ||
+                                  std::any_of(between.begin(), between.end(), [&](const Setting& x) { return x.method == mi && x.values == st.values; });
+                if (!seen) between.push_back(st);
             }
-            const bool seen = std::any_of(here.begin(), here.end(), [&](const FrontierPoint& p) { return p.settings == st.values; }) ||
-                              std::any_of(between.begin(), between.end(), [&](const Setting& x) { return x.values == st.values; });
-            if (!seen) between.push_back(st);
         }
         for (const Setting& st : between) measure(st);
         res.truth_noise.push_back(noise);
@@ -292,8 +357,8 @@ FrontierResult frontier_scene(const Scene& base, const FrontierOptions& o, bool 
 
     // [SECTION] Outputs
     std::ostringstream md, csv;
-    md << "Frontier of `" << base.name << "` (" << o.backend << ", " << o.width << "x" << o.height << "; " << res.machine << "): each accuracy knob ("
-       << join(res.knobs, ", ") << ") on a coarse grid around the preset and all of them together, then between neighbours on the frontier; frame time the median of " << o.repeat
+    md << "Frontier of `" << base.name << "` (" << o.backend << ", " << o.width << "x" << o.height << "; " << res.machine << "): for each method, each accuracy knob ("
+       << join(res.knobs, ", ") << ") on a coarse grid around the preset and all of them together, then between neighbours on the method's frontier; frame time the median of " << o.repeat
        << " frames with the stages cached, precomputation the stages from a cold cache; error `rmse_rel` against the truth (" << o.truth.seed
        << " seed). ★: on the frontier (no point as fast or faster has a lower error).";
     if (res.budget_reached) md << " The budget ended the run before every setting was measured.";
@@ -313,7 +378,11 @@ FrontierResult frontier_scene(const Scene& base, const FrontierOptions& o, bool 
         json x{{"distance", p.distance}, {"method", p.method}, {"setting", p.varied}, {"frame_ms", p.frame_ms}, {"precompute_ms", p.precompute_ms},
                {"rmse_rel", p.rmse_rel}, {"below_noise", p.below_noise}, {"on_frontier", p.on_frontier}};
         json knobs_json = json::object();
-        for (const auto& [k, v] : p.settings) csv << "," << v, knobs_json[k] = v;
+        for (const auto& [k, v] : p.settings) knobs_json[k] = v;
+        for (const std::string& key : res.knobs) {  // a column per knob of any method, empty where this method has none
+            const auto it = std::find_if(p.settings.begin(), p.settings.end(), [&](const auto& kv) { return kv.first == key; });
+            csv << "," << (it == p.settings.end() ? std::string() : it->second);
+        }
         x["knobs"] = knobs_json;
         j["points"].push_back(x);
         csv << "," << p.frame_ms << "," << p.precompute_ms << "," << p.rmse_rel << "," << (p.below_noise ? "true" : "false") << ","
@@ -333,20 +402,25 @@ FrontierResult frontier_scene(const Scene& base, const FrontierOptions& o, bool 
             plot.title = "accuracy against time: " + base.name + " at distance " + strprintf("%g", d) + " (" + o.backend + ")";
             plot.xlabel = "frame time, stages cached (ms)";
             plot.ylabel = "relative RMSE vs the truth";
-            PlotSeries all{"settings (" + methods_of(base) + ")", {}, {}, {}, false}, below{"below the truth's noise", {}, {}, {}, false},
-                front{"frontier", {}, {}, {}, true};
+            // One colour per method.
+            std::vector<PlotSeries> per_method;
+            for (const auto& m : methods) per_method.push_back({m.label, {}, {}, {}, false});
+            PlotSeries below{"below the truth's noise", {}, {}, {}, false}, front{"frontier", {}, {}, {}, true};
             std::vector<const FrontierPoint*> fp;
             double lo = 1e300, hi = 0;
             for (const auto& p : res.points) {
                 if (p.distance != d) continue;
-                PlotSeries& s = p.below_noise ? below : all;
+                const auto mi = size_t(std::find_if(methods.begin(), methods.end(), [&](const MethodChoice& m) { return m.label == p.method; }) - methods.begin());
+                PlotSeries& s = p.below_noise ? below : per_method.at(mi);
                 s.x.push_back(p.frame_ms), s.y.push_back(p.rmse_rel), s.point_labels.push_back(p.varied == "preset" ? "preset" : "");
                 if (p.on_frontier) fp.push_back(&p);
                 lo = std::min(lo, p.frame_ms), hi = std::max(hi, p.frame_ms);
             }
             std::sort(fp.begin(), fp.end(), [](auto* a, auto* b) { return a->frame_ms < b->frame_ms; });
             for (auto* p : fp) front.x.push_back(p->frame_ms), front.y.push_back(p->rmse_rel), front.point_labels.push_back("");
-            plot.series = {all};  // the frontier last of the points: drawn over them
+            plot.series.clear();  // the frontier last of the points: drawn over them
+            for (auto& m : per_method)
+                if (!m.x.empty()) plot.series.push_back(std::move(m));
             if (!below.x.empty()) plot.series.push_back(below);
             plot.series.push_back(front);
             if (hi > 0) plot.series.push_back({"truth's noise floor (2 noise_rel)", {lo, hi}, {2.0 * res.truth_noise[di], 2.0 * res.truth_noise[di]}, {}});

@@ -152,14 +152,14 @@ bool ParamTable::operator==(const ParamTable& o) const {
     return group_ == o.group_ && values_ == o.values_;
 }
 
-void ParamGroup::section(std::string title, std::vector<std::string> names, bool open) {
+void ParamGroup::section(std::string title, std::vector<std::string> names, bool open, bool first) {
     for (const std::string& n : names) {
         if (index_of(n) < 0) throw std::logic_error("section " + title + ": no parameter " + name_ + "." + n);
         for (const ParamSection& sec : sections_)
             if (std::find(sec.names.begin(), sec.names.end(), n) != sec.names.end())
                 throw std::logic_error("section " + title + ": " + name_ + "." + n + " is already in section " + sec.title);
     }
-    sections_.push_back({std::move(title), std::move(names), open});
+    sections_.insert(first ? sections_.begin() : sections_.end(), ParamSection{std::move(title), std::move(names), open});
 }
 
 void ParamGroup::set_cost(std::string_view name, Cost c) {
@@ -203,6 +203,8 @@ void ParamTable::set(std::string_view n, const Value& v, const std::string& wher
 
 bool ParamTable::is_used(const ParamDecl& d) const {
     if (d.used_when_key.empty()) return true;
+    // A key used under another is unused wherever that one is (e.g. a method's sub-option).
+    if (const ParamDecl* parent = group_->find(d.used_when_key); parent && !is_used(*parent)) return false;
     const Value& v = get(d.used_when_key);
     std::string s;
     if (auto* b = std::get_if<bool>(&v)) s = *b ? "true" : "false";

@@ -109,7 +109,7 @@ public:
     void set_cost(std::string_view name, Cost c);
     // Declares a section of already declared parameters (std::logic_error for an unknown name or
     // one already in a section). Parameters in no section are shown after the sections.
-    void section(std::string title, std::vector<std::string> names, bool open = true);
+    void section(std::string title, std::vector<std::string> names, bool open = true, bool first = false);
     const std::vector<ParamSection>& sections() const { return sections_; }
 
 private:

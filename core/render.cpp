@@ -205,9 +205,8 @@ DeclaredReads frame_step_reads(const Scene& s, const FrameStepDecl& d) {
 std::vector<FrameStepRun> FrameStepScheduler::run(const Scene& s, const Evaluation& ev, const Runner& work) {
     std::vector<FrameStepRun> runs;
     for (const Technique* t : Registry::instance().techniques()) {
-        std::vector<int> objects;
-        for (size_t i = 0; i < s.objects.size(); ++i)
-            if (s.objects[i].technique == t->name()) objects.push_back(int(i));
+        // A technique's frame steps are its paper method's: they run for the objects that use it.
+        const std::vector<int> objects = method_objects(s, *t, nullptr);
         if (objects.empty()) continue;
         for (const FrameStepDecl& d : t->frame_steps()) {
             FrameStepRun run{d.name};
@@ -286,12 +285,6 @@ Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height, co
     Frame f = make_frame(frame_layout(s, aovs), width, height);
     const FrameCamera cam = make_camera(s, world_bounds(s, ev), width, height);
     const Lighting lighting = make_lighting(s, ev);
-    const auto objects_of = [&](const Technique& t) {
-        std::vector<int> r;
-        for (size_t i = 0; i < s.objects.size(); ++i)
-            if (s.objects[i].technique == t.name()) r.push_back(int(i));
-        return r;
-    };
 
     // Frame steps: offscreen work before shading, reused while their inputs are unchanged.
     FrameStepScheduler local;
@@ -339,12 +332,20 @@ Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height, co
             });
     }
     for (const Technique* t : reg.techniques()) {
-        const std::vector<int> objs = objects_of(*t);
-        if (objs.empty()) continue;
         const AovWriter out(f, *t);
-        ShadeContext ctx{s, ev, gb, cam, lighting, objs, f, out, step_out};
-        PROFILE_SCOPE("shade." + t->name());
-        t->shade_cpu(ctx);
+        // The paper's method, then each other method, on the objects that use it.
+        if (const std::vector<int> objs = method_objects(s, *t, nullptr); !objs.empty()) {
+            ShadeContext ctx{s, ev, gb, cam, lighting, objs, f, out, step_out};
+            PROFILE_SCOPE("shade." + t->name());
+            t->shade_cpu(ctx);
+        }
+        for (const Method* m : t->methods()) {
+            const std::vector<int> objs = method_objects(s, *t, m);
+            if (objs.empty()) continue;
+            ShadeContext ctx{s, ev, gb, cam, lighting, objs, f, out, step_out};
+            PROFILE_SCOPE("shade." + t->name() + "/" + m->name());
+            m->shade_cpu(ctx);
+        }
     }
     return f;
 }

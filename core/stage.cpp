@@ -1,6 +1,8 @@
 #include "core/stage.h"
 #include "core/hash.h"
 #include "core/error.h"
+#include "core/scene.h"
+#include "core/strings.h"
 
 #include <algorithm>
 
@@ -128,10 +130,22 @@ const StageDecl& StageGraph::at(const std::string& name) const {
     return *d;
 }
 
+StageDecl& StageGraph::at_mut(const std::string& name) {
+    for (StageDecl& d : stages_)
+        if (d.name == name) return d;
+    throw std::logic_error("unknown stage " + name);
+}
+
 bool StageGraph::covers(const Scene& scene, const StageDecl& d, int object) const {
     if (d.scope == StageScope::Scene) return true;
     if (object < 0 || size_t(object) >= scene.objects.size()) return false;
-    return d.technique.empty() || scene.objects[size_t(object)].technique == d.technique;
+    const SceneObject& o = scene.objects[size_t(object)];
+    if (!d.technique.empty() && o.technique != d.technique) return false;
+    if (d.methods.empty()) return true;
+    // Read outside any stage's read contract: which objects a stage computes for is the graph's
+    // business, not the stage's input.
+    ParamReadScope quiet(nullptr);
+    return std::find(d.methods.begin(), d.methods.end(), o.material.get_string("method")) != d.methods.end();
 }
 
 std::vector<int> StageGraph::subjects(const Scene& scene, const StageDecl& d) const {
@@ -155,7 +169,11 @@ void StageGraph::for_each_input(const Scene& scene, const StageDecl& d, int obje
 bool StageGraph::enabled(const Scene& scene, const StageDecl& d, int object, std::string* reason) const {
     if (d.scope == StageScope::Object) {
         if (!covers(scene, d, object)) {
-            if (reason) *reason = "the object does not use " + d.technique;
+            if (reason) {
+                const SceneObject& o = scene.objects[size_t(object)];
+                *reason = o.technique != d.technique ? "the object does not use " + d.technique
+                                                     : "the object's " + d.technique + ".method is not " + join(d.methods, " or ");
+            }
             return false;
         }
         if (d.applies && !d.applies(scene, scene.objects[size_t(object)])) {

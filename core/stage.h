@@ -122,6 +122,9 @@ struct StageDecl {
     StageScope scope = StageScope::Scene;
     // Object stages: the technique whose objects it computes for ("" = every object).
     std::string technique;
+    // ...and of those, only the objects whose `<technique>.method` is one of these (empty: every
+    // method). Set by the registry from the methods' frame stages, not declared.
+    std::vector<std::string> methods;
     std::vector<std::string> params;   // public keys or "group.*"
     std::vector<StageName> inputs;     // upstream stages
     std::vector<std::string> effects;  // empty: needed whenever downstream needs it
@@ -258,6 +261,8 @@ public:
     const StageDecl* find(const std::string& name) const;
     const StageDecl& at(const std::string& name) const;  // std::logic_error when unknown
     const std::vector<StageDecl>& stages() const { return stages_; }
+    // The registry's access while it builds the graph (StageDecl::methods).
+    StageDecl& at_mut(const std::string& name);
 
     // Whether object `object` is one an object stage computes for (its technique); true for scene stages.
     bool covers(const Scene& scene, const StageDecl& d, int object) const;

@@ -13,8 +13,17 @@ std::vector<std::function<std::unique_ptr<Technique>()>>& extra_techniques() {
     static std::vector<std::function<std::unique_ptr<Technique>()>> v;
     return v;
 }
+std::vector<std::function<std::unique_ptr<Method>()>>& extra_methods() {
+    static std::vector<std::function<std::unique_ptr<Method>()>> v;
+    return v;
+}
 bool g_registry_built = false;
 }  // namespace
+
+void register_extra_method(std::function<std::unique_ptr<Method>()> make) {
+    if (g_registry_built) throw std::logic_error("register_extra_method: the registry is already built");
+    extra_methods().push_back(std::move(make));
+}
 
 void register_extra_technique(std::function<std::unique_ptr<Technique>()> make) {
     if (g_registry_built) throw std::logic_error("register_extra_technique: the registry is already built");
@@ -62,6 +71,8 @@ Registry::Registry()
     declare_scene_stages(stages_);
     register_core_techniques(*this);
     for (const auto& make : extra_techniques()) add(make());
+    register_core_methods(*this);
+    for (const auto& make : extra_methods()) add_method(make());
     finish();
     g_registry_built = true;
 }
@@ -82,7 +93,63 @@ void Registry::add(std::unique_ptr<Technique> t) {
     techniques_.push_back(std::move(t));
 }
 
+void Registry::add_method(std::unique_ptr<Method> m) {
+    Technique* t = nullptr;
+    for (const auto& x : techniques_)
+        if (x->name() == m->technique()) t = x.get();
+    if (!t) throw std::logic_error("method " + m->name() + ": no technique " + m->technique());
+    if (t->paper_method_.empty()) throw std::logic_error("method " + m->name() + ": technique " + t->name() + " names no paper method");
+    for (const std::string& n : t->method_names())
+        if (n == m->name()) throw std::logic_error("method " + t->name() + "/" + m->name() + " registered twice");
+    const size_t before = t->params_.decls().size();
+    m->declare_params(t->params_);
+    for (size_t i = before; i < t->params_.decls().size(); ++i) {
+        const ParamDecl& d = t->params_.decls()[i];
+        if (d.used_when_key != "method" || d.used_when_values != std::vector<std::string>{m->name()})
+            throw std::logic_error("method " + t->name() + "/" + m->name() + " declares " + t->name() + "." + d.name +
+                                   " without .used_when(\"method\", {\"" + m->name() + "\"})");
+    }
+    m->declare_stages(stages_);
+    t->methods_.push_back(m.get());
+    methods_.push_back(std::move(m));
+}
+
+void Registry::declare_methods() {
+    for (const auto& t : techniques_) {
+        if (t->paper_method_.empty()) continue;
+        std::string doc = "How the effect is computed: " + t->paper_method_ + " (the paper's, " + t->title() + ")";
+        for (const Method* m : t->methods_) doc += "; " + m->name() + " (" + m->title() + ")";
+        t->params_.add_enum("method", t->method_names(), t->paper_method_).doc(doc + ". One truth serves them all");
+        t->params_.section("Method", {"method"}, true, /*first=*/true);
+        if (t->methods_.empty()) continue;
+        // Which methods each of the technique's object stages serves: those whose frame stages
+        // reach it upstream. A stage no method's frame reaches (an export's, the truth's) serves all.
+        const auto reach = [&](const std::vector<StageName>& roots) {
+            std::set<std::string> seen;
+            std::vector<std::string> todo(roots.begin(), roots.end());
+            while (!todo.empty()) {
+                const std::string n = todo.back();
+                todo.pop_back();
+                if (!seen.insert(n).second) continue;
+                for (const StageName& in : stages_.at(n).inputs) todo.push_back(in.str());
+            }
+            return seen;
+        };
+        std::vector<std::pair<std::string, std::set<std::string>>> reached{{t->paper_method_, reach(t->frame_stages())}};
+        for (const Method* m : t->methods_) reached.emplace_back(m->name(), reach(m->frame_stages()));
+        for (const StageDecl& d : stages_.stages()) {
+            if (d.scope != StageScope::Object || d.technique != t->name()) continue;
+            std::vector<std::string> serves;
+            for (const auto& [name, set] : reached)
+                if (set.count(d.name)) serves.push_back(name);
+            if (serves.empty() || serves.size() == reached.size()) continue;
+            stages_.at_mut(d.name).methods = serves;
+        }
+    }
+}
+
 void Registry::finish() {
+    declare_methods();
     // The effects group is the union of the scene's and the techniques' effect switches.
     std::vector<EffectDecl> all = scene_effects_;
     for (const auto& t : techniques_)
@@ -127,6 +194,9 @@ void Registry::derive_costs() {
         for (const std::string& p : d.params) read.insert(p);
         for (const std::string& e : d.effects) read.insert("effects." + e);
     }
+    // A method decides which stages run for its objects.
+    for (const auto& t : techniques_)
+        if (!t->paper_method_.empty()) read.insert(t->name() + ".method");
     std::vector<ParamGroup*> groups{&camera_, &light_, &env_, &geometry_, &effects_};
     for (const auto& t : techniques_) groups.push_back(&t->params_);
     for (ParamGroup* g : groups)
@@ -163,9 +233,41 @@ std::vector<const ParamGroup*> Registry::groups() const {
 
 std::vector<StageName> Registry::frame_stages(const Scene& s) const {
     std::vector<StageName> r{stages::geometry, stages::env_map, stages::env_irradiance};
-    for (const auto& t : techniques_)
-        if (s.uses_technique(t->name()))
+    for (const auto& t : techniques_) {
+        if (!method_objects(s, *t, nullptr).empty())
             for (auto& st : t->frame_stages()) r.push_back(st);
+        for (const Method* m : t->methods())
+            if (!method_objects(s, *t, m).empty())
+                for (auto& st : m->frame_stages()) r.push_back(st);
+    }
+    return r;
+}
+
+// [SECTION] Methods
+std::vector<std::string> Technique::method_names() const {
+    if (paper_method_.empty()) return {};
+    std::vector<std::string> r{paper_method_};
+    for (const Method* m : methods_) r.push_back(m->name());
+    return r;
+}
+
+const Method* Technique::method_of(const SceneObject& o) const {
+    if (methods_.empty() || o.technique != name()) return nullptr;
+    const std::string& v = o.material.get_string("method");
+    for (const Method* m : methods_)
+        if (m->name() == v) return m;
+    return nullptr;
+}
+
+FrameAgreement Technique::agreement_for(const SceneObject& o) const {
+    if (const Method* m = method_of(o)) return m->agreement();
+    return agreement();
+}
+
+std::vector<int> method_objects(const Scene& s, const Technique& t, const Method* m) {
+    std::vector<int> r;
+    for (size_t i = 0; i < s.objects.size(); ++i)
+        if (s.objects[i].technique == t.name() && t.method_of(s.objects[i]) == m) r.push_back(int(i));
     return r;
 }
 

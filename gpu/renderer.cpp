@@ -79,6 +79,17 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
                                        (i < declared.size() ? declared[i].name : std::string("none")));
             impl_->steps[declared[i].name] = bound[i].run;
         }
+        // Each other method's pass: the technique's outputs, no frame steps of its own.
+        for (const Method* m : t->methods()) {
+            const std::string key = t->name() + "/" + m->name();
+            auto mf = factories.find(key);
+            if (mf == factories.end()) throw std::logic_error("method " + key + " has no GPU pass");
+            impl_->passes[key] = mf->second(*t);
+            if (!impl_->passes[key]->frame_steps().empty()) throw std::logic_error("method " + key + ": a method's pass has no frame steps");
+            if (int(t->outputs().size()) > max_attachments() && !impl_->passes[key]->output_variants())
+                throw std::runtime_error("method " + key + " draws " + std::to_string(t->outputs().size()) + " outputs; this GL draws at most " +
+                                         std::to_string(max_attachments()) + " at once");
+        }
     }
     GLuint vao = 0;
     glGenVertexArrays(1, &vao);
@@ -268,10 +279,10 @@ void Renderer::render(const Scene& s, const Evaluation& ev, int width, int heigh
 
     const FrameCamera cam = make_camera(s, world_bounds(s, ev), width, height);
     const Lighting lighting = make_lighting(s, ev);
-    const auto context_for = [&](const Technique& t) {
+    // The objects of technique t that use method m (null: the paper's, whose pass runs the frame steps).
+    const auto context_for = [&](const Technique& t, const Method* m = nullptr) {
         DrawContext ctx{s, ev, cam, lighting, {}, *this, cam.raster.proj * cam.raster.view};
-        for (size_t i = 0; i < s.objects.size(); ++i)
-            if (s.objects[i].technique == t.name()) ctx.objects.push_back(int(i));
+        ctx.objects = method_objects(s, t, m);
         return ctx;
     };
 
@@ -344,6 +355,12 @@ void Renderer::render(const Scene& s, const Evaluation& ev, int width, int heigh
         return w;
     });
 
+    // Every technique's paper method, then its other methods.
+    std::vector<std::pair<const Technique*, const Method*>> drawn;
+    for (const Technique* t : Registry::instance().techniques()) {
+        drawn.emplace_back(t, nullptr);
+        for (const Method* m : t->methods()) drawn.emplace_back(t, m);
+    }
     if (!per_pass) begin_range();
     for (size_t b = 0; b < batches_.size(); ++b) {
         if (per_pass) begin_range();
@@ -376,10 +393,11 @@ void Renderer::render(const Scene& s, const Evaluation& ev, int width, int heigh
         if (per_pass) impl_->timeline->end(range_done("frame.gpu/clear/gpu", ""));
         glEnable(GL_DEPTH_TEST);
         glDepthFunc(GL_LESS);
-        for (const Technique* t : Registry::instance().techniques()) {
-            DrawContext ctx = context_for(*t);
+        for (const auto& [t, m] : drawn) {
+            DrawContext ctx = context_for(*t, m);
             if (ctx.objects.empty()) continue;
-            TechniquePass& pass = *impl_->passes.at(t->name());
+            const std::string key = m ? t->name() + "/" + m->name() : t->name();
+            TechniquePass& pass = *impl_->passes.at(key);
             // The outputs bound: all the technique's, or with output variants those of this batch.
             std::vector<AovDecl> bound;
             for (const AovDecl& o : t->outputs())
@@ -389,7 +407,7 @@ void Renderer::render(const Scene& s, const Evaluation& ev, int width, int heigh
             bind_outputs(bound, b);
             if (per_pass) begin_range();
             pass.draw(ctx);
-            if (per_pass) impl_->timeline->end(range_done("frame.gpu/draw." + t->name() + "/gpu", ""));
+            if (per_pass) impl_->timeline->end(range_done("frame.gpu/draw." + key + "/gpu", ""));
         }
     }
     if (!per_pass) impl_->timeline->end(range_done("frame.gpu/draw/gpu", ""));

@@ -10,6 +10,7 @@
 namespace mesolab::bumpsynth {
 
 BumpsynthTechnique::BumpsynthTechnique() : Technique("bumpsynth", "Bump map synthesis (Kautz et al. 2001)") {
+    paper_method_ = "kautz";
     auto& p = params_;
     const std::vector<std::string> lobed{"beckmann", "ggx", "ward"};
     p.add_enum("ndf", {"phong", "beckmann", "ggx", "ward", "lobes", "image", "normal_map", "heightfield"}, "beckmann")

@@ -44,6 +44,7 @@ Settings Settings::from(const Scene& sc, const SceneObject& o, unsigned parts) {
 
 // [SECTION] Parameters and AOVs
 ClothTechnique::ClothTechnique() : Technique("cloth", "Cloth (Daubert et al. 2001)") {
+    paper_method_ = "daubert";
     auto& p = params_;
     p.add_enum("stitch", stitch_names(), "knit")
         .doc("Stitch pattern: plain knit, purl loops, knit loops in two colours, plain weave, 2/1 twill");

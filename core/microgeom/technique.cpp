@@ -8,6 +8,7 @@ namespace mesolab::microgeom {
 
 // [SECTION] The technique
 MicrogeomTechnique::MicrogeomTechnique() : Technique("microgeom", "Micro-geometry (Heidrich et al. 2000)") {
+    paper_method_ = "heidrich";
     auto& p = params_;
     declare_heightfield_params(p);
     p.add_color("albedo", {0.8, 0.8, 0.8})
@@ -15,11 +16,11 @@ MicrogeomTechnique::MicrogeomTechnique() : Technique("microgeom", "Micro-geometr
     p.add_path("albedo_map", "")
         .doc("Per-texel albedo image (8/16-bit sRGB or float linear), resampled bilinearly (wrapping) onto the heightfield's texels and "
              "multiplied by albedo; empty: the procedural rule");
-    p.add_int("directions", 100).range(16, 1024).more_accurate(Accuracy::Higher, int64_t(1024))
+    p.add_int("directions", 100).used_when("method", {"heidrich"}).range(16, 1024).more_accurate(Accuracy::Higher, int64_t(1024))
         .doc("N: directions over the whole sphere for the visibility textures S_i (and their triangulation)");
-    p.add_int("depth", 2).range(0, 8).more_accurate(Accuracy::Higher, int64_t(8))
+    p.add_int("depth", 2).used_when("method", {"heidrich"}).range(0, 8).more_accurate(Accuracy::Higher, int64_t(8))
         .doc("K: bounces of light scattered inside the heightfield (direct light is added at every scattering point)");
-    p.add_enum("sampling", {"all", "random"}, "all")
+    p.add_enum("sampling", {"all", "random"}, "all").used_when("method", {"heidrich"})
         .doc("Directions gathered per bounce: all N (deterministic quadrature) or a random subset (dependent tests)");
     p.add_int("paths", 64).range(1, 4096).used_when("sampling", {"random"}).doc("Random directions per bounce");
     p.add_int("scatter_seed", 1).range(0, 2147483647).used_when("sampling", {"random"}).doc("Seed of the random subsets");
@@ -27,11 +28,11 @@ MicrogeomTechnique::MicrogeomTechnique() : Technique("microgeom", "Micro-geometr
         .doc("Curvature of the base geometry along u, as the total bend across the field (+ convex, - concave): bends the "
              "scattering directions and reweights paths by the triangle-fan area importance (§5); S_i are not recomputed");
     p.add_float("curvature_v", 0.0).range(-360.0, 360.0).in("degrees").doc("Curvature along v (see curvature_u)");
-    p.add_enum("device", {"cpu", "gpu"}, "cpu")
+    p.add_enum("device", {"cpu", "gpu"}, "cpu").used_when("method", {"heidrich"})
         .doc("Where the precomputations run: cpu (all cores) or gpu (OpenGL compute shaders on a context of their own): S_i, the scattering "
              "bounces, the curvature importance, the ellipse fits and the goniometer's and BTF's light images; without OpenGL a stage runs on "
              "the CPU and says so. Both agree to float rounding (tests/microgeom/*_gpu_test.cpp)");
-    p.add_enum("shadows", {"none", "exact", "ellipse"}, "exact")
+    p.add_enum("shadows", {"none", "exact", "ellipse"}, "exact").used_when("method", {"heidrich"})
         .doc("none; exact: the visibility of the 3 directions of the spherical triangle containing the light, interpolated; "
              "ellipse: the paper's per-texel ellipse fitted to the unshadowed directions (§4)");
     p.add_float("ellipse_bend", 90.0).range(1.0, 360.0).in("degrees").used_when("shadows", {"ellipse"})
@@ -41,7 +42,7 @@ MicrogeomTechnique::MicrogeomTechnique() : Technique("microgeom", "Micro-geometr
     p.add_color("ks", {0.04, 0.04, 0.04}).used_when("brdf", {"blinn-phong"}).doc("Specular albedo of the normalised Blinn-Phong lobe");
     p.add_float("shininess", 32.0).range(1.0, 10000.0).log().used_when("brdf", {"blinn-phong"}).doc("Blinn-Phong exponent");
     p.add_float("tiling", 4.0).range(0.01, 1e4).log().doc("Repeats of the heightfield across the object's (u,v) (texture mode: always 1:1); recomputes only the displaced geometry of lod = geometry");
-    p.add_enum("lod", {"geometry", "bump", "brdf"}, "bump")
+    p.add_enum("lod", {"geometry", "bump", "brdf"}, "bump").used_when("method", {"heidrich"})
         .doc("Level of detail: geometry (the base re-tessellated at one vertex per texel and displaced by the heights; parallax and "
              "silhouettes), bump (bump map with precomputed visibility), brdf (smooth surface with the heightfield's simulated BRDF "
              "from the virtual goniometer, §6)");

@@ -111,6 +111,7 @@ MemoryEstimate factor_memory(const PreparedMesh& m, const Settings& s) {
 
 // [SECTION] The technique
 TranslucencyTechnique::TranslucencyTechnique() : Technique("translucency", "Translucency (Lensch et al. 2002)") {
+    paper_method_ = "lensch";
     std::vector<std::string> names;
     for (const auto& m : measured_materials()) names.push_back(m.name);
     names.push_back("custom");

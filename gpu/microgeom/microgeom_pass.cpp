@@ -5,6 +5,7 @@
 #include "core/microgeom/microgeom.h"
 #include "core/profile.h"
 #include "core/scene_stages.h"
+#include "gpu/microgeom/field_textures.h"
 #include "gpu/renderer.h"
 
 #include <glm/gtc/type_ptr.hpp>
@@ -17,19 +18,6 @@ namespace {
 using namespace mesolab::microgeom;
 
 constexpr int kGridW = 64, kGridH = 32;
-
-// RGBA32F texture, nearest filtering (the shader fetches texels).
-Texture make_rgba_texture(const float* rgba, int w, int h) {
-    return make_texture({.format = GL_RGBA32F, .width = w, .height = h}, {GL_RGBA, GL_FLOAT, rgba});
-}
-
-// RGBA32F texture from per-texel vec3 (alpha 1).
-Texture make_rgb_texture(const std::vector<vec3>& v, int w, int h) {
-    std::vector<float> rgba(size_t(w) * size_t(h) * 4, 1.f);
-    for (size_t i = 0; i < v.size(); ++i)
-        for (int c = 0; c < 3; ++c) rgba[i * 4 + size_t(c)] = v[i][c];
-    return make_rgba_texture(rgba.data(), w, h);
-}
 
 // GL objects made from the stage results (kept in the renderer's resource cache with them).
 struct DirectionBuffers {
@@ -47,13 +35,6 @@ struct BrdfTables {
 Texture upload_visibility(const Visibility& vis) {
     return make_texture({.target = GL_TEXTURE_2D_ARRAY, .format = GL_R32UI, .width = vis.width, .height = vis.height, .layers = vis.count},
                         {GL_RED_INTEGER, GL_UNSIGNED_INT, vis.hit.data()});
-}
-
-Texture upload_normals(const Heightfield& hf) {
-    std::vector<vec3> normals(hf.h.size());
-    for (int y = 0; y < hf.height; ++y)
-        for (int x = 0; x < hf.width; ++x) normals[hf.index(x, y)] = hf.normal(x, y);
-    return make_rgb_texture(normals, hf.width, hf.height);
 }
 
 DirectionBuffers upload_directions(const DirectionSet& dirs) {
@@ -96,7 +77,7 @@ Texture upload_per_light(const LightsScatter& s, const Heightfield& hf) {
     stacked.reserve(size_t(hf.width) * size_t(hf.height) * std::max<size_t>(1, s.lights.size()));
     for (const LightScatter& one : s.lights) stacked.insert(stacked.end(), one.result.E_indirect.begin(), one.result.E_indirect.end());
     if (stacked.empty()) stacked.assign(size_t(hf.width) * size_t(hf.height), vec3(0.f));
-    return make_rgb_texture(stacked, hf.width, int(stacked.size() / size_t(hf.width)));
+    return rgb_field_texture(stacked, hf.width, int(stacked.size() / size_t(hf.width)));
 }
 
 // microgeom.scatter_directions: one RGBA32F layer per direction above the horizon (at least one layer).
@@ -113,7 +94,7 @@ Texture upload_per_direction(const DirectionalScatter& s) {
 Texture upload_folded(const Importance& imp) {
     std::vector<vec3> mask(imp.folded.size());
     for (size_t k = 0; k < mask.size(); ++k) mask[k] = vec3(float(imp.folded[k]));
-    return make_rgb_texture(mask, imp.width, imp.height);
+    return rgb_field_texture(mask, imp.width, imp.height);
 }
 
 Ellipses upload_ellipses(const EllipseMap& em) {
@@ -124,8 +105,8 @@ Ellipses upload_ellipses(const EllipseMap& em) {
         rgba1[k * 4 + 0] = e.a, rgba1[k * 4 + 1] = e.b;
     }
     Ellipses r;
-    r.t0 = make_rgba_texture(rgba0.data(), em.width, em.height);
-    r.t1 = make_rgba_texture(rgba1.data(), em.width, em.height);
+    r.t0 = rgba_field_texture(rgba0.data(), em.width, em.height);
+    r.t1 = rgba_field_texture(rgba1.data(), em.width, em.height);
     return r;
 }
 
@@ -141,8 +122,8 @@ BrdfTables upload_brdf(const SimulatedBrdf& b) {
     for (size_t k = 0; k < size_t(nodes); ++k)
         for (int c = 0; c < 3; ++c) env[k * 4 + size_t(c)] = b.env.empty() ? 0.f : b.env[k][c];
     BrdfTables r;
-    r.table = make_rgba_texture(rgba.data(), nodes, nodes);
-    r.env = make_rgba_texture(env.data(), nodes, 1);
+    r.table = rgba_field_texture(rgba.data(), nodes, nodes);
+    r.env = rgba_field_texture(env.data(), nodes, 1);
     check_gl("microgeom.upload_brdf");
     return r;
 }
@@ -168,10 +149,10 @@ public:
             const ObjectFrame& f = b.f;
             const Heightfield& hf = *f.hf;
             b.vis = res.get<Texture>(f.vis, "vis", [&] { return upload_visibility(*f.vis); }).get();
-            b.normals = res.get<Texture>(f.hf, "normals", [&] { return upload_normals(hf); }).get();
-            b.albedo = res.get<Texture>(f.hf, "albedo", [&] { return make_rgb_texture(hf.albedo, hf.width, hf.height); }).get();
+            b.normals = res.get<Texture>(f.hf, "normals", [&] { return field_normals_texture(hf); }).get();
+            b.albedo = res.get<Texture>(f.hf, "albedo", [&] { return rgb_field_texture(hf.albedo, hf.width, hf.height); }).get();
             b.dirs = &res.get<DirectionBuffers>(f.dirs, "directions", [&] { return upload_directions(*f.dirs); });
-            if (f.env) b.e_env = res.get<Texture>(f.env, "E_env", [&] { return make_rgb_texture(f.env->result.E_indirect, hf.width, hf.height); }).get();
+            if (f.env) b.e_env = res.get<Texture>(f.env, "E_env", [&] { return rgb_field_texture(f.env->result.E_indirect, hf.width, hf.height); }).get();
             if (f.lights) b.e_light = res.get<Texture>(f.lights, "E_light", [&] { return upload_per_light(*f.lights, hf); }).get();
             if (f.table) b.e_dirs = res.get<Texture>(f.table, "E_dirs", [&] { return upload_per_direction(*f.table); }).get();
             if (f.imp && !f.imp->folded.empty()) b.folded = res.get<Texture>(f.imp, "folded", [&] { return upload_folded(*f.imp); }).get();

@@ -89,7 +89,7 @@ TEST(Gallery, EveryPresetAgreesOnBothBackendsAndMatchesItsScreenshot) {
         RenderRequest req;  // as `mesolab capture` renders (512 x 512, or the texture's own size)
         req.aovs = {"radiance", "normal"};
         for (const SceneObject& o : s.objects)  // and the AOVs of discrete choices the agreement tells flips by
-            for (const std::string& name : Registry::instance().technique(o.technique)->agreement().choices)
+            for (const std::string& name : Registry::instance().technique(o.technique)->agreement_for(o).choices)
                 if (std::find(req.aovs.begin(), req.aovs.end(), name) == req.aovs.end()) req.aovs.push_back(name);
         req.coverage = true;
         req.renderer = "cpu";

@@ -68,11 +68,15 @@ TEST(AgreementCheck, OnePercentOfWrongInteriorPixelsFailsEveryTechniquesToleranc
     size_t interior = 0;
     for (size_t p = 0; p < cpu.coverage.object.size(); ++p) interior += cpu.coverage.covered(p) && !cpu.coverage.edge[p];
     for (size_t p : interior_pixels(cpu.coverage, interior / 100)) wrong.aov("radiance").data[p * 3] += 0.5f;
+    std::vector<std::pair<std::string, FrameAgreement>> tolerances;  // every technique's and every method's
     for (const Technique* t : Registry::instance().techniques()) {
-        SCOPED_TRACE(t->name());
+        tolerances.emplace_back(t->name(), t->agreement());
+        for (const Method* m : t->methods()) tolerances.emplace_back(t->name() + "/" + m->name(), m->agreement());
+    }
+    for (auto& [name, tol] : tolerances) {
+        SCOPED_TRACE(name);
         // A wrong value shows the same discrete choices (table entries) as the CPU, so it is never
         // counted as a flip: these frames have no choice AOVs to compare.
-        FrameAgreement tol = t->agreement();
         tol.choices.clear();
         EXPECT_THAT(failures_of([&] { test::expect_frames_agree(cpu, wrong, {"radiance"}, tol); }), ::testing::HasSubstr("off silhouettes and triangle edges"));
     }

@@ -169,7 +169,7 @@ inline void expect_frames_agree(const Frame& cpu, const Frame& gpu, std::initial
 // object it shows.
 inline void expect_frames_agree(const Scene& s, const Frame& cpu, const Frame& gpu, std::initializer_list<const char*> aovs) {
     std::vector<FrameAgreement> tol;
-    for (const SceneObject& o : s.objects) tol.push_back(Registry::instance().technique(o.technique)->agreement());
+    for (const SceneObject& o : s.objects) tol.push_back(Registry::instance().technique(o.technique)->agreement_for(o));
     expect_frames_agree_by_object(cpu, gpu, aovs, [&](int o) -> const FrameAgreement& { return tol.at(size_t(o)); }, s.name);
 }
 

@@ -1,0 +1,67 @@
+// GPU pass of method pom of technique microgeom (core/microgeom/pom.h): uploads the heights in
+// texel units, the heightfield's normals and albedo (shared with the paper's pass) and shades
+// with pom.frag.
+#include "core/microgeom/microgeom.h"
+#include "core/microgeom/pom.h"
+#include "core/microgeom/stages.h"
+#include "core/profile.h"
+#include "core/scene_stages.h"
+#include "gpu/microgeom/field_textures.h"
+#include "gpu/renderer.h"
+
+#include <glm/gtc/type_ptr.hpp>
+
+namespace mesolab::gpu {
+namespace {
+
+using namespace mesolab::microgeom;
+
+class PomPass final : public TechniquePass {
+public:
+    explicit PomPass(const Technique& t) : program_(Program::graphics("shaders/mesh.vert", "microgeom/pom.frag", {"MESOLAB_SNAP_VERTICES"}, fragment_outputs(t))) {}
+
+    void draw(DrawContext& ctx) override {
+        PROFILE_SCOPE("draw.microgeom/pom");
+        GpuResources& res = ctx.renderer.resources();
+        program_.use();
+        ctx.renderer.set_lighting_uniforms(program_, ctx.lighting, 0);
+        for (int i : ctx.objects) {
+            const ParamTable& m = ctx.scene.objects[size_t(i)].material;
+            const auto hf = ctx.eval.get(microgeom::stages::heightfield, i);
+            const auto field = ctx.eval.get(microgeom::stages::pom_field, i);
+            if (!hf || !field) throw std::logic_error("microgeom/pom: the frame's stages were not evaluated for object " + std::to_string(i));
+            const GLuint heights = res.get<Texture>(field, "heights", [&] {
+                return make_texture({.format = GL_R32F, .width = field->width, .height = field->height}, {GL_RED, GL_FLOAT, field->z.data()});
+            }).get();
+            const GLuint normals = res.get<Texture>(hf, "normals", [&] { return field_normals_texture(*hf); }).get();
+            const GLuint albedo = res.get<Texture>(hf, "albedo", [&] { return rgb_field_texture(hf->albedo, hf->width, hf->height); }).get();
+            ctx.renderer.set_camera_uniforms(program_, ctx.camera, object_to_world(ctx.scene.objects[size_t(i)]));
+            program_.bind_texture(1, GL_TEXTURE_2D, heights, "u_heights");
+            program_.bind_texture(2, GL_TEXTURE_2D, normals, "u_normals");
+            program_.bind_texture(3, GL_TEXTURE_2D, albedo, "u_albedo");
+            glUniform2i(program_.uniform("u_size"), hf->width, hf->height);
+            glUniform2f(program_.uniform("u_z_range"), field->z_min, field->z_max);
+            glUniform1f(program_.uniform("u_tiling"), float(m.get_float("tiling")));
+            glUniform1i(program_.uniform("u_steps"), int(m.get_int("pom_steps")));
+            glUniform1i(program_.uniform("u_refine"), int(m.get_int("pom_refine")));
+            glUniform1i(program_.uniform("u_shadow_steps"), int(m.get_int("pom_shadow_steps")));
+            const bool phong = m.get_string("brdf") == "blinn-phong";
+            const vec3 ks = phong ? m.get_vec3("ks") : vec3(0.f);
+            glUniform1i(program_.uniform("u_phong"), phong ? 1 : 0);
+            glUniform3fv(program_.uniform("u_ks"), 1, glm::value_ptr(ks));
+            glUniform1f(program_.uniform("u_shininess"), float(m.get_float("shininess")));
+            ctx.renderer.draw_object(ctx.scene, ctx.eval, i);
+        }
+        glBindVertexArray(0);
+        check_gl("microgeom/pom.draw");
+    }
+
+private:
+    Program program_;
+};
+}  // namespace
+
+void register_microgeom_pom_gpu(std::map<std::string, PassFactory>& out) {
+    out["microgeom/pom"] = [](const Technique& t) { return std::make_unique<PomPass>(t); };
+}
+}  // namespace mesolab::gpu
