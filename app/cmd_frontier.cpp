@@ -59,11 +59,11 @@ std::vector<AccuracyKnob> accuracy_knobs(const Scene& s) {
     return r;
 }
 
-// An integer setting with the preset's parity (a kernel width that must be odd stays odd; the
-// other knobs do not mind), within the knob's range.
+// An integer setting within the knob's range, odd where the knob takes only odd values (a kernel
+// width).
 std::string int_setting(const AccuracyKnob& k, double x, double hi) {
     int64_t n = std::max<int64_t>(int64_t(std::llround(x)), int64_t(std::ceil(k.decl->min)));
-    if ((n - int64_t(std::llround(k.value))) % 2 != 0) n += double(n + 1) <= hi ? 1 : -1;
+    if (k.decl->odd_only && n % 2 == 0) n += double(n + 1) <= hi ? 1 : -1;
     return std::to_string(n);
 }
 

@@ -230,7 +230,10 @@ void validate_value(const ParamDecl& d, const Value& v, const std::string& where
             fail(where, "value " + fmt_double(x) + " is out of range " + describe_range(d) + (d.unit.empty() ? "" : " " + d.unit));
     };
     switch (d.type) {
-        case ParamType::Int: check(double(std::get<int64_t>(v))); break;
+        case ParamType::Int:
+            check(double(std::get<int64_t>(v)));
+            if (d.odd_only && std::get<int64_t>(v) % 2 == 0) fail(where, "value " + std::to_string(std::get<int64_t>(v)) + " must be odd");
+            break;
         case ParamType::Float: check(std::get<double>(v)); break;
         case ParamType::Vec2: for (double x : std::get<std::array<double, 2>>(v)) check(x); break;
         case ParamType::Vec3:

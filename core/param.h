@@ -58,6 +58,7 @@ struct ParamDecl {
     // Text only: the syntax check of a value (returns what is wrong, empty when it is fine), so a
     // bad value is refused where it is set (preset, --set, widget) with the key named.
     std::function<std::string(const std::string&)> syntax;
+    bool odd_only = false;             // Int: only odd values (ParamDecl::odd)
 
     // Fluent setters for concise declarations.
     ParamDecl& range(double lo, double hi) { min = lo; max = hi; return *this; }
@@ -69,6 +70,8 @@ struct ParamDecl {
     // A Path value that names a file (not one of the built-in names, not empty).
     bool is_file(const Value& v) const;
     ParamDecl& checked(std::function<std::string(const std::string&)> f) { syntax = std::move(f); return *this; }
+    // Int only: odd values only (a kernel width), refused where set with the key named.
+    ParamDecl& odd() { odd_only = true; return *this; }
     ParamDecl& used_when(std::string key, std::vector<std::string> values) { used_when_key = std::move(key); used_when_values = std::move(values); return *this; }
 };
 

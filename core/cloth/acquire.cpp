@@ -83,6 +83,7 @@ SampleGrid acquire(const StitchMesh& st, const AcquireParams& p, const ProgressF
     if (p.spatial < 1 || p.spatial > 256 || (p.spatial & (p.spatial - 1)) != 0)
         throw InputError("cloth.spatial: " + std::to_string(p.spatial) + " sample points per side must be a power of two in [1, 256]");
     if (p.directions < 4 || p.directions > 128) throw InputError("cloth.directions: " + std::to_string(p.directions) + " must be in [4, 128]");
+    if (p.bounces < 0 || p.bounces > 64) throw InputError("cloth.bounces: " + std::to_string(p.bounces) + " must be in [0, 64]");
     const TriMesh& m = st.mesh;
     if (m.triangle_count() == 0) throw InputError("cloth.stitch: the stitch mesh has no triangles");
     const StitchScene rt(m);
@@ -127,13 +128,19 @@ SampleGrid acquire(const StitchMesh& st, const AcquireParams& p, const ProgressF
             const bool lit = c > 0.f && !rt.occluded(m.position[i] + eps * m.normal[i], l);
             direct[i] = lit ? rho[i] * (c * kInvPi) : vec3(0.f);
         }
-        for (size_t i = 0; i < V; ++i) {
-            vec3 E_ind(0.f);
-            for (size_t k = 0; k < KK; ++k)
-                if (seen[i * KK + k].tri >= 0) E_ind += at_hit(m, direct, seen[i * KK + k]);
-            if (KK > 0) E_ind *= kPi / float(KK);
-            Lo[i * N + li] = direct[i] + rho[i] * kInvPi * E_ind;
+        // Bounce b gathers bounce b - 1's radiance at the hits (bounce 0: the direct light).
+        std::vector<vec3> L = direct, next(KK > 0 && p.bounces > 0 ? V : 0);
+        for (int b = 0; b < p.bounces && KK > 0; ++b) {
+            for (size_t i = 0; i < V; ++i) {
+                vec3 E_ind(0.f);
+                for (size_t k = 0; k < KK; ++k)
+                    if (seen[i * KK + k].tri >= 0) E_ind += at_hit(m, L, seen[i * KK + k]);
+                E_ind *= kPi / float(KK);
+                next[i] = direct[i] + rho[i] * kInvPi * E_ind;
+            }
+            L.swap(next);
         }
+        for (size_t i = 0; i < V; ++i) Lo[i * N + li] = L[i];
     });
     report(0.75);
     // Sampling along each view through each point of the centre tile's top face.

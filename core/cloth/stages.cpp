@@ -97,7 +97,7 @@ void ClothTechnique::declare_stages(StageGraph& g) const {
                return stage_result(stages::stitch, build_stitch_mesh(make_stitch(s.stitch), s.stitch_resolution));
            }});
     std::vector<std::string> acquire_keys = kStitchKeys;
-    acquire_keys.insert(acquire_keys.end(), {"cloth.spatial", "cloth.directions", "cloth.visibility_rays", "cloth.samples"});
+    acquire_keys.insert(acquire_keys.end(), {"cloth.spatial", "cloth.directions", "cloth.visibility_rays", "cloth.bounces", "cloth.samples"});
     g.add(stages::acquire, {.help = "Virtual acquisition (Embree): lighting by precomputed visibility, parallax samples per light x view pair, alpha per view",
            .scope = StageScope::Object,
            .technique = "cloth",

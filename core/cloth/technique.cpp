@@ -26,6 +26,7 @@ Settings Settings::from(const Scene& sc, const SceneObject& o, unsigned parts) {
         s.acquire.spatial = int(t.get_int("spatial"));
         s.acquire.directions = int(t.get_int("directions"));
         s.acquire.visibility_rays = int(t.get_int("visibility_rays"));
+        s.acquire.bounces = int(t.get_int("bounces"));
         s.samples = sc.resolve(t.get_string("samples"));
     }
     if (parts & Fit) {
@@ -60,7 +61,10 @@ ClothTechnique::ClothTechnique() : Technique("cloth", "Cloth (Daubert et al. 200
     p.add_int("directions", 32).range(4, 128).more_accurate(Accuracy::Higher, int64_t(64))
         .doc("Light directions, and as many view directions, over the hemisphere (32: the paper's 32 x 32 pairs)");
     p.add_int("visibility_rays", 64).range(0, 1024).more_accurate(Accuracy::Higher, int64_t(256))
-        .doc("Rays per vertex of the precomputed visibility for the indirect bounce (0: direct light only)");
+        .doc("Rays per vertex of the precomputed visibility for the indirect bounces (0: direct light only)");
+    p.add_int("bounces", 1).range(0, 64).more_accurate(Accuracy::Higher, int64_t(32))
+        .doc("Bounces of light between the yarns in the acquisition (the paper: 1; each gathers the previous one through the same "
+             "visibility rays; the truth keeps every bounce); 0: direct light only");
     p.add_path("samples", "")
         .doc("Acquired samples to fit instead of acquiring (mesolab export cloth-samples writes them); relative to the preset's folder");
     p.add_int("lobes", 2).range(1, 3).more_accurate(Accuracy::Higher, int64_t(3)).doc("Lafortune lobes per channel");
@@ -76,7 +80,7 @@ ClothTechnique::ClothTechnique() : Technique("cloth", "Cloth (Daubert et al. 200
         .doc("Mip level from the screen-space uv derivatives: off (level 0, aliases), nearest, blend between the two levels around it");
     p.add_float("mip_bias", 0.0).range(-4.0, 4.0).in("levels").used_when("mip", {"nearest", "blend"}).doc("Added to the mip level (positive: blurrier)");
     params_.section("Stitch", {"stitch", "yarn_radius", "loop_height", "color_a", "color_b", "stitch_resolution"});
-    params_.section("Acquisition", {"spatial", "directions", "visibility_rays", "samples"});
+    params_.section("Acquisition", {"spatial", "directions", "visibility_rays", "bounces", "samples"});
     params_.section("Fit", {"lobes", "lookup_table", "tolerance"});
     params_.section("Garment and mip blending", {"garment", "garment_resolution", "repeat", "mip", "mip_bias"});
     aovs_ = {{"alpha", 1, "The table's alpha: 1 yarn, 0 a hole (the background shows through)"},

@@ -130,7 +130,7 @@ TranslucencyTechnique::TranslucencyTechnique() : Technique("translucency", "Tran
         .doc("Texels per side of the texture atlas (local response, illumination map)");
     p.add_float("chunk_angle", 30.0).range(1.0, 89.0).in("degrees")
         .doc("Largest deviation of a triangle's normal from its chunk's average normal");
-    p.add_int("kernel", 7).range(3, 15).more_accurate(Accuracy::Higher, int64_t(15))
+    p.add_int("kernel", 7).range(3, 15).odd().more_accurate(Accuracy::Higher, int64_t(15))
         .doc("Local kernel size K (odd): K x K texels around each texel");
     p.add_float("threshold", 3e-5).range(0.0, 1.0).more_accurate(Accuracy::Lower, 0.0)
         .doc("Smallest vertex-to-vertex factor kept (largest channel); fewer factors, faster global response");

@@ -145,3 +145,45 @@ TEST(ClothAcquire, BadParametersNameTheirKey) {
         EXPECT_NE(std::string(e.what()).find("cloth.directions"), std::string::npos);
     }
 }
+
+// The acquisition's bounces (AcquireParams::bounces): none is the direct light alone, each adds
+// light, less each time (the gather is a contraction: ρ < 1 and rays escape), and the series has
+// converged to a part in a thousand by 32; a count out of range names the key.
+TEST(ClothAcquire, BouncesAddLightThatConverges) {
+    StitchParams sp;
+    sp.stitch = "knit";
+    const StitchMesh s = build_stitch_mesh(make_stitch(sp), 24);
+    AcquireParams p;
+    p.spatial = 4;
+    p.directions = 8;
+    p.visibility_rays = 16;
+    const auto mean_f = [&](int bounces) {
+        p.bounces = bounces;
+        const SampleGrid g = acquire(s, p);
+        double sum = 0;
+        size_t n = 0;
+        for (const auto& pt : g.f)
+            for (const dvec3& f : pt) sum += f.x + f.y + f.z, ++n;
+        return sum / double(n);
+    };
+    std::vector<double> m;
+    for (int b : {0, 1, 2, 3, 4, 8, 16, 32}) m.push_back(mean_f(b));
+    for (size_t i = 1; i < m.size(); ++i) EXPECT_GT(m[i], m[i - 1]) << "bounce step " << i;
+    for (size_t i = 2; i < 5; ++i) EXPECT_LT(m[i] - m[i - 1], m[i - 1] - m[i - 2]) << "each bounce adds less than the one before";
+    EXPECT_LT(m[7] - m[6], 1e-3 * m[7]);
+    EXPECT_GT(m[7] - m[1], 0.01 * m[7]) << "the bounces beyond the paper's one matter on a knit";
+    // No bounce: the same bytes as no visibility rays.
+    p.bounces = 0;
+    const SampleGrid a = acquire(s, p);
+    p.bounces = 1;
+    p.visibility_rays = 0;
+    const SampleGrid b = acquire(s, p);
+    EXPECT_EQ(a.f, b.f);
+    p.bounces = 65;
+    try {
+        acquire(s, p);
+        FAIL() << "65 bounces were accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("cloth.bounces"), std::string::npos) << e.what();
+    }
+}

@@ -74,8 +74,8 @@ TEST(Declarations, EveryKeyIsSettableFromTheCommandLine) {
 }
 
 TEST(Declarations, RecomputeCostsMatchTheStageGraph) {
-    // Parameters whose change costs a recompute are read by a stage, and stages only read
-    // declared parameters.
+    // Parameters whose change costs a recompute are read by a stage (or, for a technique's
+    // method, choose which stages run), and stages only read declared parameters.
     const StageGraph& graph = Registry::instance().stages();
     std::set<std::string> read;
     for (const StageDecl& st : graph.stages())
@@ -92,9 +92,13 @@ TEST(Declarations, RecomputeCostsMatchTheStageGraph) {
         }
     for (const ParamGroup* g : Registry::instance().groups())
         for (const ParamDecl& d : g->decls())
-            if (d.cost == Cost::Recompute && g->name() != "effects") {
+            if (d.cost == Cost::Recompute && g->name() != "effects" && d.name != "method") {
                 EXPECT_TRUE(read.count(key(*g, d)) || read.count(g->name() + ".*")) << key(*g, d) << " costs a recompute but no stage reads it";
             }
+    for (const Technique* t : Registry::instance().techniques())
+        if (const ParamDecl* m = t->params().find("method")) {
+            EXPECT_EQ(m->cost, Cost::Recompute) << t->name() << ".method";
+        }
 }
 
 TEST(Declarations, ValueChecksNameTheKeyAndRange) {
@@ -110,4 +114,18 @@ TEST(Declarations, ValueChecksNameTheKeyAndRange) {
     EXPECT_THROW(value_from_text(*cam.find("fov"), "inf", "x"), InputError);
     EXPECT_THROW(value_from_text(*cam.find("fov"), "12abc", "x"), InputError);
     EXPECT_THROW(value_from_json(*cam.find("fov"), json(true), "x"), InputError);
+}
+
+// A knob that takes only odd values (translucency.kernel) refuses an even one where it is set,
+// naming the key; odd values in range pass.
+TEST(Declarations, OddOnlyKnobsRefuseEvenValues) {
+    const ParamDecl& kernel = *Registry::instance().technique("translucency")->params().find("kernel");
+    try {
+        value_from_text(kernel, "8", "--set translucency.kernel");
+        FAIL() << "an even kernel was accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("--set translucency.kernel"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("must be odd"), std::string::npos) << e.what();
+    }
+    EXPECT_NO_THROW(value_from_text(kernel, "9", "x"));
 }
