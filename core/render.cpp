@@ -311,7 +311,9 @@ Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height, co
             keep.push_back(drawn_mesh(s, ev, int(i)));
             if (!keep.back()) throw std::logic_error("render_cpu: scene.geometry was not evaluated for object " + std::to_string(i));
             const Technique* t = reg.technique(s.objects[i].technique);
-            items.push_back({keep.back().get(), object_to_world(s.objects[i]), int(i), t && t->uses_uv_derivatives()});
+            const Method* method = t ? t->method_of(s.objects[i]) : nullptr;
+            const bool derivatives = method ? method->uses_uv_derivatives() : t && t->uses_uv_derivatives();
+            items.push_back({keep.back().get(), object_to_world(s.objects[i]), int(i), derivatives});
         }
         rasterize(items, cam.raster, gb);
     }

@@ -123,7 +123,8 @@ void Registry::declare_methods() {
         t->params_.section("Method", {"method"}, true, /*first=*/true);
         if (t->methods_.empty()) continue;
         // Which methods each of the technique's object stages serves: those whose frame stages
-        // reach it upstream. A stage no method's frame reaches (an export's, the truth's) serves all.
+        // reach it upstream. A stage no method's frame reaches (an export's) serves all, and so does
+        // every stage the truth reads (one truth serves every method, whichever method also reads it).
         const auto reach = [&](const std::vector<StageName>& roots) {
             std::set<std::string> seen;
             std::vector<std::string> todo(roots.begin(), roots.end());
@@ -137,8 +138,13 @@ void Registry::declare_methods() {
         };
         std::vector<std::pair<std::string, std::set<std::string>>> reached{{t->paper_method_, reach(t->frame_stages())}};
         for (const Method* m : t->methods_) reached.emplace_back(m->name(), reach(m->frame_stages()));
+        std::set<std::string> truth;
+        if (const auto decl = t->truth()) {
+            std::vector<StageName> roots(decl->stages.begin(), decl->stages.end());
+            truth = reach(roots);
+        }
         for (const StageDecl& d : stages_.stages()) {
-            if (d.scope != StageScope::Object || d.technique != t->name()) continue;
+            if (d.scope != StageScope::Object || d.technique != t->name() || truth.count(d.name)) continue;
             std::vector<std::string> serves;
             for (const auto& [name, set] : reached)
                 if (set.count(d.name)) serves.push_back(name);

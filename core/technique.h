@@ -188,6 +188,8 @@ public:
     virtual void shade_cpu(const ShadeContext& ctx) const = 0;
     // How closely its GPU pass follows its CPU shading (FrameAgreement).
     virtual FrameAgreement agreement() const { return {}; }
+    // Whether shade_cpu reads GBuffer::uv_dx and uv_dy (as Technique::uses_uv_derivatives).
+    virtual bool uses_uv_derivatives() const { return false; }
 
 private:
     std::string technique_, name_, title_;

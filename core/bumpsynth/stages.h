@@ -16,6 +16,7 @@ struct NoiseCdfs;
 struct NoiseTexture;
 class SmithTable;
 struct TruthNdf;
+struct LeanMap;
 
 namespace stages {
 inline constexpr Stage<BumpNormals> bump_normals{"bumpsynth.bump_normals"};
@@ -27,5 +28,6 @@ inline constexpr Stage<NoiseTexture> noise_texture{"bumpsynth.noise_texture"};
 inline constexpr Stage<SmithTable> masking{"bumpsynth.smith_table"};
 inline constexpr Stage<Image> albedo{"bumpsynth.albedo"};
 inline constexpr Stage<TruthNdf> truth_ndf{"bumpsynth.truth_ndf"};
+inline constexpr Stage<LeanMap> lean_map{"bumpsynth.lean_map"};  // method lean (lean.h)
 }  // namespace stages
 }  // namespace mesolab::bumpsynth

@@ -69,6 +69,12 @@ struct TruthNdf {
     std::optional<SmithTable> smith;
     std::optional<IndexMap> index_map;
 };
+// The bump normal at uv that the truth integrates (and LEAN mapping bakes): its inputs at K octaves
+// (the noise through `cdfs`, or the index map with `detail`) mapped to a normal by the exact inversion
+// of t's NDF (truth.cpp).
+vec3 truth_bump_normal(const TruthNdf& t, const NoiseCdfs* cdfs, const IndexDetail& detail, vec2 uv, int K);
+// The index map's detail the truth adds (index_map on; else a default IndexDetail).
+IndexDetail truth_index_detail(const TruthNdf& t, const ParamTable& m);
 
 // [SECTION] The technique
 class BumpsynthTechnique final : public Technique {

@@ -67,10 +67,7 @@ public:
     static vec2 uv_of(const TruthHit& h) { return h.uv + (h.jitter.x - 0.5f) * h.duv_dx + (h.jitter.y - 0.5f) * h.duv_dy; }
 
     // The bump at uv: its inputs at K octaves through the exact inversion of the NDF.
-    LutEntry bump(vec2 uv) const {
-        const vec2 u = t_->index_map ? index_inputs(*t_->index_map, detail_, uv, K_) : noise_inputs(*cdfs_, uv, K_);
-        return microfacet_frame(t_->lut.sample_uniform(double(u.x), double(u.y)));
-    }
+    LutEntry bump(vec2 uv) const { return microfacet_frame(truth_bump_normal(*t_, cdfs_.get(), detail_, uv, K_)); }
     vec3 texture(vec2 uv) const { return albedo_ ? basic::sample_albedo(*albedo_, uv) : vec3(1.f); }
 
     vec3 fcos(const TruthHit& h, vec3 wo, vec3 wi) const override {
@@ -215,12 +212,20 @@ private:
 };
 }  // namespace
 
+vec3 truth_bump_normal(const TruthNdf& t, const NoiseCdfs* cdfs, const IndexDetail& detail, vec2 uv, int K) {
+    const vec2 u = t.index_map ? index_inputs(*t.index_map, detail, uv, K) : noise_inputs(*cdfs, uv, K);
+    return t.lut.sample_uniform(double(u.x), double(u.y));
+}
+
+IndexDetail truth_index_detail(const TruthNdf& t, const ParamTable& m) {
+    return t.index_map ? index_detail(*t.index_map, noise_from_material(m), float(m.get_float("index_noise"))) : IndexDetail{};
+}
+
 TruthObject truth_object(const Scene& s, const Evaluation& ev, int object) {
     const SceneObject& o = s.objects.at(size_t(object));
     const ParamTable& m = o.material;
     auto t = ev.get(stages::truth_ndf, object);
-    IndexDetail detail;
-    if (t && t->index_map) detail = index_detail(*t->index_map, noise_from_material(m), float(m.get_float("index_noise")));
+    const IndexDetail detail = t ? truth_index_detail(*t, m) : IndexDetail{};
     TruthObject ob;
     ob.mesh = drawn_mesh(s, ev, object);
     ob.to_world = object_to_world(o);
