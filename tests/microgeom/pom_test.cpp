@@ -237,7 +237,7 @@ TEST(MicrogeomPom, KeysOfAnotherMethodAreErrors) {
         EXPECT_NE(std::string(e.what()).find("pom"), std::string::npos) << e.what();
     }
     const Technique* t = Registry::instance().technique("microgeom");
-    EXPECT_EQ(t->method_names(), (std::vector<std::string>{"heidrich", "pom"}));
+    EXPECT_EQ(t->method_names(), (std::vector<std::string>{"heidrich", "pom", "horizon"}));
     for (const Technique* each : Registry::instance().techniques())
         if (each->name() != "basic") {
             EXPECT_TRUE(each->params().find("method")) << each->name() << " has a method key";

@@ -30,7 +30,7 @@ Scene probe_scene(const std::string& material) {
 
 TEST(Methods, ANewMethodIsOneRegistrationAndRunsOnBothPaths) {
     const Technique* t = Registry::instance().technique("microgeom");
-    EXPECT_EQ(t->method_names(), (std::vector<std::string>{"heidrich", "pom", "flat-probe"}));
+    EXPECT_EQ(t->method_names(), (std::vector<std::string>{"heidrich", "pom", "horizon", "flat-probe"}));
     Scene s = probe_scene("");
     apply_set(s, "microgeom.method=flat-probe");
     apply_set(s, "microgeom.probe_gain=0.5");
@@ -63,7 +63,7 @@ TEST(Methods, TheFrontierMeasuresEveryMethodAgainstOneTruth) {
         EXPECT_EQ(p.settings.front(), (std::pair<std::string, std::string>{"microgeom.method", p.method})) << "its settings load its method";
         EXPECT_GT(p.rmse_rel, 0.0);
     }
-    EXPECT_EQ(methods, (std::set<std::string>{"heidrich", "pom", "flat-probe"}));
-    EXPECT_EQ(r.points.size(), 3u);
+    EXPECT_EQ(methods, (std::set<std::string>{"heidrich", "pom", "horizon", "flat-probe"}));
+    EXPECT_EQ(r.points.size(), 4u);
     EXPECT_EQ(r.truth_noise.size(), 1u) << "one truth for the distance";
 }
