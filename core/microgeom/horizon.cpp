@@ -3,6 +3,7 @@
 // gpu/microgeom/horizon_pass.cpp with horizon.frag.
 #include "core/microgeom/horizon.h"
 #include "core/error.h"
+#include "core/microgeom/microgeom.h"
 #include "core/microgeom/stages.h"
 #include "core/parallel.h"
 #include "core/render.h"
@@ -139,10 +140,7 @@ public:
 struct HorizonObject {
     std::shared_ptr<const Heightfield> hf;
     std::shared_ptr<const HorizonMap> map;
-    float tiling = 1;
-    bool phong = false;
-    vec3 ks{0.f};
-    float shininess = 1;
+    FieldMaterial mat;
 };
 
 void HorizonMethod::shade_cpu(const ShadeContext& ctx) const {
@@ -153,10 +151,7 @@ void HorizonMethod::shade_cpu(const ShadeContext& ctx) const {
         o.hf = ctx.eval.get(stages::heightfield, i);
         o.map = ctx.eval.get(stages::horizon_map, i);
         if (!o.hf || !o.map) throw std::logic_error("microgeom/horizon: the frame's stages were not evaluated for object " + std::to_string(i));
-        o.tiling = ctx.camera.texture_mode ? 1.f : float(m.get_float("tiling"));
-        o.phong = m.get_string("brdf") == "blinn-phong";
-        o.ks = o.phong ? m.get_vec3("ks") : vec3(0.f);
-        o.shininess = float(m.get_float("shininess"));
+        o.mat = FieldMaterial::from(m, ctx.camera.texture_mode);
         objects.emplace(i, std::move(o));
     }
     const GBuffer& gb = ctx.gbuffer;
@@ -172,22 +167,11 @@ void HorizonMethod::shade_cpu(const ShadeContext& ctx) const {
             const vec3 wo = ctx.camera.wo(p);
             const TangentFrame frame = tangent_frame(gb.normal[px], gb.tangent[px], wo);
             const vec2 uv = gb.uv[px];
-            const float c = uv.x * float(hf.width) * o.tiling - 0.5f, r = (1.f - uv.y) * float(hf.height) * o.tiling - 0.5f;
+            const float c = uv.x * float(hf.width) * o.mat.tiling - 0.5f, r = (1.f - uv.y) * float(hf.height) * o.mat.tiling - 0.5f;
 
             // The heightfield's normal and albedo at the base point, bilinear (as the bump level).
-            const float cf = std::floor(c), rf = std::floor(r), fc = c - cf, fr = r - rf;
-            int tx[2], ty[2];
-            for (int k = 0; k < 2; ++k) {
-                tx[k] = ((int(cf) + k) % hf.width + hf.width) % hf.width;
-                ty[k] = ((int(rf) + k) % hf.height + hf.height) % hf.height;
-            }
-            const float wts[4] = {(1 - fc) * (1 - fr), fc * (1 - fr), (1 - fc) * fr, fc * fr};
-            vec3 n_loc(0.f), albedo(0.f);
-            for (int k = 0; k < 4; ++k) {
-                n_loc += wts[k] * hf.normal(tx[k & 1], ty[k >> 1]);
-                albedo += wts[k] * hf.albedo[hf.index(tx[k & 1], ty[k >> 1])];
-            }
-            n_loc = glm::normalize(n_loc);
+            const FieldSample fs = sample_field(hf, c, r);
+            const vec3 n_loc = fs.n_loc, albedo = fs.albedo;
             const vec3 n = glm::normalize(frame.T * n_loc.x + frame.B * n_loc.y + frame.N * n_loc.z);
 
             vec3 direct(0.f);
@@ -205,11 +189,7 @@ void HorizonMethod::shade_cpu(const ShadeContext& ctx) const {
                 }
                 if (li == 0) shadow0 = V;
                 if (cos_i <= 0.f || V <= 0.f) continue;
-                vec3 f = albedo * kInvPi;
-                if (o.phong) {
-                    const vec3 h = glm::normalize(wo + wi);
-                    f += o.ks * (o.shininess + 8.f) / (8.f * kPi) * std::pow(std::max(0.f, glm::dot(n, h)), o.shininess);
-                }
+                const vec3 f = micro_brdf(albedo, n, wo, wi, o.mat.phong, o.mat.ks, o.mat.shininess);
                 direct += f * E * cos_i;
             }
             vec3 env(0.f);

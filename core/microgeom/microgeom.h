@@ -50,6 +50,8 @@
 #include "core/microgeom/scatter.h"
 #include "core/microgeom/visibility.h"
 #include "core/stage.h"
+#include <algorithm>
+#include <cmath>
 #include <vector>
 
 namespace mesolab::microgeom {
@@ -77,6 +79,43 @@ struct Material {
     bool shadows = true;    // microgeom.shadows != none
     static Material from(const ParamTable& m);
 };
+
+// [SECTION] The bump level's look-up, shared by every method
+// The heightfield's micro normal (bilinear in the texels' normals, normalised; local frame) and
+// albedo (bilinear) at texel coordinates (c, r), periodic, with the four texels (columns tx, rows
+// ty) and their weights w (w[k] for texel (tx[k & 1], ty[k >> 1])).
+struct FieldSample {
+    int tx[2]{}, ty[2]{};
+    float w[4]{};
+    vec3 n_loc{0, 0, 1};
+    vec3 albedo{0.f};
+};
+FieldSample sample_field(const Heightfield& hf, float c, float r);
+// The micro-BRDF's and the tiling's keys as the counterparts read them (tiling 1 in texture mode).
+struct FieldMaterial {
+    float tiling = 1;
+    bool phong = false;
+    vec3 ks{0.f};
+    float shininess = 1;
+    static FieldMaterial from(const ParamTable& m, bool texture_mode) {
+        FieldMaterial f;
+        f.tiling = texture_mode ? 1.f : float(m.get_float("tiling"));
+        f.phong = m.get_string("brdf") == "blinn-phong";
+        f.ks = f.phong ? m.get_vec3("ks") : vec3(0.f);
+        f.shininess = float(m.get_float("shininess"));
+        return f;
+    }
+};
+// The micro-BRDF (sr⁻¹): Lambert with `albedo`, plus the energy-normalised Blinn-Phong lobe
+// ks (e + 8)/(8π) max(0, n·h)^e when `phong` (h the half vector of the unit wo and wi).
+inline vec3 micro_brdf(vec3 albedo, vec3 n, vec3 wo, vec3 wi, bool phong, vec3 ks, float shininess) {
+    vec3 f = albedo * kInvPi;
+    if (phong) {
+        const vec3 h = glm::normalize(wo + wi);
+        f += ks * (shininess + 8.f) / (8.f * kPi) * std::pow(std::max(0.f, glm::dot(n, h)), shininess);
+    }
+    return f;
+}
 
 // An object's stage results for a frame (null where a stage did not run) and its material.
 struct ObjectFrame {

@@ -2,6 +2,7 @@
 // Its keys, its stage (the heights in texel units), the march and its CPU shading; the GPU pass
 // is gpu/microgeom/pom_pass.cpp with pom.frag.
 #include "core/microgeom/pom.h"
+#include "core/microgeom/microgeom.h"
 #include "core/microgeom/stages.h"
 #include "core/parallel.h"
 #include "core/render.h"
@@ -123,10 +124,7 @@ struct PomObject {
     std::shared_ptr<const Heightfield> hf;
     std::shared_ptr<const PomField> field;
     PomSettings st;
-    float tiling = 1;
-    bool phong = false;
-    vec3 ks{0.f};
-    float shininess = 1;
+    FieldMaterial mat;
 };
 
 void PomMethod::shade_cpu(const ShadeContext& ctx) const {
@@ -138,10 +136,7 @@ void PomMethod::shade_cpu(const ShadeContext& ctx) const {
         o.field = ctx.eval.get(stages::pom_field, i);
         if (!o.hf || !o.field) throw std::logic_error("microgeom/pom: the frame's stages were not evaluated for object " + std::to_string(i));
         o.st = {int(m.get_int("pom_steps")), int(m.get_int("pom_refine")), int(m.get_int("pom_shadow_steps"))};
-        o.tiling = ctx.camera.texture_mode ? 1.f : float(m.get_float("tiling"));
-        o.phong = m.get_string("brdf") == "blinn-phong";
-        o.ks = o.phong ? m.get_vec3("ks") : vec3(0.f);
-        o.shininess = float(m.get_float("shininess"));
+        o.mat = FieldMaterial::from(m, ctx.camera.texture_mode);
         objects.emplace(i, std::move(o));
     }
     const GBuffer& gb = ctx.gbuffer;
@@ -157,23 +152,12 @@ void PomMethod::shade_cpu(const ShadeContext& ctx) const {
             const vec3 wo = ctx.camera.wo(p);
             const TangentFrame frame = tangent_frame(gb.normal[px], gb.tangent[px], wo);
             const vec2 uv = gb.uv[px];
-            const float c0 = uv.x * float(hf.width) * o.tiling - 0.5f, r0 = (1.f - uv.y) * float(hf.height) * o.tiling - 0.5f;
+            const float c0 = uv.x * float(hf.width) * o.mat.tiling - 0.5f, r0 = (1.f - uv.y) * float(hf.height) * o.mat.tiling - 0.5f;
             const PomHit hit = pom_march(*o.field, c0, r0, frame.to_local(wo), o.st.steps, o.st.refine);
 
             // The heightfield's normal and albedo at the hit, bilinear (as the bump level).
-            const float cf = std::floor(hit.c), rf = std::floor(hit.r), fc = hit.c - cf, fr = hit.r - rf;
-            int tx[2], ty[2];
-            for (int k = 0; k < 2; ++k) {
-                tx[k] = ((int(cf) + k) % hf.width + hf.width) % hf.width;
-                ty[k] = ((int(rf) + k) % hf.height + hf.height) % hf.height;
-            }
-            const float wts[4] = {(1 - fc) * (1 - fr), fc * (1 - fr), (1 - fc) * fr, fc * fr};
-            vec3 n_loc(0.f), albedo(0.f);
-            for (int k = 0; k < 4; ++k) {
-                n_loc += wts[k] * hf.normal(tx[k & 1], ty[k >> 1]);
-                albedo += wts[k] * hf.albedo[hf.index(tx[k & 1], ty[k >> 1])];
-            }
-            n_loc = glm::normalize(n_loc);
+            const FieldSample fs = sample_field(hf, hit.c, hit.r);
+            const vec3 n_loc = fs.n_loc, albedo = fs.albedo;
             const vec3 n = glm::normalize(frame.T * n_loc.x + frame.B * n_loc.y + frame.N * n_loc.z);
 
             vec3 direct(0.f);
@@ -185,11 +169,7 @@ void PomMethod::shade_cpu(const ShadeContext& ctx) const {
                 const float V = cos_i > 0.f ? pom_visibility(*o.field, hit.c, hit.r, hit.z, glm::normalize(frame.to_local(wi)), o.st.shadow_steps) : 0.f;
                 if (li == 0) shadow0 = V;
                 if (cos_i <= 0.f || V <= 0.f) continue;
-                vec3 f = albedo * kInvPi;
-                if (o.phong) {
-                    const vec3 h = glm::normalize(wo + wi);
-                    f += o.ks * (o.shininess + 8.f) / (8.f * kPi) * std::pow(std::max(0.f, glm::dot(n, h)), o.shininess);
-                }
+                const vec3 f = micro_brdf(albedo, n, wo, wi, o.mat.phong, o.mat.ks, o.mat.shininess);
                 direct += f * E * cos_i * V;
             }
             const vec3 env = ctx.lighting.env_lighting ? albedo * kInvPi * ctx.lighting.env_irradiance(n) : vec3(0.f);

@@ -13,6 +13,25 @@
 
 namespace mesolab::microgeom {
 
+// [SECTION] The bump level's look-up (microgeom.h)
+FieldSample sample_field(const Heightfield& hf, float c, float r) {
+    FieldSample s;
+    const float c0f = std::floor(c), r0f = std::floor(r), fc = c - c0f, fr = r - r0f;
+    for (int k = 0; k < 2; ++k) {
+        s.tx[k] = ((int(c0f) + k) % hf.width + hf.width) % hf.width;
+        s.ty[k] = ((int(r0f) + k) % hf.height + hf.height) % hf.height;
+    }
+    s.w[0] = (1 - fc) * (1 - fr), s.w[1] = fc * (1 - fr), s.w[2] = (1 - fc) * fr, s.w[3] = fc * fr;
+    vec3 n_loc(0.f), albedo(0.f);
+    for (int k = 0; k < 4; ++k) {
+        n_loc += s.w[k] * hf.normal(s.tx[k & 1], s.ty[k >> 1]);
+        albedo += s.w[k] * hf.albedo[hf.index(s.tx[k & 1], s.ty[k >> 1])];
+    }
+    s.n_loc = glm::normalize(n_loc);
+    s.albedo = albedo;
+    return s;
+}
+
 // [SECTION] Per-frame inputs
 Material Material::from(const ParamTable& m) {
     Material r;
@@ -98,19 +117,11 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
             }
 
             // Micro normal and albedo, bilinear.
-            const float c0f = std::floor(c), r0f = std::floor(r), fc = c - c0f, fr = r - r0f;
-            int tx[2], ty[2];
-            for (int k = 0; k < 2; ++k) {
-                tx[k] = ((int(c0f) + k) % hf.width + hf.width) % hf.width;
-                ty[k] = ((int(r0f) + k) % hf.height + hf.height) % hf.height;
-            }
-            const float wts[4] = {(1 - fc) * (1 - fr), fc * (1 - fr), (1 - fc) * fr, fc * fr};
-            vec3 n_loc(0.f), albedo(0.f);
-            for (int k = 0; k < 4; ++k) {
-                n_loc += wts[k] * hf.normal(tx[k & 1], ty[k >> 1]);
-                albedo += wts[k] * hf.albedo[hf.index(tx[k & 1], ty[k >> 1])];
-            }
-            n_loc = glm::normalize(n_loc);
+            const FieldSample fs = sample_field(hf, c, r);
+            const int(&tx)[2] = fs.tx;
+            const int(&ty)[2] = fs.ty;
+            const float(&wts)[4] = fs.w;
+            const vec3 n_loc = fs.n_loc, albedo = fs.albedo;
             const vec3 n = glm::normalize(T * n_loc.x + B * n_loc.y + N * n_loc.z);
             const bool phong = m.phong, shadows = m.shadows;
             const vec3 ks = m.ks;
@@ -144,11 +155,7 @@ void MicrogeomTechnique::shade_cpu(const ShadeContext& ctx) const {
                 }
                 if (li == 0) shadow0 = V;
                 if (cos_i <= 0.f || V <= 0.f) continue;
-                vec3 f = albedo * kInvPi;
-                if (phong) {
-                    const vec3 h = glm::normalize(wo + wi);
-                    f += ks * (shininess + 8.f) / (8.f * kPi) * std::pow(std::max(0.f, glm::dot(n, h)), shininess);
-                }
+                const vec3 f = micro_brdf(albedo, n, wo, wi, phong, ks, shininess);
                 direct += f * E * cos_i * V;
             }
 

@@ -3,7 +3,12 @@
 // filtering (the shaders fetch texels and blend with the CPU's bilinear weights), one texel per
 // heightfield texel.
 #include "core/heightfield/heightfield.h"
+#include "core/param.h"
 #include "gpu/gl.h"
+#include "gpu/renderer.h"
+
+#include <glm/gtc/type_ptr.hpp>
+#include <memory>
 
 #include <vector>
 
@@ -28,5 +33,21 @@ inline Texture field_normals_texture(const Heightfield& hf) {
     for (int y = 0; y < hf.height; ++y)
         for (int x = 0; x < hf.width; ++x) normals[hf.index(x, y)] = hf.normal(x, y);
     return rgb_field_texture(normals, hf.width, hf.height);
+}
+// For the counterparts' passes (pom, horizon): binds the heightfield's normals and albedo
+// (u_normals, u_albedo on texture units `unit` and `unit + 1`, made once per heightfield) and
+// sets the bump level's uniforms u_size, u_tiling, u_phong, u_ks and u_shininess from `m`.
+inline void bind_field_material(Program& program, GpuResources& res, const std::shared_ptr<const Heightfield>& hf, const ParamTable& m, int unit) {
+    const GLuint normals = res.get<Texture>(hf, "normals", [&] { return field_normals_texture(*hf); }).get();
+    const GLuint albedo = res.get<Texture>(hf, "albedo", [&] { return rgb_field_texture(hf->albedo, hf->width, hf->height); }).get();
+    program.bind_texture(unit, GL_TEXTURE_2D, normals, "u_normals");
+    program.bind_texture(unit + 1, GL_TEXTURE_2D, albedo, "u_albedo");
+    glUniform2i(program.uniform("u_size"), hf->width, hf->height);
+    glUniform1f(program.uniform("u_tiling"), float(m.get_float("tiling")));
+    const bool phong = m.get_string("brdf") == "blinn-phong";
+    const vec3 ks = phong ? m.get_vec3("ks") : vec3(0.f);
+    glUniform1i(program.uniform("u_phong"), phong ? 1 : 0);
+    glUniform3fv(program.uniform("u_ks"), 1, glm::value_ptr(ks));
+    glUniform1f(program.uniform("u_shininess"), float(m.get_float("shininess")));
 }
 }  // namespace mesolab::gpu

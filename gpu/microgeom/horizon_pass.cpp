@@ -35,20 +35,10 @@ public:
                 return make_texture({.target = GL_TEXTURE_2D_ARRAY, .format = GL_R32F, .width = map->width, .height = map->height, .layers = map->directions},
                                     {GL_RED, GL_FLOAT, map->sin_theta.data()});
             }).get();
-            const GLuint normals = res.get<Texture>(hf, "normals", [&] { return field_normals_texture(*hf); }).get();
-            const GLuint albedo = res.get<Texture>(hf, "albedo", [&] { return rgb_field_texture(hf->albedo, hf->width, hf->height); }).get();
             ctx.renderer.set_camera_uniforms(program_, ctx.camera, object_to_world(ctx.scene.objects[size_t(i)]));
             program_.bind_texture(1, GL_TEXTURE_2D_ARRAY, horizon, "u_horizon");
-            program_.bind_texture(2, GL_TEXTURE_2D, normals, "u_normals");
-            program_.bind_texture(3, GL_TEXTURE_2D, albedo, "u_albedo");
-            glUniform2i(program_.uniform("u_size"), hf->width, hf->height);
+            bind_field_material(program_, res, hf, m, 2);
             glUniform1i(program_.uniform("u_directions"), map->directions);
-            glUniform1f(program_.uniform("u_tiling"), float(m.get_float("tiling")));
-            const bool phong = m.get_string("brdf") == "blinn-phong";
-            const vec3 ks = phong ? m.get_vec3("ks") : vec3(0.f);
-            glUniform1i(program_.uniform("u_phong"), phong ? 1 : 0);
-            glUniform3fv(program_.uniform("u_ks"), 1, glm::value_ptr(ks));
-            glUniform1f(program_.uniform("u_shininess"), float(m.get_float("shininess")));
             ctx.renderer.draw_object(ctx.scene, ctx.eval, i);
         }
         glBindVertexArray(0);
