@@ -60,10 +60,15 @@ std::vector<AccuracyKnob> accuracy_knobs(const Scene& s) {
 }
 
 // An integer setting within the knob's range, odd where the knob takes only odd values (a kernel
-// width).
+// width), the nearest power of two (in log2) where it takes only those (a texture's size).
 std::string int_setting(const AccuracyKnob& k, double x, double hi) {
     int64_t n = std::max<int64_t>(int64_t(std::llround(x)), int64_t(std::ceil(k.decl->min)));
     if (k.decl->odd_only && n % 2 == 0) n += double(n + 1) <= hi ? 1 : -1;
+    if (k.decl->pow2_only) {
+        n = int64_t(1) << int(std::lround(std::log2(std::max(1.0, x))));
+        while (double(n) > hi && n > 1) n /= 2;
+        while (double(n) < k.decl->min) n *= 2;
+    }
     return std::to_string(n);
 }
 

@@ -233,6 +233,8 @@ void validate_value(const ParamDecl& d, const Value& v, const std::string& where
         case ParamType::Int:
             check(double(std::get<int64_t>(v)));
             if (d.odd_only && std::get<int64_t>(v) % 2 == 0) fail(where, "value " + std::to_string(std::get<int64_t>(v)) + " must be odd");
+            if (d.pow2_only && (std::get<int64_t>(v) < 1 || (std::get<int64_t>(v) & (std::get<int64_t>(v) - 1)) != 0))
+                fail(where, "value " + std::to_string(std::get<int64_t>(v)) + " must be a power of two");
             break;
         case ParamType::Float: check(std::get<double>(v)); break;
         case ParamType::Vec2: for (double x : std::get<std::array<double, 2>>(v)) check(x); break;

@@ -59,6 +59,7 @@ struct ParamDecl {
     // bad value is refused where it is set (preset, --set, widget) with the key named.
     std::function<std::string(const std::string&)> syntax;
     bool odd_only = false;             // Int: only odd values (ParamDecl::odd)
+    bool pow2_only = false;            // Int: only powers of two (ParamDecl::power_of_two)
 
     // Fluent setters for concise declarations.
     ParamDecl& range(double lo, double hi) { min = lo; max = hi; return *this; }
@@ -72,6 +73,7 @@ struct ParamDecl {
     ParamDecl& checked(std::function<std::string(const std::string&)> f) { syntax = std::move(f); return *this; }
     // Int only: odd values only (a kernel width), refused where set with the key named.
     ParamDecl& odd() { odd_only = true; return *this; }
+    ParamDecl& power_of_two() { pow2_only = true; return *this; }
     ParamDecl& used_when(std::string key, std::vector<std::string> values) { used_when_key = std::move(key); used_when_values = std::move(values); return *this; }
 };
 

@@ -196,7 +196,7 @@ public:
     LeanMethod() : Method("bumpsynth", "lean", "LEAN mapping of the synthesised bumps (Olano and Baker 2010)") {}
 
     void declare_params(ParamGroup& p) const override {
-        p.add_int("lean_size", 512).used_when("method", {"lean"}).range(16, 4096).log().in("texels").more_accurate(Accuracy::Higher, int64_t(2048))
+        p.add_int("lean_size", 512).used_when("method", {"lean"}).range(16, 4096).power_of_two().log().in("texels").more_accurate(Accuracy::Higher, int64_t(2048))
             .doc("LEAN mapping: texels per side of the baked map's finest level (a power of two); detail finer than a texel enters its second moments");
         p.add_int("lean_supersample", 4).used_when("method", {"lean"}).range(1, 16).more_accurate(Accuracy::Higher, int64_t(8))
             .doc("Points per side of the grid over each texel whose bump slopes the map's moments average");

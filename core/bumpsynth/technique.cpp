@@ -59,7 +59,7 @@ BumpsynthTechnique::BumpsynthTechnique() : Technique("bumpsynth", "Bump map synt
         .doc("Lattice cells of the first octave across the uv square (an integer, so the noise tiles uv)");
     p.add_float("noise_gain", 0.5).range(0.01, 1.0).doc("Amplitude ratio between successive octaves");
     p.add_int("noise_seed", 1).range(0, 1 << 30).doc("Seed of the noise (both channels)");
-    p.add_int("noise_texture_size", 1024).range(16, 4096).in("texels").used_when("noise", {"texture"})
+    p.add_int("noise_texture_size", 1024).range(16, 4096).power_of_two().in("texels").used_when("noise", {"texture"})
         .doc("Size of the finest level of the noise texture (a power of two)");
     p.add_color("ks", {0.9, 0.9, 0.9}).doc("Specular colour (F0 with fresnel on)");
     p.add_color("kd", {0.1, 0.1, 0.1}).doc("Separate diffuse albedo, bump-mapped with the synthesised normal (0: NDF only, as in the paper)");

@@ -93,6 +93,27 @@ TEST(Frontier, EverySettingIsMeasuredAgainstItsDistancesTruth) {
     EXPECT_EQ(j["points"][0]["knobs"]["geometry.resolution"], "96");
 }
 
+// A knob declared as taking only powers of two (a texture's size) gets only those, on the grid
+// and between neighbours, so no setting is refused by its stage.
+TEST(Frontier, PowerOfTwoKnobsGetOnlyPowersOfTwo) {
+    Scene s = load_preset(test::source_path("presets/bumpsynth/lean-sphere-far.json"));
+    for (const char* set : {"bumpsynth.lean_size=32", "bumpsynth.lean_supersample=1", "bumpsynth.octaves_max=3", "geometry.resolution=24"}) apply_set(s, set);
+    FrontierOptions o = small();
+    o.width = o.height = 24;
+    o.truth.spp = 4;
+    const FrontierResult r = frontier_scene(s, o, false);
+    EXPECT_TRUE(r.skipped.empty()) << r.skipped.front();
+    int lean = 0;
+    for (const FrontierPoint& p : r.points)
+        for (const auto& [key, value] : p.settings)
+            if (key == "bumpsynth.lean_size") {
+                const long n = std::stol(value);
+                EXPECT_TRUE(n > 0 && (n & (n - 1)) == 0) << p.varied << ": " << value;
+                ++lean;
+            }
+    EXPECT_GT(lean, 6);
+}
+
 TEST(Frontier, TheBudgetLeavesOnlyThePresetAndBadInputIsSaid) {
     const Scene s = load_preset(test::source_path("presets/basic/sphere.json"));
     FrontierOptions o = small();
