@@ -31,7 +31,7 @@ std::vector<dvec3> vertex_power(const VertexFactors& F) {
 // P_W(a) = Dipole::reflectance_within_square(a) tabulated over [lo, hi], linear between 256 samples.
 class SquarePower {
 public:
-    SquarePower(const Dipole& d, double lo, double hi) : lo_(lo), step_(std::max(hi - lo, 1e-12 * lo) / double(kSamples - 1)), table_(kSamples) {
+    SquarePower(const Profile& d, double lo, double hi) : lo_(lo), step_(std::max(hi - lo, 1e-12 * lo) / double(kSamples - 1)), table_(kSamples) {
         for (int k = 0; k < kSamples; ++k) table_[size_t(k)] = d.reflectance_within_square(lo + step_ * double(k));
     }
     dvec3 operator()(double a) const {
@@ -111,7 +111,7 @@ vec3 source_weights(const TexelRef& t, float area_t, const std::vector<float>& v
 }
 }  // namespace
 
-BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position, const std::vector<uint32_t>& index, const Dipole& dipole,
+BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position, const std::vector<uint32_t>& index, const Profile& dipole,
                           double mm_per_unit, const VertexFactors& F0, LocalKernels& L) {
     BlendWeights B;
     B.c.assign(L.texel.size(), {vec3(0.f), vec3(0.f), vec3(0.f)});

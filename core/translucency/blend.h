@@ -81,7 +81,7 @@ struct BlendWeights {
 
 // Fits c and corrects the kernels in place (K from the kernels; the ring needs the atlas's border
 // of (K-1)/2 + 1 texels, which LocalKernels already requires). `F0` must have a zero diagonal.
-BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position, const std::vector<uint32_t>& index, const Dipole& dipole,
+BlendWeights fit_blending(const Atlas& atlas, const std::vector<vec3>& position, const std::vector<uint32_t>& index, const Profile& dipole,
                           double mm_per_unit, const VertexFactors& F0, LocalKernels& kernels);
 
 // B_D per vertex from per-texel irradiance.

@@ -27,8 +27,6 @@ double BurleyProfile::Rd(double r, int c) const {
     return A_[c] * (std::exp(-r / d) + std::exp(-r / (3.0 * d))) / (8.0 * kPiD * d * r);
 }
 
-dvec3 BurleyProfile::Rd(double r) const { return {Rd(r, 0), Rd(r, 1), Rd(r, 2)}; }
-
 void BurleyProfile::derivatives(double r, int c, double& f, double& f1, double& f2) const {
     // R = K (e^(-r/d) + e^(-r/3d)) / r, K = A / (8π d): each term g = e^(-a r) / r has
     // g' = -g (a + 1/r), g'' = g ((a + 1/r)² + 1/r²).
@@ -62,21 +60,4 @@ dvec3 BurleyProfile::tail(double R) const {
 
 dvec3 BurleyProfile::reflectance_within(double R) const { return A_ - 2.0 * kPiD * tail(std::abs(R)); }
 
-double BurleyProfile::radius_holding(double f) const {
-    f = std::clamp(f, 0.0, 1.0 - 1e-12);
-    // Per channel the fraction within R is 1 - (e^(-R/d) + 3 e^(-R/3d)) / 4: monotonic, solved by bisection.
-    double R = 0.0;
-    for (int c = 0; c < 3; ++c) {
-        if (!(A_[c] > 0.0)) continue;
-        double lo = 0.0, hi = 3.0 * d_[c];
-        const auto within = [&](double x) { return 1.0 - (std::exp(-x / d_[c]) + 3.0 * std::exp(-x / (3.0 * d_[c]))) / 4.0; };
-        while (within(hi) < f) hi *= 2.0;
-        for (int it = 0; it < 200 && hi - lo > 1e-12 * hi; ++it) {
-            const double mid = 0.5 * (lo + hi);
-            (within(mid) < f ? lo : hi) = mid;
-        }
-        R = std::max(R, hi);
-    }
-    return R;
-}
 }  // namespace mesolab::translucency

@@ -16,24 +16,28 @@
 // use the mean over a small disk instead ((A - 2π T(ε)) / (π ε²)).
 #include "core/translucency/dipole.h"
 
+#include <algorithm>
+
 namespace mesolab::translucency {
 
-class BurleyProfile {
+class BurleyProfile final : public Profile {
 public:
     explicit BurleyProfile(const Medium& m);
+    std::unique_ptr<Profile> clone() const override { return std::make_unique<BurleyProfile>(*this); }
     // R(r) per channel, mm⁻², r in mm (|r|; r = 0 gives +inf).
-    double Rd(double r, int channel) const;
-    dvec3 Rd(double r) const;
+    using Profile::Rd;
+    double Rd(double r, int channel) const override;
     // R, R' and R'' at r > 0 (closed form).
-    void derivatives(double r, int channel, double& f, double& f1, double& f2) const;
+    void derivatives(double r, int channel, double& f, double& f1, double& f2) const override;
     // (R'' + R'/r) / R at r > 0: the Laplacian in the plane over R.
-    dvec3 laplacian_ratio(double r) const;
+    dvec3 laplacian_ratio(double r) const override;
     // ∫_R^∞ R(r) r dr, ∫_0^R 2πr R dr and the total (A) per channel.
-    dvec3 tail(double R) const;
-    dvec3 reflectance_within(double R) const;
-    dvec3 total_reflectance() const { return A_; }
-    // The radius within which R holds a fraction f of A in every channel (mm).
-    double radius_holding(double f) const;
+    dvec3 tail(double R) const override;
+    dvec3 reflectance_within(double R) const override;
+    dvec3 total_reflectance() const override { return A_; }
+    dvec3 decay() const override { return 1.0 / d_; }
+    double length_scale() const override { return std::max(1e-12, std::min({d_.x, d_.y, d_.z})); }
+    double reach_hint() const override { return 3.0 * std::max({d_.x, d_.y, d_.z}); }
 
     const dvec3& albedo() const { return A_; }
     const dvec3& s() const { return s_; }

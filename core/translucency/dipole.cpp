@@ -103,7 +103,29 @@ double Dipole::Rd(double r, int c) const {
     return alpha_[c] / (4.0 * kPiD) * (real + virt);
 }
 
-dvec3 Dipole::Rd(double r) const { return {Rd(r, 0), Rd(r, 1), Rd(r, 2)}; }
+void Dipole::derivatives(double r, int c, double& f, double& f1, double& f2) const {
+    const double s = sigma_tr_[c];
+    double g = 0.0, g1 = 0.0, g2 = 0.0;
+    for (const double z : {zr_[c], zv_[c]}) {
+        const double D2 = r * r + z * z, D = std::sqrt(D2), sD = s * D, e = std::exp(-sD);
+        const double T = z * (sD + 1.0) * e / (D2 * D);
+        const double T1 = -z * e * (sD * sD + 3.0 * sD + 3.0) / (D2 * D2);
+        const double T2 = z * e * (sD * sD * sD + 5.0 * sD * sD + 12.0 * sD + 12.0) / (D2 * D2 * D);
+        g += T, g1 += T1 * r / D, g2 += T2 * r * r / D2 + T1 * z * z / (D2 * D);
+    }
+    const double k = alpha_[c] / (4.0 * kPiD);
+    f = k * g, f1 = k * g1, f2 = k * g2;
+}
+
+dvec3 Dipole::tail(double R) const {
+    dvec3 out(0.0);
+    for (int c = 0; c < 3; ++c)
+        for (const double z : {zr_[c], zv_[c]}) {
+            const double D = std::sqrt(R * R + z * z);
+            out[c] += alpha_[c] / (4.0 * kPiD) * z * std::exp(-sigma_tr_[c] * D) / D;
+        }
+    return out;
+}
 
 dvec3 Dipole::laplacian_ratio(double r) const {
     r = std::abs(r);
@@ -135,7 +157,7 @@ dvec3 Dipole::reflectance_within(double R) const {
     return out;
 }
 
-dvec3 Dipole::reflectance_within_square(double a) const {
+dvec3 Profile::reflectance_within_square(double a) const {
     static constexpr double x[8] = {0.0950125098376374, 0.2816035507792589, 0.4580167776572274, 0.6178762444026438,
                                     0.7554044083550030, 0.8656312023878318, 0.9445750230732326, 0.9894009349916499};
     static constexpr double w[8] = {0.1894506104550685, 0.1826034150449236, 0.1691565193950025, 0.1495959888165767,
@@ -159,10 +181,10 @@ dvec3 Dipole::total_reflectance() const {
     return out;
 }
 
-double Dipole::radius_holding(double f) const {
+double Profile::radius_holding(double f) const {
     f = std::clamp(f, 0.0, 1.0 - 1e-12);
     const dvec3 total = reflectance_within(INFINITY);
-    double lo = 0.0, hi = std::max({zv_.x, zv_.y, zv_.z});
+    double lo = 0.0, hi = reach_hint();
     const auto enough = [&](double R) {
         const dvec3 w = reflectance_within(R);
         for (int c = 0; c < 3; ++c)
@@ -178,7 +200,7 @@ double Dipole::radius_holding(double f) const {
 }
 
 // [SECTION] Tabulated R_d
-RdTable::RdTable(const Dipole& d, double r_max, int n) : r_max_(r_max), n_(std::max(2, n)) {
+RdTable::RdTable(const Profile& d, double r_max, int n) : r_max_(r_max), n_(std::max(2, n)) {
     if (!(r_max > 0.0) || !std::isfinite(r_max)) throw std::invalid_argument("RdTable: r_max must be positive and finite");
     inv_r_max_ = float(1.0 / r_max);
     r_max2_ = float(r_max * r_max);
@@ -187,5 +209,10 @@ RdTable::RdTable(const Dipole& d, double r_max, int n) : r_max_(r_max), n_(std::
         const double q = double(i) / double(n_ - 1), r = q * q * r_max;
         table_[size_t(i)] = vec3(d.Rd(r));
     }
+    // A profile infinite at r = 0 (Christensen–Burley's 1/r) keeps its mean over the disk of the
+    // first sample's radius there: the power the disk holds over its area.
+    const double r1 = r_max / double((n_ - 1) * (n_ - 1));
+    for (int c = 0; c < 3; ++c)
+        if (!std::isfinite(table_[0][c])) table_[0][c] = float(d.reflectance_within(r1)[c] / (kPiD * r1 * r1));
 }
 }  // namespace mesolab::translucency

@@ -19,14 +19,14 @@
 // Fresnel transmittance (Schlick 1994, as the paper): T(cos θ) = 1 - R0 - (1 - R0)(1 - cos θ)^5
 // with R0 = ((η - 1)/(η + 1))². At η = 1 there is no interface: T = 1 at every angle.
 #include "core/math.h"
+#include "core/translucency/profile.h"
 
+#include <algorithm>
 #include <array>
 #include <string>
 #include <vector>
 
 namespace mesolab::translucency {
-
-using dvec3 = glm::dvec3;
 
 // A homogeneous medium, RGB. Lengths in millimetres.
 struct Medium {
@@ -64,30 +64,33 @@ double fresnel_transmittance(double cos_theta, double eta);
 double diffuse_transmittance(double eta);
 
 // The dipole for one medium, with the per-channel constants computed once.
-class Dipole {
+class Dipole final : public Profile {
 public:
     explicit Dipole(const Medium& m);
+    std::unique_ptr<Profile> clone() const override { return std::make_unique<Dipole>(*this); }
 
     // R_d(r) per channel, mm^-2, r in mm (r < 0 is taken as |r|).
-    dvec3 Rd(double r) const;
-    double Rd(double r, int channel) const;
+    using Profile::Rd;
+    double Rd(double r, int channel) const override;
+    // R_d and its first two derivatives in r: per source at depth z, T(D) = z (σ D + 1) e^(−σD) / D³
+    // at D = √(r² + z²), T'(D) = −z e^(−σD) (σ²D² + 3σD + 3) / D⁴,
+    // T''(D) = z e^(−σD) (σ³D³ + 5σ²D² + 12σD + 12) / D⁵, dT/dr = T'(D) r / D,
+    // d²T/dr² = T''(D) r² / D² + T'(D) z² / D³; times α'/4π.
+    void derivatives(double r, int channel, double& f, double& f1, double& f2) const override;
+    // T(R) = α'/4π Σ_{z = z_r, z_v} z e^(−σ_tr D) / D, D = √(R² + z²).
+    dvec3 tail(double R) const override;
+    dvec3 decay() const override { return sigma_tr_; }
+    double length_scale() const override { return std::max(1e-12, std::min({zv_.x, zv_.y, zv_.z})); }
+    double reach_hint() const override { return std::max({zv_.x, zv_.y, zv_.z}); }
     // ∇²R_d / R_d at r per channel, mm⁻²: the Laplacian in the surface's plane,
     // (R_d'' + R_d' / r) / R_d, by central differences (r → 0: 2 R_d'' / R_d). Positive where
     // R_d is convex across the plane (beyond about the source depth z_r); σ_tr² far out. 0 where
     // R_d is 0.
-    dvec3 laplacian_ratio(double r) const;
+    dvec3 laplacian_ratio(double r) const override;
     // ∫ 2πr R_d(r) dr over [0, R] per channel (closed form), and R_total (R = ∞).
-    dvec3 reflectance_within(double R) const;
-    dvec3 total_reflectance() const;
-    // ∫ R_d over a square of side a (mm) centred where the light enters, per channel: the disk
-    // of radius b = a / 2 in closed form plus the four corners, where a circle of radius r in
-    // (b, b√2) keeps the length (2π − 8 arccos(b / r)) r inside the square; with r = b / cos φ,
-    // ∫_0^{π/4} R_d(b / cos φ) (2π − 8φ) b² sin φ / cos³ φ dφ (16-point Gauss–Legendre; the
-    // integrand is smooth in φ). The power a K x K texel kernel window holds (blend.h).
-    dvec3 reflectance_within_square(double a) const;
-    // The radius within which R_d holds a fraction `f` of R_total in every channel (mm): how far
-    // subsurface transport reaches (Lensch et al.: "up to several millimetres in marble").
-    double radius_holding(double f) const;
+    dvec3 reflectance_within(double R) const override;
+    dvec3 total_reflectance() const override;
+    // reflectance_within_square and radius_holding: Profile's (profile.h).
 
     const Medium& medium() const { return m_; }
     const dvec3& sigma_tr() const { return sigma_tr_; }
@@ -107,7 +110,7 @@ private:
 // 50 mean free paths of every channel (tests/translucency/dipole_test.cpp).
 class RdTable {
 public:
-    RdTable(const Dipole& d, double r_max, int n = 8192);
+    RdTable(const Profile& d, double r_max, int n = 8192);
     // R_d at squared distance r2 (mm²).
     vec3 at_r2(float r2) const {
         const float q = std::sqrt(std::sqrt(r2) * inv_r_max_) * float(n_ - 1);

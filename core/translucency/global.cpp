@@ -95,11 +95,10 @@ struct SubSamples {
 
 constexpr int kMaxSplit = 8;
 
-SubSamples sub_samples(const std::vector<vec3>& x, const std::vector<uint32_t>& index, const Dipole& dipole, int max_split) {
+SubSamples sub_samples(const std::vector<vec3>& x, const std::vector<uint32_t>& index, const Profile& dipole, int max_split) {
     SubSamples S;
     const size_t faces = index.size() / 3;
-    const dvec3 zv = dipole.z_v();
-    const double z = std::max(1e-12, std::min({zv.x, zv.y, zv.z}));
+    const double z = dipole.length_scale();
     std::vector<int> split(faces, 0);
     S.first.assign(faces + 1, 0);
     for (size_t f = 0; f < faces; ++f) {
@@ -349,7 +348,7 @@ std::vector<vec3> multiply_directed(const VertexFactors& F, const DirectedFactor
 }
 
 // [SECTION] Building
-VertexFactors build_vertex_factors(const std::vector<vec3>& position, const std::vector<uint32_t>& index, const Dipole& dipole,
+VertexFactors build_vertex_factors(const std::vector<vec3>& position, const std::vector<uint32_t>& index, const Profile& dipole,
                                    const FactorParams& p) {
     if (!(p.mm_per_unit > 0.0) || !std::isfinite(p.mm_per_unit))
         throw InputError("translucency.mm_per_unit: " + std::to_string(p.mm_per_unit) + " must be a positive number of millimetres");

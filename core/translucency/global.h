@@ -134,7 +134,7 @@ struct FactorParams {
 // Builds the factors for a mesh (positions, 3 indices per triangle) and a dipole. Rows in
 // parallel; R_d from an RdTable over the mesh's diameter. InputError naming
 // translucency.mm_per_unit / translucency.threshold for values out of range.
-VertexFactors build_vertex_factors(const std::vector<vec3>& position, const std::vector<uint32_t>& index, const Dipole& dipole,
+VertexFactors build_vertex_factors(const std::vector<vec3>& position, const std::vector<uint32_t>& index, const Profile& dipole,
                                    const FactorParams& p);
 
 // E_j = (3 / A_j) ∫ E φ_j dA from per-texel irradiance over an atlas of the same mesh (inner

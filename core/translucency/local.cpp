@@ -22,7 +22,7 @@ std::vector<vec3> texel_positions_mm(const Atlas& atlas, const std::vector<vec3>
     return x;
 }
 
-LocalKernels build_local_kernels(const Atlas& atlas, const std::vector<vec3>& position, const std::vector<uint32_t>& index, const Dipole& dipole,
+LocalKernels build_local_kernels(const Atlas& atlas, const std::vector<vec3>& position, const std::vector<uint32_t>& index, const Profile& dipole,
                                  double mm_per_unit, int K) {
     if (K < 3 || K > 15 || K % 2 == 0) throw InputError("translucency.kernel: " + std::to_string(K) + " must be odd, in [3, 15]");
     const int h = (K - 1) / 2;

@@ -58,7 +58,7 @@ std::vector<vec3> texel_positions_mm(const Atlas& atlas, const std::vector<vec3>
 
 // InputError naming translucency.kernel for an even K, K < 3 or K > 15, or a K wider than the
 // atlas's border allows (border >= (K - 1)/2 + 1).
-LocalKernels build_local_kernels(const Atlas& atlas, const std::vector<vec3>& position, const std::vector<uint32_t>& index, const Dipole& dipole,
+LocalKernels build_local_kernels(const Atlas& atlas, const std::vector<vec3>& position, const std::vector<uint32_t>& index, const Profile& dipole,
                                  double mm_per_unit, int K);
 
 // B_local per atlas texel (0 outside inner texels) from per-texel irradiance E (every texel,

@@ -9,11 +9,11 @@
 
 namespace mesolab::translucency {
 
-vec3 reference_self_weight(const Dipole& dipole, const RdTable& Rd, float area) {
+vec3 reference_self_weight(const Profile& dipole, const RdTable& Rd, float area) {
     return vec3(dipole.reflectance_within(std::sqrt(double(texel_disk_r2(area))))) - Rd.at_r2(texel_disk_r2(area)) * area;
 }
 
-std::vector<vec3> reference_radiosity(const Atlas& atlas, const std::vector<vec3>& x, const Dipole& dipole, double mm_per_unit,
+std::vector<vec3> reference_radiosity(const Atlas& atlas, const std::vector<vec3>& x, const Profile& dipole, double mm_per_unit,
                                       const std::vector<vec3>& E) {
     const float s2 = float(mm_per_unit * mm_per_unit);
     // Sources: lit inner texels, with their power E A (mm²).

@@ -16,9 +16,9 @@ namespace mesolab::translucency {
 
 // What the loop's pair of a texel with itself (R_d at ρ, times A) must add to make it the disk
 // ∫_{r < ρ} R_d 2πr dr, for a texel of area A (mm²).
-vec3 reference_self_weight(const Dipole& dipole, const RdTable& Rd, float area_mm2);
+vec3 reference_self_weight(const Profile& dipole, const RdTable& Rd, float area_mm2);
 
 // Per atlas texel (0 outside inner texels); x_mm from texel_positions_mm.
-std::vector<vec3> reference_radiosity(const Atlas& atlas, const std::vector<vec3>& x_mm, const Dipole& dipole, double mm_per_unit,
+std::vector<vec3> reference_radiosity(const Atlas& atlas, const std::vector<vec3>& x_mm, const Profile& dipole, double mm_per_unit,
                                       const std::vector<vec3>& E);
 }  // namespace mesolab::translucency

@@ -20,17 +20,6 @@ constexpr int kMaxSplit = 3, kSamples = 8192;
 constexpr double kGaussX[4] = {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526};
 constexpr double kGaussW[4] = {0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538};
 
-// One source of the dipole at depth z (Dipole, dipole.h): T(D) = z (σ D + 1) e^(−σD) / D³ at
-// D = √(r² + z²), and its first two derivatives in r:
-//   T'(D) = −z e^(−σD) (σ²D² + 3σD + 3) / D⁴,  T''(D) = z e^(−σD) (σ³D³ + 5σ²D² + 12σD + 12) / D⁵,
-//   dT/dr = T'(D) r / D,  d²T/dr² = T''(D) r² / D² + T'(D) z² / D³.
-void source_derivatives(double r, double z, double s, double& f, double& f1, double& f2) {
-    const double D2 = r * r + z * z, D = std::sqrt(D2), sD = s * D, e = std::exp(-sD);
-    const double T = z * (sD + 1.0) * e / (D2 * D);
-    const double T1 = -z * e * (sD * sD + 3.0 * sD + 3.0) / (D2 * D2);
-    const double T2 = z * e * (sD * sD * sD + 5.0 * sD * sD + 12.0 * sD + 12.0) / (D2 * D2 * D);
-    f += T, f1 += T1 * r / D, f2 += T2 * r * r / D2 + T1 * z * z / (D2 * D);
-}
 }  // namespace
 
 SurfaceReflectance::Triangle SurfaceReflectance::make_triangle(const dvec3& a, const dvec3& b, const dvec3& c) {
@@ -50,7 +39,7 @@ SurfaceReflectance::Triangle SurfaceReflectance::make_triangle(const dvec3& a, c
 }
 
 SurfaceReflectance::SurfaceReflectance(const std::vector<vec3>& position, const std::vector<uint32_t>& index, double mm_per_unit,
-                                       const Dipole& dipole) {
+                                       const Profile& profile) {
     dvec3 lo(INFINITY), hi(-INFINITY);
     for (size_t f = 0; f + 2 < index.size(); f += 3) {
         const dvec3 a = dvec3(position[index[f]]) * mm_per_unit, b = dvec3(position[index[f + 1]]) * mm_per_unit,
@@ -60,10 +49,10 @@ SurfaceReflectance::SurfaceReflectance(const std::vector<vec3>& position, const 
         for (const dvec3& p : t.p) lo = glm::min(lo, p), hi = glm::max(hi, p);
         tri_.push_back(t);
     }
-    sigma_tr_ = dipole.sigma_tr();
-    const dvec3 R_total = dipole.total_reflectance();
+    profile_ = profile.clone();
+    sigma_tr_ = profile.decay();
+    const dvec3 R_total = profile.total_reflectance();
     negligible_ = kNegligible * R_total;
-    z_r_ = dipole.z_r(), z_v_ = dipole.z_v(), alpha_ = dipole.alpha_prime();
     // Distances between points of the mesh stay below its diagonal.
     r_max_ = tri_.empty() ? 1.0 : std::max(1e-9, 1.01 * glm::length(hi - lo));
     n_ = kSamples;
@@ -73,12 +62,7 @@ SurfaceReflectance::SurfaceReflectance(const std::vector<vec3>& position, const 
         const double q = double(i) / double(n_ - 1), r = q * q * r_max_;
         tail_table_[size_t(i)] = tail_exact(r);
         std::array<dvec3, 3>& d = d_table_[size_t(i)];
-        for (int c = 0; c < 3; ++c) {
-            double f = 0.0, f1 = 0.0, f2 = 0.0;
-            for (const double z : {dipole.z_r()[c], dipole.z_v()[c]}) source_derivatives(r, z, sigma_tr_[c], f, f1, f2);
-            const double k = dipole.alpha_prime()[c] / (4.0 * kPiD);
-            d[0][c] = k * f, d[1][c] = k * f1, d[2][c] = k * f2;
-        }
+        for (int c = 0; c < 3; ++c) profile.derivatives(r, c, d[0][c], d[1][c], d[2][c]);
     }
     if (tri_.empty()) return;
     std::vector<int> order(tri_.size());
@@ -128,15 +112,7 @@ dvec3 SurfaceReflectance::tail(double r) const {
     return tail_table_[size_t(i)] * (1.0 - t) + tail_table_[size_t(i) + 1] * t;
 }
 
-dvec3 SurfaceReflectance::tail_exact(double R) const {
-    dvec3 out(0.0);
-    for (int c = 0; c < 3; ++c)
-        for (const double z : {z_r_[c], z_v_[c]}) {
-            const double D = std::sqrt(R * R + z * z);
-            out[c] += alpha_[c] / (4.0 * kPiD) * z * std::exp(-sigma_tr_[c] * D) / D;
-        }
-    return out;
-}
+dvec3 SurfaceReflectance::tail_exact(double R) const { return profile_->tail(R); }
 
 void SurfaceReflectance::derivatives(double r, dvec3& f, dvec3& f1, dvec3& f2) const {
     const double u = std::min(std::sqrt(r / r_max_) * double(n_ - 1), double(n_ - 1));

@@ -41,6 +41,7 @@
 #include "core/translucency/dipole.h"
 
 #include <array>
+#include <memory>
 #include <cstdint>
 #include <vector>
 
@@ -49,7 +50,7 @@ namespace mesolab::translucency {
 class SurfaceReflectance {
 public:
     // The mesh's triangles in mm (positions × mm_per_unit); triangles without area are left out.
-    SurfaceReflectance(const std::vector<vec3>& position, const std::vector<uint32_t>& index, double mm_per_unit, const Dipole& dipole);
+    SurfaceReflectance(const std::vector<vec3>& position, const std::vector<uint32_t>& index, double mm_per_unit, const Profile& profile);
     // R_S(y) per channel, y in mm (a point of the surface; anywhere within the mesh's bounds).
     dvec3 operator()(const vec3& y_mm) const;
     // ∫ R_d(|x − y|) dA over the f-th triangle kept (mm²·mm⁻²), by the polar sum above.
@@ -83,7 +84,8 @@ private:
 
     std::vector<Triangle> tri_;
     std::vector<Node> node_;
-    dvec3 sigma_tr_{0.0}, z_r_{0.0}, z_v_{0.0}, alpha_{0.0}, negligible_{0.0};
+    std::shared_ptr<const Profile> profile_;
+    dvec3 sigma_tr_{0.0}, negligible_{0.0};
     double r_max_ = 1.0;
     int n_ = 0;
     std::vector<dvec3> tail_table_;
