@@ -312,7 +312,7 @@ Frame render_cpu(const Scene& s, const Evaluation& ev, int width, int height, co
             if (!keep.back()) throw std::logic_error("render_cpu: scene.geometry was not evaluated for object " + std::to_string(i));
             const Technique* t = reg.technique(s.objects[i].technique);
             const Method* method = t ? t->method_of(s.objects[i]) : nullptr;
-            const bool derivatives = method ? method->uses_uv_derivatives() : t && t->uses_uv_derivatives();
+            const bool derivatives = method && !method->shares_paper_pipeline() ? method->uses_uv_derivatives() : t && t->uses_uv_derivatives();
             items.push_back({keep.back().get(), object_to_world(s.objects[i]), int(i), derivatives});
         }
         rasterize(items, cam.raster, gb);

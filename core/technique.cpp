@@ -266,14 +266,18 @@ const Method* Technique::method_of(const SceneObject& o) const {
 }
 
 FrameAgreement Technique::agreement_for(const SceneObject& o) const {
-    if (const Method* m = method_of(o)) return m->agreement();
+    if (const Method* m = method_of(o); m && !m->shares_paper_pipeline()) return m->agreement();
     return agreement();
 }
 
 std::vector<int> method_objects(const Scene& s, const Technique& t, const Method* m) {
     std::vector<int> r;
-    for (size_t i = 0; i < s.objects.size(); ++i)
-        if (s.objects[i].technique == t.name() && t.method_of(s.objects[i]) == m) r.push_back(int(i));
+    if (m && m->shares_paper_pipeline()) return r;
+    for (size_t i = 0; i < s.objects.size(); ++i) {
+        if (s.objects[i].technique != t.name()) continue;
+        const Method* u = t.method_of(s.objects[i]);
+        if (u == m || (!m && u && u->shares_paper_pipeline())) r.push_back(int(i));
+    }
     return r;
 }
 

@@ -190,6 +190,13 @@ public:
     virtual FrameAgreement agreement() const { return {}; }
     // Whether shade_cpu reads GBuffer::uv_dx and uv_dy (as Technique::uses_uv_derivatives).
     virtual bool uses_uv_derivatives() const { return false; }
+    // A method that is the paper's pipeline with other data: the technique's stages read
+    // `<technique>.method` and build that data (translucency's lensch-burley: the dipole's
+    // kernels, factors and blending made from another diffusion profile). Its objects are the
+    // paper method's for everything a frame runs (method_objects(s, t, nullptr): its frame stages,
+    // frame steps, CPU shading, GPU pass and agreement); it has no shade_cpu or GPU pass of its own
+    // (those are never called), and its keys, if any, are read by the technique's stages.
+    virtual bool shares_paper_pipeline() const { return false; }
 
 private:
     std::string technique_, name_, title_;
@@ -317,7 +324,8 @@ void register_core_methods(Registry& r);
 // a probe method to show what a new method gets from one registration). std::logic_error once
 // the registry exists.
 void register_extra_method(std::function<std::unique_ptr<Method>()> make);
-// The objects of technique t that use method m (null: the paper's), in scene order.
+// The objects of technique t that use method m (null: the paper's, with those of the methods that
+// share its pipeline; such a method itself gets none), in scene order.
 std::vector<int> method_objects(const Scene& s, const Technique& t, const Method* m);
 // A technique added besides the generated list, before the registry is first used (tests use a
 // probe technique to exercise contracts no shipped technique exercises yet). std::logic_error

@@ -81,6 +81,7 @@ Renderer::Renderer() : impl_(std::make_unique<Impl>()) {
         }
         // Each other method's pass: the technique's outputs, no frame steps of its own.
         for (const Method* m : t->methods()) {
+            if (m->shares_paper_pipeline()) continue;  // its objects are drawn by the technique's pass
             const std::string key = t->name() + "/" + m->name();
             auto mf = factories.find(key);
             if (mf == factories.end()) throw std::logic_error("method " + key + " has no GPU pass");
@@ -359,7 +360,8 @@ void Renderer::render(const Scene& s, const Evaluation& ev, int width, int heigh
     std::vector<std::pair<const Technique*, const Method*>> drawn;
     for (const Technique* t : Registry::instance().techniques()) {
         drawn.emplace_back(t, nullptr);
-        for (const Method* m : t->methods()) drawn.emplace_back(t, m);
+        for (const Method* m : t->methods())
+            if (!m->shares_paper_pipeline()) drawn.emplace_back(t, m);
     }
     if (!per_pass) begin_range();
     for (size_t b = 0; b < batches_.size(); ++b) {

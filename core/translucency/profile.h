@@ -27,7 +27,8 @@ public:
     virtual dvec3 total_reflectance() const = 0;
     // (R_d'' + R_d'/r) / R_d per channel (0 where R_d is 0).
     virtual dvec3 laplacian_ratio(double r) const = 0;
-    // How fast R_d falls off far out, per channel (mm⁻¹): the dipole's σ_tr.
+    // The fastest exponential fall-off of R_d, per channel (mm⁻¹): the dipole's σ_tr, Burley's s/ℓ.
+    // A cluster of the surface is expanded about its centroid only where it spans a few of these.
     virtual dvec3 decay() const = 0;
     // The shortest length of the profile (mm): below it a surface element is split (global.h).
     virtual double length_scale() const = 0;

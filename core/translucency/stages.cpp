@@ -82,7 +82,7 @@ void TranslucencyTechnique::declare_stages(StageGraph& g) const {
     g.add(stages::kernels, {.help = "Local K x K kernels per texel from R_d (§5.3)",
            .scope = StageScope::Object,
            .technique = "translucency",
-           .params = with_material({"translucency.kernel"}),
+           .params = with_material({"translucency.kernel", "translucency.method"}),
            .inputs = {stages::mesh, stages::atlas},
            .paper = PaperFigure{paper::kKernelsMaxMs, "Lensch 2002, §6: kernels 1-2 min (dual Xeon 1.7 GHz)"},
            .memory = [](const StageContext& ctx) {
@@ -93,25 +93,25 @@ void TranslucencyTechnique::declare_stages(StageGraph& g) const {
                                      {"translucency.kernel", "translucency.atlas_size"}};
            },
            .run = [](StageContext& ctx) -> std::any {
-               const Settings s = Settings::from(ctx.obj(), Settings::Medium_ | Settings::Scale | Settings::AtlasPart);
+               const Settings s = Settings::from(ctx.obj(), Settings::Medium_ | Settings::ProfilePart | Settings::Scale | Settings::AtlasPart);
                const auto m = ctx.input(stages::mesh);
                const auto a = ctx.input(stages::atlas);
-               return stage_result(stages::kernels, build_local_kernels(a->atlas, m->position, m->index, Dipole(s.medium), s.mm_per_unit, s.kernel));
+               return stage_result(stages::kernels, build_local_kernels(a->atlas, m->position, m->index, *s.profile(), s.mm_per_unit, s.kernel));
            },
            .disk = stage_codec(stages::kernels, write_kernels, read_kernels)});
     g.add(stages::factors, {.help = "Vertex-to-vertex throughput factors above translucency.threshold (§5.2)",
            .scope = StageScope::Object,
            .technique = "translucency",
-           .params = with_material({"translucency.threshold", "translucency.blend"}),
+           .params = with_material({"translucency.threshold", "translucency.blend", "translucency.method"}),
            .inputs = {stages::mesh},
            .paper = PaperFigure{paper::kFactorsMaxMs, "Lensch 2002, §6: form factors 2-8 min (dual Xeon 1.7 GHz)"},
            .memory = [](const StageContext& ctx) {
-               return factor_memory(*ctx.input(stages::mesh), Settings::from(ctx.obj(), Settings::Medium_ | Settings::Scale | Settings::Factors));
+               return factor_memory(*ctx.input(stages::mesh), Settings::from(ctx.obj(), Settings::Medium_ | Settings::ProfilePart | Settings::Scale | Settings::Factors));
            },
            .run = [](StageContext& ctx) -> std::any {
-               const Settings s = Settings::from(ctx.obj(), Settings::Medium_ | Settings::Scale | Settings::Factors);
+               const Settings s = Settings::from(ctx.obj(), Settings::Medium_ | Settings::ProfilePart | Settings::Scale | Settings::Factors);
                const auto m = ctx.input(stages::mesh);
-               VertexFactors F = build_vertex_factors(m->position, m->index, Dipole(s.medium), {s.mm_per_unit, s.threshold, s.blend});
+               VertexFactors F = build_vertex_factors(m->position, m->index, *s.profile(), {s.mm_per_unit, s.threshold, s.blend});
                if (F.count() == 0 && m->vertex_count() > 1)
                    ctx.warn("translucency.threshold = " + std::to_string(s.threshold) + " drops every factor: the global response is zero");
                return stage_result(stages::factors, std::move(F));
@@ -147,10 +147,10 @@ void TranslucencyTechnique::declare_stages(StageGraph& g) const {
                                      {"translucency.kernel", "translucency.atlas_size"}};
            },
            .run = [](StageContext& ctx) -> std::any {
-               const Settings s = Settings::from(ctx.obj(), Settings::Medium_ | Settings::Scale);
+               const Settings s = Settings::from(ctx.obj(), Settings::Medium_ | Settings::ProfilePart | Settings::Scale);
                const auto m = ctx.input(stages::mesh);
                Blended b{*ctx.input(stages::kernels), {}};
-               b.weights = fit_blending(ctx.input(stages::atlas)->atlas, m->position, m->index, Dipole(s.medium), s.mm_per_unit,
+               b.weights = fit_blending(ctx.input(stages::atlas)->atlas, m->position, m->index, *s.profile(), s.mm_per_unit,
                                         *ctx.input(stages::factors), b.kernels);
                return stage_result(stages::blend, std::move(b));
            },
@@ -270,12 +270,12 @@ std::vector<FrameStepDecl> TranslucencyTechnique::frame_steps() const {
                        const auto& E = ctx.step(steps::illumination);
                        PerObject<std::vector<vec3>> out;
                        for (int o : ctx.objects) {
-                           const Settings s = Settings::from(ctx.scene.objects[size_t(o)], Settings::Medium_ | Settings::Scale | Settings::Show);
+                           const Settings s = Settings::from(ctx.scene.objects[size_t(o)], Settings::Medium_ | Settings::ProfilePart | Settings::Scale | Settings::Show);
                            if (!s.needs_reference()) continue;
                            const auto a = atlas(ctx, o);
                            const auto m = ctx.eval.get(stages::mesh, o);
                            out[o] = fill_texels(*a, reference_radiosity(a->atlas, texel_positions_mm(a->atlas, m->position, m->index, s.mm_per_unit),
-                                                                        Dipole(s.medium), s.mm_per_unit, E.at(o)));
+                                                                        *s.profile(), s.mm_per_unit, E.at(o)));
                        }
                        return out;
                    })};

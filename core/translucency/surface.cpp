@@ -62,7 +62,12 @@ SurfaceReflectance::SurfaceReflectance(const std::vector<vec3>& position, const 
         const double q = double(i) / double(n_ - 1), r = q * q * r_max_;
         tail_table_[size_t(i)] = tail_exact(r);
         std::array<dvec3, 3>& d = d_table_[size_t(i)];
-        for (int c = 0; c < 3; ++c) profile.derivatives(r, c, d[0][c], d[1][c], d[2][c]);
+        // A profile infinite at r = 0 (Burley's 1/r) gets its values a quarter of the first step out:
+        // the expansion is used only where r exceeds a node's radius 2.5 times, never that close.
+        const double r_at = i == 0 && !std::isfinite(profile.Rd(0.0, 0) + profile.Rd(0.0, 1) + profile.Rd(0.0, 2))
+                                ? 0.25 * r_max_ / (double(n_ - 1) * double(n_ - 1))
+                                : r;
+        for (int c = 0; c < 3; ++c) profile.derivatives(r_at, c, d[0][c], d[1][c], d[2][c]);
     }
     if (tri_.empty()) return;
     std::vector<int> order(tri_.size());

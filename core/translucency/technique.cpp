@@ -30,6 +30,7 @@ Settings Settings::from(const SceneObject& o, unsigned parts) {
         }
         validate(s.medium);
     }
+    if (parts & ProfilePart) s.burley = t.get_string("method") == "lensch-burley";
     if (parts & Scale) s.mm_per_unit = t.get_float("mm_per_unit") * o.geometry.get_float("scale");
     if (parts & Mesh) s.vertices = int(t.get_int("vertices"));
     if (parts & AtlasPart) {
@@ -59,6 +60,11 @@ Settings Settings::from(const SceneObject& o, unsigned parts) {
     return s;
 }
 
+std::unique_ptr<Profile> Settings::profile() const {
+    if (burley) return std::make_unique<BurleyProfile>(medium);
+    return std::make_unique<Dipole>(medium);
+}
+
 AtlasParams atlas_params(const Settings& s) { return {s.atlas_size, (s.kernel - 1) / 2 + 1, s.chunk_angle}; }
 
 std::vector<std::string> with_material(std::vector<std::string> keys) {
@@ -67,7 +73,9 @@ std::vector<std::string> with_material(std::vector<std::string> keys) {
 }
 
 std::vector<std::string> step_keys(std::vector<std::string> extra) {
-    std::vector<std::string> k = {"light.*", "env.*", "effects.*", "geometry.*", "translucency.shadows", "translucency.shadow_map"};
+    // translucency.method: which objects the steps run for (the paper's pipeline serves lensch and
+    // lensch-burley) and which profile the reference sums.
+    std::vector<std::string> k = {"light.*", "env.*", "effects.*", "geometry.*", "translucency.shadows", "translucency.shadow_map", "translucency.method"};
     k.insert(k.end(), kMaterialKeys.begin(), kMaterialKeys.end());
     k.insert(k.end(), extra.begin(), extra.end());
     return k;
@@ -86,9 +94,9 @@ MemoryEstimate factor_memory(const PreparedMesh& m, const Settings& s) {
         area += 0.5 * double(glm::length(glm::cross(m.position[m.index[3 * f + 1]] - m.position[m.index[3 * f]],
                                                     m.position[m.index[3 * f + 2]] - m.position[m.index[3 * f]])));
     const double mean_area = 3.0 * area * s.mm_per_unit * s.mm_per_unit / double(n);  // A_j, mm²
-    const Dipole d(s.medium);
+    const std::unique_ptr<Profile> d = s.profile();
     auto factor = [&](double r) {
-        const dvec3 v = d.Rd(r);
+        const dvec3 v = d->Rd(r);
         return std::max({v.x, v.y, v.z}) * mean_area / 3.0;
     };
     double lo = 0.0, hi = 1.0;
@@ -160,9 +168,11 @@ TranslucencyTechnique::TranslucencyTechnique() : Technique("translucency", "Tran
                              "before rho (the displayed response B x the hemispherical mean of T; the truth's exitance is the same quantity)"}};
 }
 
-std::vector<StageName> TranslucencyTechnique::frame_stages() const {
+std::vector<StageName> pipeline_stages() {
     return {stages::mesh, stages::atlas, stages::kernels, stages::factors, stages::blend, stages::gather, stages::albedo};
 }
+
+std::vector<StageName> TranslucencyTechnique::frame_stages() const { return pipeline_stages(); }
 
 std::optional<ivec2> TranslucencyTechnique::texture_size(const Scene& s, const Evaluation& ev) const {
     for (size_t i = 0; i < s.objects.size(); ++i)
@@ -210,7 +220,7 @@ double radiosity_error(const Scene& s, const Evaluation& ev, int o) {
     const std::vector<vec3> local = convolve_local(b ? b->kernels : *K, E);
     const std::vector<vec3> global = interpolate_to_texels(a->atlas, m->index, Bv);
     const std::vector<vec3> ref =
-        reference_radiosity(a->atlas, texel_positions_mm(a->atlas, m->position, m->index, st.mm_per_unit), Dipole(st.medium), st.mm_per_unit, E);
+        reference_radiosity(a->atlas, texel_positions_mm(a->atlas, m->position, m->index, st.mm_per_unit), *st.profile(), st.mm_per_unit, E);
     double se = 0.0, sum = 0.0;
     size_t n = 0;
     for (size_t t = 0; t < E.size(); ++t) {

@@ -24,13 +24,17 @@ namespace mesolab::translucency {
 inline const std::vector<std::string> kMaterialKeys = {"translucency.material", "translucency.sigma_s", "translucency.sigma_a", "translucency.eta",
                                                        "translucency.mm_per_unit", "geometry.scale"};
 std::vector<std::string> with_material(std::vector<std::string> keys);
-// A frame step's keys: the lights, environment, effects, geometry, shadows and material, and `extra`.
+// A frame step's keys: the lights, environment, effects, geometry, shadows, material and method, and `extra`.
 std::vector<std::string> step_keys(std::vector<std::string> extra);
 AtlasParams atlas_params(const Settings& s);
 // Factors above the threshold (an estimate before they are built, for the memory budget).
 MemoryEstimate factor_memory(const PreparedMesh& m, const Settings& s);
 
 // [SECTION] The technique
+// The object stages a frame of the atlas and vertex pipeline reads (the paper's method and
+// lensch-burley, which share it).
+std::vector<StageName> pipeline_stages();
+
 class TranslucencyTechnique final : public Technique {
 public:
     TranslucencyTechnique();

@@ -34,6 +34,7 @@
 #include "core/scene.h"
 #include "core/translucency/atlas.h"
 #include "core/translucency/blend.h"
+#include "core/translucency/burley.h"
 #include "core/translucency/dipole.h"
 #include "core/translucency/global.h"
 #include "core/translucency/local.h"
@@ -53,6 +54,7 @@ enum class Response { Both, Local, Global, Reference };
 struct Settings {
     std::string material;       // a measured material or "custom"
     Medium medium;
+    bool burley = false;        // translucency.method = lensch-burley: Christensen–Burley's profile
     double mm_per_unit = 1.0;   // mm per object-space unit: translucency.mm_per_unit x geometry.scale
     int vertices = 0, atlas_size = 512, kernel = 7, shadow_map = 512;
     float chunk_angle = 30.f, threshold = 0.f;
@@ -74,11 +76,15 @@ struct Settings {
         Shadows = 32,   // shadows, shadow_map
         Rho = 64,       // albedo_map, veins, vein_color, vein_scale
         Show = 128,     // compare, response: what the frame shows
+        ProfilePart = 256,  // method: which diffusion profile the stages build from the medium
         Frame = Shadows | Show,
-        All = 255,
+        All = 511,
     };
     static Settings from(const SceneObject& o, unsigned parts = All);  // InputError naming a bad material key
     bool needs_reference() const { return compare || response == Response::Reference; }
+    // The diffusion profile of the medium (read with Medium_ | ProfilePart): the dipole (the paper's
+    // method) or Christensen and Burley's normalised profile (lensch-burley, burley.h).
+    std::unique_ptr<Profile> profile() const;
 };
 
 // [SECTION] Stage results

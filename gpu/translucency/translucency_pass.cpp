@@ -557,19 +557,19 @@ private:
         auto make = [&] {
             RefData r;
             const std::vector<vec3> x = texel_positions_mm(a, in.mesh->position, in.mesh->index, mm);
-            const Dipole d(in.s.medium);
+            const std::unique_ptr<Profile> d = Settings::from(ctx.scene.objects[size_t(o)], Settings::Medium_ | Settings::ProfilePart).profile();
             vec3 lo(INFINITY), hi(-INFINITY);
             r.x.assign(x.size(), vec4(0.f));
             r.self.assign(x.size(), vec4(0.f));
             for (size_t t = 0; t < x.size(); ++t)
                 if (a.texel_kind[t] == Atlas::kInner) lo = glm::min(lo, x[t]), hi = glm::max(hi, x[t]);
-            const RdTable Rd(d, std::max(1e-6, double(glm::length(hi - lo))) * 1.0001);
+            const RdTable Rd(*d, std::max(1e-6, double(glm::length(hi - lo))) * 1.0001);
             const float s2 = float(mm * mm);
             for (size_t t = 0; t < x.size(); ++t) {
                 if (a.texel_kind[t] != Atlas::kInner) continue;
                 const float area = a.texel_area[t] * s2;
                 r.x[t] = vec4(x[t], 1.f);
-                r.self[t] = vec4(reference_self_weight(d, Rd, area), 0.f);
+                r.self[t] = vec4(reference_self_weight(*d, Rd, area), 0.f);
                 r.sources_x.push_back(vec4(x[t], area));
                 r.sources_t.push_back(int32_t(t));
             }

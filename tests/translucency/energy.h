@@ -42,6 +42,7 @@ struct EnergySettings {
     float threshold = 3e-5f;
     bool unblended = true;  // also the unblended sum (kernels, factors alone)
     bool rmse = true;       // the blended RMSE and lowest value against the reference
+    bool burley = false;    // Christensen and Burley's profile (lensch-burley) instead of the dipole
 };
 
 struct Energy {
@@ -57,12 +58,14 @@ struct Energy {
 inline Energy energy(const Shape& shape, double mm, const Light& light, const EnergySettings& s = {}) {
     const PreparedMesh m = prepare_mesh(shape.position, shape.index, 0);
     const AtlasStage a = make_atlas_stage(m, {s.atlas, (s.kernel - 1) / 2 + 1, 30.f});
-    const Dipole d(measured_material(s.material).medium);
+    const Medium medium = measured_material(s.material).medium;
+    const std::unique_ptr<Profile> profile = s.burley ? std::unique_ptr<Profile>(std::make_unique<BurleyProfile>(medium)) : std::make_unique<Dipole>(medium);
+    const Profile& d = *profile;
     Lighting L;
     L.lights = {light};
     L.env_lighting = false;
     const std::vector<ShadowMap> shadows = {make_shadow_map(*a.display, mat4(1.f), light, 512)};
-    const std::vector<vec3> E = illuminate(a, mat4(1.f), L, d.medium().eta, shadows);
+    const std::vector<vec3> E = illuminate(a, mat4(1.f), L, medium.eta, shadows);
     const std::vector<float> A = vertex_areas(m.position, m.index, mm);
     Energy r;
     dvec3 in(0.0);
