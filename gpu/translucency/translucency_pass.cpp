@@ -2,7 +2,9 @@
 // buffers made once from the stage results (core/translucency/translucency.h), then one draw per
 // object sampling the radiosity maps at the atlas coordinates.
 #include "core/translucency/stages.h"
+#include "core/error.h"
 #include "core/profile.h"
+#include "core/strings.h"
 #include "core/scene_stages.h"
 #include "core/translucency/gpu_layout.h"
 #include "core/translucency/reference.h"
@@ -377,6 +379,18 @@ private:
     // [SECTION] translucency.local
     void local_step(DrawContext& ctx, int /*o*/, const In& in, PerObject& w) {
         const LocalKernels& K = in.K();
+        // One buffer texture holds every weight (K² per inner texel): beyond what this GL's buffer
+        // textures address the shader would read past it (llvmpipe crashes, others read zeros).
+        {
+            GLint64 max_texels = 0;
+            glGetInteger64v(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
+            const double weights = double(K.texel.size()) * double(K.K) * double(K.K);
+            if (weights > double(max_texels) || weights * 16.0 > 2147483647.0)
+                throw InputError("translucency.kernel = " + std::to_string(K.K) + " with translucency.atlas_size = " + std::to_string(K.size) +
+                                 ": the GPU's local kernels would hold " + std::to_string(int64_t(weights)) + " weights (" +
+                                 format_bytes(weights * 16.0) + "), more than this GL's buffer textures address (GL_MAX_TEXTURE_BUFFER_SIZE = " +
+                                 std::to_string(max_texels) + ", and 2 GiB); lower the kernel or the atlas size, or render on the CPU");
+        }
         // The weights kernel by kernel on llvmpipe, tap by tap on a hardware GPU (local.comp).
         const bool tap_major = tuned_for_hardware();
         if (tap_major && !local_tap_major_) local_tap_major_.emplace(Program::compute("translucency/local.comp", {"TAP_MAJOR"}));
