@@ -79,7 +79,7 @@ std::vector<BenchTable> TranslucencyTechnique::bench_tables() const {
     // what the profile costs in the precomputation and the frame (no paper figure).
     {
         BenchRow r;
-        const int n = paper::kTable1[2].vertices;
+        const int n = paper::kTable1[0].vertices;
         r.name = "bunny " + std::to_string(n) + ", lensch-burley";
         const std::string mesh = shipped_mesh("stanford-bunny.obj"), name = r.name;
         r.scene = [=] {
