@@ -35,7 +35,7 @@ struct Settings {
     enum Part : unsigned {
         Stitch = 1,    // stitch, yarn_radius, loop_height, color_a, color_b, stitch_resolution
         Acquire = 2,   // spatial, directions, visibility_rays, samples
-        Fit = 4,       // lobes, lookup_table, tolerance
+        Fit = 4,       // method, lobes (daubert), lookup_table, tolerance
         Shading = 8,   // repeat, mip, mip_bias, garment
         All = 15,
     };
@@ -44,7 +44,7 @@ struct Settings {
 
 // The pyramid as the GPU reads it: one record of `stride` vec4s per entry, entries level by
 // level (level_first[k] = the first entry of level k), each record:
-//   [0]   k_d (rgb), lobe count
+//   [0]   k_d (rgb), lobe count (−1: the sheen model, its S (rgb) and r in the first lobe's first vec4)
 //   [1-3] the entry's frame rows x, y, z (xyz); [1].w = table size
 //   [4]   f_max (rgb; ClothBrdf::f_max, the bound on f_r, at most 3e38)
 //   then per lobe 4 vec4: C_x, C_y, C_z, n (rgb); then per table direction 2 vec4: v (xyz), T (rgba).

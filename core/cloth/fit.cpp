@@ -181,18 +181,6 @@ double solve(const ChannelData& d, int lobes, std::vector<double>& x, const FitO
     return std::isfinite(sum.final_cost) ? sum.final_cost : std::numeric_limits<double>::infinity();
 }
 
-double rms_of(const PointSamples& ps, const ClothBrdf& b, double* rel) {
-    double e2 = 0.0, r2 = 0.0;
-    for (const BrdfSample& s : ps.s) {
-        const dvec3 f = b.L.f(s.l, s.v) * (b.table.empty() ? dvec3(1.0) : dvec3(b.table.T[size_t(s.view)]));
-        const double w2 = s.w * s.w;
-        for (int c = 0; c < 3; ++c) e2 += w2 * (f[c] - s.f[c]) * (f[c] - s.f[c]), r2 += w2 * s.f[c] * s.f[c];
-    }
-    const double n = std::max<double>(1.0, 3.0 * double(ps.s.size()));
-    if (rel) *rel = r2 > 0.0 ? std::sqrt(e2 / r2) : 0.0;
-    return std::sqrt(e2 / n);
-}
-
 LafortuneLobe lobe_of(dvec3 shape, double n, double peak) {
     // Scaled so that the lobe's value where its base is |shape|_max is about `peak`.
     const double m = std::max({std::abs(shape.x), std::abs(shape.y), std::abs(shape.z)});
@@ -266,12 +254,12 @@ Lafortune fit_lobes(const PointSamples& ps, const ViewTable& table, const std::v
 }
 
 // [SECTION] Step 2: the table (Eq. 4)
-ViewTable fit_table(const PointSamples& ps, const Lafortune& L) {
+ViewTable fit_table(const PointSamples& ps, const ModelFn& model) {
     ViewTable t;
     t.v = ps.views;
     std::vector<dvec3> num(ps.views.size(), dvec3(0.0)), den(ps.views.size(), dvec3(0.0));
     for (const BrdfSample& s : ps.s) {
-        const dvec3 f = L.f(s.l, s.v);
+        const dvec3 f = model(s.l, s.v);
         const double w2 = s.w * s.w;
         num[size_t(s.view)] += w2 * s.f * f;
         den[size_t(s.view)] += w2 * f * f;
@@ -287,8 +275,31 @@ ViewTable fit_table(const PointSamples& ps, const Lafortune& L) {
     return t;
 }
 
+ViewTable fit_table(const PointSamples& ps, const Lafortune& L) {
+    return fit_table(ps, [&L](dvec3 l, dvec3 v) { return L.f(l, v); });
+}
+
+ViewTable unit_table(const PointSamples& ps) {
+    ViewTable t = fit_table(ps, [](dvec3, dvec3) { return dvec3(0.0); });  // directions and alpha
+    for (dvec4& T : t.T) T = dvec4(1.0, 1.0, 1.0, T.w);
+    return t;
+}
+
+double rms_of(const PointSamples& ps, const ModelFn& model, const ViewTable& table, double* rel) {
+    double e2 = 0.0, r2 = 0.0;
+    for (const BrdfSample& s : ps.s) {
+        const dvec3 f = model(s.l, s.v) * (table.empty() ? dvec3(1.0) : dvec3(table.T[size_t(s.view)]));
+        const double w2 = s.w * s.w;
+        for (int c = 0; c < 3; ++c) e2 += w2 * (f[c] - s.f[c]) * (f[c] - s.f[c]), r2 += w2 * s.f[c] * s.f[c];
+    }
+    const double n = std::max<double>(1.0, 3.0 * double(ps.s.size()));
+    if (rel) *rel = r2 > 0.0 ? std::sqrt(e2 / r2) : 0.0;
+    return std::sqrt(e2 / n);
+}
+
 // [SECTION] Alternation
 ClothBrdf fit_brdf(const PointSamples& ps, const FitOptions& o, FitReport* report) {
+    if (o.sheen) return fit_sheen(ps, o, report);
     if (o.lobes < 1 || o.lobes > 3) throw InputError("cloth.lobes: " + std::to_string(o.lobes) + " must be 1, 2 or 3");
     if (!(o.tolerance > 0.0)) throw InputError("cloth.tolerance: " + std::to_string(o.tolerance) + " must be > 0");
     for (const Lafortune& s : o.starts)
@@ -303,8 +314,7 @@ ClothBrdf fit_brdf(const PointSamples& ps, const FitOptions& o, FitReport* repor
     ClothBrdf b;
     ViewTable ones;  // T = 1
     if (o.lookup_table) {
-        ones = fit_table(ps, Lafortune{});  // directions and alpha
-        for (dvec4& T : ones.T) T = dvec4(1.0, 1.0, 1.0, T.w);
+        ones = unit_table(ps);
     }
     b.L = fit_lobes(ps, ones, starts, o, &rep.starts_tried);
     rep.rounds = 1;
@@ -332,7 +342,7 @@ ClothBrdf fit_brdf(const PointSamples& ps, const FitOptions& o, FitReport* repor
     dvec3 peak(0.0);
     for (const BrdfSample& s : ps.s) peak = glm::max(peak, s.f);
     b.f_max = 2.0 * peak;
-    rep.rms = rms_of(ps, b, &rep.rel_rms);
+    rep.rms = rms_of(ps, [&b](dvec3 l, dvec3 v) { return b.L.f(l, v); }, b.table, &rep.rel_rms);
     if (report) *report = rep;
     return b;
 }

@@ -16,6 +16,7 @@
 // with no energy or a table direction without samples leave T at 1.
 #include "core/cloth/lafortune.h"
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -56,6 +57,10 @@ struct FitOptions {
     // must equal `lobes`.
     std::vector<Lafortune> starts;
     bool builtin_starts = true;
+    // The sheen model instead of the lobes (cloth.method = sheen, sheen.h): lobes and starts are
+    // not used; r is fitted within [r_min, 1].
+    bool sheen = false;
+    double r_min = 0.01;
 };
 
 struct FitReport {
@@ -67,8 +72,11 @@ struct FitReport {
 };
 
 // The model of one point. InputError naming the option for lobes outside [1, 3], a non-positive
-// tolerance, or starts with the wrong lobe count.
+// tolerance, or starts with the wrong lobe count (the sheen: a non-positive tolerance or r_min
+// outside (0, 1)).
 ClothBrdf fit_brdf(const PointSamples& samples, const FitOptions& options, FitReport* report = nullptr);
+// The sheen's fit (sheen.h), which fit_brdf calls when options.sheen is set.
+ClothBrdf fit_sheen(const PointSamples& samples, const FitOptions& options, FitReport* report = nullptr);
 
 // The lobes alone for a fixed table (step 1): per channel, the best of `starts` after LM.
 Lafortune fit_lobes(const PointSamples& samples, const ViewTable& table, const std::vector<Lafortune>& starts, const FitOptions& options,
@@ -76,6 +84,14 @@ Lafortune fit_lobes(const PointSamples& samples, const ViewTable& table, const s
 
 // The table for fixed lobes (step 2, Eq. 4), alpha from the samples (1 without).
 ViewTable fit_table(const PointSamples& samples, const Lafortune& L);
+
+// The same for any model of f_L (another method's BRDF, sheen.h), and the table of ones with the
+// samples' directions and alpha (the first round's).
+using ModelFn = std::function<dvec3(dvec3 l, dvec3 v)>;
+ViewTable fit_table(const PointSamples& samples, const ModelFn& model);
+ViewTable unit_table(const PointSamples& samples);
+// FitReport::rms (returned) and rel_rms (in *rel) of model × table over the samples.
+double rms_of(const PointSamples& samples, const ModelFn& model, const ViewTable& table, double* rel);
 
 // The built-in starting points for `lobes` lobes, scaled to the samples' magnitude.
 std::vector<Lafortune> default_starts(const PointSamples& samples, int lobes);

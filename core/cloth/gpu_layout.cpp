@@ -11,7 +11,7 @@ PackedPyramid pack_pyramid(const BrdfPyramid& p) {
     out.res = p.res;
     size_t lobes = 0, dirs = 0, count = 0;
     for (const auto& level : p.level)
-        for (const ClothBrdf& b : level) lobes = std::max(lobes, b.L.lobes.size()), dirs = std::max(dirs, b.table.v.size()), ++count;
+        for (const ClothBrdf& b : level) lobes = std::max(lobes, b.sheen ? size_t(1) : b.L.lobes.size()), dirs = std::max(dirs, b.table.v.size()), ++count;
     out.stride = int(5 + 4 * lobes + 2 * dirs);
     out.lobes = int(lobes), out.dirs = int(dirs);
     out.data.assign(count * size_t(out.stride), vec4(0.f));
@@ -22,13 +22,14 @@ PackedPyramid pack_pyramid(const BrdfPyramid& p) {
             const ClothBrdf& b = p.level[k][i];
             const glm::dmat3& F = p.frame[k][i];
             vec4* r = &out.data[e * size_t(out.stride)];
-            r[0] = vec4(vec3(b.L.kd), float(b.L.lobes.size()));
+            r[0] = vec4(vec3(b.L.kd), b.sheen ? -1.f : float(b.L.lobes.size()));
             // glm is column-major: row j of F is (F[0][j], F[1][j], F[2][j]).
             for (int j = 0; j < 3; ++j) r[1 + j] = vec4(float(F[0][j]), float(F[1][j]), float(F[2][j]), 0.f);
             r[1].w = float(b.table.v.size());
             constexpr double kFloatMax = 3.0e38;
             r[4] = vec4(vec3(glm::min(b.f_max, dvec3(kFloatMax))), 0.f);
             vec4* q = r + 5;
+            if (b.sheen) *q = vec4(vec3(b.sheen->S), float(b.sheen->r));  // the sheen in the first lobe's place
             for (const LafortuneLobe& l : b.L.lobes) {
                 *q++ = vec4(vec3(l.Cx), 0.f);
                 *q++ = vec4(vec3(l.Cy), 0.f);

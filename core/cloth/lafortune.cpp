@@ -1,5 +1,6 @@
 // The cloth reflectance model (see lafortune.h).
 #include "core/cloth/lafortune.h"
+#include "core/cloth/sheen.h"
 
 #include <algorithm>
 #include <array>
@@ -68,8 +69,13 @@ dvec4 ViewTable::at(dvec3 w) const {
 }
 
 // [SECTION] The model of a sample point
+dvec3 ClothBrdf::f_model(dvec3 l, dvec3 v) const {
+    if (sheen) return L.kd + sheen->S * sheen_lobe(l, v, sheen->r);
+    return glm::min(L.f(l, v), dvec3(1e300));  // an overflowing lobe stays finite: 0 × it is 0
+}
+
 dvec3 ClothBrdf::f(dvec3 l, dvec3 v) const {
-    const dvec3 fl = glm::min(L.f(l, v), dvec3(1e300));  // an overflowing lobe stays finite: 0 × it is 0
+    const dvec3 fl = f_model(l, v);
     if (table.empty()) return glm::min(fl, f_max);
     return glm::min(dvec3(table.at(v)) * fl, f_max);
 }

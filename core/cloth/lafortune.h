@@ -15,6 +15,7 @@
 #include "core/math.h"
 
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -50,9 +51,16 @@ struct ViewTable {
     dvec4 at(dvec3 v) const;
 };
 
+// The sheen model of cloth.method = sheen (sheen.h): f_L = k_d + S g_r(l, v), with k_d = L.kd.
+struct SheenLobe {
+    dvec3 S{0.0};  // the sheen colour, dimensionless
+    double r = 0.5;  // the distribution's roughness, (0, 1]
+};
+
 // The fitted model of one sample point (or of a group of them: a mip level's entry).
 struct ClothBrdf {
     Lafortune L;
+    std::optional<SheenLobe> sheen;  // set: k_d + the sheen lobe instead of L's lobes
     ViewTable table;  // empty: no lookup table (T = 1)
     // Per channel, the most f_r may reach: twice the largest sample value of its fit (fit.h).
     // Between sparse samples or outside them, a lobe with a base above 1 and a large exponent can
@@ -60,6 +68,7 @@ struct ClothBrdf {
     // a lobe at the samples), so evaluations clamp to this. Infinite: no bound (a model not from a fit).
     dvec3 f_max{std::numeric_limits<double>::infinity()};
     dvec3 f(dvec3 l, dvec3 v) const;  // f_r = T(v) ∘ f_L(l, v), sr⁻¹
+    dvec3 f_model(dvec3 l, dvec3 v) const;  // f_L alone (the lobes' or the sheen's), kept finite
     double alpha(dvec3 v) const;      // the table's alpha (1 without a table)
 };
 }  // namespace mesolab::cloth

@@ -32,7 +32,7 @@ size_t BrdfPyramid::count() const {
 size_t BrdfPyramid::bytes() const {
     size_t b = 0;
     for (const auto& l : level)
-        for (const ClothBrdf& e : l) b += (3 + 12 * e.L.lobes.size()) * 4 + e.table.T.size() * 4 * 4 + 6 * 4;
+        for (const ClothBrdf& e : l) b += (3 + 12 * e.L.lobes.size() + (e.sheen ? 4 : 0)) * 4 + e.table.T.size() * 4 * 4 + 6 * 4;
     return b;  // the table's directions are shared by every entry (the acquisition's views)
 }
 
@@ -48,7 +48,7 @@ dvec3 entry_reflectance(const ClothBrdf& b, const glm::dmat3& F, dvec3 l, dvec3 
     };
     // The lobes where they were fitted; the table (a look-up, bounded) at the view itself.
     const dvec3 vh = F * v;
-    const dvec3 fl = glm::min(b.L.f(lift(lh, kFittedLightZ), lift(vh, 0.0)), dvec3(1e300));
+    const dvec3 fl = b.f_model(lift(lh, kFittedLightZ), lift(vh, 0.0));
     const dvec3 T = b.table.empty() ? dvec3(1.0) : dvec3(b.table.at(vh));
     return glm::min(T * fl, b.f_max) * lh.z;
 }

@@ -55,6 +55,8 @@ void write_pyramid(BlobWriter& w, const BrdfPyramid& p) {
         w.put(uint64_t(level.size()));
         for (const ClothBrdf& b : level) {
             w.put(b.L.kd), w.put_vector(b.L.lobes);
+            w.put(uint8_t(b.sheen ? 1 : 0));
+            if (b.sheen) w.put(b.sheen->S), w.put(b.sheen->r);
             w.put_vector(b.table.v), w.put_vector(b.table.T);
             w.put(b.f_max);
         }
@@ -70,6 +72,11 @@ BrdfPyramid read_pyramid(BlobReader& r) {
         level.resize(r.get_count(64));
         for (ClothBrdf& b : level) {
             b.L.kd = r.get<dvec3>(), b.L.lobes = r.get_vector<LafortuneLobe>();
+            if (r.get<uint8_t>()) {
+                SheenLobe sh;
+                sh.S = r.get<dvec3>(), sh.r = r.get<double>();
+                b.sheen = sh;
+            }
             b.table.v = r.get_vector<dvec3>(), b.table.T = r.get_vector<dvec4>();
             b.f_max = r.get<dvec3>();
         }
@@ -121,10 +128,10 @@ void ClothTechnique::declare_stages(StageGraph& g) const {
                return stage_result(stages::acquire, acquire(*ctx.input(stages::stitch), s.acquire, progress, ctx.cancel_flag()));
            },
            .disk = stage_codec(stages::acquire, write_grid, read_grid)});
-    g.add(stages::fit, {.help = "Lafortune x view-table fits (Ceres) of every mip level's entries, coarse to fine",
+    g.add(stages::fit, {.help = "Lafortune (or sheen, cloth.method = sheen) x view-table fits (Ceres) of every mip level's entries, coarse to fine",
            .scope = StageScope::Object,
            .technique = "cloth",
-           .params = {"cloth.lobes", "cloth.lookup_table", "cloth.tolerance"},
+           .params = {"cloth.method", "cloth.lobes", "cloth.lookup_table", "cloth.tolerance"},
            .inputs = {stages::acquire},
            .paper = paper::fit(),
            .run = [](StageContext& ctx) -> std::any {

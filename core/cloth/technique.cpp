@@ -30,7 +30,8 @@ Settings Settings::from(const Scene& sc, const SceneObject& o, unsigned parts) {
         s.samples = sc.resolve(t.get_string("samples"));
     }
     if (parts & Fit) {
-        s.fit.lobes = int(t.get_int("lobes"));
+        s.fit.sheen = t.get_string("method") == "sheen";
+        if (!s.fit.sheen) s.fit.lobes = int(t.get_int("lobes"));
         s.fit.lookup_table = t.get_bool("lookup_table");
         s.fit.tolerance = t.get_float("tolerance");
     }
@@ -67,7 +68,7 @@ ClothTechnique::ClothTechnique() : Technique("cloth", "Cloth (Daubert et al. 200
              "visibility rays; the truth keeps every bounce); 0: direct light only");
     p.add_path("samples", "")
         .doc("Acquired samples to fit instead of acquiring (mesolab export cloth-samples writes them); relative to the preset's folder");
-    p.add_int("lobes", 2).range(1, 3).more_accurate(Accuracy::Higher, int64_t(3)).doc("Lafortune lobes per channel");
+    p.add_int("lobes", 2).range(1, 3).more_accurate(Accuracy::Higher, int64_t(3)).used_when("method", {"daubert"}).doc("Lafortune lobes per channel");
     p.add_bool("lookup_table", true).doc("Fit the view-dependent table T(v) (colour and alpha); off: the lobes alone (Fig. 5)");
     p.add_float("tolerance", 0.1).range(1e-4, 10.0).log().more_accurate(Accuracy::Lower, 0.01)
         .used_when("lookup_table", {"true"}).doc("Stop alternating when the table changes less than this on average");
@@ -88,7 +89,8 @@ ClothTechnique::ClothTechnique() : Technique("cloth", "Cloth (Daubert et al. 200
              {"brdf_index", 1, "Index of the BRDF read (the finer level when blending), counting level by level from level 0"}};
 }
 
-std::vector<StageName> ClothTechnique::frame_stages() const { return {stages::fit, stages::garment}; }
+std::vector<StageName> ClothTechnique::pipeline_stages() { return {stages::fit, stages::garment}; }
+std::vector<StageName> ClothTechnique::frame_stages() const { return pipeline_stages(); }
 
 std::shared_ptr<const TriMesh> ClothTechnique::object_mesh(const Scene&, const Evaluation& ev, int object) const {
     return ev.get(stages::garment, object);

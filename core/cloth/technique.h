@@ -25,6 +25,8 @@ public:
     ClothTechnique();
     void declare_stages(StageGraph& g) const override;
     std::vector<StageName> frame_stages() const override;
+    // The object stages a frame reads (the paper's method and sheen, which share the pipeline).
+    static std::vector<StageName> pipeline_stages();
     void shade_cpu(const ShadeContext& ctx) const override;
     std::shared_ptr<const TriMesh> object_mesh(const Scene&, const Evaluation& ev, int object) const override;
     std::vector<ExportDecl> exports() const override;

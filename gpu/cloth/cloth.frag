@@ -96,6 +96,26 @@ vec3 lift(vec3 w, float z) {
     return vec3(d * sqrt(1.0 - z * z), z);
 }
 
+// [SECTION] The sheen of cloth.method = sheen (core/cloth/sheen.cpp): Estevez and Kulla 2017.
+float sheen_L(float x, float r) {
+    float t = (1.0 - r) * (1.0 - r);
+    float a = mix(21.5473, 25.3245, t), b = mix(3.82987, 3.32435, t), c = mix(0.19823, 0.16801, t);
+    float d = mix(-1.97760, -1.27393, t), e = mix(-4.32054, -4.85967, t);
+    return a / (1.0 + b * pow(x, c)) + d * x + e;
+}
+float sheen_lambda(float mu, float r) {
+    mu = clamp(mu, 0.0, 1.0);
+    return mu < 0.5 ? exp(sheen_L(mu, r)) : exp(2.0 * sheen_L(0.5, r) - sheen_L(1.0 - mu, r));
+}
+float sheen_lobe(vec3 l, vec3 v, float r) {
+    if (l.z <= 0.0 || v.z <= 0.0) return 0.0;
+    vec3 h = normalize(l + v);
+    float sin2 = max(0.0, 1.0 - h.z * h.z);
+    float D = (2.0 + 1.0 / r) * pow(sin2, 0.5 / r) / (2.0 * 3.14159265358979);
+    float G = 1.0 / (1.0 + sheen_lambda(l.z, r) + sheen_lambda(v.z, r));
+    return D * G / (4.0 * l.z * v.z);
+}
+
 // The entry under pattern coordinates uv at level k: radiance summed over the lights, alpha, index.
 vec4 entry_radiance(int k, vec2 uv, vec3 p, vec3 T, vec3 B, vec3 N, vec3 v, ivec3 vidx, vec3 vwt, out int index) {
     int side = u_res >> k;
@@ -128,6 +148,7 @@ vec4 entry_radiance(int k, vec2 uv, vec3 p, vec3 T, vec3 B, vec3 N, vec3 v, ivec
         if (lh.z <= 0.0) continue;
         vec3 lf = lift(lh, 0.05);
         vec3 f = h.rgb;
+        if (lobes < 0) f += P[base + 5].rgb * sheen_lobe(lf, vf, P[base + 5].w);
         for (int j = 0; j < lobes; ++j) {
             int o = base + 5 + 4 * j;
             vec3 a = P[o].rgb * (lf.x * vf.x) + P[o + 1].rgb * (lf.y * vf.y) + P[o + 2].rgb * (lf.z * vf.z);
