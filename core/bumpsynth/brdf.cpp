@@ -53,12 +53,13 @@ float SmithTable::G1(vec3 w) const {
 }
 
 // [SECTION] The BRDF in a facet's frame
-vec3 shade_facet(const ShadingModel& s, const Ndf& ndf, const SmithTable* smith, const LutEntry& f, vec3 wo, vec3 wi, vec3 E, vec3 albedo) {
+vec3 shade_facet(const ShadingModel& s, const Ndf& ndf, const SmithTable* smith, const LutEntry& f, vec3 wo, vec3 wi, vec3 E, vec3 albedo,
+                 const vec3* mean_normal) {
     if (!(wo.z > 0.f) || !(wi.z > 0.f)) return vec3(0.f);
     const vec3 o(glm::dot(wo, f.t), glm::dot(wo, f.b), glm::dot(wo, f.m));
     const vec3 i(glm::dot(wi, f.t), glm::dot(wi, f.b), glm::dot(wi, f.m));
     if (!(i.z > 0.f)) return vec3(0.f);
-    vec3 L = s.kd * albedo * (kInvPi * i.z);
+    vec3 L = s.kd * albedo * (kInvPi * (mean_normal ? std::max(0.f, glm::dot(i, *mean_normal)) : i.z));
     if (o.z > 0.f) {
         const vec3 h = glm::normalize(o + i);
         const float D = ndf.eval(h);

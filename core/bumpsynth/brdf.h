@@ -37,6 +37,8 @@
 
 namespace mesolab::bumpsynth {
 
+struct ConsistentNdfs;
+
 class SmithTable {
 public:
     static constexpr int kTheta = 65, kPhi = 64;
@@ -59,8 +61,10 @@ struct ShadingModel {
 
 // Radiance toward wo from one light (direction wi, irradiance E) for the facet frame f; wo, wi and
 // f are in the macro tangent frame (z = macro normal). `smith` is needed when masking is on.
+// `mean_normal` (kautz-consistent, consistent.h): the diffuse term's normal in the facet's frame, the
+// unresolved bumps' mean (|m̄| < 1) instead of the facet's own; null: the facet's.
 vec3 shade_facet(const ShadingModel& s, const Ndf& ndf, const SmithTable* smith, const LutEntry& f, vec3 wo, vec3 wi, vec3 E,
-                 vec3 albedo = vec3(1.f));
+                 vec3 albedo = vec3(1.f), const vec3* mean_normal = nullptr);
 
 // What a pixel's synthesis needs. The inputs come from index_map when non-null (§7, bump_map.h),
 // else from noise_texture when non-null (noise = texture), else from the procedural noise (cdfs).
@@ -76,6 +80,9 @@ struct Synthesis {
     int octaves_max = 1;          // K
     float detail_distance = 4.f;  // eye distance beyond which there are no bumps (scene units)
     const Image* albedo = nullptr;  // albedo map (null: none)
+    // kautz-consistent: per octave count the NDF of the unresolved bumps, their mean normal and
+    // Smith table, which shade the facet of k octaves instead of ndf and smith (consistent.h).
+    const ConsistentNdfs* consistent = nullptr;
 };
 
 // The two microfacets a pixel blends (coarse: k octaves, fine: k + 1, weight w of fine), and their

@@ -1,5 +1,6 @@
 // Technique bumpsynth: the materials' readers (bumpsynth.h).
 #include "core/bumpsynth/bumpsynth.h"
+#include "core/bumpsynth/consistent.h"
 #include "core/bumpsynth/stages.h"
 #include "core/bumpsynth/technique.h"
 #include "core/error.h"
@@ -103,6 +104,10 @@ Synthesis synthesis_for(const Scene& s, const Evaluation& ev, int object) {
     syn.model = shading_from_material(m);
     if (syn.model.masking) syn.smith = ev.get(stages::masking, object).get();
     syn.albedo = ev.get(stages::albedo, object).get();
+    if (m.get_string("method") == "kautz-consistent") {
+        syn.consistent = ev.get(stages::consistent, object).get();
+        if (!syn.consistent) throw std::logic_error("bumpsynth/kautz-consistent: the frame's stages were not evaluated for object " + std::to_string(object));
+    }
     return syn;
 }
 

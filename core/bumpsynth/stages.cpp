@@ -1,5 +1,6 @@
 // Technique bumpsynth: the stage graph (handles in stages.h).
 #include "core/basic/basic.h"
+#include "core/bumpsynth/consistent.h"
 #include "core/bumpsynth/stages.h"
 #include "core/bumpsynth/technique.h"
 #include "core/error.h"
@@ -111,6 +112,39 @@ void BumpsynthTechnique::declare_stages(StageGraph& g) const {
                       if (m.get_bool("masking")) t.smith = SmithTable::build(t.ndf);
                       if (n && from_bump_map(ctx.obj()) && m.get_bool("index_map")) t.index_map = make_index_map(*n, t.lut);
                       return stage_result(stages::truth_ndf, std::move(t));
+                  }}));
+    g.add(stages::consistent, object({.help = "Measure, for every octave count, the NDF the unresolved octaves' bumps produce (D self-convolved at 0 octaves), "
+                                              "its mean normal and Smith table (masking on)",
+                  .params = [] {
+                      std::vector<std::string> k = keys({"method", "consistent_samples", "octaves_max", "masking", "index_noise"});
+                      for (const auto& key : keys(kNoiseKeys)) k.push_back(key);
+                      return k;
+                  }(),
+                  .inputs = {stages::ndf, stages::lut, stages::index_map, stages::noise_cdf, stages::noise_texture},
+                  .applies = [](const Scene&, const SceneObject& o) { return o.material.get_string("method") == "kautz-consistent"; },
+                  .when_text = "bumpsynth.method is kautz-consistent",
+                  .run = [](StageContext& ctx) {
+                      const ParamTable& m = ctx.material();
+                      const auto ndf = ctx.input(stages::ndf);
+                      const auto lut = ctx.input(stages::lut);
+                      const auto index = ctx.input(stages::index_map);
+                      const auto cdfs = ctx.input(stages::noise_cdf);
+                      const auto tex = ctx.input(stages::noise_texture);
+                      Synthesis syn;
+                      syn.ndf = ndf.get();
+                      syn.lut = lut.get();
+                      syn.octaves_max = int(m.get_int("octaves_max"));
+                      if (index) {
+                          syn.index_map = index.get();
+                          syn.index_detail = index_detail(*index, noise_from_material(m), float(m.get_float("index_noise")));
+                      } else {
+                          if (!cdfs) throw std::logic_error("bumpsynth/kautz-consistent: no noise CDFs for a noise-synthesised object");
+                          syn.cdfs = cdfs.get();
+                          syn.noise_texture = tex.get();
+                      }
+                      return stage_result(stages::consistent,
+                                          build_consistent_ndfs(*ndf, [&](vec2 uv, int k) { return synthesis_facet(syn, uv, k); }, syn.octaves_max,
+                                                                int(m.get_int("consistent_samples")), m.get_bool("masking")));
                   }}));
     g.add(stages::albedo, object({.help = "Read the object's albedo map",
                   .params = {"bumpsynth.albedo_map"},

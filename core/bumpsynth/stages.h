@@ -17,6 +17,7 @@ struct NoiseTexture;
 class SmithTable;
 struct TruthNdf;
 struct LeanMap;
+struct ConsistentNdfs;
 
 namespace stages {
 inline constexpr Stage<BumpNormals> bump_normals{"bumpsynth.bump_normals"};
@@ -29,5 +30,6 @@ inline constexpr Stage<SmithTable> masking{"bumpsynth.smith_table"};
 inline constexpr Stage<Image> albedo{"bumpsynth.albedo"};
 inline constexpr Stage<TruthNdf> truth_ndf{"bumpsynth.truth_ndf"};
 inline constexpr Stage<LeanMap> lean_map{"bumpsynth.lean_map"};  // method lean (lean.h)
+inline constexpr Stage<ConsistentNdfs> consistent{"bumpsynth.consistent_ndf"};  // method kautz-consistent (consistent.h)
 }  // namespace stages
 }  // namespace mesolab::bumpsynth

@@ -45,15 +45,15 @@ BumpsynthTechnique::BumpsynthTechnique() : Technique("bumpsynth", "Bump map synt
              "adding index_noise detail when zooming in past its texels");
     p.add_float("index_noise", 0.03).range(0.0, 0.5).used_when("index_map", {"true"})
         .doc("Amplitude of the detail noise added to the index texture's inputs (uniform units) per octave beyond the bump map");
-    p.add_int("ndf_resolution", 128).used_when("method", {"kautz"}).range(64, 512).in("cells").more_accurate(Accuracy::Higher, int64_t(512))
+    p.add_int("ndf_resolution", 128).used_when("method", {"kautz", "kautz-consistent"}).range(64, 512).in("cells").more_accurate(Accuracy::Higher, int64_t(512))
         .doc("Cells per side of the tabulated NDF");
-    p.add_int("lut_size", 256).used_when("method", {"kautz"}).range(16, 4096).in("entries").more_accurate(Accuracy::Higher, int64_t(4096))
+    p.add_int("lut_size", 256).used_when("method", {"kautz", "kautz-consistent"}).range(16, 4096).in("entries").more_accurate(Accuracy::Higher, int64_t(4096))
         .doc("Entries per side of the normal look-up table L(r1, r2) (the paper: 256)");
     p.add_int("octaves_max", 8).range(1, 16)
         .doc("Octaves of noise at full detail (K); one more octave fades in at every halving of the eye distance");
-    p.add_float("detail_distance", 4.0).used_when("method", {"kautz"}).range(1e-6, 1e6).log().in("scene units")
+    p.add_float("detail_distance", 4.0).used_when("method", {"kautz", "kautz-consistent"}).range(1e-6, 1e6).log().in("scene units")
         .doc("Eye distance beyond which there are no bumps (shading with the NDF alone)");
-    p.add_enum("noise", {"procedural", "texture"}, "procedural").used_when("method", {"kautz"})
+    p.add_enum("noise", {"procedural", "texture"}, "procedural").used_when("method", {"kautz", "kautz-consistent"})
         .doc("Perlin noise evaluated per pixel, or the paper's mip-mapped noise texture (one octave less per level)");
     p.add_int("noise_frequency", 8).range(1, 4096).in("cells per uv unit")
         .doc("Lattice cells of the first octave across the uv square (an integer, so the noise tiles uv)");
@@ -77,9 +77,10 @@ BumpsynthTechnique::BumpsynthTechnique() : Technique("bumpsynth", "Bump map synt
              {"entry_fine", 3, "The same for k + 1 octaves while an octave fades in (else the same as entry)"}};
 }
 
-std::vector<StageName> BumpsynthTechnique::frame_stages() const {
-    return {stages::ndf, stages::lut, stages::index_map, stages::noise_cdf, stages::noise_texture, stages::masking, stages::albedo};
+std::vector<StageName> BumpsynthTechnique::pipeline_stages() {
+    return {stages::ndf, stages::lut, stages::index_map, stages::noise_cdf, stages::noise_texture, stages::masking, stages::albedo, stages::consistent};
 }
+std::vector<StageName> BumpsynthTechnique::frame_stages() const { return pipeline_stages(); }
 
 // Texture mode: the uv square at one pixel per cell of the finest octave (at least 512, at most 4096).
 // Index map: one pixel per cell of the finest detail octave (the bump map's texels at K = 1).

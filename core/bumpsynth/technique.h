@@ -82,6 +82,8 @@ public:
     BumpsynthTechnique();
     void declare_stages(StageGraph& g) const override;
     std::vector<StageName> frame_stages() const override;
+    // The paper's frame stages, which kautz-consistent shares (its tables: stages::consistent).
+    static std::vector<StageName> pipeline_stages();
     std::optional<ivec2> texture_size(const Scene& s, const Evaluation& ev) const override;
     void shade_cpu(const ShadeContext& ctx) const override;
     std::vector<BenchTable> bench_tables() const override;

@@ -16,10 +16,13 @@ in vec3 v_tangent;
 in vec2 v_uv;
 
 // [SECTION] Data
-uniform sampler2D u_ndf;             // (R + 2)²: (value, 1 where the cell meets the disk), an empty border
+uniform sampler2DArray u_ndf;        // (R + 2)² per layer: (value, 1 where the cell meets the disk), an empty border;
+                                     // layer k: the NDF for a facet of k octaves (kautz-consistent), else one layer
 uniform int u_ndf_res;
 uniform sampler2DArray u_lut;        // S x S x 3: m, t, b
-uniform sampler2D u_smith;           // 64 (phi) x 65 (theta): G1
+uniform sampler2DArray u_smith;      // 64 (phi) x 65 (theta): G1, layers as u_ndf's
+uniform int u_consistent;            // kautz-consistent: the NDF, Smith table and diffuse normal of k octaves' unresolved bumps
+uniform vec3 u_mean_normal[17];      // kautz-consistent: their mean normal in the facet's frame, k = 0..K
 uniform int u_masking;
 uniform int u_fresnel;
 uniform vec3 u_ks;
@@ -42,7 +45,7 @@ void lut_lookup(ivec2 e, out vec3 m, out vec3 t, out vec3 b) {
 // taps need no bounds test, and since D is 0 wherever the disk flag is 0, summing every tap with
 // weights w·flag is the sum over the cells in the disk, the same bits. When no tap meets the disk the
 // cell holding xy is outside it too, and D is 0 there.
-float ndf_eval(vec3 m) {
+float ndf_eval(vec3 m, int layer) {
     float len = length(m);
     if (!(len > 0.0) || m.z < 0.0) return 0.0;
     vec2 xy = m.xy / len;
@@ -54,15 +57,15 @@ float ndf_eval(vec3 m) {
     vec2 f0 = floor(f);
     ivec2 c = ivec2(f0) + 1;
     vec2 t = f - f0, s = 1.0 - t;
-    vec2 v00 = texelFetch(u_ndf, c, 0).rg, v10 = texelFetch(u_ndf, c + ivec2(1, 0), 0).rg;
-    vec2 v01 = texelFetch(u_ndf, c + ivec2(0, 1), 0).rg, v11 = texelFetch(u_ndf, c + ivec2(1, 1), 0).rg;
+    vec2 v00 = texelFetch(u_ndf, ivec3(c, layer), 0).rg, v10 = texelFetch(u_ndf, ivec3(c + ivec2(1, 0), layer), 0).rg;
+    vec2 v01 = texelFetch(u_ndf, ivec3(c + ivec2(0, 1), layer), 0).rg, v11 = texelFetch(u_ndf, ivec3(c + ivec2(1, 1), layer), 0).rg;
     float w00 = s.x * s.y, w10 = t.x * s.y, w01 = s.x * t.y, w11 = t.x * t.y;
     float sum = w00 * v00.x + w10 * v10.x + w01 * v01.x + w11 * v11.x;
     float sum_w = w00 * v00.y + w10 * v10.y + w01 * v01.y + w11 * v11.y;
     return sum_w > 0.0 ? sum / sum_w : 0.0;
 }
 
-float smith_g1(vec3 w) {
+float smith_g1(vec3 w, int layer) {
     if (!(w.z > 0.0)) return 0.0;
     float theta = acos(clamp(w.z / length(w), 0.0, 1.0));
     float phi = atan(w.y, w.x);
@@ -70,25 +73,27 @@ float smith_g1(vec3 w) {
     float ft = theta / (PI / 2.0) * 64.0, fp = phi / TWO_PI * 64.0;
     int t0 = min(int(ft), 63), p0 = int(fp) % 64, p1 = (p0 + 1) % 64;
     float at = clamp(ft - float(t0), 0.0, 1.0), ap = fp - floor(fp);
-    float g00 = texelFetch(u_smith, ivec2(p0, t0), 0).r, g01 = texelFetch(u_smith, ivec2(p1, t0), 0).r;
-    float g10 = texelFetch(u_smith, ivec2(p0, t0 + 1), 0).r, g11 = texelFetch(u_smith, ivec2(p1, t0 + 1), 0).r;
+    float g00 = texelFetch(u_smith, ivec3(p0, t0, layer), 0).r, g01 = texelFetch(u_smith, ivec3(p1, t0, layer), 0).r;
+    float g10 = texelFetch(u_smith, ivec3(p0, t0 + 1, layer), 0).r, g11 = texelFetch(u_smith, ivec3(p1, t0 + 1, layer), 0).r;
     float a = g00 + ap * (g01 - g00), b = g10 + ap * (g11 - g10);
     return a + at * (b - a);
 }
 
 // [SECTION] The BRDF in a facet's frame (core/bumpsynth/brdf.cpp shade_facet)
-vec3 shade_facet(vec3 fm, vec3 ft, vec3 fb, vec3 wo, vec3 wi, vec3 E, vec3 albedo) {
+// k: the facet's octaves, which pick the tables and the diffuse normal under kautz-consistent.
+vec3 shade_facet(vec3 fm, vec3 ft, vec3 fb, int k, vec3 wo, vec3 wi, vec3 E, vec3 albedo) {
+    int layer = u_consistent != 0 ? k : 0;
     if (!(wo.z > 0.0) || !(wi.z > 0.0)) return vec3(0.0);
     vec3 o = vec3(dot(wo, ft), dot(wo, fb), dot(wo, fm));
     vec3 i = vec3(dot(wi, ft), dot(wi, fb), dot(wi, fm));
     if (!(i.z > 0.0)) return vec3(0.0);
-    vec3 L = u_kd * albedo * (INV_PI * i.z);
+    vec3 L = u_kd * albedo * (INV_PI * (u_consistent != 0 ? max(0.0, dot(i, u_mean_normal[k])) : i.z));
     if (o.z > 0.0) {
         vec3 h = normalize(o + i);
-        float D = ndf_eval(h);
+        float D = ndf_eval(h, layer);
         vec3 F = u_fresnel != 0 ? u_ks + (vec3(1.0) - u_ks) * pow(clamp(1.0 - dot(i, h), 0.0, 1.0), 5.0) : u_ks;
         if (u_masking != 0) {
-            float g1o = max(smith_g1(o), 1e-7), g1i = max(smith_g1(i), 1e-7);
+            float g1o = max(smith_g1(o, layer), 1e-7), g1i = max(smith_g1(i, layer), 1e-7);
             float G2 = 1.0 / (1.0 / g1o + 1.0 / g1i - 1.0);
             L += F * (D * G2 / (4.0 * max(o.z, 1e-7)));
         } else {
@@ -96,6 +101,16 @@ vec3 shade_facet(vec3 fm, vec3 ft, vec3 fb, vec3 wo, vec3 wi, vec3 E, vec3 albed
         }
     }
     return L * E;
+}
+
+// The environment's diffuse light on a facet of k octaves: at its normal (the paper), or at its
+// unresolved bumps' mean normal, |m̄| times the irradiance along it (kautz-consistent).
+vec3 env_diffuse(vec3 fm, vec3 ft, vec3 fb, int k, mat3 to_world, vec3 albedo) {
+    if (u_consistent == 0) return u_kd * albedo * INV_PI * env_irradiance(to_world * fm);
+    vec3 mb = u_mean_normal[k];
+    vec3 mbar = mb.x * ft + mb.y * fb + mb.z * fm;
+    float len = length(mbar);
+    return u_kd * albedo * (INV_PI * len) * env_irradiance(to_world * (mbar / len));
 }
 
 void main() {
@@ -135,11 +150,11 @@ void main() {
         vec3 wi, E;
         light_sample(li, p, wi, E);
         vec3 wi_t = vec3(dot(wi, T), dot(wi, B), dot(wi, N));
-        Lc += shade_facet(cm, ct, cb, wo_t, wi_t, E, albedo);
-        if (w > 0.0) Lf += shade_facet(fm, ft, fb, wo_t, wi_t, E, albedo);
+        Lc += shade_facet(cm, ct, cb, k, wo_t, wi_t, E, albedo);
+        if (w > 0.0) Lf += shade_facet(fm, ft, fb, k + 1, wo_t, wi_t, E, albedo);
     }
-    Lc += u_kd * albedo * INV_PI * env_irradiance(to_world * cm);
-    if (w > 0.0) Lf += u_kd * albedo * INV_PI * env_irradiance(to_world * fm);
+    Lc += env_diffuse(cm, ct, cb, k, to_world, albedo);
+    if (w > 0.0) Lf += env_diffuse(fm, ft, fb, k + 1, to_world, albedo);
     vec3 L = w > 0.0 ? mix(Lc, Lf, w) : Lc;
     vec3 n = w > 0.0 ? normalize(mix(cm, fm, w)) : cm;
     o_radiance = vec4(L, 1.0);

@@ -2,6 +2,7 @@
 // noise texture and the Smith table (each once per stage result), draws a depth pre-pass and shades
 // with bumpsynth.frag.
 #include "core/bumpsynth/bumpsynth.h"
+#include "core/bumpsynth/consistent.h"
 #include "core/bumpsynth/stages.h"
 #include "core/profile.h"
 #include "core/scene_stages.h"
@@ -31,7 +32,18 @@ public:
         for (int i : ctx.objects) {
             const Evaluation& ev = ctx.eval;
             Bound b{};
-            b.ndf = res.get<Texture>(ev.get(bumpsynth::stages::ndf, i), "ndf", [&] { return upload_ndf(*ev.get(bumpsynth::stages::ndf, i)); }).get();
+            // kautz-consistent: one layer per octave count k = 0..K of the NDF and Smith table its
+            // unresolved bumps produce; the paper: one layer, the NDF's own.
+            const auto consistent = ev.get(bumpsynth::stages::consistent, i);
+            if (consistent) {
+                b.ndf = res.get<Texture>(consistent, "consistent_ndf", [&] {
+                    std::vector<const Ndf*> layers;
+                    for (const Ndf& d : consistent->ndf) layers.push_back(&d);
+                    return upload_ndf(layers);
+                }).get();
+            } else {
+                b.ndf = res.get<Texture>(ev.get(bumpsynth::stages::ndf, i), "ndf", [&] { return upload_ndf({ev.get(bumpsynth::stages::ndf, i).get()}); }).get();
+            }
             b.lut = res.get<Texture>(ev.get(bumpsynth::stages::lut, i), "lut", [&] { return upload_lut(*ev.get(bumpsynth::stages::lut, i)); }).get();
             if (auto index = ev.get(bumpsynth::stages::index_map, i)) {
                 b.index = res.get<Texture>(index, "index_map", [&] { return upload_index(*index); }).get();
@@ -40,8 +52,15 @@ public:
             }
             if (auto tex = ev.get(bumpsynth::stages::noise_texture, i))
                 b.noise = res.get<Texture>(tex, "noise_texture", [&] { return upload_noise(*tex); }).get();
-            if (auto smith = ev.get(bumpsynth::stages::masking, i))
-                b.smith = res.get<Texture>(smith, "masking", [&] { return upload_smith(*smith); }).get();
+            if (consistent && !consistent->smith.empty()) {
+                b.smith = res.get<Texture>(consistent, "consistent_smith", [&] {
+                    std::vector<const SmithTable*> layers;
+                    for (const SmithTable& t : consistent->smith) layers.push_back(&t);
+                    return upload_smith(layers);
+                }).get();
+            } else if (auto smith = ev.get(bumpsynth::stages::masking, i); smith && !consistent) {
+                b.smith = res.get<Texture>(smith, "masking", [&] { return upload_smith({smith.get()}); }).get();
+            }
             if (auto albedo = ev.get(bumpsynth::stages::albedo, i)) b.albedo = ctx.renderer.texture(albedo);
             bound[i] = b;
         }
@@ -66,9 +85,9 @@ public:
             const Bound& b = bound.at(i);
             const Synthesis syn = synthesis_for(ctx.scene, ctx.eval, i);  // the material, parsed once
             ctx.renderer.set_camera_uniforms(program_, ctx.camera, object_to_world(o));
-            program_.bind_texture(1, GL_TEXTURE_2D, b.ndf, "u_ndf");
+            program_.bind_texture(1, GL_TEXTURE_2D_ARRAY, b.ndf, "u_ndf");
             program_.bind_texture(2, GL_TEXTURE_2D_ARRAY, b.lut, "u_lut");
-            program_.bind_texture(4, GL_TEXTURE_2D, b.smith, "u_smith");
+            program_.bind_texture(4, GL_TEXTURE_2D_ARRAY, b.smith, "u_smith");
             program_.bind_texture(5, GL_TEXTURE_2D, b.albedo, "u_albedo");
             set_synthesis_uniforms(program_, syn, {.cdf = b.cdf, .noise = b.noise, .index = b.index}, 3, 6);
             glUniform1i(program_.uniform("u_ndf_res"), syn.ndf->resolution());
@@ -78,6 +97,10 @@ public:
             glUniform3fv(program_.uniform("u_kd"), 1, glm::value_ptr(syn.model.kd));
             glUniform1f(program_.uniform("u_detail_distance"), syn.detail_distance);
             glUniform1i(program_.uniform("u_has_albedo"), b.albedo ? 1 : 0);
+            glUniform1i(program_.uniform("u_consistent"), syn.consistent ? 1 : 0);
+            if (syn.consistent)
+                glUniform3fv(program_.uniform("u_mean_normal"), GLsizei(syn.consistent->mean_normal.size()),
+                             glm::value_ptr(syn.consistent->mean_normal[0]));
             ctx.renderer.draw_object(ctx.scene, ctx.eval, i);
         }
         glDepthFunc(GL_LESS);
@@ -88,17 +111,20 @@ public:
 private:
 
     // NDF: (value, 1 where the cell meets the disk), cell (i, j) at texel (i + 1, j + 1) inside a
-    // border of (0, 0) (bumpsynth.frag ndf_eval).
-    static Texture upload_ndf(const Ndf& ndf) {
-        const int R = ndf.resolution(), W = R + 2;
-        std::vector<float> rg(size_t(W) * size_t(W) * 2, 0.f);
-        for (int j = 0; j < R; ++j)
-            for (int i = 0; i < R; ++i) {
-                const size_t k = size_t(j + 1) * size_t(W) + size_t(i + 1);
-                rg[k * 2] = ndf.value(i, j);
-                rg[k * 2 + 1] = ndf.cell_area(i, j) > 0.0 ? 1.f : 0.f;
-            }
-        return make_texture({.format = GL_RG32F, .width = W, .height = W}, {GL_RG, GL_FLOAT, rg.data()});
+    // border of (0, 0) (bumpsynth.frag ndf_eval); one layer per table.
+    static Texture upload_ndf(const std::vector<const Ndf*>& ndfs) {
+        const int R = ndfs.front()->resolution(), W = R + 2;
+        const size_t layer = size_t(W) * size_t(W) * 2;
+        std::vector<float> rg(layer * ndfs.size(), 0.f);
+        for (size_t l = 0; l < ndfs.size(); ++l)
+            for (int j = 0; j < R; ++j)
+                for (int i = 0; i < R; ++i) {
+                    const size_t k = l * layer + (size_t(j + 1) * size_t(W) + size_t(i + 1)) * 2;
+                    rg[k] = ndfs[l]->value(i, j);
+                    rg[k + 1] = ndfs[l]->cell_area(i, j) > 0.0 ? 1.f : 0.f;
+                }
+        return make_texture({.target = GL_TEXTURE_2D_ARRAY, .format = GL_RG32F, .width = W, .height = W, .layers = int(ndfs.size())},
+                            {GL_RG, GL_FLOAT, rg.data()});
     }
 
     // Look-up table: layers m, t, b.
@@ -133,8 +159,12 @@ private:
         return make_texture({.format = GL_RG32F, .width = m.width, .height = m.height}, {GL_RG, GL_FLOAT, m.u.data()});
     }
 
-    static Texture upload_smith(const SmithTable& s) {
-        return make_texture({.format = GL_R32F, .width = SmithTable::kPhi, .height = SmithTable::kTheta}, {GL_RED, GL_FLOAT, s.values().data()});
+    static Texture upload_smith(const std::vector<const SmithTable*>& tables) {
+        std::vector<float> v;
+        for (const SmithTable* t : tables) v.insert(v.end(), t->values().begin(), t->values().end());
+        return make_texture({.target = GL_TEXTURE_2D_ARRAY, .format = GL_R32F, .width = SmithTable::kPhi, .height = SmithTable::kTheta,
+                             .layers = int(tables.size())},
+                            {GL_RED, GL_FLOAT, v.data()});
     }
 
     Program program_, depth_;
