@@ -19,10 +19,7 @@
 namespace mesolab::translucency {
 
 // [SECTION] Illumination
-std::vector<vec3> illuminate(const AtlasStage& a, const mat4& model, const Lighting& L, double eta, const std::vector<ShadowMap>& shadows) {
-    std::vector<vec3> E(a.texel_position.size(), vec3(0.f));
-    const mat3 normal_matrix = glm::transpose(glm::inverse(mat3(model)));
-    const float env_t = float(diffuse_transmittance(eta));  // entering from outside: the lights' T averaged over the hemisphere
+vec3 entering_irradiance(vec3 p, vec3 n, const Lighting& L, double eta, const std::vector<ShadowMap>& shadows) {
     // Schlick's transmittance (fresnel_transmittance) in single precision: c is in (0, 1] here.
     const float r0 = float((eta - 1.0) / (eta + 1.0) * ((eta - 1.0) / (eta + 1.0)));
     const auto transmittance = [&](float c) {
@@ -30,22 +27,26 @@ std::vector<vec3> illuminate(const AtlasStage& a, const mat4& model, const Light
         const float m = 1.f - std::min(c, 1.f), m2 = m * m;
         return std::clamp(1.f - (r0 + (1.f - r0) * m2 * m2 * m), 0.f, 1.f);
     };
+    vec3 e(0.f);
+    for (size_t i = 0; i < L.lights.size(); ++i) {
+        vec3 wi, El;
+        L.lights[i].sample(p, wi, El);
+        const float c = glm::dot(n, wi);
+        if (c <= 0.f) continue;
+        const float v = i < shadows.size() ? shadows[i].visibility(p) : 1.f;
+        e += El * (c * transmittance(c) * v);
+    }
+    // Entering from outside: the lights' T averaged over the hemisphere.
+    return e + L.env_irradiance(n) * float(diffuse_transmittance(eta));
+}
+
+std::vector<vec3> illuminate(const AtlasStage& a, const mat4& model, const Lighting& L, double eta, const std::vector<ShadowMap>& shadows) {
+    std::vector<vec3> E(a.texel_position.size(), vec3(0.f));
+    const mat3 normal_matrix = glm::transpose(glm::inverse(mat3(model)));
     mesolab::parallel_for(tbb::blocked_range<size_t>(0, a.lit.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t k = r.begin(); k != r.end(); ++k) {
             const size_t t = size_t(a.lit[k]);
-            const vec3 p = vec3(model * vec4(a.texel_position[t], 1.f));
-            const vec3 n = glm::normalize(normal_matrix * a.texel_normal[t]);
-            vec3 e(0.f);
-            for (size_t i = 0; i < L.lights.size(); ++i) {
-                vec3 wi, El;
-                L.lights[i].sample(p, wi, El);
-                const float c = glm::dot(n, wi);
-                if (c <= 0.f) continue;
-                const float v = i < shadows.size() ? shadows[i].visibility(p) : 1.f;
-                e += El * (c * transmittance(c) * v);
-            }
-            e += L.env_irradiance(n) * env_t;
-            E[t] = e;
+            E[t] = entering_irradiance(vec3(model * vec4(a.texel_position[t], 1.f)), glm::normalize(normal_matrix * a.texel_normal[t]), L, eta, shadows);
         }
     });
     // Border texels whose surface another chunk holds take its value.

@@ -125,6 +125,8 @@ TranslucencyTechnique::TranslucencyTechnique() : Technique("translucency", "Tran
     names.push_back("custom");
     const MeasuredMaterial& marble = measured_material("marble");
     auto& p = params_;
+    // The atlas and vertex pipeline's keys: read by the paper's method and lensch-burley only.
+    const std::vector<std::string> kPipelineMethods = {"lensch", "lensch-burley"};
     p.add_enum("material", names, "marble")
         .doc("One of Jensen et al. 2001's measured materials, or custom (sigma_s, sigma_a, eta)");
     p.add_vec3("sigma_s", {marble.medium.sigma_s.x, marble.medium.sigma_s.y, marble.medium.sigma_s.z}).range(0.0, 1e4).in("1/mm").used_when("material", {"custom"}).doc("Reduced scattering coefficient sigma'_s, RGB");
@@ -132,28 +134,28 @@ TranslucencyTechnique::TranslucencyTechnique() : Technique("translucency", "Tran
     p.add_float("eta", 1.5).range(1.0, 3.0).used_when("material", {"custom"}).doc("Relative index of refraction");
     p.add_float("mm_per_unit", 20.0).range(1e-4, 1e7).log().in("mm")
         .doc("Millimetres per scene unit: the object's size decides how translucent it looks");
-    p.add_int("vertices", 10000).range(0, 2000000).more_accurate(Accuracy::Higher)
+    p.add_int("vertices", 10000).used_when("method", kPipelineMethods).range(0, 2000000).more_accurate(Accuracy::Higher)
         .doc("Vertices after simplification (OpenMesh's decimater; 0 keeps every vertex): one hat basis function per vertex");
-    p.add_int("atlas_size", 512).range(128, 2048).more_accurate(Accuracy::Higher, int64_t(2048))
+    p.add_int("atlas_size", 512).used_when("method", kPipelineMethods).range(128, 2048).more_accurate(Accuracy::Higher, int64_t(2048))
         .doc("Texels per side of the texture atlas (local response, illumination map)");
-    p.add_float("chunk_angle", 30.0).range(1.0, 89.0).in("degrees")
+    p.add_float("chunk_angle", 30.0).used_when("method", kPipelineMethods).range(1.0, 89.0).in("degrees")
         .doc("Largest deviation of a triangle's normal from its chunk's average normal");
-    p.add_int("kernel", 7).range(3, 15).odd().more_accurate(Accuracy::Higher, int64_t(15))
+    p.add_int("kernel", 7).used_when("method", kPipelineMethods).range(3, 15).odd().more_accurate(Accuracy::Higher, int64_t(15))
         .doc("Local kernel size K (odd): K x K texels around each texel");
-    p.add_float("threshold", 3e-5).range(0.0, 1.0).more_accurate(Accuracy::Lower, 0.0)
+    p.add_float("threshold", 3e-5).used_when("method", kPipelineMethods).range(0.0, 1.0).more_accurate(Accuracy::Lower, 0.0)
         .doc("Smallest vertex-to-vertex factor kept (largest channel); fewer factors, faster global response");
-    p.add_bool("blend", true).doc("Blend local and global responses (§5.4); off shows the double counting of Fig. 6");
-    p.add_enum("response", {"both", "local", "global", "reference"}, "both")
+    p.add_bool("blend", true).used_when("method", kPipelineMethods).doc("Blend local and global responses (§5.4); off shows the double counting of Fig. 6");
+    p.add_enum("response", {"both", "local", "global", "reference"}, "both").used_when("method", kPipelineMethods)
         .doc("What the image shows: local + global, one of them, or the brute-force reference");
-    p.add_bool("compare", false)
+    p.add_bool("compare", false).used_when("method", kPipelineMethods)
         .doc("Also compute the brute-force reference each frame (the reference and error AOVs): seconds per light move on large meshes");
     p.add_bool("shadows", true).doc("Self-shadowing of the illumination map (a shadow map per light)");
     p.add_int("shadow_map", 512).range(64, 8192).used_when("shadows", {"true"}).doc("Shadow map texels per side");
-    p.add_path("albedo_map", "")
+    p.add_path("albedo_map", "").used_when("method", kPipelineMethods)
         .doc("Surface texture rho multiplying the outgoing radiosity, at the mesh's (u,v); relative to the preset's folder");
-    p.add_float("veins", 0.0).range(0.0, 1.0).doc("Strength of procedural fractal veins in rho (0 = none)");
-    p.add_float("vein_scale", 10.0).range(0.01, 1e5).log().in("mm").doc("Vein period (used when veins > 0)");
-    p.add_color("vein_color", {0.35, 0.3, 0.28}).doc("rho inside a vein");
+    p.add_float("veins", 0.0).used_when("method", kPipelineMethods).range(0.0, 1.0).doc("Strength of procedural fractal veins in rho (0 = none)");
+    p.add_float("vein_scale", 10.0).used_when("method", kPipelineMethods).range(0.01, 1e5).log().in("mm").doc("Vein period (used when veins > 0)");
+    p.add_color("vein_color", {0.35, 0.3, 0.28}).used_when("method", kPipelineMethods).doc("rho inside a vein");
     p.section("Material and size", {"material", "sigma_s", "sigma_a", "eta", "mm_per_unit"});
     p.section("Accuracy (each costs a recompute)", {"vertices", "atlas_size", "chunk_angle", "kernel", "threshold", "blend"});
     p.section("Display", {"response", "compare", "shadows", "shadow_map"});

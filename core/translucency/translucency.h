@@ -154,6 +154,10 @@ struct ShadowMap {
 ShadowMap shadow_frame(const Light& l, vec3 centre, float radius, int res);
 ShadowMap make_shadow_map(const TriMesh& display, const mat4& model, const Light& l, int res);
 
+// Irradiance entering the medium at world point p with outward unit normal n: every light times
+// Schlick's transmittance T(cos θi) and its shadow map (the first shadows.size() lights), plus the
+// environment times the hemispherical mean of T.
+vec3 entering_irradiance(vec3 p, vec3 n, const Lighting& lighting, double eta, const std::vector<ShadowMap>& shadows);
 // Irradiance entering the medium at every lit texel, copied from there to the other non-empty
 // texels (AtlasStage::copy); 0 at empty texels.
 std::vector<vec3> illuminate(const AtlasStage& a, const mat4& model, const Lighting& lighting, double eta, const std::vector<ShadowMap>& shadows);

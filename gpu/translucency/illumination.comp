@@ -5,6 +5,7 @@
 #include "common.glsl"
 #include "lighting.glsl"
 #include "translucency.glsl"
+#include "shadow.glsl"
 layout(local_size_x = 64) in;
 
 uniform isamplerBuffer u_lit;       // AtlasStage::lit
@@ -19,30 +20,6 @@ uniform mat4 u_model;
 uniform mat3 u_normal_matrix;
 uniform float u_eta;
 uniform float u_env_transmittance;  // 1 - F_dr(eta)
-// Shadow maps (ShadowMap): one per light, up to 4, as the layers of u_shadow.
-uniform int u_shadow_count;
-uniform sampler2DArray u_shadow;
-uniform int u_shadow_res;
-uniform mat4 u_shadow_view_proj[4];
-uniform int u_shadow_point[4];
-uniform vec3 u_shadow_origin[4];
-uniform vec3 u_shadow_dir[4];
-uniform float u_shadow_bias[4];
-uniform int u_shadow_valid[4];
-
-float visibility(int i, vec3 p) {
-    if (i >= u_shadow_count || u_shadow_valid[i] == 0) return 1.0;
-    vec4 c = u_shadow_view_proj[i] * vec4(p, 1.0);
-    if (!(c.w > 0.0)) return 1.0;
-    float nx = c.x / c.w, ny = c.y / c.w;
-    if (!(abs(nx) <= 1.0 && abs(ny) <= 1.0)) return 1.0;
-    int res = u_shadow_res;
-    int x = clamp(int(floor((nx * 0.5 + 0.5) * float(res))), 0, res - 1);
-    int y = clamp(int(floor((0.5 - 0.5 * ny) * float(res))), 0, res - 1);  // row 0 at the top
-    float d = u_shadow_point[i] != 0 ? length(p - u_shadow_origin[i]) : dot(p - u_shadow_origin[i], u_shadow_dir[i]);
-    return d - u_shadow_bias[i] <= texelFetch(u_shadow, ivec3(x, res - 1 - y, i), 0).r ? 1.0 : 0.0;  // GL rows from the bottom
-}
-
 void main() {
     int k = int(gl_GlobalInvocationID.x);
     if (k >= u_count) return;

@@ -10,6 +10,7 @@
 #include "core/translucency/reference.h"
 #include "core/translucency/translucency.h"
 #include "gpu/renderer.h"
+#include "gpu/translucency/shadow_maps.h"
 
 #include <glm/gtc/type_ptr.hpp>
 #include <algorithm>
@@ -182,34 +183,6 @@ private:
               gather(ctx.eval.get(translucency::stages::gather, o)) {}
         const LocalKernels& K() const { return blended ? blended->kernels : *kernels; }
     };
-    // One shadow map per light as the layers of one texture (a single fetch in the shader, whatever
-    // the light), with one depth buffer they share in turn.
-    struct ShadowLayers {
-        int res = 0, layers = 0;
-        Texture color, depth;
-        Framebuffer fbo;
-        void resize(int r, int n) {
-            if (r == res && n == layers) return;
-            color = make_texture({.target = GL_TEXTURE_2D_ARRAY, .format = GL_R32F, .width = r, .height = r, .layers = n});
-            depth = make_texture({.format = GL_DEPTH_COMPONENT32F, .width = r, .height = r});
-            GLuint id = 0;
-            glCreateFramebuffers(1, &id);
-            fbo = Framebuffer(id);
-            glNamedFramebufferTexture(id, GL_DEPTH_ATTACHMENT, depth.get(), 0);
-            glNamedFramebufferDrawBuffer(id, GL_COLOR_ATTACHMENT0);
-            res = r, layers = n;
-        }
-        // Binds layer i as the target, cleared: no surface (3e38) at the far plane.
-        void begin(int i) const {
-            glNamedFramebufferTextureLayer(fbo.get(), GL_COLOR_ATTACHMENT0, color.get(), 0, i);
-            glBindFramebuffer(GL_FRAMEBUFFER, fbo.get());
-            glViewport(0, 0, res, res);
-            const float far_distance[4] = {3e38f, 0.f, 0.f, 0.f}, one = 1.f;
-            glDepthMask(GL_TRUE);
-            glClearNamedFramebufferfv(fbo.get(), GL_COLOR, 0, far_distance);
-            glClearNamedFramebufferfv(fbo.get(), GL_DEPTH, 0, &one);
-        }
-    };
     // Per object: the frame's buffers and maps.
     struct PerObject {
         int size = 0, vertices = 0;
@@ -277,49 +250,10 @@ private:
         const AtlasStage& a = *in.atlas;
         // Shadow maps: the same frame as the CPU's (shadow_frame over the drawn mesh's world bounds).
         std::vector<ShadowMap> frames;
-        if (in.s.shadows) {
-            Bounds b{vec3(INFINITY), vec3(-INFINITY)};
-            for (const vec3& p : a.display->position) {
-                const vec3 q = vec3(model * vec4(p, 1.f));
-                b.lo = glm::min(b.lo, q), b.hi = glm::max(b.hi, q);
-            }
-            const size_t n = std::min(ctx.lighting.lights.size(), size_t(kMaxShadowMaps));
-            w.shadow.resize(in.s.shadow_map, int(std::max<size_t>(n, 1)));
-            for (size_t i = 0; i < n && !a.display->position.empty(); ++i) {
-                frames.push_back(shadow_frame(ctx.lighting.lights[i], 0.5f * (b.lo + b.hi), 0.5f * glm::length(b.hi - b.lo), in.s.shadow_map));
-                if (!frames.back().valid) continue;
-                w.shadow.begin(int(i));
-                glEnable(GL_DEPTH_TEST);
-                glDepthFunc(GL_LESS);
-                shadow_.use();
-                glUniformMatrix4fv(shadow_.uniform("u_model"), 1, GL_FALSE, glm::value_ptr(model));
-                glUniformMatrix4fv(shadow_.uniform("u_view_proj"), 1, GL_FALSE, glm::value_ptr(frames.back().view_proj));
-                glUniform1i(shadow_.uniform("u_point"), frames.back().point ? 1 : 0);
-                glUniform3fv(shadow_.uniform("u_origin"), 1, glm::value_ptr(frames.back().origin));
-                glUniform3fv(shadow_.uniform("u_dir"), 1, glm::value_ptr(frames.back().dir));
-                ctx.renderer.draw_object(ctx.scene, ctx.eval, o);
-                glBindVertexArray(0);
-            }
-            glBindFramebuffer(GL_FRAMEBUFFER, 0);
-        }
+        if (in.s.shadows) frames = draw_shadow_maps(ctx, o, *a.display, in.s.shadow_map, shadow_, w.shadow);
         illumination_.use();
         ctx.renderer.set_lighting_uniforms(illumination_, ctx.lighting, 0);
-        glUniform1i(illumination_.uniform("u_shadow_count"), int(frames.size()));
-        illumination_.bind_texture(6, GL_TEXTURE_2D_ARRAY, frames.empty() ? 0 : w.shadow.color.get(), "u_shadow");
-        for (size_t i = 0; i < 4; ++i) {
-            std::string k = std::to_string(i);
-            k.insert(k.begin(), '['), k.push_back(']');
-            const bool on = i < frames.size() && frames[i].valid;
-            glUniform1i(illumination_.uniform(("u_shadow_valid" + k).c_str()), on ? 1 : 0);
-            if (!on) continue;
-            const ShadowMap& f = frames[i];
-            glUniformMatrix4fv(illumination_.uniform(("u_shadow_view_proj" + k).c_str()), 1, GL_FALSE, glm::value_ptr(f.view_proj));
-            glUniform1i(illumination_.uniform(("u_shadow_point" + k).c_str()), f.point ? 1 : 0);
-            glUniform3fv(illumination_.uniform(("u_shadow_origin" + k).c_str()), 1, glm::value_ptr(f.origin));
-            glUniform3fv(illumination_.uniform(("u_shadow_dir" + k).c_str()), 1, glm::value_ptr(f.dir));
-            glUniform1f(illumination_.uniform(("u_shadow_bias" + k).c_str()), f.bias);
-        }
-        glUniform1i(illumination_.uniform("u_shadow_res"), in.s.shadow_map);
+        set_shadow_uniforms(illumination_, frames, w.shadow, in.s.shadow_map, 6);
         const mat3 nm = glm::transpose(glm::inverse(mat3(model)));
         glUniformMatrix4fv(illumination_.uniform("u_model"), 1, GL_FALSE, glm::value_ptr(model));
         glUniformMatrix3fv(illumination_.uniform("u_normal_matrix"), 1, GL_FALSE, glm::value_ptr(nm));

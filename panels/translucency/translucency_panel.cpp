@@ -5,6 +5,7 @@
 #include "core/strings.h"
 #include "core/translucency/stages.h"
 #include "core/technique.h"
+#include "core/translucency/separable.h"
 #include "core/translucency/translucency.h"
 #include "panels/panel.h"
 
@@ -90,6 +91,26 @@ void TranslucencyPanel::draw(PanelContext& ctx) {
             ImGui::TextColored(ImVec4(1.f, 0.45f, 0.4f, 1.f), "%s", e.what());
         }
     });
+
+    // A method outside the atlas and vertex pipeline (separable) has no atlas, stages or brute force.
+    const Technique* technique = Registry::instance().technique("translucency");
+    const Method* method = technique ? technique->method_of(o) : nullptr;
+    if (method && !method->shares_paper_pipeline()) {
+        if (ImGui::TreeNodeEx("Separable kernel", ImGuiTreeNodeFlags_DefaultOpen)) {
+            try {
+                const Settings s = Settings::from(o, Settings::Medium_);
+                const SeparableKernel& k =
+                    *separable_kernel(s.medium, o.material.get_string("separable_profile") == "burley", int(o.material.get_int("separable_taps")));
+                ImGui::Text("%zu taps out to %.3g mm (99.5%% of R_total), per pass", k.offset_mm.size(), double(k.reach_mm));
+                ImGui::Text("R_total %.3f %.3f %.3f", k.total.x, k.total.y, k.total.z);
+            } catch (const std::exception& e) {
+                ImGui::TextColored(ImVec4(1.f, 0.45f, 0.4f, 1.f), "%s", e.what());
+            }
+            aov_buttons(ctx, "translucency");
+            ImGui::TreePop();
+        }
+        return;
+    }
 
     // What the stages hold for this object.
     if (ctx.eval && ImGui::TreeNodeEx("Precomputed", ImGuiTreeNodeFlags_DefaultOpen)) {
