@@ -208,6 +208,7 @@ void SeparableMethod::shade_cpu(const ShadeContext& ctx) const {
     im.object.assign(im.value.size(), -1);
     im.depth_mm.assign(im.value.size(), 0.f);
     im.pixel_mm.assign(im.value.size(), 0.f);
+    const std::vector<ShadowMap> no_shadows;
     const mat4 view = ctx.camera.raster.view;
     const float proj11 = ctx.camera.raster.proj[1][1];
     {
@@ -220,7 +221,7 @@ void SeparableMethod::shade_cpu(const ShadeContext& ctx) const {
                 const SeparableSettings& st = settings.at(o);
                 const vec3 p = gb.position[px];
                 const auto sh = shadows.find(o);
-                im.value[px] = entering_irradiance(p, gb.normal[px], ctx.lighting, st.s.medium.eta, sh == shadows.end() ? std::vector<ShadowMap>{} : sh->second);
+                im.value[px] = entering_irradiance(p, gb.normal[px], ctx.lighting, st.s.medium.eta, sh == shadows.end() ? no_shadows : sh->second);
                 const float z = -(view * vec4(p, 1.f)).z;
                 im.object[px] = o;
                 im.depth_mm[px] = z * st.mm_per_world;
