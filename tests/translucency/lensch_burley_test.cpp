@@ -11,6 +11,7 @@
 #include "core/translucency/translucency.h"
 #include "core/truth/cache.h"
 #include "support/frames.h"
+#include "translucency/sphere_scene.h"
 
 #include <gtest/gtest.h>
 
@@ -25,24 +26,14 @@ using glm::dvec2;
 namespace {
 // A small translucent sphere (about 500 vertices), side-lit, a 128 x 128 atlas.
 Scene small_sphere(const char* method) {
-    Scene s = default_scene("translucency");
-    apply_set(s, "geometry.type", "sphere");
-    apply_set(s, "geometry.resolution", "32");
+    Scene s = test::side_lit_sphere();
     apply_set(s, "translucency.method", method);
     apply_set(s, "translucency.material", "skin1");
     apply_set(s, "translucency.atlas_size", "128");
-    apply_set(s, "translucency.mm_per_unit", "10");
-    apply_set(s, "translucency.shadow_map", "256");
-    apply_set(s, "light.direction", "70,30");
-    apply_set(s, "light.intensity", "3");
     return s;
 }
 
-double max_value(const Image& img) {
-    double m = 0.0;
-    for (float v : img.data) m = std::max(m, double(v));
-    return m;
-}
+using test::max_value;
 }  // namespace
 
 // ∫ R_d(|x − p|) dA over a convex region around p whose boundary lies ρ(θ) from p along the

@@ -15,6 +15,7 @@
 #include "core/translucency/translucency.h"
 #include "core/truth/cache.h"
 #include "support/frames.h"
+#include "translucency/sphere_scene.h"
 
 #include <gtest/gtest.h>
 
@@ -37,23 +38,13 @@ std::unique_ptr<Profile> profile(const char* kind, const char* material) {
 
 // A small translucent sphere, side-lit.
 Scene small_sphere() {
-    Scene s = default_scene("translucency");
-    apply_set(s, "geometry.type", "sphere");
-    apply_set(s, "geometry.resolution", "32");
+    Scene s = test::side_lit_sphere();
     apply_set(s, "translucency.method", "separable");
     apply_set(s, "translucency.material", "skin1");
-    apply_set(s, "translucency.mm_per_unit", "10");
-    apply_set(s, "translucency.shadow_map", "256");
-    apply_set(s, "light.direction", "70,30");
-    apply_set(s, "light.intensity", "3");
     return s;
 }
 
-double max_value(const Image& img) {
-    double m = 0.0;
-    for (float v : img.data) m = std::max(m, double(v));
-    return m;
-}
+using test::max_value;
 
 // A flat image: every pixel of object 0 at depth 100 mm, pixels of `pixel_mm`.
 BlurImage flat_image(int w, int h, float pixel_mm) {

@@ -9,6 +9,7 @@
 #include "gpu/gl.h"
 #include "support/cli.h"
 #include "support/frames.h"
+#include "translucency/sphere_scene.h"
 
 #include <gtest/gtest.h>
 #include <algorithm>
@@ -24,14 +25,8 @@ namespace {
 
 // A small translucent sphere (about 500 vertices), side-lit, a 128 x 128 atlas.
 Scene small_sphere() {
-    Scene s = default_scene("translucency");
-    apply_set(s, "geometry.type", "sphere");
-    apply_set(s, "geometry.resolution", "32");
+    Scene s = test::side_lit_sphere();
     apply_set(s, "translucency.atlas_size", "128");
-    apply_set(s, "translucency.mm_per_unit", "10");
-    apply_set(s, "translucency.shadow_map", "256");
-    apply_set(s, "light.direction", "70,30");
-    apply_set(s, "light.intensity", "3");
     return s;
 }
 
@@ -56,11 +51,7 @@ bool all_finite(const Frame& f) {
     return true;
 }
 
-double max_value(const Image& img) {
-    double m = 0.0;
-    for (float v : img.data) m = std::max(m, double(v));
-    return m;
-}
+using test::max_value;
 
 // RMSE of `error` over the covered texels, relative to the mean of `reference` there (channel c).
 double relative_rmse(const Frame& f, int c) {
