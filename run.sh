@@ -24,7 +24,7 @@ echo "== no display: headless showcase"
 ./build/mesolab info
 ./build/mesolab capture presets -o build/showcase
 echo "== captures (PNG and a JSON sidecar each): build/showcase/"
-if [ -e build/python ] && ls build/python/mesolab*.so >/dev/null 2>&1; then
+if [ -e build/python ] && ls build/python/mesolab/_mesolab*.so >/dev/null 2>&1; then
   echo "== Python (import mesolab): Heidrich et al. 2000, Fig. 1 as a matplotlib figure"
   PYTHONPATH=build/python PYTHONDONTWRITEBYTECODE=1 MPLBACKEND=Agg /usr/bin/python3 examples/heidrich_fig1.py build/showcase
 fi

@@ -6,10 +6,10 @@ MESOLAB_PACKAGES=(
   libglfw3-dev libimgui-dev libglm-dev libepoxy-dev libegl-dev libgl-dev
   libegl-mesa0 libgl1-mesa-dri libglx-mesa0
   libopenmesh-dev libopenimageio-dev libeigen3-dev nlohmann-json3-dev libcli11-dev libtbb-dev
-  libceres-dev libembree-dev libimath-dev
+  libceres-dev libembree-dev libimath-dev libzip-dev
   libfreetype-dev fonts-dejavu-core
   libgtest-dev libgmock-dev
-  pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib python3-openimageio
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib python3-openimageio python3-distributed
   xvfb xauth
   ccache
 )

@@ -42,6 +42,7 @@ struct BenchOptions {
     double noise = 0;                 // table truth: measure each preset's time to this noise_rel (0: a pilot, extrapolated)
     double time_limit_s = 600;        // table truth with noise: the most time per preset (seconds)
     std::vector<std::string> rows, columns;  // only the rows and columns whose names contain one of these
+    std::vector<std::string> presets;        // table truth: a row for each of these presets or packs (named after its scene) instead of the shipped presets
     uint64_t memory_limit = 0;        // bytes; a stage above it stops (InputError); 0: the available memory
     // Progress per cell ("bench TABLE: ROW / COLUMN", fraction of cells done), a flag that stops
     // between runs (Cancelled), no per-cell lines on stderr.
@@ -107,7 +108,12 @@ struct SweepResult {
 };
 // The sweep of `base`; the files go to o.out_dir only when write_files.
 SweepResult sweep_scene(const Scene& base, const SweepOptions& o, bool write_files);
-std::string sweep_metric_names();  // "rmse (default: ...), bumpsynth.ndf_histogram" for help texts and errors
+std::string sweep_metric_names();
+// What a sweep of `knob` measures against (metric rmse or a technique's): `reference` when given,
+// else the knob's declared reference setting, else its most accurate value among knob.values, as
+// (KEY, VALUE) pairs. InputError as sweep_scene's for the knob.
+std::vector<std::pair<std::string, std::string>> sweep_reference(const Scene& base, const SweepKnob& knob,
+                                                                 const std::vector<std::pair<std::string, std::string>>& reference);  // "rmse (default: ...), bumpsynth.ndf_histogram" for help texts and errors
 
 // [SECTION] The accuracy-time frontier
 // For every method of the scene's techniques (`<technique>.method`: the scene's own, then each

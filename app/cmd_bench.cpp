@@ -69,6 +69,24 @@ BenchResult measure_bench(const BenchOptions& o) {
             if (t.name == "truth") t = truth_bench_table(st.noise, st.time_limit_s), found = true;
         if (!found) throw InputError("--noise: only the table truth takes it (mesolab bench truth --noise 0.01)");
     }
+    // --preset: the truth table's rows are the user's presets or packs.
+    if (!o.presets.empty()) {
+        bool found = false;
+        for (auto& t : tables) {
+            if (t.name != "truth") continue;
+            found = true;
+            t.rows.clear();
+            for (const std::string& path : o.presets) {
+                const Scene s = load_preset(path);  // a bad preset or pack fails before any work
+                check_truth_request(s, 64, 64, TruthSettings{}, {});
+                std::string name = s.name;
+                for (int k = 2; std::any_of(t.rows.begin(), t.rows.end(), [&](const BenchRow& r) { return r.name == name; }); ++k)
+                    name = s.name + " #" + std::to_string(k);
+                t.rows.push_back({name, [path] { return load_preset(path); }, {}});
+            }
+        }
+        if (!found) throw InputError("--preset: only the table truth takes presets (mesolab bench truth --preset FILE)");
+    }
     // --row / --column: the cells asked for; a filter that matches nothing is an error, naming what there is.
     const auto contains_any = [](const std::string& name, const std::vector<std::string>& parts) {
         return parts.empty() || std::any_of(parts.begin(), parts.end(), [&](const std::string& p) { return name.find(p) != std::string::npos; });

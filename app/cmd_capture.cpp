@@ -6,6 +6,7 @@
 #include "core/error.h"
 #include "core/image.h"
 #include "core/profile.h"
+#include "core/pack.h"
 #include "core/scene.h"
 #include "core/strings.h"
 #include "core/technique.h"
@@ -36,12 +37,12 @@ std::vector<std::string> expand_presets(const std::vector<std::string>& args) {
     std::vector<std::string> files;
     for (const auto& a : args) {
         std::error_code ec;
-        if (fs::is_directory(a, ec)) {
+        if (fs::is_directory(a, ec) && !is_pack(a)) {
             std::vector<std::string> found;
             for (const auto& e : fs::recursive_directory_iterator(a))
-                if (e.is_regular_file() && e.path().extension() == ".json") found.push_back(e.path().string());
+                if (e.is_regular_file() && (e.path().extension() == ".json" || e.path().extension() == ".zip")) found.push_back(e.path().string());
             std::sort(found.begin(), found.end());
-            if (found.empty()) throw InputError(a + ": folder holds no preset (*.json)");
+            if (found.empty()) throw InputError(a + ": folder holds no preset (*.json) or pack (*.zip)");
             files.insert(files.end(), found.begin(), found.end());
         } else {
             files.push_back(a);

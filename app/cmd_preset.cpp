@@ -2,6 +2,7 @@
 #include "app/commands.h"
 #include "app/workbench.h"
 #include "core/error.h"
+#include "core/pack.h"
 #include "core/scene.h"
 #include "core/technique.h"
 #include "gpu/context.h"
@@ -77,6 +78,17 @@ int run_preset_show(const std::string& file, const std::vector<std::string>& set
     Scene s = load_preset(file);
     apply_sets(s, sets);
     std::printf("%s", scene_to_text(s).c_str());
+    return 0;
+}
+
+// [SECTION] preset pack
+int run_preset_pack(const std::string& file, const std::vector<std::string>& sets, const std::string& out) {
+    Scene s = load_preset(file);
+    apply_sets(s, sets);
+    const std::vector<std::string> members = write_pack(s, out);
+    std::printf("packed %s into %s: %s", file.c_str(), out.c_str(), members.front().c_str());
+    if (members.size() > 1) std::printf(" and %zu file%s", members.size() - 1, members.size() == 2 ? "" : "s");
+    std::printf("\n");
     return 0;
 }
 

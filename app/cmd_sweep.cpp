@@ -116,28 +116,28 @@ Knob check_knob(const Scene& base, const SweepKnob& in, const char* option) {
     return k;
 }
 
-// The reference scene: --reference settings, else the knob's declared reference, else its most accurate value.
-Scene reference_scene(const Scene& base, const Knob& k, const std::vector<std::pair<std::string, std::string>>& settings, std::string& text) {
-    Scene ref = base;
+// The reference's settings: --reference settings, else the knob's declared reference, else its most accurate value.
+std::vector<std::pair<std::string, std::string>> reference_settings(const Knob& k, const std::vector<std::pair<std::string, std::string>>& settings) {
     const ParamDecl& decl = *k.decl;
-    if (!settings.empty()) {
-        for (const auto& [key, value] : settings) {
-            apply_set(ref, key, value);
-            text += (text.empty() ? "" : ", ") + key + "=" + value;
-        }
-    } else if (decl.reference) {
-        text = k.key + "=" + value_to_text(decl, *decl.reference);
-        apply_set(ref, k.key, value_to_text(decl, *decl.reference));
-    } else if (decl.accuracy != Accuracy::None && (decl.type == ParamType::Int || decl.type == ParamType::Float)) {
+    if (!settings.empty()) return settings;
+    if (decl.reference) return {{k.key, value_to_text(decl, *decl.reference)}};
+    if (decl.accuracy != Accuracy::None && (decl.type == ParamType::Int || decl.type == ParamType::Float)) {
         std::string best = k.values.front();
         for (const auto& v : k.values) {
             const bool better = decl.accuracy == Accuracy::Higher ? as_number(decl, v) > as_number(decl, best) : as_number(decl, v) < as_number(decl, best);
             if (better) best = v;
         }
-        text = k.key + "=" + best;
-        apply_set(ref, k.key, best);
-    } else {
-        throw InputError("--knob " + k.key + ": this parameter declares no most-accurate setting; give one with --reference KEY=VALUE");
+        return {{k.key, best}};
+    }
+    throw InputError("--knob " + k.key + ": this parameter declares no most-accurate setting; give one with --reference KEY=VALUE");
+}
+
+// The reference scene, and its settings as text ("KEY=VALUE, ...").
+Scene reference_scene(const Scene& base, const Knob& k, const std::vector<std::pair<std::string, std::string>>& settings, std::string& text) {
+    Scene ref = base;
+    for (const auto& [key, value] : reference_settings(k, settings)) {
+        apply_set(ref, key, value);
+        text += (text.empty() ? "" : ", ") + key + "=" + value;
     }
     return ref;
 }
@@ -462,5 +462,9 @@ SweepResult sweep_scene(const Scene& base, const SweepOptions& o, bool write_fil
         result.written = {stem + ".csv", stem + ".md", stem + ".png", stem + ".svg"};
     }
     return result;
+}
+std::vector<std::pair<std::string, std::string>> sweep_reference(const Scene& base, const SweepKnob& knob,
+                                                                 const std::vector<std::pair<std::string, std::string>>& reference) {
+    return reference_settings(check_knob(base, knob, "--knob"), reference);
 }
 }  // namespace mesolab

@@ -117,6 +117,7 @@ int run_export(const ExportOptions& o);
 int run_preset_validate(const std::vector<std::string>& files);
 int run_preset_schema(const std::string& technique, bool as_json);
 int run_preset_show(const std::string& file, const std::vector<std::string>& sets);
+int run_preset_pack(const std::string& file, const std::vector<std::string>& sets, const std::string& out);
 int run_info();
 
 struct GuiOptions {

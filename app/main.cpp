@@ -103,6 +103,7 @@ int main(int argc, char** argv) {
     b->add_option("--pages-root", bench.pages_root, "With --update-pages: the repository's root")->capture_default_str();
     b->add_option("--mesh", bench.run.mesh, "A mesh file (OBJ, PLY, OFF, STL, OM) measured as its own row by the tables that take one (translucency)");
     b->add_option("--vertices", bench.run.vertices, "With --mesh: simplify it to N vertices first (0: the table's default)");
+    b->add_option("--preset", bench.run.presets, "Table truth: a row for this preset or pack (repeatable), named after its scene, instead of the shipped presets");
     b->add_option("--noise", bench.run.noise, "Table truth: measure each preset's time to this noise_rel (e.g. 0.01) instead of extrapolating a 32-sample pilot");
     b->add_option("--time-limit", bench.time_limit, "Table truth with --noise: give up on a preset after this long (600, 90s, 10m, 1.5h; default 10m)");
     add_memory_limit(b, bench.memory_limit);
@@ -157,6 +158,13 @@ int main(int argc, char** argv) {
     auto* psh = p->add_subcommand("show", "Print the fully resolved preset JSON");
     psh->add_option("file", show_file, "Preset file")->required();
     psh->add_option("--set", show_sets, "Override a parameter: KEY=VALUE (repeatable)");
+    std::string pack_file, pack_out;
+    std::vector<std::string> pack_sets;
+    auto* ppk = p->add_subcommand("pack", "Write a preset with every file it names (meshes, images, samples, arrays from Python) as a pack to share: "
+                                          "NAME.zip or a folder; capture, sweep, bench, frontier, gui and Python read a pack as a preset");
+    ppk->add_option("file", pack_file, "Preset file (or pack)")->required();
+    ppk->add_option("-o,--output", pack_out, "NAME.zip, or a folder (new, empty, or a pack it replaces)")->required();
+    ppk->add_option("--set", pack_sets, "Override a parameter first: KEY=VALUE (repeatable)");
 
     auto* tr = app.add_subcommand("truth", "Partial truths (capture --backend truth --samples A:B): merge");
     tr->require_subcommand(1);
@@ -231,6 +239,7 @@ int main(int argc, char** argv) {
         if (pv->parsed()) return run_preset_validate(validate_files);
         if (ps->parsed()) return run_preset_schema(schema_tech, schema_json);
         if (psh->parsed()) return run_preset_show(show_file, show_sets);
+        if (ppk->parsed()) return run_preset_pack(pack_file, pack_sets, pack_out);
         if (info->parsed()) return run_info();
         if (x->parsed()) return run_export(exp);
         for (TechniqueCommand& c : technique_commands) {

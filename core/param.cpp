@@ -398,6 +398,9 @@ std::string value_canonical(const ParamDecl& d, const Value& v, const std::strin
         fs::path p = std::get<std::string>(v);
         if (p.is_relative() && !base_dir.empty()) p = fs::path(base_dir) / p;
         if (files == FileIdentity::Contents) {
+            // The file's kind (its extension: the reader follows it) and bytes, not its name or
+            // folder: a scene keeps its keys when its files move (a pack, another machine).
+            s = d.name + "=*" + p.extension().string();
             std::ifstream in(p, std::ios::binary);
             if (!in) return s + "|missing";
             Fnv1a h;  // over the bytes

@@ -2,6 +2,7 @@
 #include "core/scene.h"
 #include "core/error.h"
 #include "core/file.h"
+#include "core/pack.h"
 #include "core/technique.h"
 
 #include <filesystem>
@@ -29,19 +30,9 @@ std::string list_text(const std::vector<std::string>& v) {
     return s;
 }
 
-// Path values must name an existing file; relative paths are relative to base_dir.
-void check_path(const ParamDecl& d, const Value& v, const std::string& base_dir, const std::string& source, const std::string& key) {
-    if (!d.is_file(v)) return;
-    const auto& p = std::get<std::string>(v);
-    fs::path full = p;
-    if (full.is_relative() && !base_dir.empty()) full = fs::path(base_dir) / full;
-    std::error_code ec;
-    if (!fs::is_regular_file(full, ec)) fail(source, key, "file '" + p + "' not found (looked for " + full.lexically_normal().string() + ")");
-}
-
 // One group's table from a JSON object: every key must be declared and used.
 ParamTable parse_table(const ParamGroup& g, const json& j, const std::string& source, const std::string& path,
-                       const std::string& base_dir, const std::vector<std::string>& skip = {}) {
+                       const PathCheck& check_file, const std::vector<std::string>& skip = {}) {
     ParamTable t(&g);
     if (!j.is_object()) fail(source, path, "expected a JSON object of " + g.name() + " parameters, got " + j.dump());
     std::vector<const ParamDecl*> given;
@@ -59,7 +50,8 @@ ParamTable parse_table(const ParamGroup& g, const json& j, const std::string& so
             fail(source, path + "." + d->name,
                  "not used when " + g.name() + "." + d->used_when_key + " is '" + value_to_text(*g.find(d->used_when_key), t.get(d->used_when_key)) +
                      "' (it applies to " + d->used_when_key + " = " + list_text(d->used_when_values) + "); remove it");
-    for (const ParamDecl* d : given) check_path(*d, t.get(d->name), base_dir, source, path + "." + d->name);
+    for (const ParamDecl* d : given)
+        if (d->is_file(t.get(d->name))) check_file(path + "." + d->name, t.get_string(d->name));
     return t;
 }
 
@@ -179,6 +171,16 @@ Scene default_scene(const std::string& technique) {
 
 // [SECTION] JSON -> Scene
 Scene scene_from_json(const json& j, const std::string& source, const std::string& base_dir) {
+    const PathCheck exists = [&](const std::string& key, const std::string& value) {
+        fs::path full = value;
+        if (full.is_relative() && !base_dir.empty()) full = fs::path(base_dir) / full;
+        std::error_code ec;
+        if (!fs::is_regular_file(full, ec)) fail(source, key, "file '" + value + "' not found (looked for " + full.lexically_normal().string() + ")");
+    };
+    return scene_from_json(j, source, base_dir, exists);
+}
+
+Scene scene_from_json(const json& j, const std::string& source, const std::string& base_dir, const PathCheck& check_file) {
     const Registry& reg = Registry::instance();
     if (!j.is_object()) fail(source, "", "expected a JSON object at the top level, got " + std::string(j.type_name()));
     static const std::vector<std::string> top{"schema", "name", "description", "camera", "lights", "env", "effects", "objects"};
@@ -199,13 +201,13 @@ Scene scene_from_json(const json& j, const std::string& source, const std::strin
     };
     str("name", s.name);
     str("description", s.description);
-    s.camera = j.contains("camera") ? parse_table(reg.camera(), j["camera"], source, "camera", base_dir) : reg.camera().defaults();
-    s.env = j.contains("env") ? parse_table(reg.env(), j["env"], source, "env", base_dir) : reg.env().defaults();
-    s.effects = j.contains("effects") ? parse_table(reg.effects(), j["effects"], source, "effects", base_dir) : reg.effects().defaults();
+    s.camera = j.contains("camera") ? parse_table(reg.camera(), j["camera"], source, "camera", check_file) : reg.camera().defaults();
+    s.env = j.contains("env") ? parse_table(reg.env(), j["env"], source, "env", check_file) : reg.env().defaults();
+    s.effects = j.contains("effects") ? parse_table(reg.effects(), j["effects"], source, "effects", check_file) : reg.effects().defaults();
     if (j.contains("lights")) {
         if (!j["lights"].is_array()) fail(source, "lights", "expected an array of lights, got " + j["lights"].dump());
         for (size_t i = 0; i < j["lights"].size(); ++i)
-            s.lights.push_back(parse_table(reg.light(), j["lights"][i], source, "lights[" + std::to_string(i) + "]", base_dir));
+            s.lights.push_back(parse_table(reg.light(), j["lights"][i], source, "lights[" + std::to_string(i) + "]", check_file));
     } else {
         s.lights.push_back(reg.light().defaults());
     }
@@ -225,7 +227,7 @@ Scene scene_from_json(const json& j, const std::string& source, const std::strin
             if (!o["name"].is_string()) fail(source, path + ".name", "expected a string, got " + o["name"].dump());
             obj.name = o["name"].get<std::string>();
         }
-        obj.geometry = o.contains("geometry") ? parse_table(reg.geometry(), o["geometry"], source, path + ".geometry", base_dir) : reg.geometry().defaults();
+        obj.geometry = o.contains("geometry") ? parse_table(reg.geometry(), o["geometry"], source, path + ".geometry", check_file) : reg.geometry().defaults();
         if (!o.contains("material") || !o["material"].is_object())
             fail(source, path + ".material", "missing (expected {\"technique\": one of " + list_text(reg.technique_names()) + ", ...parameters})");
         const json& m = o["material"];
@@ -236,24 +238,15 @@ Scene scene_from_json(const json& j, const std::string& source, const std::strin
         if (!t)
             fail(source, path + ".material.technique", "unknown technique '" + obj.technique + "'" + suggestion(obj.technique, reg.technique_names()) +
                                                            "; known techniques: " + list_text(reg.technique_names()));
-        obj.material = parse_table(t->params(), m, source, path + ".material", base_dir, {"technique"});
+        obj.material = parse_table(t->params(), m, source, path + ".material", check_file, {"technique"});
         s.objects.push_back(std::move(obj));
     }
     return s;
 }
 
-Scene load_preset(const std::string& path) {
-    std::error_code ec;
-    if (!fs::exists(path, ec)) throw InputError(path + ": no such file");
-    if (fs::is_directory(path, ec)) throw InputError(path + ": is a folder, expected a preset file (.json)");
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError(path + ": cannot open for reading");
-    std::stringstream ss;
-    ss << in.rdbuf();
-    const std::string text = ss.str();
-    json j;
+json preset_json_from_text(const std::string& text, const std::string& source) {
     try {
-        j = json::parse(text);
+        return json::parse(text);
     } catch (const json::parse_error& e) {
         // Turn the byte offset into line:column.
         size_t line = 1, col = 1;
@@ -263,8 +256,22 @@ Scene load_preset(const std::string& path) {
         std::string what = e.what();
         const auto p = what.find("parse error");
         if (p != std::string::npos) what = what.substr(p);
-        throw InputError(path + ": line " + std::to_string(line) + ", column " + std::to_string(col) + ": invalid JSON (" + what + ")");
+        throw InputError(source + ": line " + std::to_string(line) + ", column " + std::to_string(col) + ": invalid JSON (" + what + ")");
     }
+}
+
+Scene load_preset(const std::string& path) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) throw InputError(path + ": no such file");
+    if (is_pack(path)) return load_pack(path);
+    if (fs::is_directory(path, ec))
+        throw InputError(path + ": is a folder without " + std::string(kPackScene) + ", expected a preset file (.json) or a pack (.zip, or a folder holding " +
+                         kPackScene + ")");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path + ": cannot open for reading");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    const json j = preset_json_from_text(ss.str(), path);
     const fs::path abs = fs::absolute(path).lexically_normal();
     return scene_from_json(j, path, abs.parent_path().string());
 }

@@ -9,20 +9,27 @@
 //   Scene           presets: load, set/get keys (object=), JSON, atomic save
 //   Frame           a rendered frame: numpy views of its AOVs, stages, timings, save, PNG
 //   Workbench       one session (stage cache, memory budget, GL context) on one worker thread
-//   Module          __version__, info, schema, load_preset, bench, sweep
+//   Module          __version__, info, schema, load_preset, bench, sweep, frontier
+//   Cluster layer   packs and partial truths as bytes, for python/mesolab/cluster.py (names with a leading _)
+// The package mesolab (python/mesolab/__init__.py) re-exports these and adds client= (cluster.py).
 #include "app/api.h"
 #include "app/workbench.h"
 #include "core/error.h"
 #include "core/image.h"
+#include "core/pack.h"
 #include "core/scene.h"
 #include "core/session.h"
 #include "core/stage_store.h"
 #include "core/strings.h"
 #include "core/technique.h"
 #include "core/renderer.h"
+#include "core/truth/cache.h"
+#include "gpu/headless.h"
 #include "core/truth/truth.h"
+#include "core/stage_store.h"
 
 #include <OpenImageIO/imageio.h>
+#include <tbb/global_control.h>
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -477,6 +484,69 @@ public:
         return f;
     }
 
+    // [SECTION] Truths in parts (the cluster layer, mesolab/cluster.py)
+    // Samples [first, end) of the truth of `ps` as a partial truth's bytes (truth_part_bytes:
+    // `capture --samples A:B`'s file), neither read from nor kept in the truth cache.
+    py::bytes truth_part(const PyScene& ps, const py::object& size, uint64_t seed, int first, int end, const py::object& progress) {
+        open();
+        ps.check_used();
+        const auto [w, h] = frame_size_arg(size);
+        RenderRequest req;
+        req.renderer = "truth";
+        req.width = w, req.height = h;
+        req.aovs = {"radiance"};
+        req.truth.seed = seed;
+        req.truth.first = first;
+        req.truth.spp = end;
+        req.partial = true;
+        check_truth_settings(req.truth, TruthOptionNames{"spp=", "noise=", "time_limit=", "samples="});
+        const std::string bytes = run_on<std::string>(worker_, progress, [&](const ProgressFn& p, const std::atomic<bool>* cancel) {
+            RenderRequest rq = req;
+            rq.progress = p;
+            rq.cancel = cancel;
+            const RenderResult r = open().render(ps.scene, rq);
+            return truth_part_bytes(TruthPart{ps.scene.name, r.sampled->key, truth_build(version_string()), *r.sampled->sums});
+        });
+        return py::bytes(bytes);
+    }
+    // The frame of a merged truth of `ps` (samples from 0), as render(backend="truth") gives it,
+    // and kept in the truth cache as if rendered here. InputError when it is another scene's truth
+    // (another key: scene, size or seed) or another build's.
+    PyFrame truth_from_part(const PyScene& ps, const py::bytes& part_bytes, const py::object& progress) {
+        open();
+        ps.check_used();
+        const TruthPart part = truth_part_from_bytes(std::string(part_bytes), "the merged truth");
+        const TruthAccumulator& a = part.sums;
+        if (a.first != 0) throw InputError("the merged truth starts at sample " + std::to_string(a.first) + ", not 0: a part is missing");
+        const std::string here = truth_build(version_string());
+        if (part.build != here)
+            throw InputError("the truth's samples were made by another build (" + part.build + "; here: " + here +
+                             "): its bits differ from this build's; not used");
+        TruthSettings ts;
+        ts.spp = a.spp;
+        ts.seed = a.seed;
+        PyFrame f{nullptr, ps.scene, ts};
+        f.r = run_on<std::shared_ptr<const RenderResult>>(worker_, progress, [&](const ProgressFn& p, const std::atomic<bool>* cancel) {
+            auto r = std::make_shared<RenderResult>();
+            const auto t0 = std::chrono::steady_clock::now();
+            r->eval = open().session().evaluate(ps.scene, truth_stages(ps.scene), p, cancel);
+            r->stages_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+            const std::string key = truth_cache_key(version_string(), ps.scene, a.width, a.height, a.seed);
+            if (key != part.key) throw InputError("the merged truth is not of this scene at this size and seed (its key " + part.key + ", this scene's " + key + ")");
+            r->frame = truth_frame(a);
+            r->renderer = "truth";
+            SampledRun run;
+            run.spp = a.samples();
+            run.cached_spp = a.spp;
+            run.ended = TruthEnd::Samples;
+            run.key = key;
+            r->sampled = run;
+            TruthCache(cache_folder("truth"), version_string()).store(key, a);  // a later render(backend="truth") reads it
+            return std::shared_ptr<const RenderResult>(std::move(r));
+        });
+        return f;
+    }
+
     std::string gl_renderer() {
         return run_on<std::string>(worker_, py::none(), [this](const ProgressFn&, const std::atomic<bool>*) { return open().gl_renderer(); });
     }
@@ -522,6 +592,15 @@ py::dict schema_dict(const std::string& technique) {
 PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
     m.doc() = "mesolab: meso-scale appearance (micro-geometry, bump synthesis, translucency, cloth) from Python. See python/README.md.";
     m.attr("__version__") = version_string();
+    gpu::install_headless_renderer();  // backend="gpu" (its context is made on first use), also before any Workbench
+    // MESOLAB_THREADS=N: this process uses at most N threads (a cluster's workers, one per core
+    // group, each capped so that they do not oversubscribe the machine). Unset: every core.
+    if (const char* t = std::getenv("MESOLAB_THREADS"); t && *t) {
+        char* end = nullptr;
+        const long n = std::strtol(t, &end, 10);
+        if (!end || *end || n < 1 || n > 4096) throw InputError(std::string("MESOLAB_THREADS: expected a thread count 1..4096, got '") + t + "'");
+        static tbb::global_control cap(tbb::global_control::max_allowed_parallelism, size_t(n));
+    }
 
     // [SECTION] Errors (the translators run newest first: the subclass before its base)
     static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);
@@ -566,11 +645,18 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
         .def("to_json", [](const PyScene& s) { return scene_to_text(s.scene); }, "The preset JSON (every used parameter, declaration order).")
         .def(
             "save",
-            [](const PyScene& s, const py::object& path) {
+            [](const PyScene& s, const py::object& path, bool pack) {
                 s.check_used();
-                save_preset(s.scene, path_arg(path));
+                const std::string p = path_arg(path);
+                if (pack || is_pack(p)) {
+                    write_pack(s.scene, p);
+                    return;
+                }
+                save_preset(s.scene, p);
             },
-            py::arg("path"), "Write the preset through a temporary file renamed over `path`: the old file survives any failure.")
+            py::arg("path"), py::kw_only(), py::arg("pack") = false,
+            "Write the preset through a temporary file renamed over `path`: the old file survives any failure. With pack=True (or a path "
+            "ending in .zip) a pack to share: the preset with every file it names, arrays given from Python included, as NAME.zip or a folder.")
         .def("set", &PyScene::set, py::arg("key"), py::arg("value"), py::arg("object") = py::none(),
              "Set a public key (as --set KEY=VALUE): type and range are checked at once. TECHNIQUE.* and geometry.* keys "
              "address every object of that technique (the first object) unless object= names an index or a name.")
@@ -617,6 +703,84 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
             return "<mesolab.Scene '" + s.scene.name + "': " + join(objects, ", ") + ">";
         });
 
+    // [SECTION] For the cluster layer (mesolab/cluster.py): packs and partial truths as bytes
+    m.def(
+        "_pack_bytes", [](const PyScene& s) {
+            s.check_used();
+            return py::bytes(pack_bytes(s.scene));
+        },
+        py::arg("scene"), "The scene as a zip pack's bytes (core/pack.h), the same bytes for the same scene and files.");
+    m.def(
+        "_load_pack_bytes", [](const py::bytes& b, const std::string& name) { return PyScene{load_pack_bytes(std::string(b), name), {}}; },
+        py::arg("data"), py::arg("name") = "pack", "The scene of a zip pack's bytes (unpacked once into the cache's packs/ folder).");
+    m.def(
+        "_content_hash", [](const py::bytes& b) { return content_hash(std::string(b)); }, py::arg("data"), "FNV-1a 64 of the bytes, 16 hex digits.");
+    m.def("_truth_build", [] { return truth_build(version_string()); }, "The build a truth's samples come from (version, compiler, instruction set).");
+    m.def(
+        "_merge_truth_parts",
+        [](const std::vector<std::pair<std::string, py::bytes>>& parts) {
+            std::vector<std::pair<std::string, TruthPart>> named;
+            for (const auto& [name, b] : parts) named.emplace_back(name, truth_part_from_bytes(std::string(b), name));
+            return py::bytes(truth_part_bytes(merge_truth_parts(named)));
+        },
+        py::arg("parts"), "Joins partial truths' bytes [(name, bytes)] into one (exact sums: the same bytes in any order); InputError as `truth merge`.");
+    m.def(
+        "_truth_part_info",
+        [](const py::bytes& b) {
+            const TruthPart p = truth_part_from_bytes(std::string(b), "a partial truth");
+            py::dict d;
+            d["scene"] = p.scene, d["key"] = p.key, d["build"] = p.build;
+            d["first"] = p.sums.first, d["end"] = p.sums.spp, d["seed"] = p.sums.seed;
+            d["size"] = py::make_tuple(p.sums.width, p.sums.height);
+            return d;
+        },
+        py::arg("part"), "What a partial truth's bytes hold: {scene, key, build, first, end, seed, size}.");
+
+    m.attr("_truth_block") = kTruthBlock;
+    m.def(
+        "_truth_key",
+        [](const PyScene& s, const py::object& size, uint64_t seed) {
+            const auto [w, h] = frame_size_arg(size);
+            return truth_cache_key(version_string(), s.scene, w, h, seed);
+        },
+        py::arg("scene"), py::arg("size"), py::arg("seed"), "The truth cache's key of the scene's truth at this size and seed (what the truth reads).");
+    m.def(
+        "_sweep_reference",
+        [](const PyScene& s, const std::string& knob, const py::sequence& values, const py::object& reference) {
+            SweepKnob k;
+            k.key = knob;
+            for (const py::handle& v : values) k.values.push_back(to_set_text(knob, v));
+            if (k.values.empty()) throw InputError("sweep: values is empty; give the knob's settings, e.g. values=[8, 16, 32]");
+            std::vector<std::pair<std::string, std::string>> given;
+            if (!reference.is_none())
+                for (const auto& [key, v] : reference.cast<py::dict>()) given.emplace_back(key.cast<std::string>(), to_set_text(key.cast<std::string>(), v));
+            py::dict out;
+            for (const auto& [key, v] : sweep_reference(s.scene, k, given)) out[py::str(key)] = v;
+            return out;
+        },
+        py::arg("scene"), py::arg("knob"), py::arg("values"), py::arg("reference") = py::none(),
+        "What a sweep measures against: {KEY: VALUE text}, as the one-process sweep chooses it.");
+    m.def(
+        "_bench_rows",
+        [](const py::object& tables) {
+            std::vector<std::string> names;
+            if (py::isinstance<py::str>(tables)) names = {tables.cast<std::string>()};
+            else if (!tables.is_none()) names = tables.cast<std::vector<std::string>>();
+            std::vector<std::string> known;
+            py::list out;
+            for (const BenchTable& t : bench_tables()) {
+                known.push_back(t.name);
+                if (!names.empty() && std::find(names.begin(), names.end(), t.name) == names.end()) continue;
+                for (const BenchRow& r : t.rows) out.append(py::make_tuple(t.name, r.name));
+            }
+            for (const auto& n : names)
+                if (std::find(known.begin(), known.end(), n) == known.end())
+                    throw InputError("bench: unknown table '" + n + "'" + (nearest_key(n, known).empty() ? "" : " (did you mean '" + nearest_key(n, known) + "'?)") +
+                                     "; tables: " + join(known, ", "));
+            return out;
+        },
+        py::arg("tables") = py::none(), "[(table, row)] of the timing tables (all when none named), in their order.");
+
     m.def(
         "load_preset",
         [](const py::object& path) { return PyScene{load_preset(path_arg(path)), {}}; },
@@ -662,6 +826,10 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
              "noise_rel reaches noise= (e.g. 0.01) or time_limit= seconds pass, continuing the cached truth (spp is then the most samples, "
              "unlimited when not given); frame.truth['ended'] says which. aovs beside radiance; 'truth_error' also renders the truth. "
              "progress(stage, fraction) is called from this thread; Ctrl-C stops the work.")
+        .def("_truth_part", &PyWorkbench::truth_part, py::arg("scene"), py::arg("size"), py::arg("seed"), py::arg("first"), py::arg("end"),
+             py::arg("progress") = py::none(), "Samples [first, end) of the scene's truth as a partial truth's bytes (the cluster layer's task).")
+        .def("_truth_from_part", &PyWorkbench::truth_from_part, py::arg("scene"), py::arg("part"), py::arg("progress") = py::none(),
+             "The frame of a merged truth's bytes (samples from 0), as render(backend='truth') gives it; kept in the truth cache.")
         .def_property_readonly("gl_renderer", &PyWorkbench::gl_renderer)
         .def_property_readonly("memory_limit", &PyWorkbench::memory_limit, "In bytes; 0: the machine's available memory.")
         .def("clear_cache", &PyWorkbench::clear_cache, "Forget every cached stage result and frame step.")
@@ -692,8 +860,10 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
     m.def(
         "bench",
         [](const py::object& tables, int repeat, const std::string& backend, const std::vector<std::string>& rows, const std::vector<std::string>& columns,
-           const py::object& noise, const py::object& time_limit, const py::object& memory_limit, const py::object& progress) {
+           const py::object& noise, const py::object& time_limit, const py::object& memory_limit, const py::object& presets, const py::object& progress) {
             BenchOptions o;
+            if (!presets.is_none())
+                for (const py::handle& p : presets.cast<py::sequence>()) o.presets.push_back(path_arg(py::reinterpret_borrow<py::object>(p)));
             if (!noise.is_none()) {
                 const TruthSettings st = truth_sampling_arg(py::none(), noise, time_limit.is_none() ? py::float_(600.0) : time_limit, 1);
                 o.noise = st.noise;
@@ -728,10 +898,10 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
         },
         py::arg("tables") = py::none(), py::kw_only(), py::arg("repeat") = 5, py::arg("backend") = "both", py::arg("rows") = std::vector<std::string>{},
         py::arg("columns") = std::vector<std::string>{}, py::arg("noise") = py::none(), py::arg("time_limit") = py::none(), py::arg("memory_limit") = py::none(),
-        py::arg("progress") = py::none(),
+        py::arg("presets") = py::none(), py::arg("progress") = py::none(),
         "Measure timing tables (all when none named) as `mesolab bench --format json`: a list of its cells "
         "({table, row, column, device, median_ms, min_ms, max_ms, ...}). noise= (table 'truth'): each preset's time to that noise_rel, "
-        "measured, giving up after time_limit= seconds (600 by default).");
+        "measured, giving up after time_limit= seconds (600 by default). presets= (table 'truth'): a row for each of these presets or packs instead of the shipped ones.");
     m.def(
         "frontier",
         [](const PyScene& scene, const py::object& size, const std::string& backend, const std::vector<double>& distances, const py::object& spp,

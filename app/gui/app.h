@@ -15,6 +15,7 @@
 #include "core/error.h"
 #include "core/image.h"
 #include "core/profile.h"
+#include "core/pack.h"
 #include "core/scene.h"
 #include "core/session.h"
 #include "core/stage.h"
@@ -105,6 +106,8 @@ private:
     // Actions (throw InputError; callers report)
     void load(const std::string& path) override;
     void save_to(const std::string& path);
+    void save_pack(const std::string& path) override { save_pack_to(path); }
+    void save_pack_to(const std::string& path);  // a pack (core/pack.h); the document becomes it
     void paste();
     void screenshot_viewport(const std::string& path);
     void capture_window(const std::string& path);

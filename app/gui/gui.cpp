@@ -88,11 +88,20 @@ void Gui::load(const std::string& path) {
 
 void Gui::save_to(const std::string& path) {
     if (path.empty()) throw InputError("save: no file name given");
+    if (is_pack(path)) return save_pack_to(path);  // a pack opened is saved as a pack
     save_preset(state_.doc.scene, path);
     // Reload, so that relative paths are rebased onto the new file's folder.
     state_.doc.saved_as(load_preset(path), path);
     presets_.rescan();
     toast("Saved " + path);
+}
+
+void Gui::save_pack_to(const std::string& path) {
+    if (path.empty()) throw InputError("save as shareable: no file name given");
+    const std::vector<std::string> members = write_pack(state_.doc.scene, path);
+    state_.doc.saved_as(load_preset(path), path);
+    presets_.rescan();
+    toast("Saved the pack " + path + " (" + std::to_string(members.size() - 1) + " file" + (members.size() == 2 ? "" : "s") + " beside scene.json)");
 }
 
 void Gui::paste() {
@@ -210,12 +219,12 @@ void Gui::handle_drops() {
     std::vector<std::string> paths;
     paths.swap(dropped_);
     for (const auto& p : paths) {
-        if (fs::path(p).extension() == ".json") {
+        if (fs::path(p).extension() == ".json" || is_pack(p)) {
             attempt([&] { load(p); });
             return;
         }
     }
-    report("dropped " + paths.front() + ": not a preset (drop a .json file)", true, ErrorOrigin::Action);
+    report("dropped " + paths.front() + ": not a preset or a pack (drop a .json or .zip file, or a pack's folder)", true, ErrorOrigin::Action);
 }
 
 int Gui::run() {

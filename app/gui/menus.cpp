@@ -14,6 +14,13 @@ void Gui::menu_bar() {
         if (ImGui::MenuItem("Save as...", "Ctrl+Shift+S")) {
             state_.ui.open_modal(Modal::SaveAs, presets_.save_as);
         }
+        if (ImGui::MenuItem("Save as shareable...")) {
+            const std::string name = state_.doc.scene.name.empty() ? "scene" : state_.doc.scene.name;
+            state_.ui.open_modal(Modal::SavePack, "screenshots/" + name + ".zip");
+        }
+        if (ImGui::IsItemHovered())
+            ImGui::SetTooltip("A pack: the preset with every file it names (meshes, images, samples, arrays from Python) under content-hash names, as NAME.zip or "
+                              "a folder; it renders the same on another machine (mesolab preset pack does the same)");
         ImGui::Separator();
         if (ImGui::MenuItem("Copy preset JSON to clipboard")) handle({panels::PresetRequest::Kind::Copy, ""});
         if (ImGui::MenuItem("Paste preset JSON from clipboard")) handle({panels::PresetRequest::Kind::Paste, ""});
@@ -212,6 +219,7 @@ void Gui::status_bar() {
 void Gui::modals() {
     if (state_.ui.modal == Modal::Open) ImGui::OpenPopup("Open preset");
     if (state_.ui.modal == Modal::SaveAs) ImGui::OpenPopup("Save preset as");
+    if (state_.ui.modal == Modal::SavePack) ImGui::OpenPopup("Save as shareable pack");
     if (state_.ui.modal == Modal::Close) ImGui::OpenPopup("Unsaved changes");
     state_.ui.modal = Modal::None;
     const ImVec2 centre(ImGui::GetIO().DisplaySize.x * 0.5f, ImGui::GetIO().DisplaySize.y * 0.5f);
@@ -223,7 +231,7 @@ void Gui::modals() {
         panels::PresetRequest r = panels::preset_list(presets_, ImGui::GetContentRegionAvail().y - ImGui::GetFrameHeightWithSpacing() * 3.f);
         ImGui::SetNextItemWidth(-1);
         if (appearing) ImGui::SetKeyboardFocusHere();
-        const bool enter = ImGui::InputTextWithHint("##open_path", "path/to/preset.json (or pick one above)", state_.ui.modal_path, sizeof state_.ui.modal_path, ImGuiInputTextFlags_EnterReturnsTrue);
+        const bool enter = ImGui::InputTextWithHint("##open_path", "path/to/preset.json or pack.zip (or pick one above)", state_.ui.modal_path, sizeof state_.ui.modal_path, ImGuiInputTextFlags_EnterReturnsTrue);
         std::string path = state_.ui.modal_path;
         if (path.empty() && presets_.selected >= 0 && presets_.selected < int(presets_.files.size())) path = presets_.files[size_t(presets_.selected)];
         if (r.kind == panels::PresetRequest::Kind::Load) path = r.path;
@@ -246,18 +254,19 @@ void Gui::modals() {
         ImGui::EndPopup();
     }
 
-    ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
-    if (ImGui::BeginPopupModal("Save preset as", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
-        ImGui::TextUnformatted("Path of the preset file (relative to the working directory):");
+    // A dialog asking for a path to save to: Enter or Save calls `save` (an error is reported and the dialog stays).
+    const auto save_dialog = [&](const char* title, const char* prompt, const char* id, const char* exists_note, void (Gui::*save)(const std::string&)) {
+        ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
+        if (!ImGui::BeginPopupModal(title, nullptr, ImGuiWindowFlags_AlwaysAutoResize)) return;
+        ImGui::TextUnformatted(prompt);
         ImGui::SetNextItemWidth(480);
         if (ImGui::IsWindowAppearing()) ImGui::SetKeyboardFocusHere();
-        const bool enter = ImGui::InputText("##save_path", state_.ui.modal_path, sizeof state_.ui.modal_path, ImGuiInputTextFlags_EnterReturnsTrue);
-        const bool exists = fs::exists(state_.ui.modal_path);
-        if (exists) ImGui::TextColored(ImVec4(0.95f, 0.7f, 0.3f, 1.f), "The file exists and will be replaced.");
+        const bool enter = ImGui::InputText(id, state_.ui.modal_path, sizeof state_.ui.modal_path, ImGuiInputTextFlags_EnterReturnsTrue);
+        if (fs::exists(state_.ui.modal_path)) ImGui::TextColored(ImVec4(0.95f, 0.7f, 0.3f, 1.f), "%s", exists_note);
         if (ImGui::Button("Save", ImVec2(120, 0)) || enter) {
             bool ok = true;
             try {
-                save_to(state_.ui.modal_path);
+                (this->*save)(state_.ui.modal_path);
             } catch (const std::exception& e) {
                 ok = false;
                 report(e.what(), true, ErrorOrigin::Action);
@@ -267,7 +276,11 @@ void Gui::modals() {
         ImGui::SameLine();
         if (ImGui::Button("Cancel", ImVec2(120, 0)) || ImGui::IsKeyPressed(GLFW_KEY_ESCAPE, false)) ImGui::CloseCurrentPopup();
         ImGui::EndPopup();
-    }
+    };
+    save_dialog("Save preset as", "Path of the preset file (relative to the working directory):", "##save_path", "The file exists and will be replaced.",
+                &Gui::save_to);
+    save_dialog("Save as shareable pack", "NAME.zip, or a folder (new, empty, or a pack it replaces), relative to the working directory:", "##pack_path",
+                "It exists and will be replaced.", &Gui::save_pack_to);
 
     ImGui::SetNextWindowPos(centre, ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
     if (ImGui::BeginPopupModal("Unsaved changes", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {

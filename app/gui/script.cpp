@@ -20,7 +20,7 @@ std::string trim(const std::string& s) {
 }
 
 const char* const kScriptVerbs =
-    "load PRESET, set KEY=VALUE, frames N, wait, screenshot PATH, window-screenshot PATH, size WxH, view real-time|truth|error|frontier [SPP], quit";
+    "load PRESET, set KEY=VALUE, save-pack PATH, frames N, wait, screenshot PATH, window-screenshot PATH, size WxH, view real-time|truth|error|frontier [SPP], quit";
 }  // namespace
 
 // [SECTION] Parsing
@@ -38,7 +38,7 @@ std::vector<ScriptCommand> parse_script(const std::string& path) {
         c.verb = line.substr(0, sp);
         c.arg = sp == std::string::npos ? "" : trim(line.substr(sp));
         auto bad = [&](const std::string& msg) { return InputError(c.where + ": " + msg); };
-        if (c.verb == "load" || c.verb == "screenshot" || c.verb == "window-screenshot") {
+        if (c.verb == "load" || c.verb == "screenshot" || c.verb == "window-screenshot" || c.verb == "save-pack") {
             if (c.arg.empty()) throw bad("'" + c.verb + "' needs a path");
         } else if (c.verb == "set") {
             if (c.arg.find('=') == std::string::npos) throw bad("'set' expects KEY=VALUE, got '" + c.arg + "'");
@@ -159,6 +159,10 @@ bool ScriptRunner::run(const ScriptCommand& c, ScriptHost& host) {
     }
     if (c.verb == "set") {
         host.set(c.arg);
+        return true;
+    }
+    if (c.verb == "save-pack") {
+        host.save_pack(c.arg);
         return true;
     }
     if (c.verb == "view") {

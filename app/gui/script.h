@@ -34,6 +34,7 @@ public:
     virtual ~ScriptHost() = default;
     virtual void load(const std::string& path) = 0;          // load (the path already resolved)
     virtual void set(const std::string& assignment) = 0;     // set KEY=VALUE
+    virtual void save_pack(const std::string& /*path*/) {}   // save-pack PATH: File > Save as shareable
     virtual bool settled() const = 0;                        // evaluated, rendered, nothing pending
     virtual void screenshot(const std::string& path) = 0;    // the viewport's frame, now
     // The whole window, taken after a later frame was drawn: request, then ask for the result.

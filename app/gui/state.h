@@ -86,7 +86,7 @@ struct FrameState {
 
 // [SECTION] UI
 struct UiState {
-    enum class Modal { None, Open, SaveAs, Close };
+    enum class Modal { None, Open, SaveAs, SavePack, Close };
     enum class ErrorOrigin { Action, Evaluation, Render };
 
     struct Toast {

@@ -170,6 +170,31 @@ TEST_F(GuiSmoke, ScriptLoadsSetsAndScreenshots) {
     EXPECT_EQ(wi.height, 720);
 }
 
+// File > Save as shareable writes a pack (here of a scene with an environment map); the window
+// opens the pack as it opens a preset and shows the same frame.
+TEST_F(GuiSmoke, SavesAsShareableAndOpensThePack) {
+    const fs::path sky = fs::path(mesolab::test::source_dir()) / "presets/basic/torus-sky.json";
+    const fs::path a = dir_ / "a.png", b = dir_ / "b.png", pack = dir_ / "shared/torus.zip", script = dir_ / "pack.txt";
+    std::ofstream(script) << "load " << sky.string() << "\n"
+                          << "frames 2\nwait\nscreenshot " << a.string() << "\n"
+                          << "save-pack " << pack.string() << "\n"
+                          << "load " << pack.string() << "\n"
+                          << "frames 2\nwait\nscreenshot " << b.string() << "\n"
+                          << "quit\n";
+    const Result r = gui("--script " + q(script.string()));
+    ASSERT_EQ(r.status, 0) << r.err;
+    ASSERT_TRUE(fs::is_regular_file(pack));
+    const mesolab::Image ai = mesolab::read_image(a.string()), bi = mesolab::read_image(b.string());
+    EXPECT_GT(varied_fraction(ai), 0.1);
+    EXPECT_LT(mean_abs_diff(ai, bi), 1e-6) << "the pack shows another frame than its preset";
+    // A bad pack: status 2, naming it; the window does not crash.
+    const fs::path bad = dir_ / "bad.zip";
+    std::ofstream(bad) << "PK not a zip";
+    const Result rb = gui(q(bad.string()) + " --frames 1");
+    EXPECT_EQ(rb.status, 2) << rb.err;
+    EXPECT_NE(rb.err.find("bad.zip"), std::string::npos) << rb.err;
+}
+
 TEST_F(GuiSmoke, BadPresetExitsWithStatus2NamingTheFile) {
     const fs::path bad = dir_ / "broken_preset.json";
     std::ofstream(bad) << R"({"schema":1,"objects":[{"geometry":{"type":"sphere"},"material":{"technique":"basic","kd":[0.5,0.5]}}]})";

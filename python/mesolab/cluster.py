@@ -1,0 +1,462 @@
+"""mesolab on a Dask.distributed cluster: `client=` on Workbench.render (the truth), sweep,
+frontier and bench.
+
+[SECTION] index
+  Front     Workbench, sweep, frontier, bench: the core's own, or spread over `client`'s workers
+  Truth     a truth as blocks of samples on the workers, merged to the one-process bytes
+  Points    a sweep's settings, a frontier's distances and a bench's rows as tasks
+  Tasks     what runs on a worker: one Workbench per worker process, scenes by their pack's hash
+  Checks    workers, the GL resource, one build; progress and cancelling
+
+How the work travels: the scene goes as a pack (mesolab.Scene -> zip bytes, core/pack.h), scattered
+once to every worker under its content's hash and unpacked once per machine into the cache's
+packs/ folder; each task names the pack, so a worker that has it does not receive it again. A
+truth is split into blocks of samples (multiples of the path tracer's own block of samples); each
+block's exact sums come back as a partial truth (what `capture --samples A:B` writes) and are
+joined by the same code as `mesolab truth merge`: integer sums, so the merged truth is the
+one-process truth's bytes whatever the number of workers and the order the blocks finish in, for
+one build and instruction set (each part records its build; parts of two builds are refused).
+A worker process that dies has its task rerun by the scheduler on another worker.
+
+A task that needs OpenGL (backend "gpu", a bench's GPU columns) asks for the Dask resource "GL":
+start such workers with `dask worker tcp://HOST:8786 --resources GL=1`. Ctrl-C (or a progress
+callback that raises) cancels the queued tasks and sets a distributed.Event that running tasks
+poll from their progress reports, so they stop at their next check.
+"""
+import os
+import threading
+import time
+import uuid
+
+from . import _mesolab as _core
+
+_TRUTH_AOVS = ("radiance", "normal", "truth_stderr", "exitance", "irradiance")
+
+
+class Stopped(Exception):
+    """A task stopped because its run was cancelled (Ctrl-C or an error on the caller's side)."""
+
+
+# [SECTION] Front
+class Workbench(_core.Workbench):
+    __doc__ = _core.Workbench.__doc__
+
+    def render(self, scene, *, client=None, block=None, **kwargs):
+        if client is None:
+            if block is not None:
+                raise _core.InputError("block= sets the samples per task of a truth spread over a cluster; add client=")
+            return _core.Workbench.render(self, scene, **kwargs)
+        return render_truth(self, scene, client, block=block, **kwargs)
+
+
+Workbench.render.__doc__ = (_core.Workbench.render.__doc__ or "") + (
+    "\n\nclient=: a distributed.Client; the truth (backend='truth', spp=) is rendered on its workers in blocks of block= "
+    "samples (default: two blocks per worker thread) and merged into the bytes this workbench would render (kept in the "
+    "truth cache as if rendered here)."
+)
+
+
+def sweep(scene, *, client=None, **kwargs):
+    """mesolab's sweep (see the core's help below); with client= each setting is a task on the cluster."""
+    if client is None:
+        return _core.sweep(scene, **kwargs)
+    return _sweep_on(client, scene, **kwargs)
+
+
+def frontier(scene, *, client=None, **kwargs):
+    """mesolab's frontier; with client= each distance's truth is spread in blocks and each distance is a task."""
+    if client is None:
+        return _core.frontier(scene, **kwargs)
+    return _frontier_on(client, scene, **kwargs)
+
+
+def bench(tables=None, *, client=None, **kwargs):
+    """mesolab's bench; with client= each row of each table is a task on the cluster."""
+    if client is None:
+        return _core.bench(tables, **kwargs)
+    return _bench_on(client, tables, **kwargs)
+
+
+for _f, _core_f in ((sweep, _core.sweep), (frontier, _core.frontier), (bench, _core.bench)):
+    _f.__doc__ = _f.__doc__ + "\n\n" + (_core_f.__doc__ or "")
+
+
+# [SECTION] Truth
+def _blocks(spp, threads, block):
+    """[(first, end)] covering [0, spp): `block` samples each (a multiple of the path tracer's block), else two per thread."""
+    step = _core._truth_block
+    if block is None:
+        block = max(step, -(-spp // max(1, 2 * threads)))
+    elif int(block) < 1:
+        raise _core.InputError(f"block={block}: expected samples per task, 1 or more")
+    block = -(-int(block) // step) * step
+    return [(a, min(spp, a + block)) for a in range(0, spp, block)]
+
+
+def render_truth(wb, scene, client, *, size=(512, 512), backend="truth", aovs=(), spp=None, seed=1, noise=None, time_limit=None,
+                 progress=None, block=None):
+    """The truth of `scene` rendered on `client`'s workers in blocks of samples and merged (the one-process bytes)."""
+    if backend != "truth":
+        raise _core.InputError(f"client=: backend={backend!r} renders a frame in milliseconds on this machine; a cluster spreads the truth "
+                               "(backend='truth'), sweeps, frontiers and benches")
+    if noise is not None or time_limit is not None:
+        raise _core.InputError("client=: noise= and time_limit= stop a truth on its own noise or clock, which a truth split into blocks "
+                               "does not see; give spp= (the samples are split into blocks of block=)")
+    for a in aovs:
+        if a not in _TRUTH_AOVS:
+            raise _core.InputError(f"aovs: the truth does not write '{a}' (it writes {', '.join(_TRUTH_AOVS)})")
+    merged = truth_on(client, scene, size=size, spp=64 if spp is None else spp, seed=seed, block=block, progress=progress)
+    return wb._truth_from_part(scene, merged)
+
+
+def truth_on(client, scene, *, size, spp, seed=1, block=None, progress=None, pack=None):
+    """The merged partial truth's bytes of samples [0, spp) of `scene`, rendered on the cluster."""
+    spp = int(spp)
+    if spp < 1:
+        raise _core.InputError(f"spp={spp}: expected 1 or more samples per pixel")
+    threads = _threads(client)
+    blocks = _blocks(spp, threads, block)
+    if pack is None:
+        pack = _core._pack_bytes(scene)
+    pack_future, digest = _send_pack(client, pack)
+    run = uuid.uuid4().hex[:12]
+    event = f"mesolab-cancel-{run}"
+    size = tuple(int(x) for x in size)
+    futures = [client.submit(_truth_task, pack_future, digest, size, int(seed), a, b, event, key=f"mesolab-truth-{digest}-{a}-{b}-{run}")
+               for a, b in blocks]
+    # The blocks are joined on the workers, neighbours two by two (a tree), where their sums are: the
+    # caller receives one partial truth, not one per block.
+    merges, level = [], list(futures)
+    while len(level) > 1:
+        nxt = [client.submit(_merge_task, level[i], level[i + 1], key=f"mesolab-merge-{digest}-{len(merges) + i // 2}-{run}")
+               for i in range(0, len(level) - 1, 2)]
+        merges += nxt
+        level = nxt + level[len(level) - len(level) % 2:]
+    t0 = time.perf_counter()
+    _collect(client, futures, event, progress, f"truth of {scene.name}: blocks of {blocks[0][1] - blocks[0][0]} samples", fetch=False,
+             others=merges)
+    t1 = time.perf_counter()
+    result = _collect(client, [level[0]], event, None, "merge", others=futures + merges)[0]
+    _one_build([(t["worker"], t["build"]) for t in result["tasks"]])
+    last_run.clear()
+    last_run.update(tasks=[{k: t[k] for k in ("first", "end", "worker", "seconds")} for t in result["tasks"]], wait_s=t1 - t0,
+                    merge_s=time.perf_counter() - t1, merges=len(merges), pack_bytes=len(pack))
+    return result["part"]
+
+
+# What the last truth spread over a cluster did: its tasks ({first, end, worker, seconds: the task's time on its worker}),
+# the caller's wait for the blocks and then for the last merges and the merged truth (seconds), the merge tasks, the pack's
+# size. For measuring a cluster's overhead.
+last_run = {}
+
+
+# [SECTION] Points
+def _sweep_on(client, scene, *, knob, values, size=(256, 256), metric="rmse", backend="cpu", repeat=3, reference=None, by=None,
+              by_values=None, spp=None, seed=1, noise=None, time_limit=None, out_dir=None, memory_limit=None, progress=None):
+    if out_dir is not None:
+        raise _core.InputError("client=: out_dir= writes a one-machine sweep's files; on a cluster the points come back as values")
+    if noise is not None or time_limit is not None:
+        raise _core.InputError("client=: the truth of a sweep on a cluster is split into blocks of samples; give spp= instead of noise= or time_limit=")
+    values = list(values)
+    if by is not None and by_values is None:
+        raise _core.InputError("sweep: by= needs by_values=[...]")
+    by_list = list(by_values) if by is not None else [None]
+    if metric != "truth":
+        reference = _core._sweep_reference(scene, knob, values, reference)
+    if backend == "gpu":
+        _need_gl(client, "backend='gpu'")
+    spp = 64 if spp is None else spp
+    scenes = {}
+    for b in by_list:
+        for v in values:
+            s = scene.copy()
+            if by is not None:
+                s[by] = b
+            s[knob] = v
+            scenes[(_key(b), _key(v))] = s
+    if metric == "truth":  # each distinct truth once, spread in blocks, then kept by every worker
+        _truths_everywhere(client, list(scenes.values()), size, spp, seed, progress)
+    pack = _core._pack_bytes(scene)
+    pack_future, digest = _send_pack(client, pack)
+    run = uuid.uuid4().hex[:12]
+    event = f"mesolab-cancel-{run}"
+    common = dict(knob=knob, size=tuple(size), metric=metric, backend=backend, repeat=repeat, reference=reference, spp=spp, seed=seed,
+                  memory_limit=memory_limit)
+    futures, order = [], []
+    for b in by_list:
+        for v in values:
+            kw = dict(common, values=[v])
+            if by is not None:
+                kw.update(by=by, by_values=[b])
+            futures.append(client.submit(_sweep_task, pack_future, digest, kw, event, key=f"mesolab-sweep-{digest}-{len(futures)}-{run}",
+                                         resources={"GL": 1} if backend == "gpu" else None))
+            order.append((b, v))
+    results = _collect(client, futures, event, progress, f"sweep {knob}")
+    points = []
+    for (b, v), r in zip(order, results):
+        p = dict(r["points"][0])
+        p["value"] = v
+        if by is not None:
+            p["by"] = b
+        p["worker"] = r["worker"]
+        points.append(p)
+    return points
+
+
+def _frontier_on(client, scene, *, size=(128, 128), backend="cpu", distances=(), spp=None, seed=1, noise=None, time_limit=None, budget=600.0,
+                 repeat=3, out_dir=None, memory_limit=None, progress=None):
+    if out_dir is not None:
+        raise _core.InputError("client=: out_dir= writes a one-machine frontier's files; on a cluster the points come back as values")
+    if noise is not None or time_limit is not None:
+        raise _core.InputError("client=: the frontier's truths on a cluster are split into blocks of samples; give spp= instead of noise= or time_limit=")
+    if backend == "gpu":
+        _need_gl(client, "backend='gpu'")
+    distances = list(distances) or [scene["camera.distance"]]
+    spp = 64 if spp is None else spp
+    per_distance = []
+    for d in distances:
+        s = scene.copy()
+        s["camera.distance"] = d
+        per_distance.append(s)
+    _truths_everywhere(client, per_distance, size, spp, seed, progress)
+    pack_future, digest = _send_pack(client, _core._pack_bytes(scene))
+    run = uuid.uuid4().hex[:12]
+    event = f"mesolab-cancel-{run}"
+    share = float(budget) / len(distances)  # the one-process frontier shares its budget evenly by the distances too
+    futures = [client.submit(_frontier_task, pack_future, digest,
+                             dict(size=tuple(size), backend=backend, distances=[d], spp=spp, seed=seed, budget=share, repeat=repeat,
+                                  memory_limit=memory_limit), event, key=f"mesolab-frontier-{digest}-{i}-{run}",
+                             resources={"GL": 1} if backend == "gpu" else None)
+               for i, d in enumerate(distances)]
+    results = _collect(client, futures, event, progress, "frontier")
+    points = []
+    for r in results:
+        for p in r["points"]:
+            points.append(dict(p, worker=r["worker"]))
+    return points
+
+
+def _bench_on(client, tables=None, *, repeat=5, backend="both", rows=(), columns=(), noise=None, time_limit=None, memory_limit=None, presets=None,
+              progress=None):
+    if backend not in ("cpu", "gpu", "both"):
+        raise _core.InputError(f"backend={backend!r}: expected cpu, gpu or both")
+    if backend != "cpu":
+        _need_gl(client, f"backend={backend!r} (the GPU columns)")
+    run = uuid.uuid4().hex[:12]
+    event = f"mesolab-cancel-{run}"
+    common = dict(repeat=repeat, backend=backend, columns=list(columns), noise=noise, time_limit=time_limit, memory_limit=memory_limit)
+    resources = {"GL": 1} if backend != "cpu" else None
+    futures = []
+    if presets is not None:  # the truth table's rows are the user's scenes: each sent as a pack, a row on the worker that has it
+        names = [str(t) for t in ([tables] if isinstance(tables, str) else tables or [])]
+        if names != ["truth"]:
+            raise _core.InputError("presets=: only the table truth takes presets (bench('truth', presets=[...]))")
+        for i, path in enumerate(presets):
+            scene = _core.load_preset(path)
+            if rows and not any(f in scene.name for f in rows):
+                continue
+            pack_future, digest = _send_pack(client, _core._pack_bytes(scene))
+            futures.append(client.submit(_bench_pack_task, pack_future, digest, scene.name, common, event, key=f"mesolab-bench-{i}-{run}",
+                                         resources=resources))
+    else:
+        cells = [(t, r) for t, r in _core._bench_rows(tables) if not rows or any(f in r for f in rows)]
+        futures = [client.submit(_bench_task, t, r, common, event, key=f"mesolab-bench-{i}-{run}", resources=resources)
+                   for i, (t, r) in enumerate(cells)]
+    if not futures:
+        raise _core.InputError("bench: no row matches rows=" + repr(list(rows)))
+    results = _collect(client, futures, event, progress, "bench")
+    out = []
+    for r in results:
+        out.extend(dict(c, worker=r["worker"]) for c in r["cells"])
+    return out
+
+
+def _truths_everywhere(client, scenes, size, spp, seed, progress):
+    """Each distinct truth of `scenes` rendered once on the cluster and kept in every worker's truth cache."""
+    seen = set()
+    for s in scenes:
+        key = _core._truth_key(s, size, seed)
+        if key in seen:
+            continue
+        seen.add(key)
+        pack = _core._pack_bytes(s)
+        merged = truth_on(client, s, size=size, spp=spp, seed=seed, progress=progress, pack=pack)
+        client.run(_keep_truth_task, pack, _core._content_hash(pack), merged)
+
+
+def _key(v):
+    return repr(v)
+
+
+# [SECTION] Tasks (run on the workers)
+_worker_lock = threading.Lock()
+_worker_wb = None
+_worker_scenes = {}  # pack hash -> Scene
+
+
+def _worker_name():
+    try:
+        from distributed import get_worker
+        return get_worker().address
+    except (ImportError, ValueError):
+        return f"pid {os.getpid()}"
+
+
+def _workbench():
+    global _worker_wb
+    with _worker_lock:
+        if _worker_wb is None:
+            _worker_wb = _core.Workbench()
+        return _worker_wb
+
+
+def _scene(pack, digest):
+    with _worker_lock:
+        s = _worker_scenes.get(digest)
+        if s is None:
+            s = _core._load_pack_bytes(pack, f"the pack {digest}")
+            _worker_scenes[digest] = s
+        return s.copy()
+
+
+def _stopper(event_name):
+    """A progress callback that raises once the caller has set the run's cancel event (checked every 0.2 s at most)."""
+    from distributed import Event
+    ev = Event(event_name)
+    last = [0.0]
+
+    def progress(stage, fraction):
+        now = time.monotonic()
+        if now - last[0] < 0.2:
+            return
+        last[0] = now
+        if ev.is_set():
+            raise Stopped(f"cancelled by the caller ({event_name})")
+
+    return progress
+
+
+def _test_exit_once(seed, first):
+    """Test hook: MESOLAB_TEST_EXIT_ONCE=MARKER:SEED:FIRST makes the first attempt of the truth block (SEED, FIRST) exit its process."""
+    spec = os.environ.get("MESOLAB_TEST_EXIT_ONCE")
+    if not spec:
+        return
+    marker, s, f = spec.rsplit(":", 2)
+    if int(s) != seed or int(f) != first:
+        return
+    try:
+        fd = os.open(marker, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+    except FileExistsError:
+        return
+    os.close(fd)
+    os._exit(75)
+
+
+def _truth_task(pack, digest, size, seed, first, end, event):
+    _test_exit_once(seed, first)
+    t0 = time.perf_counter()
+    scene = _scene(pack, digest)
+    part = _workbench()._truth_part(scene, size, seed, first, end, progress=_stopper(event))
+    task = dict(first=first, end=end, build=_core._truth_build(), worker=_worker_name(), seconds=time.perf_counter() - t0)  # the part's build
+    return dict(part=part, first=first, end=end, tasks=[task])
+
+
+def _merge_task(a, b):
+    """Two neighbouring blocks' sums joined (exact: the same bytes in any grouping); a mixed build is refused by the merge."""
+    name = lambda r: "samples {}:{} from {}".format(r["first"], r["end"], ", ".join(sorted({t["worker"] for t in r["tasks"]})))
+    part = _core._merge_truth_parts([(name(a), a["part"]), (name(b), b["part"])])
+    return dict(part=part, first=min(a["first"], b["first"]), end=max(a["end"], b["end"]), tasks=a["tasks"] + b["tasks"])
+
+
+def _keep_truth_task(pack, digest, merged):
+    _workbench()._truth_from_part(_scene(pack, digest), merged)
+    return True
+
+
+def _sweep_task(pack, digest, kwargs, event):
+    points = _core.sweep(_scene(pack, digest), progress=_stopper(event), **kwargs)
+    return dict(points=points, worker=_worker_name())
+
+
+def _frontier_task(pack, digest, kwargs, event):
+    points = _core.frontier(_scene(pack, digest), progress=_stopper(event), **kwargs)
+    return dict(points=points, worker=_worker_name())
+
+
+def _bench_pack_task(pack, digest, name, kwargs, event):
+    folder = _scene(pack, digest).base_dir  # the pack, unpacked on this worker: a folder pack
+    cells = _core.bench("truth", presets=[folder], progress=_stopper(event), **kwargs)
+    return dict(cells=[dict(c, row=name) for c in cells], worker=_worker_name())
+
+
+def _bench_task(table, row, kwargs, event):
+    cells = _core.bench([table], rows=[row], progress=_stopper(event), **kwargs)
+    return dict(cells=[c for c in cells if c["row"] == row], worker=_worker_name())
+
+
+# [SECTION] Checks
+def _threads(client):
+    """The cluster's worker threads; waits up to 30 s for a first worker."""
+    n = sum(client.nthreads().values())
+    if n == 0:
+        try:
+            client.wait_for_workers(1, timeout=30)
+        except Exception:
+            raise _core.InputError("client=: the cluster has no workers after 30 s; start some with `dask worker tcp://SCHEDULER:8786`") from None
+        n = sum(client.nthreads().values())
+    return n
+
+
+def _need_gl(client, what):
+    workers = client.scheduler_info().get("workers", {})
+    if not any(w.get("resources", {}).get("GL", 0) >= 1 for w in workers.values()):
+        raise _core.InputError(f"client=: {what} needs OpenGL, and none of the cluster's {len(workers)} workers declares the Dask resource GL; "
+                               "start workers on machines with a GPU with `dask worker tcp://SCHEDULER:8786 --resources GL=1`")
+
+
+def _one_build(worker_builds):
+    here = _core._truth_build()
+    others = sorted({(b, w) for w, b in worker_builds if b != here})
+    if others:
+        b, w = others[0]
+        raise _core.InputError(f"client=: worker {w} renders with another build ({b}; here: {here}): a mixed cluster gives different bits, "
+                               "so its samples are not merged; run workers of this build")
+
+
+def _send_pack(client, pack):
+    """The pack scattered to every worker once, under its content's hash: (future, hash)."""
+    digest = _core._content_hash(pack)
+    [future] = client.scatter([pack], broadcast=True, hash=True)
+    return future, digest
+
+
+def _collect(client, futures, event, progress, what, fetch=True, others=()):
+    """The futures' results in their order (None each without fetch: they stay on the workers); progress(what, fraction)
+    as they finish. Any exception (Ctrl-C, a failed task, a progress callback that raises) cancels the run (the futures and
+    `others`): queued tasks are cancelled, running ones see the event."""
+    from distributed import as_completed
+    index = {f.key: i for i, f in enumerate(futures)}
+    results = [None] * len(futures)
+    done = 0
+    try:
+        if progress is not None:
+            progress(f"{what}: 0 of {len(futures)} tasks", 0.0)
+        for f in as_completed(futures):
+            if fetch or f.status != "finished":
+                results[index[f.key]] = f.result()  # raises the task's error
+            done += 1
+            if progress is not None:
+                progress(f"{what}: {done} of {len(futures)} tasks", done / len(futures))
+    except BaseException:
+        cancel(client, list(futures) + list(others), event)
+        raise
+    return results
+
+
+def cancel(client, futures, event):
+    """Stops a run: its running tasks see `event` at their next progress check; its queued tasks are cancelled."""
+    from distributed import Event
+    try:
+        Event(event, client=client).set()
+    finally:
+        client.cancel(futures)

@@ -1,0 +1,220 @@
+# mesolab on a real Dask.distributed cluster on 127.0.0.1: a `dask scheduler` and two `dask worker`
+# processes (one thread each, MESOLAB_THREADS=1, a cache folder of their own), started here and
+# stopped at the end. Truths merged from blocks on any worker are the one-process bytes, a worker
+# that dies has its task rerun, packs carry arrays, Ctrl-C stops the workers, OpenGL is a resource.
+import _thread
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+import types
+
+import distributed  # python3-distributed: part of the project's packages, so no skip
+import numpy as np
+import pytest
+
+from conftest import PRESETS
+
+SIZE = (40, 32)
+DIE_SEED, DIE_FIRST = 77, 8
+
+
+def _start(args, env, log):
+    return subprocess.Popen([sys.executable, "-m", "dask", *args], env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+
+
+@pytest.fixture(scope="module")
+def cluster(tmp_path_factory):
+    d = tmp_path_factory.mktemp("dask")
+    sched = d / "scheduler.json"
+    env = dict(os.environ, MESOLAB_THREADS="1", PYTHONDONTWRITEBYTECODE="1", DASK_DISTRIBUTED__WORKER__DAEMON="False")
+    worker_env = dict(env, MESOLAB_CACHE_DIR=str(d / "worker-cache"), MESOLAB_TEST_EXIT_ONCE=f"{d / 'died'}:{DIE_SEED}:{DIE_FIRST}")
+    log = open(d / "cluster.log", "w")
+    procs = [_start(["scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard", "--scheduler-file", str(sched)], env, log)]
+    try:
+        deadline = time.monotonic() + 60
+        while not sched.exists():
+            assert time.monotonic() < deadline, "the scheduler did not start: " + (d / "cluster.log").read_text()
+            time.sleep(0.1)
+        for i in range(2):
+            procs.append(_start(["worker", "--scheduler-file", str(sched), "--nthreads", "1", "--nworkers", "1", "--no-dashboard", "--memory-limit", "0",
+                                 "--name", f"w{i}", "--local-directory", str(d / f"w{i}")], worker_env, log))
+        client = distributed.Client(scheduler_file=str(sched), timeout=60)
+        client.wait_for_workers(2, timeout=90)
+        yield types.SimpleNamespace(client=client, dir=d)
+        client.close()
+    finally:
+        for p in reversed(procs):
+            try:
+                os.killpg(p.pid, signal.SIGTERM)
+            except ProcessLookupError:
+                pass
+        for p in procs:
+            try:
+                p.wait(timeout=15)
+            except subprocess.TimeoutExpired:
+                os.killpg(p.pid, signal.SIGKILL)
+                p.wait()
+        log.close()
+
+
+def _sphere(mesolab):
+    return mesolab.load_preset(PRESETS / "basic" / "sphere.json")
+
+
+def _same(a, b):
+    for aov in ("radiance", "truth_stderr", "normal"):
+        assert a[aov].tobytes() == b[aov].tobytes(), aov
+
+
+def test_a_truth_from_blocks_on_two_workers_is_the_one_process_truth(mesolab, cluster, wb):
+    scene = _sphere(mesolab)
+    one = wb.render(scene, backend="truth", size=SIZE, spp=24, seed=5, aovs=["truth_stderr", "normal"])
+    seen = []
+    with mesolab.Workbench() as other:
+        spread = other.render(scene, client=cluster.client, backend="truth", size=SIZE, spp=24, seed=5, block=4,
+                              progress=lambda stage, f: seen.append(f))
+    _same(one, spread)
+    run = mesolab.cluster.last_run
+    assert sorted((t["first"], t["end"]) for t in run["tasks"]) == [(a, a + 4) for a in range(0, 24, 4)]
+    assert len({t["worker"] for t in run["tasks"]}) == 2, "both workers should take blocks"
+    assert seen[0] == 0 and seen[-1] == 1 and seen == sorted(seen), "progress reaches the caller, block by block"
+    # Blocks merge to the same bytes in any order (exact integer sums).
+    parts = [(f"{a}:{a + 8}", wb._truth_part(scene, SIZE, 5, a, a + 8)) for a in (0, 8, 16)]
+    forward = mesolab._core._merge_truth_parts(parts)
+    assert mesolab._core._merge_truth_parts(parts[::-1]) == forward
+    assert mesolab._core._merge_truth_parts([parts[1], parts[2], parts[0]]) == forward
+    with mesolab.Workbench() as third:
+        _same(one, third._truth_from_part(scene, forward))
+
+
+def test_a_worker_that_dies_has_its_block_rerun_and_the_bytes_hold(mesolab, cluster, wb):
+    scene = _sphere(mesolab)
+    one = wb.render(scene, backend="truth", size=SIZE, spp=16, seed=DIE_SEED, aovs=["truth_stderr", "normal"])
+    spread = mesolab.Workbench().render(scene, client=cluster.client, backend="truth", size=SIZE, spp=16, seed=DIE_SEED, block=4)
+    assert (cluster.dir / "died").exists(), "the test hook should have ended a worker process"
+    _same(one, spread)
+    cluster.client.wait_for_workers(2, timeout=90)  # the nanny restarts it
+
+
+def test_packs_carry_what_the_scene_names_even_arrays(mesolab, cluster, wb):
+    scene = _sphere(mesolab)
+    rng = np.random.default_rng(3)
+    scene["basic.albedo_map"] = (rng.random((16, 16, 3)) * 255).astype(np.uint8)  # in this process's cache only
+    one = wb.render(scene, backend="truth", size=SIZE, spp=8, seed=9, aovs=["truth_stderr", "normal"])
+    spread = mesolab.Workbench().render(scene, client=cluster.client, backend="truth", size=SIZE, spp=8, seed=9)
+    _same(one, spread)
+    assert mesolab.cluster.last_run["pack_bytes"] > 16 * 16 * 3 // 4
+
+
+def test_ctrl_c_cancels_the_queue_and_stops_running_tasks(mesolab, cluster):
+    scene = _sphere(mesolab)
+    timer = threading.Timer(3.0, _thread.interrupt_main)
+    timer.start()
+    t0 = time.monotonic()
+    with pytest.raises(KeyboardInterrupt):
+        mesolab.Workbench().render(scene, client=cluster.client, backend="truth", size=(64, 64), spp=400000, seed=2, block=100000)
+    timer.cancel()
+    assert time.monotonic() - t0 < 30
+    deadline = time.monotonic() + 20
+    while any(cluster.client.processing().values()):
+        assert time.monotonic() < deadline, f"tasks still running 20 s after Ctrl-C: {cluster.client.processing()}"
+        time.sleep(0.2)
+    assert len(cluster.client.nthreads()) == 2, "the workers survive a cancel"
+
+
+def test_a_mixed_cluster_is_refused(mesolab, wb):
+    scene = _sphere(mesolab)
+    build = mesolab._core._truth_build().encode()
+    other = build[:-1] + (b"X" if build[-1:] != b"X" else b"Y")
+    a = wb._truth_part(scene, SIZE, 5, 0, 4)
+    b = wb._truth_part(scene, SIZE, 5, 4, 8).replace(build, other)
+    with pytest.raises(mesolab.InputError, match="build"):
+        mesolab._core._merge_truth_parts([("a", a), ("b", b)])
+    with pytest.raises(mesolab.InputError, match="another build"):
+        wb._truth_from_part(scene, mesolab._core._merge_truth_parts([("a", a.replace(build, other))]))
+    with pytest.raises(mesolab.InputError, match="worker tcp://10.0.0.9:1 renders with another build"):
+        mesolab.cluster._one_build([("tcp://10.0.0.9:1", other.decode())])
+
+
+def test_gl_work_needs_a_gl_worker(mesolab, cluster):
+    scene = _sphere(mesolab)
+    with pytest.raises(mesolab.InputError, match="resource GL"):
+        mesolab.sweep(scene, client=cluster.client, knob="geometry.resolution", values=[8, 16], backend="gpu")
+    with pytest.raises(mesolab.InputError, match="resource GL"):
+        mesolab.bench("basic", client=cluster.client, backend="both")
+    with pytest.raises(mesolab.InputError, match="resource GL"):
+        mesolab.frontier(scene, client=cluster.client, backend="gpu")
+    # A worker that declares GL takes the GL work, and only it.
+    env = dict(os.environ, MESOLAB_THREADS="1", PYTHONDONTWRITEBYTECODE="1", MESOLAB_CACHE_DIR=str(cluster.dir / "gl-cache"))
+    with open(cluster.dir / "gl.log", "w") as log:
+        gl = _start(["worker", "--scheduler-file", str(cluster.dir / "scheduler.json"), "--nthreads", "1", "--no-dashboard", "--memory-limit", "0",
+                     "--name", "gl", "--resources", "GL=1", "--local-directory", str(cluster.dir / "gl")], env, log)
+        try:
+            cluster.client.wait_for_workers(3, timeout=90)
+            address = [a for a, w in cluster.client.scheduler_info()["workers"].items() if w.get("name") == "gl"][0]
+            points = mesolab.sweep(scene, client=cluster.client, knob="geometry.resolution", values=[8, 16, 32], size=(24, 24), repeat=1, backend="gpu")
+            assert {p["worker"] for p in points} == {address}
+            assert points[0]["error"] > points[-1]["error"] > 0  # against the declared reference resolution
+            cluster.client.retire_workers([address], close_workers=True)
+        finally:
+            try:
+                os.killpg(gl.pid, signal.SIGTERM)
+            except ProcessLookupError:
+                pass
+            gl.wait(timeout=30)
+    deadline = time.monotonic() + 30
+    while len(cluster.client.nthreads()) != 2:
+        assert time.monotonic() < deadline
+        time.sleep(0.2)
+
+
+def test_a_sweep_spread_over_points_measures_what_one_process_does(mesolab, cluster):
+    scene = _sphere(mesolab)
+    values = [6, 12, 24]
+    for metric, extra in (("rmse", {}), ("truth", {"spp": 8})):
+        local = mesolab.sweep(scene, knob="geometry.resolution", values=values, size=(24, 24), repeat=1, metric=metric, **extra)
+        spread = mesolab.sweep(scene, client=cluster.client, knob="geometry.resolution", values=values, size=(24, 24), repeat=1, metric=metric, **extra)
+        assert [p["value"] for p in spread] == values
+        assert [p["error"] for p in spread] == [p["error"] for p in local], metric
+        assert all(p["ms"] > 0 for p in spread)
+
+
+def test_a_frontier_spread_over_distances_and_a_bench_over_rows(mesolab, cluster):
+    scene = _sphere(mesolab)
+    points = mesolab.frontier(scene, client=cluster.client, size=(24, 24), spp=8, distances=[3.0, 5.0], budget=4, repeat=1)
+    assert {p["distance"] for p in points} == {3.0, 5.0}
+    local = mesolab.frontier(scene, size=(24, 24), spp=8, distances=[3.0], budget=2, repeat=1)
+    preset = lambda ps, d: [p["rmse_rel"] for p in ps if p["distance"] == d and p["setting"] == "preset"]
+    assert preset(points, 3.0) == preset(local, 3.0)
+    rows = [r for t, r in mesolab._core._bench_rows("basic")][:2]
+    cells = mesolab.bench("basic", client=cluster.client, backend="cpu", repeat=1, rows=rows, columns=["frame 512"])
+    assert {c["row"] for c in cells} >= set(rows)
+    assert all(c["median_ms"] > 0 for c in cells if "median_ms" in c)
+    # A user's scene as a truth row, sent as a pack to the worker that measures it.
+    tiny = _sphere(mesolab)
+    tiny["geometry.resolution"] = 12
+    tiny.save(cluster.dir / "tiny.zip")
+    cells = mesolab.bench("truth", client=cluster.client, presets=[cluster.dir / "tiny.zip"], backend="cpu", repeat=1)
+    assert cells and {c["row"] for c in cells} == {tiny.name}
+    with pytest.raises(mesolab.InputError, match="out_dir"):
+        mesolab.sweep(scene, client=cluster.client, knob="geometry.resolution", values=[8], out_dir="x")
+
+
+def test_the_slurm_job_array_script_spreads_a_truth_that_truth_merge_joins(mesolab, tmp_path):
+    from conftest import BINARY, ROOT, cli
+    cli("preset", "pack", PRESETS / "basic" / "sphere.json", "-o", tmp_path / "sphere.zip", check=True)
+    script = ROOT / "examples" / "slurm" / "truth-array.sh"
+    env = dict(os.environ, MESOLAB=BINARY, SIZE="40x32", SEED="4", SLURM_ARRAY_TASK_COUNT="3")
+    for i in (2, 0, 1):  # array tasks run in any order
+        subprocess.run(["bash", str(script), str(tmp_path / "sphere.zip"), "20", str(tmp_path / "parts")], env=dict(env, SLURM_ARRAY_TASK_ID=str(i)),
+                       check=True, capture_output=True)
+    parts = sorted((tmp_path / "parts").glob("*.truth"))
+    assert [p.name.split(".samples-")[1] for p in parts] == ["0-8.truth", "16-20.truth", "8-16.truth"]
+    cli("truth", "merge", *parts, "-o", tmp_path / "merged", check=True)
+    cli("capture", tmp_path / "sphere.zip", "--backend", "truth", "--spp", "20", "--seed", "4", "--size", "40x32", "--no-cache", "-o", tmp_path / "one",
+        check=True)
+    name = mesolab.load_preset(PRESETS / "basic" / "sphere.json").name
+    assert (tmp_path / "merged" / f"{name}.png").read_bytes() == (tmp_path / "one" / f"{name}.png").read_bytes()
