@@ -20,6 +20,8 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <map>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -169,6 +171,43 @@ FrontierResult frontier_scene(const Scene& base, const FrontierOptions& o, bool 
 // Marks the lower envelope: a point is on the frontier when no point of the same distance that is
 // as fast or faster has a lower error.
 void mark_frontier(std::vector<FrontierPoint>& points);
+
+// The frontier in its parts, for running its points elsewhere (mesolab/cluster.py spreads them over
+// a Dask cluster); frontier_scene is these in order: the first round's settings at each distance,
+// then the second round's between the first round's frontier, then the report.
+struct FrontierSetting {
+    std::string method;  // as FrontierPoint::method
+    std::string varied;  // as FrontierPoint::varied
+    std::vector<std::pair<std::string, std::string>> settings;  // as FrontierPoint::settings
+    bool preset() const { return varied == "preset"; }  // each method's preset is always measured, whatever the budget
+};
+// The first round: for each method its preset, the diagonal (all knobs x0.25 .. x4) and each knob
+// alone, the methods taking turns (a budget cuts them alike). Checks the options and every value
+// (InputError) before any work.
+std::vector<FrontierSetting> frontier_settings(const Scene& base, const FrontierOptions& o);
+// The second round at one distance: between each two neighbours on each method's frontier among
+// `measured` (that distance's points), every knob at the geometric mean of theirs; none already
+// measured or listed twice.
+std::vector<FrontierSetting> frontier_between(const Scene& base, const std::vector<FrontierPoint>& measured);
+// One setting at one distance, on `wb` (its stage cache is cleared first: the precomputation is
+// timed from a cold cache; `wb` must have no stage store set). Its truth (o.truth) comes from `truths` when
+// that holds it, else from the workbench's truth cache or is rendered, and is added to `truths`.
+// `budget_over` (polled every 20 ms; not for a preset) stops the setting: `stopped`. o.cancel
+// throws Cancelled. A setting a stage refuses is `skipped` with why (a preset's refusal throws).
+struct FrontierTruths {
+    std::map<std::string, Frame> frames;  // by what the truth reads and the frame size
+};
+struct FrontierMeasurement {
+    std::optional<FrontierPoint> point;
+    std::string skipped;       // "METHOD SETTING: why"
+    bool stopped = false;      // by budget_over
+    double truth_noise = 0;    // the truth's noise_rel (with a point)
+};
+FrontierMeasurement frontier_measure(Workbench& wb, const Scene& base, const FrontierOptions& o, double distance, const FrontierSetting& setting,
+                                     FrontierTruths& truths, const std::function<bool()>& budget_over = {});
+// The result of measured points (`partial`: points, truth_noise per distance, budget_reached,
+// skipped, machine): the frontier marked, the Markdown, and with write_files the files in o.out_dir.
+FrontierResult frontier_report(const Scene& base, const FrontierOptions& o, FrontierResult partial, bool write_files);
 
 // [SECTION] Descriptions
 // The parameter groups `preset schema TECHNIQUE` lists: all for "", else the technique's or the

@@ -147,8 +147,45 @@ void mark_frontier(std::vector<FrontierPoint>& points) {
     }
 }
 
-FrontierResult frontier_scene(const Scene& base, const FrontierOptions& o, bool write_files) {
-    using Clock = std::chrono::steady_clock;
+namespace {
+// The scene's methods, and each method's accuracy knobs (with the method's keys set).
+struct MethodKnobs {
+    std::vector<MethodChoice> methods;
+    std::vector<std::vector<AccuracyKnob>> knobs_of;  // per method
+    size_t index(const std::string& label) const {
+        for (size_t i = 0; i < methods.size(); ++i)
+            if (methods[i].label == label) return i;
+        throw InputError("frontier: this scene has no method " + label + " (its methods: " + [&] {
+            std::vector<std::string> n;
+            for (const auto& m : methods) n.push_back(m.label);
+            return join(n, ", ");
+        }() + ")");
+    }
+    std::vector<std::pair<std::string, std::string>> all(size_t mi, const std::vector<std::pair<std::string, std::string>>& values) const {
+        std::vector<std::pair<std::string, std::string>> r = methods[mi].sets;
+        r.insert(r.end(), values.begin(), values.end());
+        return r;
+    }
+};
+
+MethodKnobs method_knobs(const Scene& base) {
+    MethodKnobs r;
+    r.methods = method_choices(base);
+    for (const MethodChoice& m : r.methods) {
+        Scene sm = base;
+        for (const auto& [k, v] : m.sets) apply_set(sm, k, v);
+        r.knobs_of.push_back(accuracy_knobs(sm));
+    }
+    return r;
+}
+
+std::vector<double> frontier_distances(const Scene& base, const FrontierOptions& o) {
+    if (o.distances.empty()) return {std::get<double>(get_public_value(base, "camera.distance"))};
+    return o.distances;
+}
+}  // namespace
+
+std::vector<FrontierSetting> frontier_settings(const Scene& base, const FrontierOptions& o) {
     if (o.width < 1 || o.height < 1 || o.width > 16384 || o.height > 16384)
         throw InputError("--size: " + std::to_string(o.width) + "x" + std::to_string(o.height) + " is out of range (1..16384 per side)");
     if (o.repeat < 1 || o.repeat > 100) throw InputError("--repeat: " + std::to_string(o.repeat) + " is out of range [1, 100]");
@@ -161,204 +198,237 @@ FrontierResult frontier_scene(const Scene& base, const FrontierOptions& o, bool 
         return join(n, ", ");
     }() + ") against the truth");
     truth_stages(base);  // every technique of the scene has a truth
-    if (write_files) plot_font();
-    std::vector<double> distances = o.distances;
-    if (distances.empty()) distances = {std::get<double>(get_public_value(base, "camera.distance"))};
-    else if (get_public(base, "camera.mode") != "orbit") throw InputError("--distance: moves an orbit camera; this scene's camera.mode is " + get_public(base, "camera.mode"));
+    if (!o.distances.empty() && get_public(base, "camera.mode") != "orbit")
+        throw InputError("--distance: moves an orbit camera; this scene's camera.mode is " + get_public(base, "camera.mode"));
 
-    // Per method: its accuracy knobs and its settings, most informative first: the preset, the
-    // diagonal, then each knob alone. The methods take turns, so that a budget cuts them alike.
-    struct Setting {
-        size_t method = 0;  // index into `methods`
-        std::string varied;
-        std::vector<std::pair<std::string, std::string>> values;  // the method's knobs
-    };
-    const std::vector<MethodChoice> methods = method_choices(base);
-    std::vector<std::vector<AccuracyKnob>> knobs_of(methods.size());
-    std::vector<std::vector<Setting>> per_method(methods.size());
-    for (size_t mi = 0; mi < methods.size(); ++mi) {
-        Scene sm = base;
-        for (const auto& [k, v] : methods[mi].sets) apply_set(sm, k, v);
-        const std::vector<AccuracyKnob>& knobs = knobs_of[mi] = accuracy_knobs(sm);
+    // Per method: its settings, most informative first: the preset, the diagonal, then each knob
+    // alone. The methods take turns, so that a budget cuts them alike.
+    const MethodKnobs mk = method_knobs(base);
+    std::vector<std::vector<FrontierSetting>> per_method(mk.methods.size());
+    for (size_t mi = 0; mi < mk.methods.size(); ++mi) {
+        const std::vector<AccuracyKnob>& knobs = mk.knobs_of[mi];
         if (knobs.empty() && mi == 0)
             throw InputError((o.source.empty() ? base.name : o.source) + ": the scene uses no accuracy knob (none to trade against time)");
-        std::vector<Setting>& settings = per_method[mi];
+        std::vector<FrontierSetting>& settings = per_method[mi];
+        const std::string& label = mk.methods[mi].label;
         std::vector<std::pair<std::string, std::string>> preset;
         for (const auto& k : knobs) preset.emplace_back(k.key, knob_value(k, 1.0));
-        settings.push_back({mi, "preset", preset});
+        settings.push_back({label, "preset", mk.all(mi, preset)});
         for (double f : {0.25, 0.5, 2.0, 4.0}) {
-            Setting st{mi, "all x" + strprintf("%g", f), {}};
-            for (const auto& k : knobs) st.values.emplace_back(k.key, knob_value(k, f));
-            if (st.values != preset) settings.push_back(st);
+            std::vector<std::pair<std::string, std::string>> values;
+            for (const auto& k : knobs) values.emplace_back(k.key, knob_value(k, f));
+            if (values != preset) settings.push_back({label, "all x" + strprintf("%g", f), mk.all(mi, values)});
         }
         for (size_t i = 0; i < knobs.size(); ++i)
             for (double f : {0.25, 0.5, 2.0, 4.0}) {
-                Setting st{mi, "", preset};
-                st.values[i].second = knob_value(knobs[i], f);
-                st.varied = knobs[i].key + "=" + st.values[i].second;
-                const bool seen = std::any_of(settings.begin(), settings.end(), [&](const Setting& x) { return x.values == st.values; });
+                std::vector<std::pair<std::string, std::string>> values = preset;
+                values[i].second = knob_value(knobs[i], f);
+                FrontierSetting st{label, knobs[i].key + "=" + values[i].second, mk.all(mi, values)};
+                const bool seen = std::any_of(settings.begin(), settings.end(), [&](const FrontierSetting& x) { return x.settings == st.settings; });
                 if (!seen) settings.push_back(st);
             }
+        Scene sm = base;
+        for (const auto& [k, v] : mk.methods[mi].sets) apply_set(sm, k, v);
         for (const auto& st : settings) {  // every value checked before any work
             Scene probe = sm;
-            for (const auto& [k, v] : st.values) apply_set(probe, k, v);
+            for (const auto& [k, v] : st.settings) apply_set(probe, k, v);
         }
     }
-    std::vector<Setting> settings;
+    std::vector<FrontierSetting> settings;
     for (size_t i = 0;; ++i) {
         bool any = false;
         for (const auto& list : per_method)
             if (i < list.size()) settings.push_back(list[i]), any = true;
         if (!any) break;
     }
+    return settings;
+}
 
+std::vector<FrontierSetting> frontier_between(const Scene& base, const std::vector<FrontierPoint>& here) {
+    // Between two neighbours on a method's frontier, every knob at the geometric mean of their
+    // values (once; a setting already measured is not measured again).
+    const MethodKnobs mk = method_knobs(base);
+    const auto knob_of = [](const FrontierPoint& p, const std::string& key) {
+        for (const auto& [k, v] : p.settings)
+            if (k == key) return std::stod(v);
+        throw InputError("frontier: the point " + p.method + " " + p.varied + " has no setting of " + key);
+    };
+    std::vector<FrontierSetting> between;
+    for (size_t mi = 0; mi < mk.methods.size(); ++mi) {
+        std::vector<FrontierPoint> mine;
+        for (const auto& p : here)
+            if (p.method == mk.methods[mi].label) mine.push_back(p);
+        mark_frontier(mine);
+        std::vector<const FrontierPoint*> front;
+        for (const auto& p : mine)
+            if (p.on_frontier) front.push_back(&p);
+        std::sort(front.begin(), front.end(), [](auto* x, auto* y) { return x->frame_ms < y->frame_ms; });
+        const std::vector<AccuracyKnob>& knobs = mk.knobs_of[mi];
+        for (size_t i = 1; i < front.size(); ++i) {
+            std::vector<std::pair<std::string, std::string>> values;
+            for (const AccuracyKnob& k : knobs) {
+                const double x = knob_of(*front[i - 1], k.key), y = knob_of(*front[i], k.key);
+                const double mid = x > 0.0 && y > 0.0 ? std::sqrt(x * y) : 0.5 * (x + y);
+                values.emplace_back(k.key, k.decl->type == ParamType::Int ? int_setting(k, mid, k.decl->max) : strprintf("%.6g", mid));
+            }
+            FrontierSetting st{mk.methods[mi].label, "between " + front[i - 1]->varied + " and " + front[i]->varied, mk.all(mi, values)};
+            const bool seen = std::any_of(here.begin(), here.end(), [&](const FrontierPoint& p) { return p.settings == st.settings; }) ||
+                              std::any_of(between.begin(), between.end(), [&](const FrontierSetting& x) { return x.settings == st.settings; });
+            if (!seen) between.push_back(st);
+        }
+    }
+    return between;
+}
+
+FrontierMeasurement frontier_measure(Workbench& wb, const Scene& base, const FrontierOptions& o, double d, const FrontierSetting& st,
+                                     FrontierTruths& truths, const std::function<bool()>& budget_over) {
+    FrontierMeasurement m;
+    if (o.cancel && o.cancel->load()) throw Cancelled();
+    const bool preset = st.preset();
+    if (!preset && budget_over && budget_over()) {
+        m.stopped = true;
+        return m;
+    }
+    Scene s = base;
+    if (!o.distances.empty()) apply_set(s, "camera.distance", strprintf("%.9g", d));
+    for (const auto& [k, v] : st.settings) apply_set(s, k, v);
+    const std::string what = st.method + " " + st.varied;
+    // A setting still running when the budget ends is stopped (the preset is always measured).
+    std::atomic<bool> stop{false};
+    std::jthread watch([&](std::stop_token done_token) {
+        while (!done_token.stop_requested()) {
+            if ((o.cancel && o.cancel->load()) || (!preset && budget_over && budget_over())) {
+                stop = true;
+                return;
+            }
+            std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        }
+    });
+    RenderRequest req;
+    req.renderer = o.backend;
+    req.width = o.width, req.height = o.height;
+    req.aovs = {"radiance"};
+    req.cancel = &stop;
+    // Its precomputation from a cold cache, read from nowhere.
+    if (wb.session().store()) throw std::logic_error("frontier_measure: the workbench's stage store is set; set it aside to time the precomputation");
+    wb.session().cache().clear();
+    wb.forget_frame_steps();
+    RenderResult r;
+    try {
+        r = wb.render(s, req);
+    } catch (const Cancelled&) {
+        if (o.cancel && o.cancel->load()) throw;
+        m.stopped = true;  // stopped by the budget: not measured
+        return m;
+    } catch (const InputError& e) {
+        // A combination a stage refuses (e.g. an even kernel width): said, and the run goes on.
+        if (preset) throw;
+        m.skipped = what + ": " + e.what();
+        if (!o.quiet) std::fprintf(stderr, "  d=%-6g %-36s not a valid setting: %s\n", d, what.c_str(), e.what());
+        return m;
+    }
+    watch.request_stop();
+    req.cancel = o.cancel;  // measured: its frames and its truth finish
+    FrontierPoint p;
+    p.distance = d;
+    p.method = st.method;
+    p.settings = st.settings;
+    p.varied = st.varied;
+    p.precompute_ms = r.stages_ms;
+    std::vector<double> frames;
+    for (int i = 0; i < o.repeat; ++i) {
+        if (o.cancel && o.cancel->load()) throw Cancelled();
+        wb.forget_frame_steps();  // a frame's steps are part of its time
+        r = wb.render(s, req);
+        frames.push_back(r.render_ms);
+    }
+    p.frame_ms = median_of(frames);
+    // The truth of what this setting's scene describes, at the frame's size (texture mode: its native size).
+    const std::string tkey = truth_description(s) + "@" + std::to_string(r.frame.width) + "x" + std::to_string(r.frame.height);
+    auto it = truths.frames.find(tkey);
+    if (it == truths.frames.end()) {
+        RenderRequest tr;
+        tr.renderer = truth_error_aov().reference;
+        tr.width = r.frame.width, tr.height = r.frame.height;
+        tr.truth = o.truth;
+        tr.aovs = {"truth_stderr"};
+        tr.cancel = o.cancel;
+        it = truths.frames.emplace(tkey, wb.render(s, tr).frame).first;
+    }
+    m.truth_noise = truth_noise_rel(it->second);
+    const TruthComparison c = compare_to_truth(r.frame, it->second, o.truth);
+    p.rmse_rel = c.rmse_rel;
+    p.below_noise = c.below_noise;
+    if (!o.quiet)
+        std::fprintf(stderr, "  d=%-6g %-36s frame %9.3f ms  precompute %9.1f ms  rmse_rel %.4f%s\n", d, what.c_str(), p.frame_ms, p.precompute_ms,
+                     p.rmse_rel, p.below_noise ? " (below the truth's noise)" : "");
+    m.point = std::move(p);
+    return m;
+}
+
+FrontierResult frontier_scene(const Scene& base, const FrontierOptions& o, bool write_files) {
+    using Clock = std::chrono::steady_clock;
+    const std::vector<FrontierSetting> settings = frontier_settings(base, o);
+    if (write_files) plot_font();
+    const std::vector<double> distances = frontier_distances(base, o);
     FrontierResult res;
-    res.scene = base.name;
-    res.backend = o.backend;
-    res.distances = distances;
-    for (const auto& m : methods)
-        for (const auto& [k, v] : m.sets)
-            if (std::find(res.knobs.begin(), res.knobs.end(), k) == res.knobs.end()) res.knobs.push_back(k);
-    for (const auto& knobs : knobs_of)
-        for (const auto& k : knobs)
-            if (std::find(res.knobs.begin(), res.knobs.end(), k.key) == res.knobs.end()) res.knobs.push_back(k.key);
     Workbench wb;
     wb.session().set_memory_limit(o.memory_limit);
+    const RendererDecl& renderer = RendererRegistry::instance().find(o.backend);
     res.machine = cpu_model() + ", " + std::to_string(std::thread::hardware_concurrency()) + " threads" +
                   (renderer.traits.needs_gl ? "; GL: " + wb.renderer(o.backend).device() : "");
     const size_t total = distances.size() * settings.size();
     size_t done = 0;
     for (double d : distances) {
-        std::map<std::string, Frame> truths;  // by what the truth reads and the frame size
+        FrontierTruths truths;
         double noise = 0;
         const size_t first = res.points.size();
-        const auto t_d = Clock::now();  // the budget is shared evenly by the distances
-        const double budget_d = o.budget_s / double(distances.size());
-        // Renders, times and measures one setting at this distance; false when the budget is spent.
-        auto measure = [&](const Setting& st) {
-            if (o.cancel && o.cancel->load()) throw Cancelled();
-            const bool preset = st.varied == "preset";  // each method's preset setting is always measured
-            if (std::chrono::duration<double>(Clock::now() - t_d).count() > budget_d && !preset) {
-                res.budget_reached = true;
-                return false;
+        // The budget is shared evenly by the distances; a distance's clock starts with it.
+        const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(o.budget_s / double(distances.size())));
+        const auto budget_over = [&] { return Clock::now() > deadline; };
+        const auto measure = [&](const FrontierSetting& st) {
+            if (o.progress) o.progress("frontier d=" + strprintf("%g", d) + ": " + st.method + " " + st.varied, std::min(1.0, double(done) / double(total)));
+            FrontierMeasurement m = frontier_measure(wb, base, o, d, st, truths, budget_over);
+            if (m.stopped) res.budget_reached = true;
+            if (!m.skipped.empty()) res.skipped.push_back(m.skipped);
+            if (m.point) {
+                noise = std::max(noise, m.truth_noise);
+                res.points.push_back(*m.point);
+                if (o.on_point) o.on_point(*m.point);
             }
-            Scene s = base;
-            if (!o.distances.empty()) apply_set(s, "camera.distance", strprintf("%.9g", d));
-            for (const auto& [k, v] : methods[st.method].sets) apply_set(s, k, v);
-            for (const auto& [k, v] : st.values) apply_set(s, k, v);
-            const std::string what = methods[st.method].label + " " + st.varied;
-            if (o.progress) o.progress("frontier d=" + strprintf("%g", d) + ": " + what, std::min(1.0, double(done) / double(total)));
-            // A setting still running when the budget ends is stopped (the preset is always measured).
-            std::atomic<bool> stop{false};
-            std::jthread watch([&](std::stop_token done_token) {
-                const auto deadline = t_d + std::chrono::duration<double>(budget_d);
-                while (!done_token.stop_requested()) {
-                    if ((o.cancel && o.cancel->load()) || (!preset && Clock::now() > deadline)) {
-                        stop = true;
-                        return;
-                    }
-                    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-                }
-            });
-            RenderRequest req;
-            req.renderer = o.backend;
-            req.width = o.width, req.height = o.height;
-            req.aovs = {"radiance"};
-            req.cancel = &stop;
-            wb.session().cache().clear();  // its precomputation from a cold cache
-            wb.forget_frame_steps();
-            RenderResult r;
-            try {
-                r = wb.render(s, req);
-            } catch (const Cancelled&) {
-                if (o.cancel && o.cancel->load()) throw;
-                res.budget_reached = true;  // stopped by the budget: not measured
-                return false;
-            } catch (const InputError& e) {
-                // A combination a stage refuses (e.g. an even kernel width): said, and the run goes on.
-                if (preset) throw;
-                res.skipped.push_back(what + ": " + e.what());
-                if (!o.quiet) std::fprintf(stderr, "  d=%-6g %-36s not a valid setting: %s\n", d, what.c_str(), e.what());
-                return true;
-            }
-            watch.request_stop();
-            req.cancel = o.cancel;  // measured: its frames and its truth finish
-            FrontierPoint p;
-            p.distance = d;
-            p.method = methods[st.method].label;
-            p.settings = methods[st.method].sets;
-            p.settings.insert(p.settings.end(), st.values.begin(), st.values.end());
-            p.varied = st.varied;
-            p.precompute_ms = r.stages_ms;
-            std::vector<double> frames;
-            for (int i = 0; i < o.repeat; ++i) {
-                if (o.cancel && o.cancel->load()) throw Cancelled();
-                wb.forget_frame_steps();  // a frame's steps are part of its time
-                r = wb.render(s, req);
-                frames.push_back(r.render_ms);
-            }
-            p.frame_ms = median_of(frames);
-            // The truth of what this setting's scene describes, at the frame's size (texture mode: its native size).
-            const std::string tkey = truth_description(s) + "@" + std::to_string(r.frame.width) + "x" + std::to_string(r.frame.height);
-            auto it = truths.find(tkey);
-            if (it == truths.end()) {
-                RenderRequest tr;
-                tr.renderer = truth_error_aov().reference;
-                tr.width = r.frame.width, tr.height = r.frame.height;
-                tr.truth = o.truth;
-                tr.aovs = {"truth_stderr"};
-                tr.cancel = o.cancel;
-                it = truths.emplace(tkey, wb.render(s, tr).frame).first;
-                noise = std::max(noise, truth_noise_rel(it->second));
-            }
-            const TruthComparison c = compare_to_truth(r.frame, it->second, o.truth);
-            p.rmse_rel = c.rmse_rel;
-            p.below_noise = c.below_noise;
-            res.points.push_back(p);
-            if (o.on_point) o.on_point(p);
-            if (!o.quiet)
-                std::fprintf(stderr, "  d=%-6g %-36s frame %9.3f ms  precompute %9.1f ms  rmse_rel %.4f%s\n", d, what.c_str(), p.frame_ms, p.precompute_ms,
-                             p.rmse_rel, p.below_noise ? " (below the truth's noise)" : "");
-            return true;
         };
-        for (const Setting& st : settings) measure(st), ++done;
-        // Refinement near each method's frontier: between two neighbours on it, every knob at the
-        // geometric mean of their values (once; a setting already measured is not measured again).
+        for (const FrontierSetting& st : settings) measure(st), ++done;
         const std::vector<FrontierPoint> here(res.points.begin() + std::ptrdiff_t(first), res.points.end());
-        const auto knob_of = [](const FrontierPoint& p, const std::string& key) {
-            for (const auto& [k, v] : p.settings)
-                if (k == key) return std::stod(v);
-            throw std::logic_error("frontier: no setting of " + key);
-        };
-        std::vector<Setting> between;
-        for (size_t mi = 0; mi < methods.size(); ++mi) {
-            std::vector<FrontierPoint> mine;
-            for (const auto& p : here)
-                if (p.method == methods[mi].label) mine.push_back(p);
-            mark_frontier(mine);
-            std::vector<const FrontierPoint*> front;
-            for (const auto& p : mine)
-                if (p.on_frontier) front.push_back(&p);
-            std::sort(front.begin(), front.end(), [](auto* x, auto* y) { return x->frame_ms < y->frame_ms; });
-            const std::vector<AccuracyKnob>& knobs = knobs_of[mi];
-            for (size_t i = 1; i < front.size(); ++i) {
-                Setting st{mi, "between " + front[i - 1]->varied + " and " + front[i]->varied, {}};
-                for (const AccuracyKnob& k : knobs) {
-                    const double x = knob_of(*front[i - 1], k.key), y = knob_of(*front[i], k.key);
-                    const double mid = x > 0.0 && y > 0.0 ? std::sqrt(x * y) : 0.5 * (x + y);
-                    st.values.emplace_back(k.key, k.decl->type == ParamType::Int ? int_setting(k, mid, k.decl->max) : strprintf("%.6g", mid));
-                }
-                std::vector<std::pair<std::string, std::string>> all = methods[mi].sets;
-                all.insert(all.end(), st.values.begin(), st.values.end());
-                const bool seen = std::any_of(here.begin(), here.end(), [&](const FrontierPoint& p) { return p.settings == all; }) ||
-                                  std::any_of(between.begin(), between.end(), [&](const Setting& x) { return x.method == mi && x.values == st.values; });
-                if (!seen) between.push_back(st);
-            }
-        }
-        for (const Setting& st : between) measure(st);
+        for (const FrontierSetting& st : frontier_between(base, here)) measure(st);
         res.truth_noise.push_back(noise);
     }
+    return frontier_report(base, o, std::move(res), write_files);
+}
+
+FrontierResult frontier_report(const Scene& base, const FrontierOptions& o, FrontierResult partial, bool write_files) {
+    FrontierResult res = std::move(partial);
+    const std::vector<double> distances = frontier_distances(base, o);
+    if (res.truth_noise.size() != distances.size())
+        throw InputError("frontier: " + std::to_string(res.truth_noise.size()) + " truth noise values for " + std::to_string(distances.size()) + " distances");
+    const MethodKnobs mk = method_knobs(base);
+    const std::vector<MethodChoice>& methods = mk.methods;
+    res.scene = base.name;
+    res.backend = o.backend;
+    res.distances = distances;
+    res.knobs.clear();
+    for (const auto& m : methods)
+        for (const auto& [k, v] : m.sets)
+            if (std::find(res.knobs.begin(), res.knobs.end(), k) == res.knobs.end()) res.knobs.push_back(k);
+    for (const auto& knobs : mk.knobs_of)
+        for (const auto& k : knobs)
+            if (std::find(res.knobs.begin(), res.knobs.end(), k.key) == res.knobs.end()) res.knobs.push_back(k.key);
+    for (const FrontierPoint& p : res.points) {
+        mk.index(p.method);  // a point of this scene's methods
+        if (std::find(distances.begin(), distances.end(), p.distance) == distances.end())
+            throw InputError("frontier: a point at distance " + strprintf("%g", p.distance) + ", not one of the frontier's");
+    }
     mark_frontier(res.points);
+    if (write_files) plot_font();
 
     // [SECTION] Outputs
     std::ostringstream md, csv;

@@ -288,8 +288,10 @@ struct Progress {
 // every 50 ms takes the GIL to pass on progress and to check for signals. Ctrl-C (or a progress
 // callback that raises) sets the cancel flag; the work stops at its next check, and the exception
 // is raised here once it has. The task never outlives this call.
+// `poll` (optional) is called the same way every 50 ms, progress or not: it stops the work by raising.
 template <class R>
-R run_on(Worker& worker, const py::object& progress_cb, const std::function<R(const ProgressFn&, const std::atomic<bool>*)>& work) {
+R run_on(Worker& worker, const py::object& progress_cb, const std::function<R(const ProgressFn&, const std::atomic<bool>*)>& work,
+         const py::object& poll = py::none()) {
     Progress progress;
     std::atomic<bool> cancel{false};
     std::promise<R> promise;
@@ -332,6 +334,14 @@ R run_on(Worker& worker, const py::object& progress_cb, const std::function<R(co
             }
         }
         if (ready) break;
+        if (!poll.is_none()) {
+            try {
+                poll();
+            } catch (...) {
+                stop_and_wait();
+                throw;
+            }
+        }
         if (PyErr_CheckSignals() != 0) {
             py::error_already_set interrupted;  // takes the pending KeyboardInterrupt
             stop_and_wait();
@@ -435,6 +445,83 @@ struct PyFrame {
     }
 };
 
+// [SECTION] Frontier values
+// A frontier's options from the keyword arguments of frontier() (and its cluster layer's parts).
+FrontierOptions frontier_options(const py::object& size, const std::string& backend, const std::vector<double>& distances, const py::object& spp,
+                                 uint64_t seed, const py::object& noise, const py::object& time_limit, double budget, int repeat,
+                                 const py::object& memory_limit) {
+    const auto [w, h] = frame_size_arg(size);
+    FrontierOptions o;
+    o.width = w, o.height = h;
+    o.backend = RendererRegistry::instance().find(backend, "backend=").name;
+    o.distances = distances;
+    o.truth = truth_sampling_arg(spp, noise, time_limit, seed);
+    if (!(budget >= 0.0)) throw InputError("budget=" + strprintf("%g", budget) + ": expected seconds, 0 or more");
+    o.budget_s = budget, o.repeat = repeat, o.quiet = true;
+    o.memory_limit = memory_limit_arg(memory_limit);
+    return o;
+}
+
+// The same from a dict of those names (the cluster layer's tasks); an unknown name is an error.
+FrontierOptions frontier_options(const py::dict& d) {
+    static const std::vector<std::string> names = {"size", "backend", "distances", "spp", "seed", "budget", "repeat", "memory_limit"};
+    for (const auto& [k, v] : d)
+        if (std::find(names.begin(), names.end(), k.cast<std::string>()) == names.end())
+            throw InputError("frontier options: unknown '" + k.cast<std::string>() + "' (known: " + join(names, ", ") + ")");
+    const auto get = [&](const char* k, py::object dflt) { return d.contains(k) ? py::reinterpret_borrow<py::object>(d[k]) : dflt; };
+    return frontier_options(get("size", py::make_tuple(128, 128)), get("backend", py::str("cpu")).cast<std::string>(),
+                            get("distances", py::list()).cast<std::vector<double>>(), get("spp", py::none()), get("seed", py::int_(1)).cast<uint64_t>(),
+                            py::none(), py::none(), get("budget", py::float_(600.0)).cast<double>(), get("repeat", py::int_(3)).cast<int>(),
+                            get("memory_limit", py::none()));
+}
+
+// {distance, method, setting, knobs: {KEY: VALUE in order}, frame_ms, precompute_ms, rmse_rel, below_noise, on_frontier}
+py::dict frontier_point_dict(const FrontierPoint& p) {
+    py::dict d, knobs;
+    for (const auto& [k, v] : p.settings) knobs[py::str(k)] = v;
+    d["distance"] = p.distance, d["method"] = p.method, d["setting"] = p.varied, d["knobs"] = knobs;
+    d["frame_ms"] = p.frame_ms, d["precompute_ms"] = p.precompute_ms, d["rmse_rel"] = p.rmse_rel;
+    d["below_noise"] = p.below_noise, d["on_frontier"] = p.on_frontier;
+    return d;
+}
+
+py::object dict_item(const py::dict& d, const char* key, const char* what) {
+    if (!d.contains(key)) throw InputError(std::string(what) + ": no '" + key + "'");
+    return d[key];
+}
+
+std::vector<std::pair<std::string, std::string>> knobs_of_dict(const py::dict& d, const char* what) {
+    std::vector<std::pair<std::string, std::string>> r;
+    for (const auto& [k, v] : dict_item(d, "knobs", what).cast<py::dict>()) r.emplace_back(k.cast<std::string>(), v.cast<std::string>());
+    return r;
+}
+
+FrontierPoint frontier_point_of(const py::dict& d) {
+    FrontierPoint p;
+    p.distance = dict_item(d, "distance", "frontier point").cast<double>();
+    p.method = dict_item(d, "method", "frontier point").cast<std::string>();
+    p.varied = dict_item(d, "setting", "frontier point").cast<std::string>();
+    p.settings = knobs_of_dict(d, "frontier point");
+    p.frame_ms = dict_item(d, "frame_ms", "frontier point").cast<double>();
+    p.precompute_ms = dict_item(d, "precompute_ms", "frontier point").cast<double>();
+    p.rmse_rel = dict_item(d, "rmse_rel", "frontier point").cast<double>();
+    p.below_noise = dict_item(d, "below_noise", "frontier point").cast<bool>();
+    return p;
+}
+
+// {method, setting, knobs: {KEY: VALUE in order}}: a setting as a point names it.
+py::dict frontier_setting_dict(const FrontierSetting& st) {
+    py::dict d, knobs;
+    for (const auto& [k, v] : st.settings) knobs[py::str(k)] = v;
+    d["method"] = st.method, d["setting"] = st.varied, d["knobs"] = knobs;
+    return d;
+}
+
+FrontierSetting frontier_setting_of(const py::dict& d) {
+    return {dict_item(d, "method", "frontier setting").cast<std::string>(), dict_item(d, "setting", "frontier setting").cast<std::string>(),
+            knobs_of_dict(d, "frontier setting")};
+}
+
 // [SECTION] Workbench
 class PyWorkbench {
 public:
@@ -442,7 +529,8 @@ public:
         run_on<int>(worker_, py::none(), [this](const ProgressFn&, const std::atomic<bool>*) {
             wb_ = std::make_unique<Workbench>();
             wb_->session().set_memory_limit(limit_);
-            wb_->session().set_store(StageStore::from_environment(version_string()));  // expensive stages kept between runs
+            store_ = StageStore::from_environment(version_string());
+            wb_->session().set_store(store_);  // expensive stages kept between runs
             return 0;
         });
     }
@@ -562,8 +650,52 @@ public:
     }
     uint64_t memory_limit() const { return limit_; }
 
+    // [SECTION] A frontier's point (the cluster layer): one setting at one distance on this
+    // workbench (frontier_measure), its stage store set aside meanwhile (the precomputation is timed
+    // from a cold cache), its truth from the truth cache. `poll` as run_on's.
+    py::dict frontier_point(const PyScene& ps, const FrontierOptions& o, double distance, const FrontierSetting& setting, const py::object& poll) {
+        open();
+        ps.check_used();
+        // poll() returning true: the budget has ended (a setting not yet measured stops, as frontier_measure's budget_over).
+        auto budget = std::make_shared<std::atomic<bool>>(false);
+        const py::object polled = poll.is_none() ? py::object(py::none()) : py::object(py::cpp_function([poll, budget] {
+            if (py::bool_(poll())) *budget = true;
+        }));
+        if (!polled.is_none()) polled();  // a setting that starts after the budget ended does not start
+        const FrontierMeasurement m = run_on<FrontierMeasurement>(
+            worker_, py::none(),
+            [&](const ProgressFn&, const std::atomic<bool>* cancel) {
+                Workbench& wb = open();
+                FrontierOptions run = o;
+                run.cancel = cancel;
+                const uint64_t limit = wb.session().memory_limit();
+                if (o.memory_limit) wb.session().set_memory_limit(o.memory_limit);
+                wb.session().set_store(nullptr);
+                struct Restore {
+                    PyWorkbench& self;
+                    uint64_t limit;
+                    ~Restore() {
+                        self.wb_->session().set_store(self.store_);
+                        self.wb_->session().set_memory_limit(limit);
+                    }
+                } restore{*this, limit};
+                FrontierTruths truths;
+                return frontier_measure(wb, ps.scene, run, distance, setting, truths, [budget] { return budget->load(); });
+            },
+            polled);
+        py::dict d;
+        d["point"] = m.point ? frontier_point_dict(*m.point) : py::object(py::none());
+        d["skipped"] = m.skipped;
+        d["stopped"] = m.stopped;
+        d["truth_noise"] = m.truth_noise;
+        d["machine"] = cpu_model() + ", " + std::to_string(std::thread::hardware_concurrency()) + " threads" +
+                       (RendererRegistry::instance().find(o.backend).traits.needs_gl ? "; GL: " + gl_renderer() : "");
+        return d;
+    }
+
 private:
     uint64_t limit_ = 0;
+    std::shared_ptr<const StageStore> store_;
     Worker worker_;
     std::unique_ptr<Workbench> wb_;  // made and destroyed on worker_'s thread
 };
@@ -761,6 +893,44 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
         py::arg("scene"), py::arg("knob"), py::arg("values"), py::arg("reference") = py::none(),
         "What a sweep measures against: {KEY: VALUE text}, as the one-process sweep chooses it.");
     m.def(
+        "_frontier_settings",
+        [](const PyScene& s, const py::dict& options) {
+            s.check_used();
+            py::list out;
+            for (const FrontierSetting& st : frontier_settings(s.scene, frontier_options(options))) out.append(frontier_setting_dict(st));
+            return out;
+        },
+        py::arg("scene"), py::arg("options"), "A frontier's first round: [{method, setting, knobs}] in the order the one-process frontier measures them.");
+    m.def(
+        "_frontier_between",
+        [](const PyScene& s, const py::list& points) {
+            std::vector<FrontierPoint> measured;
+            for (const py::handle& p : points) measured.push_back(frontier_point_of(p.cast<py::dict>()));
+            py::list out;
+            for (const FrontierSetting& st : frontier_between(s.scene, measured)) out.append(frontier_setting_dict(st));
+            return out;
+        },
+        py::arg("scene"), py::arg("points"), "A frontier's second round at one distance, between the first round's frontier `points`: [{method, setting, knobs}].");
+    m.def(
+        "_frontier_report",
+        [](const PyScene& s, const py::dict& options, const py::list& points, const std::vector<double>& truth_noise, bool budget_reached,
+           const std::vector<std::string>& skipped, const std::string& machine, const py::object& out_dir) {
+            FrontierOptions o = frontier_options(options);
+            FrontierResult partial;
+            for (const py::handle& p : points) partial.points.push_back(frontier_point_of(p.cast<py::dict>()));
+            partial.truth_noise = truth_noise, partial.budget_reached = budget_reached, partial.skipped = skipped, partial.machine = machine;
+            if (!out_dir.is_none()) o.out_dir = path_arg(out_dir);
+            const FrontierResult r = frontier_report(s.scene, o, std::move(partial), !out_dir.is_none());
+            py::list out;
+            for (const FrontierPoint& p : r.points) out.append(frontier_point_dict(p));
+            py::dict d;
+            d["points"] = out, d["markdown"] = r.markdown, d["written"] = r.written;
+            return d;
+        },
+        py::arg("scene"), py::arg("options"), py::arg("points"), py::arg("truth_noise"), py::arg("budget_reached"), py::arg("skipped"),
+        py::arg("machine"), py::arg("out_dir") = py::none(),
+        "A frontier's result from its points: {points (on_frontier marked), markdown, written}; the files with out_dir=.");
+    m.def(
         "_bench_rows",
         [](const py::object& tables) {
             std::vector<std::string> names;
@@ -828,6 +998,15 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
              "progress(stage, fraction) is called from this thread; Ctrl-C stops the work.")
         .def("_truth_part", &PyWorkbench::truth_part, py::arg("scene"), py::arg("size"), py::arg("seed"), py::arg("first"), py::arg("end"),
              py::arg("progress") = py::none(), "Samples [first, end) of the scene's truth as a partial truth's bytes (the cluster layer's task).")
+        .def(
+            "_frontier_point",
+            [](PyWorkbench& w, const PyScene& ps, const py::dict& options, double distance, const py::dict& setting, const py::object& poll) {
+                return w.frontier_point(ps, frontier_options(options), distance, frontier_setting_of(setting), poll);
+            },
+            py::arg("scene"), py::arg("options"), py::arg("distance"), py::arg("setting"), py::arg("poll") = py::none(),
+            "One frontier setting ({method, setting, knobs}) at one distance, timed and measured on this workbench (its truth from the truth "
+            "cache): {point (or None), skipped, stopped, truth_noise, machine}. poll() is called every 50 ms: raising stops the work (cancelled), "
+            "returning True ends the budget (a setting not a preset stops unless its frame is already rendered: stopped).")
         .def("_truth_from_part", &PyWorkbench::truth_from_part, py::arg("scene"), py::arg("part"), py::arg("progress") = py::none(),
              "The frame of a merged truth's bytes (samples from 0), as render(backend='truth') gives it; kept in the truth cache.")
         .def_property_readonly("gl_renderer", &PyWorkbench::gl_renderer)
@@ -908,15 +1087,7 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
            uint64_t seed, const py::object& noise, const py::object& time_limit, double budget, int repeat, const py::object& out_dir,
            const py::object& memory_limit, const py::object& progress) {
             scene.check_used();
-            const auto [w, h] = frame_size_arg(size);
-            FrontierOptions o;
-            o.width = w, o.height = h;
-            o.backend = RendererRegistry::instance().find(backend, "backend=").name;
-            o.distances = distances;
-            o.truth = truth_sampling_arg(spp, noise, time_limit, seed);
-            if (!(budget >= 0.0)) throw InputError("budget=" + strprintf("%g", budget) + ": expected seconds, 0 or more");
-            o.budget_s = budget, o.repeat = repeat, o.quiet = true;
-            o.memory_limit = memory_limit_arg(memory_limit);
+            FrontierOptions o = frontier_options(size, backend, distances, spp, seed, noise, time_limit, budget, repeat, memory_limit);
             if (!out_dir.is_none()) o.out_dir = path_arg(out_dir);
             const FrontierResult r = run_alone<FrontierResult>(progress, [&](const ProgressFn& p, const std::atomic<bool>* cancel) {
                 FrontierOptions run = o;
@@ -924,14 +1095,7 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
                 return frontier_scene(scene.scene, run, !out_dir.is_none());
             });
             py::list out;
-            for (const FrontierPoint& p : r.points) {
-                py::dict d, knobs;
-                for (const auto& [k, v] : p.settings) knobs[py::str(k)] = v;
-                d["distance"] = p.distance, d["method"] = p.method, d["setting"] = p.varied, d["knobs"] = knobs;
-                d["frame_ms"] = p.frame_ms, d["precompute_ms"] = p.precompute_ms, d["rmse_rel"] = p.rmse_rel;
-                d["below_noise"] = p.below_noise, d["on_frontier"] = p.on_frontier;
-                out.append(d);
-            }
+            for (const FrontierPoint& p : r.points) out.append(frontier_point_dict(p));
             return out;
         },
         py::arg("scene"), py::kw_only(), py::arg("size") = py::make_tuple(128, 128), py::arg("backend") = "cpu", py::arg("distances") = std::vector<double>{},

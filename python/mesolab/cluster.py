@@ -4,7 +4,7 @@ frontier and bench.
 [SECTION] index
   Front     Workbench, sweep, frontier, bench: the core's own, or spread over `client`'s workers
   Truth     a truth as blocks of samples on the workers, merged to the one-process bytes
-  Points    a sweep's settings, a frontier's distances and a bench's rows as tasks
+  Points    a sweep's settings, a frontier's settings per distance (in its two rounds) and a bench's rows as tasks
   Tasks     what runs on a worker: one Workbench per worker process, scenes by their pack's hash
   Checks    workers, the GL resource, one build; progress and cancelling
 
@@ -64,7 +64,9 @@ def sweep(scene, *, client=None, **kwargs):
 
 
 def frontier(scene, *, client=None, **kwargs):
-    """mesolab's frontier; with client= each distance's truth is spread in blocks and each distance is a task."""
+    """mesolab's frontier; with client= each distance's truth is spread in blocks and each setting at each distance is a task.
+    budget= is then the points' wall clock on the caller (the distances run at once and share it; the truths, spread first, are
+    not counted); last_run holds budget_reached, skipped, markdown and written (files with out_dir=)."""
     if client is None:
         return _core.frontier(scene, **kwargs)
     return _frontier_on(client, scene, **kwargs)
@@ -205,35 +207,100 @@ def _sweep_on(client, scene, *, knob, values, size=(256, 256), metric="rmse", ba
 
 def _frontier_on(client, scene, *, size=(128, 128), backend="cpu", distances=(), spp=None, seed=1, noise=None, time_limit=None, budget=600.0,
                  repeat=3, out_dir=None, memory_limit=None, progress=None):
-    if out_dir is not None:
-        raise _core.InputError("client=: out_dir= writes a one-machine frontier's files; on a cluster the points come back as values")
+    """The frontier's settings as tasks, in the one-process frontier's rounds: the first round (each method's preset, diagonal
+    and knobs alone) at every distance, then, as a distance's first round completes, its second round between that round's
+    frontier. Each point runs on a worker's kept Workbench (one at a time per worker process: its times are that process's
+    alone) against the distance's truth, spread in blocks first and kept by every worker."""
     if noise is not None or time_limit is not None:
         raise _core.InputError("client=: the frontier's truths on a cluster are split into blocks of samples; give spp= instead of noise= or time_limit=")
     if backend == "gpu":
         _need_gl(client, "backend='gpu'")
-    distances = list(distances) or [scene["camera.distance"]]
     spp = 64 if spp is None else spp
+    options = dict(size=tuple(int(x) for x in size), backend=backend, distances=[float(d) for d in distances], spp=spp, seed=seed,
+                   budget=float(budget), repeat=repeat, memory_limit=memory_limit)
+    first_round = _core._frontier_settings(scene, options)  # the options and every setting checked before any work
+    dists = options["distances"] or [scene["camera.distance"]]
     per_distance = []
-    for d in distances:
+    for d in dists:
         s = scene.copy()
-        s["camera.distance"] = d
+        if options["distances"]:
+            s["camera.distance"] = d
         per_distance.append(s)
     _truths_everywhere(client, per_distance, size, spp, seed, progress)
     pack_future, digest = _send_pack(client, _core._pack_bytes(scene))
     run = uuid.uuid4().hex[:12]
-    event = f"mesolab-cancel-{run}"
-    share = float(budget) / len(distances)  # the one-process frontier shares its budget evenly by the distances too
-    futures = [client.submit(_frontier_task, pack_future, digest,
-                             dict(size=tuple(size), backend=backend, distances=[d], spp=spp, seed=seed, budget=share, repeat=repeat,
-                                  memory_limit=memory_limit), event, key=f"mesolab-frontier-{digest}-{i}-{run}",
-                             resources={"GL": 1} if backend == "gpu" else None)
-               for i, d in enumerate(distances)]
-    results = _collect(client, futures, event, progress, "frontier")
-    points = []
-    for r in results:
-        for p in r["points"]:
-            points.append(dict(p, worker=r["worker"]))
-    return points
+    event, budget_event = f"mesolab-cancel-{run}", f"mesolab-budget-{run}"
+    resources = {"GL": 1} if backend == "gpu" else None
+    from distributed import Event, as_completed
+    ac = as_completed()
+    meta = {}  # future key -> (distance index, round, index in the round, setting)
+    futures = []
+
+    def submit(j, rnd, i, setting, priority):
+        f = client.submit(_frontier_point_task, pack_future, digest, options, dists[j], setting, event, budget_event,
+                          key=f"mesolab-frontier-{digest}-{j}-{rnd}-{i}-{run}", priority=priority, resources=resources)
+        meta[f.key] = (j, rnd, i, setting)
+        futures.append(f)
+        ac.add(f)
+
+    for i, st in enumerate(first_round):  # the presets of every distance first, as the one process measures them first
+        for j in range(len(dists)):
+            submit(j, 1, i, st, -i)
+    results = {}  # (distance index, round, index) -> the task's result
+    first_left = [len(first_round)] * len(dists)
+    deadline = time.monotonic() + float(budget)  # the points' wall clock (the truths before them are not counted)
+    budget_reached, finished, last = False, 0, 0.0
+    try:
+        if progress is not None:
+            progress(f"frontier of {scene.name}: 0 of {len(futures)} settings", 0.0)
+        while not ac.is_empty():
+            if not budget_reached and time.monotonic() > deadline:
+                budget_reached = True  # running settings stop at their next check, queued ones are cancelled (not the presets)
+                Event(budget_event, client=client).set()
+                client.cancel([f for f in futures if f.status == "pending" and meta[f.key][3]["setting"] != "preset"])
+            if not ac.has_ready():
+                time.sleep(0.05)
+                continue
+            for f in ac.next_batch(block=False):
+                j, rnd, i, st = meta[f.key]
+                finished += 1
+                if f.cancelled():
+                    continue
+                r = f.result()  # raises the task's error
+                results[(j, rnd, i)] = r
+                if rnd == 1:
+                    first_left[j] -= 1
+                    if first_left[j] == 0 and not budget_reached:
+                        here = [results[(j, 1, k)]["point"] for k in range(len(first_round))
+                                if (j, 1, k) in results and results[(j, 1, k)]["point"] is not None]
+                        for k, b in enumerate(_core._frontier_between(scene, here)):
+                            submit(j, 2, k, b, -len(first_round) - k)
+                if progress is not None:
+                    last = max(last, finished / len(futures))
+                    progress(f"frontier of {scene.name}: {finished} of {len(futures)} settings", last)
+    except BaseException:
+        cancel(client, futures, event)
+        raise
+    # The points in the one-process frontier's order: by distance, then round, then setting.
+    points, workers, machines, skipped, noise = [], [], set(), [], [0.0] * len(dists)
+    for (j, rnd, i) in sorted(results):
+        r = results[(j, rnd, i)]
+        budget_reached = budget_reached or r["stopped"]
+        if r["skipped"]:
+            skipped.append(r["skipped"])
+        if r["point"] is not None:
+            points.append(r["point"])
+            workers.append(r["worker"])
+            machines.add(r["machine"])
+            noise[j] = max(noise[j], r["truth_noise"])
+    budget_reached = budget_reached or any(f.cancelled() for f in futures)
+    n_workers = len(set(workers))
+    machine = "; ".join(sorted(machines)) + f" ({n_workers} worker{'s' if n_workers != 1 else ''})"
+    report = _core._frontier_report(scene, options, points, noise, budget_reached, skipped, machine, out_dir)
+    last_run.clear()
+    last_run.update(budget_reached=budget_reached, skipped=skipped, markdown=report["markdown"], written=report["written"], tasks=len(futures),
+                    machine=machine)
+    return [dict(p, worker=w) for p, w in zip(report["points"], workers)]
 
 
 def _bench_on(client, tables=None, *, repeat=5, backend="both", rows=(), columns=(), noise=None, time_limit=None, memory_limit=None, presets=None,
@@ -378,9 +445,24 @@ def _sweep_task(pack, digest, kwargs, event):
     return dict(points=points, worker=_worker_name())
 
 
-def _frontier_task(pack, digest, kwargs, event):
-    points = _core.frontier(_scene(pack, digest), progress=_stopper(event), **kwargs)
-    return dict(points=points, worker=_worker_name())
+def _frontier_point_task(pack, digest, options, distance, setting, event, budget_event):
+    from distributed import Event
+    cancelled, budget = Event(event), Event(budget_event)
+    last, over = [0.0], [False]
+
+    def poll():  # the events every 0.2 s at most (each a round trip to the scheduler); True once the budget has ended
+        now = time.monotonic()
+        if now - last[0] >= 0.2:
+            last[0] = now
+            if cancelled.is_set():
+                raise Stopped(f"cancelled by the caller ({event})")
+            over[0] = over[0] or budget.is_set()
+        return over[0]
+
+    poll()
+    r = _workbench()._frontier_point(_scene(pack, digest), options, distance, setting, poll=poll)
+    r["worker"] = _worker_name()
+    return r
 
 
 def _bench_pack_task(pack, digest, name, kwargs, event):

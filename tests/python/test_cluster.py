@@ -182,13 +182,59 @@ def test_a_sweep_spread_over_points_measures_what_one_process_does(mesolab, clus
         assert all(p["ms"] > 0 for p in spread)
 
 
-def test_a_frontier_spread_over_distances_and_a_bench_over_rows(mesolab, cluster):
+def test_a_frontier_spread_over_its_points_measures_what_one_process_does(mesolab, cluster, tmp_path):
+    import json
     scene = _sphere(mesolab)
-    points = mesolab.frontier(scene, client=cluster.client, size=(24, 24), spp=8, distances=[3.0, 5.0], budget=4, repeat=1)
-    assert {p["distance"] for p in points} == {3.0, 5.0}
-    local = mesolab.frontier(scene, size=(24, 24), spp=8, distances=[3.0], budget=2, repeat=1)
-    preset = lambda ps, d: [p["rmse_rel"] for p in ps if p["distance"] == d and p["setting"] == "preset"]
-    assert preset(points, 3.0) == preset(local, 3.0)
+    kw = dict(size=(24, 24), spp=8, repeat=1)
+    local = mesolab.frontier(scene, distances=[3.0], budget=600, **kw)
+    seen = []
+    spread = mesolab.frontier(scene, client=cluster.client, distances=[3.0], budget=600, progress=lambda stage, f: seen.append(f) if stage.startswith("frontier") else None,
+                              **kw)
+    assert seen[-1] == 1.0 and all(a <= b for a, b in zip(seen, seen[1:]))
+    assert len({p["worker"] for p in spread}) == 2  # one distance's settings on both workers
+    # The first round: the one-process frontier's settings in its order, with its errors exactly (the same truth's bytes).
+    first = mesolab._core._frontier_settings(scene, dict(size=(24, 24), distances=[3.0], spp=8, repeat=1))
+    n = len(first)
+    assert n >= 4
+    name = lambda p: (p["method"], p["setting"], tuple(p["knobs"].items()))
+    assert [name(p) for p in spread[:n]] == [name(s) for s in first]
+    one = {name(p): p["rmse_rel"] for p in local}
+    assert [p["rmse_rel"] for p in spread[:n]] == [one[name(p)] for p in spread[:n]]
+    # The second round: between the first round's frontier, as the one process chooses them from these points.
+    # (Which points are on it depends on the frame times: on a loaded machine there may be no neighbours to go between.)
+    between = mesolab._core._frontier_between(scene, spread[:n])
+    assert [name(p) for p in spread[n:]] == [name(s) for s in between]
+    # The rounds' choice itself, from points made up: error falling as time grows puts every point on the frontier, and
+    # the second round goes between each two neighbours at the geometric mean of their resolutions.
+    made_up = [dict(p, distance=3.0, precompute_ms=0.0, frame_ms=float(p["knobs"]["geometry.resolution"]), rmse_rel=1.0 / float(p["knobs"]["geometry.resolution"]),
+                    below_noise=False) for p in first]
+    between = mesolab._core._frontier_between(scene, made_up)
+    assert [b["knobs"]["geometry.resolution"] for b in between] == ["34", "68", "136", "272"]
+    assert between[0]["setting"] == "between all x0.25 and all x0.5"
+    assert min(spread, key=lambda p: (p["frame_ms"], p["rmse_rel"]))["on_frontier"]  # the frontier marked: its fastest point is on it
+    # Two distances at once, with the files; then a budget of 0: each method's preset at each distance, the rest left out and said.
+    both = mesolab.frontier(scene, client=cluster.client, distances=[3.0, 5.0], budget=600, out_dir=tmp_path / "f", **kw)
+    assert {p["distance"] for p in both} == {3.0, 5.0}
+    written = json.loads((tmp_path / "f" / f"{scene.name}.frontier.json").read_text())
+    assert len(written["points"]) == len(both) and "worker" in written["machine"]
+    assert (tmp_path / "f" / f"{scene.name}.frontier.d5.png").exists()
+    # A setting's task after the budget has ended is left out, a preset's measured all the same.
+    from distributed import Event
+    Event("mesolab-budget-test", client=cluster.client).set()
+    options = dict(size=(24, 24), distances=[3.0], spp=8, repeat=1)
+    for setting, measured in ((first[1], False), (first[0], True)):
+        pack = mesolab._core._pack_bytes(scene)
+        r = cluster.client.submit(mesolab.cluster._frontier_point_task, pack, mesolab._core._content_hash(pack), options, 3.0, setting,
+                                  "mesolab-cancel-test", "mesolab-budget-test", pure=False).result()
+        assert (r["point"] is not None, r["stopped"]) == (measured, not measured)
+    only = mesolab.frontier(scene, client=cluster.client, distances=[3.0, 5.0], budget=0, **kw)
+    assert sorted((p["distance"], p["setting"]) for p in only) == [(3.0, "preset"), (5.0, "preset")]
+    assert mesolab.cluster.last_run["budget_reached"]
+    assert "The budget ended the run" in mesolab.cluster.last_run["markdown"]
+
+
+def test_a_bench_spread_over_rows(mesolab, cluster):
+    scene = _sphere(mesolab)
     rows = [r for t, r in mesolab._core._bench_rows("basic")][:2]
     cells = mesolab.bench("basic", client=cluster.client, backend="cpu", repeat=1, rows=rows, columns=["frame 512"])
     assert {c["row"] for c in cells} >= set(rows)
