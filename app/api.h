@@ -51,6 +51,9 @@ struct BenchOptions {
     std::function<void(const std::string&, double)> progress;
     const std::atomic<bool>* cancel = nullptr;
     bool quiet = false;
+    // Run on this workbench (its GL context and truth cache; memory_limit, when not 0, is set on
+    // it) instead of a fresh one. It must have no stage store set: the times are from a cold cache.
+    Workbench* workbench = nullptr;
 };
 
 struct BenchResult {
@@ -89,6 +92,9 @@ struct SweepOptions {
     std::function<void(const std::string&, double)> progress;
     const std::atomic<bool>* cancel = nullptr;
     bool quiet = false;
+    // Run on this workbench (its GL context and truth cache; memory_limit, when not 0, is set on
+    // it) instead of a fresh one. It must have no stage store set: the times are from a cold cache.
+    Workbench* workbench = nullptr;
 };
 
 // One measured setting of a sweep.

@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -127,8 +128,10 @@ BenchResult measure_bench(const BenchOptions& o) {
         tables = std::move(with_mesh);
     }
 
-    Workbench wb;
-    wb.session().set_memory_limit(o.memory_limit);
+    std::optional<Workbench> own;
+    Workbench& wb = o.workbench ? *o.workbench : own.emplace();
+    if (wb.session().store()) throw std::logic_error("measure_bench: the workbench's stage store is set; set it aside to time from a cold cache");
+    if (!o.workbench || o.memory_limit) wb.session().set_memory_limit(o.memory_limit);
     Session& session = wb.session();
     const bool want_gpu = o.backend != "cpu", want_cpu = o.backend != "gpu";
     std::string gl = "none";

@@ -401,8 +401,10 @@ SweepResult sweep_scene(const Scene& base, const SweepOptions& o, bool write_fil
     }
     std::string ref_text = m.vs_truth ? "the truth" : "";
 
-    Workbench wb;
-    wb.session().set_memory_limit(o.memory_limit);
+    std::optional<Workbench> own;
+    Workbench& wb = o.workbench ? *o.workbench : own.emplace();
+    if (wb.session().store()) throw std::logic_error("sweep_scene: the workbench's stage store is set; set it aside to time from a cold cache");
+    if (!o.workbench || o.memory_limit) wb.session().set_memory_limit(o.memory_limit);
     RenderRequest req;
     req.aovs = {"radiance"};
     req.renderer = o.backend;

@@ -653,6 +653,35 @@ public:
     // [SECTION] A frontier's point (the cluster layer): one setting at one distance on this
     // workbench (frontier_measure), its stage store set aside meanwhile (the precomputation is timed
     // from a cold cache), its truth from the truth cache. `poll` as run_on's.
+    // Work on this workbench's thread with its stage store set aside (the work times from a cold
+    // cache) and, when not 0, `memory_limit` set, both as they were afterwards. For the cluster
+    // layer's tasks, which share one workbench per worker process. `poll` as run_on's.
+    template <class R>
+    R borrow(const py::object& progress, uint64_t memory_limit, const std::function<R(Workbench&, const ProgressFn&, const std::atomic<bool>*)>& work,
+             const py::object& poll = py::none()) {
+        open();
+        return run_on<R>(
+            worker_, progress,
+            [&](const ProgressFn& p, const std::atomic<bool>* cancel) {
+                Workbench& wb = open();
+                struct Restore {
+                    Workbench& wb;
+                    std::shared_ptr<const StageStore> store;
+                    uint64_t limit;
+                    ~Restore() {
+                        wb.session().set_store(store);
+                        wb.session().set_memory_limit(limit);
+                    }
+                } restore{wb, store_, wb.session().memory_limit()};
+                wb.session().set_store(nullptr);
+                if (memory_limit) wb.session().set_memory_limit(memory_limit);
+                return work(wb, p, cancel);
+            },
+            poll);
+    }
+
+    // [SECTION] A frontier's point (the cluster layer): one setting at one distance on this
+    // workbench (frontier_measure), its truth from the truth cache.
     py::dict frontier_point(const PyScene& ps, const FrontierOptions& o, double distance, const FrontierSetting& setting, const py::object& poll) {
         open();
         ps.check_used();
@@ -662,23 +691,11 @@ public:
             if (py::bool_(poll())) *budget = true;
         }));
         if (!polled.is_none()) polled();  // a setting that starts after the budget ended does not start
-        const FrontierMeasurement m = run_on<FrontierMeasurement>(
-            worker_, py::none(),
-            [&](const ProgressFn&, const std::atomic<bool>* cancel) {
-                Workbench& wb = open();
+        const FrontierMeasurement m = borrow<FrontierMeasurement>(
+            py::none(), o.memory_limit,
+            [&](Workbench& wb, const ProgressFn&, const std::atomic<bool>* cancel) {
                 FrontierOptions run = o;
                 run.cancel = cancel;
-                const uint64_t limit = wb.session().memory_limit();
-                if (o.memory_limit) wb.session().set_memory_limit(o.memory_limit);
-                wb.session().set_store(nullptr);
-                struct Restore {
-                    PyWorkbench& self;
-                    uint64_t limit;
-                    ~Restore() {
-                        self.wb_->session().set_store(self.store_);
-                        self.wb_->session().set_memory_limit(limit);
-                    }
-                } restore{*this, limit};
                 FrontierTruths truths;
                 return frontier_measure(wb, ps.scene, run, distance, setting, truths, [budget] { return budget->load(); });
             },
@@ -1039,7 +1056,8 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
     m.def(
         "bench",
         [](const py::object& tables, int repeat, const std::string& backend, const std::vector<std::string>& rows, const std::vector<std::string>& columns,
-           const py::object& noise, const py::object& time_limit, const py::object& memory_limit, const py::object& presets, const py::object& progress) {
+           const py::object& noise, const py::object& time_limit, const py::object& memory_limit, const py::object& presets, const py::object& progress,
+           const py::object& on) {
             BenchOptions o;
             if (!presets.is_none())
                 for (const py::handle& p : presets.cast<py::sequence>()) o.presets.push_back(path_arg(py::reinterpret_borrow<py::object>(p)));
@@ -1054,11 +1072,16 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
             else if (!tables.is_none()) o.tables = tables.cast<std::vector<std::string>>();
             o.repeat = repeat, o.backend = backend, o.rows = rows, o.columns = columns, o.quiet = true;
             o.memory_limit = memory_limit_arg(memory_limit);
-            const BenchResult r = run_alone<BenchResult>(progress, [&](const ProgressFn& p, const std::atomic<bool>* cancel) {
+            const auto work = [&](Workbench* wb, const ProgressFn& p, const std::atomic<bool>* cancel) {
                 BenchOptions run = o;
-                run.progress = p, run.cancel = cancel;
+                run.progress = p, run.cancel = cancel, run.workbench = wb;
                 return measure_bench(run);
-            });
+            };
+            const BenchResult r =
+                on.is_none() ? run_alone<BenchResult>(progress, [&](const ProgressFn& p, const std::atomic<bool>* c) { return work(nullptr, p, c); })
+                             : on.cast<PyWorkbench&>().borrow<BenchResult>(progress, o.memory_limit, [&](Workbench& wb, const ProgressFn& p, const std::atomic<bool>* c) {
+                                   return work(&wb, p, c);
+                               });
             py::list cells;
             for (const BenchCell& c : r.cells) {
                 py::dict d;
@@ -1077,7 +1100,7 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
         },
         py::arg("tables") = py::none(), py::kw_only(), py::arg("repeat") = 5, py::arg("backend") = "both", py::arg("rows") = std::vector<std::string>{},
         py::arg("columns") = std::vector<std::string>{}, py::arg("noise") = py::none(), py::arg("time_limit") = py::none(), py::arg("memory_limit") = py::none(),
-        py::arg("presets") = py::none(), py::arg("progress") = py::none(),
+        py::arg("presets") = py::none(), py::arg("progress") = py::none(), py::arg("_on") = py::none(),
         "Measure timing tables (all when none named) as `mesolab bench --format json`: a list of its cells "
         "({table, row, column, device, median_ms, min_ms, max_ms, ...}). noise= (table 'truth'): each preset's time to that noise_rel, "
         "measured, giving up after time_limit= seconds (600 by default). presets= (table 'truth'): a row for each of these presets or packs instead of the shipped ones.");
@@ -1109,7 +1132,7 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
         [](const PyScene& scene, const std::string& knob, const py::sequence& values, const py::object& size, const std::string& metric,
            const std::string& backend, int repeat, const py::object& reference, const py::object& by, const py::object& by_values, const py::object& spp,
            uint64_t seed, const py::object& noise, const py::object& time_limit, const py::object& out_dir, const py::object& memory_limit,
-           const py::object& progress) {
+           const py::object& progress, const py::object& on) {
             scene.check_used();
             const auto [w, h] = frame_size_arg(size);
             SweepOptions o;
@@ -1131,11 +1154,16 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
             }
             o.memory_limit = memory_limit_arg(memory_limit);
             if (!out_dir.is_none()) o.out_dir = path_arg(out_dir);
-            const SweepResult r = run_alone<SweepResult>(progress, [&](const ProgressFn& p, const std::atomic<bool>* cancel) {
+            const auto work = [&](Workbench* wb, const ProgressFn& p, const std::atomic<bool>* cancel) {
                 SweepOptions run = o;
-                run.progress = p, run.cancel = cancel;
+                run.progress = p, run.cancel = cancel, run.workbench = wb;
                 return sweep_scene(scene.scene, run, !out_dir.is_none());
-            });
+            };
+            const SweepResult r =
+                on.is_none() ? run_alone<SweepResult>(progress, [&](const ProgressFn& p, const std::atomic<bool>* c) { return work(nullptr, p, c); })
+                             : on.cast<PyWorkbench&>().borrow<SweepResult>(progress, o.memory_limit, [&](Workbench& wb, const ProgressFn& p, const std::atomic<bool>* c) {
+                                   return work(&wb, p, c);
+                               });
             py::list out;
             for (size_t i = 0; i < r.points.size(); ++i) {
                 const SweepPoint& p = r.points[i];
@@ -1155,7 +1183,7 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
         py::arg("scene"), py::kw_only(), py::arg("knob"), py::arg("values"), py::arg("size") = py::make_tuple(256, 256), py::arg("metric") = "rmse",
         py::arg("backend") = "cpu", py::arg("repeat") = 3, py::arg("reference") = py::none(), py::arg("by") = py::none(), py::arg("by_values") = py::none(),
         py::arg("spp") = py::none(), py::arg("seed") = 1, py::arg("noise") = py::none(), py::arg("time_limit") = py::none(), py::arg("out_dir") = py::none(),
-        py::arg("memory_limit") = py::none(), py::arg("progress") = py::none(),
+        py::arg("memory_limit") = py::none(), py::arg("progress") = py::none(), py::arg("_on") = py::none(),
         "Accuracy vs time, as `mesolab sweep`: each value of the knob rendered from a cold cache, timed (median of repeat) and "
         "measured against the reference (metric 'rmse'), the truth ('truth': spp, seed, noise, time_limit as for render) or a technique's metric. Returns "
         "[{value, ms, error, ...}]; writes the CSV, Markdown and plot only with out_dir=.");

@@ -441,7 +441,7 @@ def _keep_truth_task(pack, digest, merged):
 
 
 def _sweep_task(pack, digest, kwargs, event):
-    points = _core.sweep(_scene(pack, digest), progress=_stopper(event), **kwargs)
+    points = _core.sweep(_scene(pack, digest), progress=_stopper(event), _on=_workbench(), **kwargs)
     return dict(points=points, worker=_worker_name())
 
 
@@ -467,12 +467,12 @@ def _frontier_point_task(pack, digest, options, distance, setting, event, budget
 
 def _bench_pack_task(pack, digest, name, kwargs, event):
     folder = _scene(pack, digest).base_dir  # the pack, unpacked on this worker: a folder pack
-    cells = _core.bench("truth", presets=[folder], progress=_stopper(event), **kwargs)
+    cells = _core.bench("truth", presets=[folder], progress=_stopper(event), _on=_workbench(), **kwargs)
     return dict(cells=[dict(c, row=name) for c in cells], worker=_worker_name())
 
 
 def _bench_task(table, row, kwargs, event):
-    cells = _core.bench([table], rows=[row], progress=_stopper(event), **kwargs)
+    cells = _core.bench([table], rows=[row], progress=_stopper(event), _on=_workbench(), **kwargs)
     return dict(cells=[c for c in cells if c["row"] == row], worker=_worker_name())
 
 

@@ -180,6 +180,16 @@ def test_a_sweep_spread_over_points_measures_what_one_process_does(mesolab, clus
         assert [p["value"] for p in spread] == values
         assert [p["error"] for p in spread] == [p["error"] for p in local], metric
         assert all(p["ms"] > 0 for p in spread)
+    # A worker's tasks run on its process's kept Workbench (_on=): a sweep there leaves its last setting's stages in that
+    # workbench's cache and measures what a sweep of its own does.
+    with mesolab.Workbench() as kept:
+        assert kept.cache_entries == 0
+        on = mesolab._core.sweep(scene, knob="geometry.resolution", values=values, size=(24, 24), repeat=1, _on=kept)
+        assert kept.cache_entries > 0
+        own = mesolab.sweep(scene, knob="geometry.resolution", values=values, size=(24, 24), repeat=1)
+        assert [p["error"] for p in on] == [p["error"] for p in own]
+        cells = mesolab._core.bench("basic", backend="cpu", repeat=1, rows=[mesolab._core._bench_rows("basic")[0][1]], columns=["frame 512"], _on=kept)
+        assert cells and all(c["median_ms"] > 0 for c in cells if "median_ms" in c)
 
 
 def test_a_frontier_spread_over_its_points_measures_what_one_process_does(mesolab, cluster, tmp_path):
