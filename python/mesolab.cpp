@@ -696,8 +696,12 @@ public:
             [&](Workbench& wb, const ProgressFn&, const std::atomic<bool>* cancel) {
                 FrontierOptions run = o;
                 run.cancel = cancel;
-                FrontierTruths truths;
-                return frontier_measure(wb, ps.scene, run, distance, setting, truths, [budget] { return budget->load(); });
+                // The truths met so far, kept for the next points of a frontier with these truth settings (as one process keeps
+                // them for its run): read from the truth cache each time, a truth's own stages would be evaluated again per point.
+                const TruthSettings& t = o.truth;
+                const std::string settings = strprintf("%d/%llu/%d/%.17g/%.17g", t.spp, (unsigned long long)t.seed, t.max_depth, t.noise, t.time_limit_s);
+                if (settings != truths_for_ || truths_.frames.size() > 16) truths_ = {}, truths_for_ = settings;
+                return frontier_measure(wb, ps.scene, run, distance, setting, truths_, [budget] { return budget->load(); });
             },
             polled);
         py::dict d;
@@ -713,6 +717,8 @@ public:
 private:
     uint64_t limit_ = 0;
     std::shared_ptr<const StageStore> store_;
+    FrontierTruths truths_;   // frontier_point's truths (on worker_'s thread), for the truth settings truths_for_
+    std::string truths_for_;
     Worker worker_;
     std::unique_ptr<Workbench> wb_;  // made and destroyed on worker_'s thread
 };
