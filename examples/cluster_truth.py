@@ -15,8 +15,6 @@ import argparse
 import json
 import os
 import pathlib
-import signal
-import subprocess
 import sys
 import tempfile
 import time
@@ -59,27 +57,9 @@ if args.saved:
 work = pathlib.Path(tempfile.mkdtemp(prefix="mesolab-cluster-"))
 os.environ["MESOLAB_CACHE_DIR"] = str(work / "cache")  # this process's truths: none cached from before
 
-import distributed  # noqa: E402
 import mesolab  # noqa: E402
 
-
-def start(cmd, env):
-    return subprocess.Popen([sys.executable, "-m", "dask", *cmd], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                            start_new_session=True)
-
-
-sched = work / "scheduler.json"
-env = dict(os.environ, MESOLAB_THREADS="1", PYTHONDONTWRITEBYTECODE="1")
-procs = [start(["scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard", "--scheduler-file", str(sched)], env)]
-try:
-    while not sched.exists():
-        time.sleep(0.1)
-    for i in range(args.workers):
-        procs.append(start(["worker", "--scheduler-file", str(sched), "--nthreads", "1", "--no-dashboard", "--memory-limit", "0",
-                            "--local-directory", str(work / f"w{i}")], dict(env, MESOLAB_CACHE_DIR=str(work / f"cache-w{i}"))))
-    client = distributed.Client(scheduler_file=str(sched), timeout=60)
-    client.wait_for_workers(args.workers, timeout=120)
-
+with mesolab.cluster.local_cluster(args.workers, threads=1, folder=work) as client:  # caches of their own
     scene = mesolab.load_preset(args.preset)
     size = (args.size, args.size)
     wb = mesolab.Workbench()
@@ -97,15 +77,6 @@ try:
         if name == "cold":
             same = all(one[a].tobytes() == frame[a].tobytes() for a in ("radiance", "truth_stderr", "normal"))
             assert same, "the cluster's truth differs from this process's"
-    client.close()
-finally:
-    for p in procs:
-        try:
-            os.killpg(p.pid, signal.SIGTERM)
-        except ProcessLookupError:
-            pass
-    for p in procs:
-        p.wait()
 
 # What a task costs beyond its samples: the warm run's tasks against the blocks of 4 (same samples, many more tasks).
 warm, small = runs["warm"]["tasks"], runs["blocks of 4"]["tasks"]

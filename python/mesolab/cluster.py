@@ -6,6 +6,7 @@ frontier and bench.
   Truth     a truth as blocks of samples on the workers, merged to the one-process bytes
   Points    a sweep's settings, a frontier's settings per distance (in its two rounds) and a bench's rows as tasks
   Tasks     what runs on a worker: one Workbench per worker process, scenes by their pack's hash
+  Local     local_cluster: a scheduler and workers on this machine
   Checks    workers, the GL resource, one build; progress and cancelling
 
 How the work travels: the scene goes as a pack (mesolab.Scene -> zip bytes, core/pack.h), scattered
@@ -23,7 +24,13 @@ start such workers with `dask worker tcp://HOST:8786 --resources GL=1`. Ctrl-C (
 callback that raises) cancels the queued tasks and sets a distributed.Event that running tasks
 poll from their progress reports, so they stop at their next check.
 """
+import contextlib
 import os
+import pathlib
+import signal
+import subprocess
+import sys
+import tempfile
 import threading
 import time
 import uuid
@@ -474,6 +481,54 @@ def _bench_pack_task(pack, digest, name, kwargs, event):
 def _bench_task(table, row, kwargs, event):
     cells = _core.bench([table], rows=[row], progress=_stopper(event), _on=_workbench(), **kwargs)
     return dict(cells=[c for c in cells if c["row"] == row], worker=_worker_name())
+
+
+# [SECTION] A cluster on this machine
+@contextlib.contextmanager
+def local_cluster(workers=2, *, threads=1, folder=None, own_caches=True, env=None):
+    """A `dask scheduler` and `workers` `dask worker` processes on 127.0.0.1, each of `threads` threads
+    (MESOLAB_THREADS=threads), for trying a cluster, or measuring one, on this machine: yields a
+    distributed.Client and stops the processes at the end. folder: where their files go (default: a
+    new temporary folder); own_caches: each worker with a cache folder of its own there (nothing
+    cached by this machine's earlier runs), else the usual one; env: more environment for them all.
+    The workers are named w0, w1, ...; the scheduler's address is in FOLDER/scheduler.json."""
+    import distributed
+    folder = pathlib.Path(folder or tempfile.mkdtemp(prefix="mesolab-cluster-"))
+    folder.mkdir(parents=True, exist_ok=True)
+    env = dict(os.environ, MESOLAB_THREADS=str(threads), PYTHONDONTWRITEBYTECODE="1", **(env or {}))
+    log = open(folder / "cluster.log", "w")
+    sched = folder / "scheduler.json"
+
+    def start(args, extra=None):
+        return subprocess.Popen([sys.executable, "-m", "dask", *args], env=dict(env, **(extra or {})), stdout=log, stderr=subprocess.STDOUT,
+                                start_new_session=True)
+
+    procs = [start(["scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard", "--scheduler-file", str(sched)])]
+    try:
+        deadline = time.monotonic() + 60
+        while not sched.exists():
+            if time.monotonic() > deadline or procs[0].poll() is not None:
+                raise RuntimeError(f"local_cluster: the scheduler did not start (its log: {folder / 'cluster.log'})")
+            time.sleep(0.1)
+        for i in range(int(workers)):
+            procs.append(start(["worker", "--scheduler-file", str(sched), "--nthreads", str(threads), "--no-dashboard", "--memory-limit", "0",
+                                "--name", f"w{i}", "--local-directory", str(folder / f"w{i}")], {"MESOLAB_CACHE_DIR": str(folder / f"cache-w{i}")} if own_caches else None))
+        with distributed.Client(scheduler_file=str(sched), timeout=60) as client:
+            client.wait_for_workers(int(workers), timeout=120)
+            yield client
+    finally:
+        for p in procs:
+            try:
+                os.killpg(p.pid, signal.SIGTERM)
+            except ProcessLookupError:
+                pass
+        for p in procs:
+            try:
+                p.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                os.killpg(p.pid, signal.SIGKILL)
+                p.wait()
+        log.close()
 
 
 # [SECTION] Checks

@@ -26,38 +26,11 @@ def _start(args, env, log):
 
 
 @pytest.fixture(scope="module")
-def cluster(tmp_path_factory):
+def cluster(tmp_path_factory, mesolab):
     d = tmp_path_factory.mktemp("dask")
-    sched = d / "scheduler.json"
-    env = dict(os.environ, MESOLAB_THREADS="1", PYTHONDONTWRITEBYTECODE="1", DASK_DISTRIBUTED__WORKER__DAEMON="False")
-    worker_env = dict(env, MESOLAB_CACHE_DIR=str(d / "worker-cache"), MESOLAB_TEST_EXIT_ONCE=f"{d / 'died'}:{DIE_SEED}:{DIE_FIRST}")
-    log = open(d / "cluster.log", "w")
-    procs = [_start(["scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard", "--scheduler-file", str(sched)], env, log)]
-    try:
-        deadline = time.monotonic() + 60
-        while not sched.exists():
-            assert time.monotonic() < deadline, "the scheduler did not start: " + (d / "cluster.log").read_text()
-            time.sleep(0.1)
-        for i in range(2):
-            procs.append(_start(["worker", "--scheduler-file", str(sched), "--nthreads", "1", "--nworkers", "1", "--no-dashboard", "--memory-limit", "0",
-                                 "--name", f"w{i}", "--local-directory", str(d / f"w{i}")], worker_env, log))
-        client = distributed.Client(scheduler_file=str(sched), timeout=60)
-        client.wait_for_workers(2, timeout=90)
+    env = {"DASK_DISTRIBUTED__WORKER__DAEMON": "False", "MESOLAB_TEST_EXIT_ONCE": f"{d / 'died'}:{DIE_SEED}:{DIE_FIRST}"}
+    with mesolab.cluster.local_cluster(2, threads=1, folder=d, env=env) as client:  # `dask scheduler` and `dask worker` processes
         yield types.SimpleNamespace(client=client, dir=d)
-        client.close()
-    finally:
-        for p in reversed(procs):
-            try:
-                os.killpg(p.pid, signal.SIGTERM)
-            except ProcessLookupError:
-                pass
-        for p in procs:
-            try:
-                p.wait(timeout=15)
-            except subprocess.TimeoutExpired:
-                os.killpg(p.pid, signal.SIGKILL)
-                p.wait()
-        log.close()
 
 
 def _sphere(mesolab):
