@@ -600,7 +600,9 @@ public:
     // The frame of a merged truth of `ps` (samples from 0), as render(backend="truth") gives it,
     // and kept in the truth cache as if rendered here. InputError when it is another scene's truth
     // (another key: scene, size or seed) or another build's.
-    PyFrame truth_from_part(const PyScene& ps, const py::bytes& part_bytes, const py::object& progress) {
+    // noise, time_limit: the targets it was sampled to (the sidecar's), `ended`: what ended it (samples, noise, time limit).
+    PyFrame truth_from_part(const PyScene& ps, const py::bytes& part_bytes, const py::object& progress, double noise, double time_limit,
+                            const std::string& ended) {
         open();
         ps.check_used();
         const TruthPart part = truth_part_from_bytes(std::string(part_bytes), "the merged truth");
@@ -613,6 +615,11 @@ public:
         TruthSettings ts;
         ts.spp = a.spp;
         ts.seed = a.seed;
+        ts.noise = noise, ts.time_limit_s = time_limit;
+        TruthEnd end = TruthEnd::Samples;
+        if (ended == "noise") end = TruthEnd::Noise;
+        else if (ended == "time limit") end = TruthEnd::TimeLimit;
+        else if (ended != "samples") throw InputError("ended=" + ended + ": expected samples, noise or time limit");
         PyFrame f{nullptr, ps.scene, ts};
         f.r = run_on<std::shared_ptr<const RenderResult>>(worker_, progress, [&](const ProgressFn& p, const std::atomic<bool>* cancel) {
             auto r = std::make_shared<RenderResult>();
@@ -626,7 +633,7 @@ public:
             SampledRun run;
             run.spp = a.samples();
             run.cached_spp = a.spp;
-            run.ended = TruthEnd::Samples;
+            run.ended = end;
             run.key = key;
             r->sampled = run;
             TruthCache(cache_folder("truth"), version_string()).store(key, a);  // a later render(backend="truth") reads it
@@ -892,6 +899,25 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
         py::arg("part"), "What a partial truth's bytes hold: {scene, key, build, first, end, seed, size}.");
 
     m.attr("_truth_block") = kTruthBlock;
+    m.attr("_noise_min_spp") = kNoiseMinSpp;
+    m.def(
+        "_truth_sampling",
+        [](const py::object& spp, const py::object& noise, const py::object& time_limit, uint64_t seed) {
+            const TruthSettings st = truth_sampling_arg(spp, noise, time_limit, seed);
+            py::dict d;
+            d["spp"] = st.spp, d["noise"] = st.noise, d["time_limit"] = st.time_limit_s, d["seed"] = st.seed;
+            return d;
+        },
+        py::arg("spp"), py::arg("noise"), py::arg("time_limit"), py::arg("seed"),
+        "A truth's sampling as render() checks it: {spp (the most samples with a target), noise, time_limit (0: none), seed}.");
+    m.def(
+        "_truth_part_noise",
+        [](const py::bytes& b) {
+            const TruthPart p = truth_part_from_bytes(std::string(b), "a partial truth");
+            py::gil_scoped_release nogil;
+            return truth_noise_rel(p.sums);
+        },
+        py::arg("part"), "The noise_rel of a partial truth's samples (what a noise target is judged on).");
     m.def(
         "_truth_key",
         [](const PyScene& s, const py::object& size, uint64_t seed) {
@@ -1031,6 +1057,7 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
             "cache): {point (or None), skipped, stopped, truth_noise, machine}. poll() is called every 50 ms: raising stops the work (cancelled), "
             "returning True ends the budget (a setting not a preset stops unless its frame is already rendered: stopped).")
         .def("_truth_from_part", &PyWorkbench::truth_from_part, py::arg("scene"), py::arg("part"), py::arg("progress") = py::none(),
+             py::arg("noise") = 0.0, py::arg("time_limit") = 0.0, py::arg("ended") = "samples",
              "The frame of a merged truth's bytes (samples from 0), as render(backend='truth') gives it; kept in the truth cache.")
         .def_property_readonly("gl_renderer", &PyWorkbench::gl_renderer)
         .def_property_readonly("memory_limit", &PyWorkbench::memory_limit, "In bytes; 0: the machine's available memory.")

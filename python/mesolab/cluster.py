@@ -59,7 +59,8 @@ class Workbench(_core.Workbench):
 Workbench.render.__doc__ = (_core.Workbench.render.__doc__ or "") + (
     "\n\nclient=: a distributed.Client; the truth (backend='truth', spp=) is rendered on its workers in blocks of block= "
     "samples (default: two blocks per worker thread) and merged into the bytes this workbench would render (kept in the "
-    "truth cache as if rendered here)."
+    "truth cache as if rendered here). With noise= (and time_limit=, spp= the most samples) in rounds until the target: "
+    "frame.truth['ended'] says what ended it; mesolab.cluster.last_run['rounds'] the samples and noise of each round."
 )
 
 
@@ -91,15 +92,15 @@ for _f, _core_f in ((sweep, _core.sweep), (frontier, _core.frontier), (bench, _c
 
 
 # [SECTION] Truth
-def _blocks(spp, threads, block):
-    """[(first, end)] covering [0, spp): `block` samples each (a multiple of the path tracer's block), else two per thread."""
+def _blocks(first, end, threads, block):
+    """[(a, b)] covering [first, end): `block` samples each (a multiple of the path tracer's block), else two per thread."""
     step = _core._truth_block
     if block is None:
-        block = max(step, -(-spp // max(1, 2 * threads)))
+        block = max(step, -(-(end - first) // max(1, 2 * threads)))
     elif int(block) < 1:
         raise _core.InputError(f"block={block}: expected samples per task, 1 or more")
     block = -(-int(block) // step) * step
-    return [(a, min(spp, a + block)) for a in range(0, spp, block)]
+    return [(a, min(end, a + block)) for a in range(first, end, block)]
 
 
 def render_truth(wb, scene, client, *, size=(512, 512), backend="truth", aovs=(), spp=None, seed=1, noise=None, time_limit=None,
@@ -108,14 +109,30 @@ def render_truth(wb, scene, client, *, size=(512, 512), backend="truth", aovs=()
     if backend != "truth":
         raise _core.InputError(f"client=: backend={backend!r} renders a frame in milliseconds on this machine; a cluster spreads the truth "
                                "(backend='truth'), sweeps, frontiers and benches")
-    if noise is not None or time_limit is not None:
-        raise _core.InputError("client=: noise= and time_limit= stop a truth on its own noise or clock, which a truth split into blocks "
-                               "does not see; give spp= (the samples are split into blocks of block=)")
     for a in aovs:
         if a not in _TRUTH_AOVS:
             raise _core.InputError(f"aovs: the truth does not write '{a}' (it writes {', '.join(_TRUTH_AOVS)})")
-    merged = truth_on(client, scene, size=size, spp=64 if spp is None else spp, seed=seed, block=block, progress=progress)
-    return wb._truth_from_part(scene, merged)
+    st = _core._truth_sampling(spp, noise, time_limit, seed)  # checked as one process checks them
+    if not st["noise"] and not st["time_limit"]:
+        merged = truth_on(client, scene, size=size, spp=st["spp"], seed=seed, block=block, progress=progress)
+        return wb._truth_from_part(scene, merged)
+    merged, ended = truth_to_target(client, scene, size=size, spp=st["spp"], seed=seed, noise=st["noise"], time_limit=st["time_limit"],
+                                    block=block, progress=progress)
+    return wb._truth_from_part(scene, merged, noise=st["noise"], time_limit=st["time_limit"], ended=ended)
+
+
+def _spread(client, pack_future, digest, size, seed, ranges, event, run, prior=None):
+    """The blocks `ranges` as tasks, and their merge on the workers, neighbours two by two (a tree), after `prior` (a merged
+    part's future of the samples before them) when given: (block futures, merge futures, the last merge's or only future)."""
+    futures = [client.submit(_truth_task, pack_future, digest, size, int(seed), a, b, event, key=f"mesolab-truth-{digest}-{a}-{b}-{run}")
+               for a, b in ranges]
+    merges, level = [], ([prior] if prior is not None else []) + futures
+    while len(level) > 1:
+        nxt = [client.submit(_merge_task, level[i], level[i + 1], key=f"mesolab-merge-{digest}-{ranges[0][0]}-{len(merges) + i // 2}-{run}")
+               for i in range(0, len(level) - 1, 2)]
+        merges += nxt
+        level = nxt + level[len(level) - len(level) % 2:]
+    return futures, merges, level[0]
 
 
 def truth_on(client, scene, *, size, spp, seed=1, block=None, progress=None, pack=None):
@@ -124,33 +141,73 @@ def truth_on(client, scene, *, size, spp, seed=1, block=None, progress=None, pac
     if spp < 1:
         raise _core.InputError(f"spp={spp}: expected 1 or more samples per pixel")
     threads = _threads(client)
-    blocks = _blocks(spp, threads, block)
+    blocks = _blocks(0, spp, threads, block)
     if pack is None:
         pack = _core._pack_bytes(scene)
     pack_future, digest = _send_pack(client, pack)
     run = uuid.uuid4().hex[:12]
     event = f"mesolab-cancel-{run}"
     size = tuple(int(x) for x in size)
-    futures = [client.submit(_truth_task, pack_future, digest, size, int(seed), a, b, event, key=f"mesolab-truth-{digest}-{a}-{b}-{run}")
-               for a, b in blocks]
-    # The blocks are joined on the workers, neighbours two by two (a tree), where their sums are: the
-    # caller receives one partial truth, not one per block.
-    merges, level = [], list(futures)
-    while len(level) > 1:
-        nxt = [client.submit(_merge_task, level[i], level[i + 1], key=f"mesolab-merge-{digest}-{len(merges) + i // 2}-{run}")
-               for i in range(0, len(level) - 1, 2)]
-        merges += nxt
-        level = nxt + level[len(level) - len(level) % 2:]
+    futures, merges, root = _spread(client, pack_future, digest, size, seed, blocks, event, run)
     t0 = time.perf_counter()
     _collect(client, futures, event, progress, f"truth of {scene.name}: blocks of {blocks[0][1] - blocks[0][0]} samples", fetch=False,
              others=merges)
     t1 = time.perf_counter()
-    result = _collect(client, [level[0]], event, None, "merge", others=futures + merges)[0]
+    result = _collect(client, [root], event, None, "merge", others=futures + merges)[0]
     _one_build([(t["worker"], t["build"]) for t in result["tasks"]])
     last_run.clear()
     last_run.update(tasks=[{k: t[k] for k in ("first", "end", "worker", "seconds")} for t in result["tasks"]], wait_s=t1 - t0,
                     merge_s=time.perf_counter() - t1, merges=len(merges), pack_bytes=len(pack))
     return result["part"]
+
+
+def truth_to_target(client, scene, *, size, spp, seed=1, noise=0.0, time_limit=0.0, block=None, progress=None):
+    """Samples [0, N) of `scene`'s truth on the cluster, in rounds: each round's blocks are merged after the rounds before, on
+    the workers, and its noise_rel measured there; the next round asks for the samples the 1/sqrt(n) law says the target needs
+    (and a tenth more), within what time_limit leaves at the rounds' pace and spp. Ends after the round that reaches `noise`,
+    passes `time_limit` seconds or reaches `spp` samples: (the merged part's bytes, what ended it: noise, time limit or samples).
+    The bytes are the one-process truth of N samples."""
+    threads = _threads(client)
+    step = _core._truth_block
+    pack = _core._pack_bytes(scene)
+    pack_future, digest = _send_pack(client, pack)
+    run = uuid.uuid4().hex[:12]
+    event = f"mesolab-cancel-{run}"
+    size = tuple(int(x) for x in size)
+    spp = int(spp)
+    t0 = time.monotonic()
+    done, root, rounds = 0, None, []
+    end = min(spp, max(_core._noise_min_spp, 2 * threads * step))
+    while True:
+        ranges = _blocks(done, end, threads, block)
+        futures, merges, root = _spread(client, pack_future, digest, size, seed, ranges, event, run, prior=root)
+        measured = client.submit(_noise_task, root, key=f"mesolab-noise-{digest}-{end}-{run}")
+        every = futures + merges + [measured]  # this round's (the rounds before are released once merged into `root`)
+        reached = _collect(client, [measured], event, None, "noise", others=every)[0]
+        done, elapsed = end, time.monotonic() - t0
+        rounds.append(dict(end=done, noise_rel=reached, seconds=elapsed))
+        ended = ("noise" if noise and reached <= noise else "samples" if done >= spp else "time limit" if time_limit and elapsed >= time_limit
+                 else None)
+        if progress is not None:
+            target = f" (target {noise:.2%})" if noise else ""
+            fraction = min(1.0, (noise / reached) ** 2) if noise and reached > 0 else 0.0
+            if time_limit:
+                fraction = max(fraction, min(1.0, elapsed / time_limit))
+            progress(f"truth of {scene.name}: {done} spp, noise {reached:.2%}{target}", 1.0 if ended else fraction)
+        if ended:
+            break
+        want = done + 2 * threads * step
+        if noise and reached > 0:
+            want = max(want, int(done * (reached / noise) ** 2 * 1.1))
+        if time_limit:  # what the time left allows at the rounds' pace so far
+            want = min(want, max(done + step, int(done + (time_limit - elapsed) * done / elapsed)))
+        end = min(spp, -(-want // step) * step)
+    result = _collect(client, [root], event, None, "merge", others=every)[0]
+    _one_build([(t["worker"], t["build"]) for t in result["tasks"]])
+    last_run.clear()
+    last_run.update(tasks=[{k: t[k] for k in ("first", "end", "worker", "seconds")} for t in result["tasks"]], rounds=rounds, ended=ended,
+                    pack_bytes=len(pack))
+    return result["part"], ended
 
 
 # What the last truth spread over a cluster did: its tasks ({first, end, worker, seconds: the task's time on its worker}),
@@ -165,7 +222,8 @@ def _sweep_on(client, scene, *, knob, values, size=(256, 256), metric="rmse", ba
     if out_dir is not None:
         raise _core.InputError("client=: out_dir= writes a one-machine sweep's files; on a cluster the points come back as values")
     if noise is not None or time_limit is not None:
-        raise _core.InputError("client=: the truth of a sweep on a cluster is split into blocks of samples; give spp= instead of noise= or time_limit=")
+        raise _core.InputError("client=: a sweep's truths on a cluster are rendered to spp= samples; give spp= instead of noise= or time_limit= "
+                               "(Workbench.render(client=, noise=) renders a truth to a noise target)")
     values = list(values)
     if by is not None and by_values is None:
         raise _core.InputError("sweep: by= needs by_values=[...]")
@@ -219,7 +277,8 @@ def _frontier_on(client, scene, *, size=(128, 128), backend="cpu", distances=(),
     frontier. Each point runs on a worker's kept Workbench (one at a time per worker process: its times are that process's
     alone) against the distance's truth, spread in blocks first and kept by every worker."""
     if noise is not None or time_limit is not None:
-        raise _core.InputError("client=: the frontier's truths on a cluster are split into blocks of samples; give spp= instead of noise= or time_limit=")
+        raise _core.InputError("client=: a frontier's truths on a cluster are rendered to spp= samples; give spp= instead of noise= or time_limit= "
+                               "(Workbench.render(client=, noise=) renders a truth to a noise target)")
     if backend == "gpu":
         _need_gl(client, "backend='gpu'")
     spp = 64 if spp is None else spp
@@ -440,6 +499,10 @@ def _merge_task(a, b):
     name = lambda r: "samples {}:{} from {}".format(r["first"], r["end"], ", ".join(sorted({t["worker"] for t in r["tasks"]})))
     part = _core._merge_truth_parts([(name(a), a["part"]), (name(b), b["part"])])
     return dict(part=part, first=min(a["first"], b["first"]), end=max(a["end"], b["end"]), tasks=a["tasks"] + b["tasks"])
+
+
+def _noise_task(r):
+    return _core._truth_part_noise(r["part"])
 
 
 def _keep_truth_task(pack, digest, merged):

@@ -144,6 +144,28 @@ def test_gl_work_needs_a_gl_worker(mesolab, cluster):
         time.sleep(0.2)
 
 
+def test_a_truth_to_a_noise_target_on_the_cluster_is_the_one_process_truth_of_its_samples(mesolab, cluster, wb):
+    scene = _sphere(mesolab)
+    seen = []
+    with mesolab.Workbench() as other:
+        spread = other.render(scene, client=cluster.client, backend="truth", size=SIZE, noise=0.01, seed=9, aovs=["truth_stderr", "normal"],
+                              progress=lambda stage, f: seen.append((stage, f)))
+        rounds = mesolab.cluster.last_run["rounds"]
+        t = spread.truth
+        assert t["ended"] == "noise" and t["noise_target"] == 0.01 and t["noise_rel"] <= 0.01
+        assert len(rounds) >= 2 and rounds[-1]["end"] == t["spp"]  # a first round of 16 samples was not enough
+        assert rounds[-1]["noise_rel"] <= 0.01 < min(r["noise_rel"] for r in rounds[:-1])
+        assert seen[-1][1] == 1.0 and "target 1.00%" in seen[-1][0]
+        _same(wb.render(scene, backend="truth", size=SIZE, spp=t["spp"], seed=9, aovs=["truth_stderr", "normal"]), spread)
+        # The most samples (spp=) and a time limit end it too, each said.
+        capped = other.render(scene, client=cluster.client, backend="truth", size=SIZE, noise=1e-4, spp=40, seed=9)
+        assert (capped.truth["ended"], capped.truth["spp"]) == ("samples", 40)
+        timed = other.render(scene, client=cluster.client, backend="truth", size=SIZE, noise=1e-4, time_limit=1.5, seed=9)
+        assert timed.truth["ended"] == "time limit" and timed.truth["noise_rel"] > 1e-4
+        with pytest.raises(mesolab.InputError, match="noise"):
+            other.render(scene, client=cluster.client, backend="truth", size=SIZE, noise=-1)
+
+
 def test_a_sweep_spread_over_points_measures_what_one_process_does(mesolab, cluster):
     scene = _sphere(mesolab)
     values = [6, 12, 24]
