@@ -161,7 +161,7 @@ def truth_on(client, scene, *, size, spp, seed=1, block=None, progress=None, pac
     return result["part"]
 
 
-def truth_to_target(client, scene, *, size, spp, seed=1, noise=0.0, time_limit=0.0, block=None, progress=None):
+def truth_to_target(client, scene, *, size, spp, seed=1, noise=0.0, time_limit=0.0, block=None, progress=None, pack=None):
     """Samples [0, N) of `scene`'s truth on the cluster, in rounds: each round's blocks are merged after the rounds before, on
     the workers, and its noise_rel measured there; the next round asks for the samples the 1/sqrt(n) law says the target needs
     (and a tenth more), within what time_limit leaves at the rounds' pace and spp. Ends after the round that reaches `noise`,
@@ -169,7 +169,8 @@ def truth_to_target(client, scene, *, size, spp, seed=1, noise=0.0, time_limit=0
     The bytes are the one-process truth of N samples."""
     threads = _threads(client)
     step = _core._truth_block
-    pack = _core._pack_bytes(scene)
+    if pack is None:
+        pack = _core._pack_bytes(scene)
     pack_future, digest = _send_pack(client, pack)
     run = uuid.uuid4().hex[:12]
     event = f"mesolab-cancel-{run}"
@@ -221,9 +222,8 @@ def _sweep_on(client, scene, *, knob, values, size=(256, 256), metric="rmse", ba
               by_values=None, spp=None, seed=1, noise=None, time_limit=None, out_dir=None, memory_limit=None, progress=None):
     if out_dir is not None:
         raise _core.InputError("client=: out_dir= writes a one-machine sweep's files; on a cluster the points come back as values")
-    if noise is not None or time_limit is not None:
-        raise _core.InputError("client=: a sweep's truths on a cluster are rendered to spp= samples; give spp= instead of noise= or time_limit= "
-                               "(Workbench.render(client=, noise=) renders a truth to a noise target)")
+    if (noise is not None or time_limit is not None) and metric != "truth":
+        raise _core.InputError("client=: noise= and time_limit= set the truth of a sweep with metric='truth'; this sweep's metric is " + repr(metric))
     values = list(values)
     if by is not None and by_values is None:
         raise _core.InputError("sweep: by= needs by_values=[...]")
@@ -232,7 +232,7 @@ def _sweep_on(client, scene, *, knob, values, size=(256, 256), metric="rmse", ba
         reference = _core._sweep_reference(scene, knob, values, reference)
     if backend == "gpu":
         _need_gl(client, "backend='gpu'")
-    spp = 64 if spp is None else spp
+    st = _core._truth_sampling(spp, noise, time_limit, seed)
     scenes = {}
     for b in by_list:
         for v in values:
@@ -241,18 +241,19 @@ def _sweep_on(client, scene, *, knob, values, size=(256, 256), metric="rmse", ba
                 s[by] = b
             s[knob] = v
             scenes[(_key(b), _key(v))] = s
+    samples = {k: st["spp"] for k in scenes}
     if metric == "truth":  # each distinct truth once, spread in blocks, then kept by every worker
-        _truths_everywhere(client, list(scenes.values()), size, spp, seed, progress)
+        samples = dict(zip(scenes, _truths_everywhere(client, list(scenes.values()), size, st, progress)))
     pack = _core._pack_bytes(scene)
     pack_future, digest = _send_pack(client, pack)
     run = uuid.uuid4().hex[:12]
     event = f"mesolab-cancel-{run}"
-    common = dict(knob=knob, size=tuple(size), metric=metric, backend=backend, repeat=repeat, reference=reference, spp=spp, seed=seed,
+    common = dict(knob=knob, size=tuple(size), metric=metric, backend=backend, repeat=repeat, reference=reference, seed=seed,
                   memory_limit=memory_limit)
     futures, order = [], []
     for b in by_list:
         for v in values:
-            kw = dict(common, values=[v])
+            kw = dict(common, values=[v], spp=samples[(_key(b), _key(v))])
             if by is not None:
                 kw.update(by=by, by_values=[b])
             futures.append(client.submit(_sweep_task, pack_future, digest, kw, event, key=f"mesolab-sweep-{digest}-{len(futures)}-{run}",
@@ -266,6 +267,8 @@ def _sweep_on(client, scene, *, knob, values, size=(256, 256), metric="rmse", ba
         if by is not None:
             p["by"] = b
         p["worker"] = r["worker"]
+        if metric == "truth":
+            p["truth_spp"] = samples[(_key(b), _key(v))]  # its truth's samples (to noise=: what the rounds took)
         points.append(p)
     return points
 
@@ -276,12 +279,10 @@ def _frontier_on(client, scene, *, size=(128, 128), backend="cpu", distances=(),
     and knobs alone) at every distance, then, as a distance's first round completes, its second round between that round's
     frontier. Each point runs on a worker's kept Workbench (one at a time per worker process: its times are that process's
     alone) against the distance's truth, spread in blocks first and kept by every worker."""
-    if noise is not None or time_limit is not None:
-        raise _core.InputError("client=: a frontier's truths on a cluster are rendered to spp= samples; give spp= instead of noise= or time_limit= "
-                               "(Workbench.render(client=, noise=) renders a truth to a noise target)")
     if backend == "gpu":
         _need_gl(client, "backend='gpu'")
-    spp = 64 if spp is None else spp
+    st = _core._truth_sampling(spp, noise, time_limit, seed)
+    spp = st["spp"]
     options = dict(size=tuple(int(x) for x in size), backend=backend, distances=[float(d) for d in distances], spp=spp, seed=seed,
                    budget=float(budget), repeat=repeat, memory_limit=memory_limit)
     first_round = _core._frontier_settings(scene, options)  # the options and every setting checked before any work
@@ -292,7 +293,8 @@ def _frontier_on(client, scene, *, size=(128, 128), backend="cpu", distances=(),
         if options["distances"]:
             s["camera.distance"] = d
         per_distance.append(s)
-    _truths_everywhere(client, per_distance, size, spp, seed, progress)
+    # Each distance's truth to spp= (or to noise=, time_limit=): its points ask for its samples, read from every worker's cache.
+    samples = _truths_everywhere(client, per_distance, size, st, progress)
     pack_future, digest = _send_pack(client, _core._pack_bytes(scene))
     run = uuid.uuid4().hex[:12]
     event, budget_event = f"mesolab-cancel-{run}", f"mesolab-budget-{run}"
@@ -303,7 +305,7 @@ def _frontier_on(client, scene, *, size=(128, 128), backend="cpu", distances=(),
     futures = []
 
     def submit(j, rnd, i, setting, priority):
-        f = client.submit(_frontier_point_task, pack_future, digest, options, dists[j], setting, event, budget_event,
+        f = client.submit(_frontier_point_task, pack_future, digest, dict(options, spp=samples[j]), dists[j], setting, event, budget_event,
                           key=f"mesolab-frontier-{digest}-{j}-{rnd}-{i}-{run}", priority=priority, resources=resources)
         meta[f.key] = (j, rnd, i, setting)
         futures.append(f)
@@ -365,7 +367,7 @@ def _frontier_on(client, scene, *, size=(128, 128), backend="cpu", distances=(),
     report = _core._frontier_report(scene, options, points, noise, budget_reached, skipped, machine, out_dir)
     last_run.clear()
     last_run.update(budget_reached=budget_reached, skipped=skipped, markdown=report["markdown"], written=report["written"], tasks=len(futures),
-                    machine=machine)
+                    machine=machine, truth_spp=samples)
     return [dict(p, worker=w) for p, w in zip(report["points"], workers)]
 
 
@@ -404,17 +406,24 @@ def _bench_on(client, tables=None, *, repeat=5, backend="both", rows=(), columns
     return out
 
 
-def _truths_everywhere(client, scenes, size, spp, seed, progress):
-    """Each distinct truth of `scenes` rendered once on the cluster and kept in every worker's truth cache."""
-    seen = set()
+def _truths_everywhere(client, scenes, size, st, progress):
+    """Each distinct truth of `scenes` rendered once on the cluster (to st's spp, or its noise target or time limit) and kept in
+    every worker's truth cache. Returns each scene's truth's samples, in their order: the spp= its tasks ask for, so that every
+    worker reads that truth from its cache, whatever ended it."""
+    samples, by_key = [], {}
     for s in scenes:
-        key = _core._truth_key(s, size, seed)
-        if key in seen:
-            continue
-        seen.add(key)
-        pack = _core._pack_bytes(s)
-        merged = truth_on(client, s, size=size, spp=spp, seed=seed, progress=progress, pack=pack)
-        client.run(_keep_truth_task, pack, _core._content_hash(pack), merged)
+        key = _core._truth_key(s, size, st["seed"])
+        if key not in by_key:
+            pack = _core._pack_bytes(s)
+            if st["noise"] or st["time_limit"]:
+                merged, _ = truth_to_target(client, s, size=size, spp=st["spp"], seed=st["seed"], noise=st["noise"], time_limit=st["time_limit"],
+                                            progress=progress, pack=pack)
+            else:
+                merged = truth_on(client, s, size=size, spp=st["spp"], seed=st["seed"], progress=progress, pack=pack)
+            client.run(_keep_truth_task, pack, _core._content_hash(pack), merged)
+            by_key[key] = _core._truth_part_info(merged)["end"]
+        samples.append(by_key[key])
+    return samples
 
 
 def _key(v):

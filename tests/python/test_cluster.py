@@ -175,6 +175,12 @@ def test_a_sweep_spread_over_points_measures_what_one_process_does(mesolab, clus
         assert [p["value"] for p in spread] == values
         assert [p["error"] for p in spread] == [p["error"] for p in local], metric
         assert all(p["ms"] > 0 for p in spread)
+    # The truth to a noise target (sampled in rounds on the cluster): the one process's errors against the truth of as many samples.
+    aimed = mesolab.sweep(scene, client=cluster.client, knob="geometry.resolution", values=values, size=(24, 24), repeat=1, metric="truth", noise=0.02)
+    n = aimed[0]["truth_spp"]
+    assert n > 16 and all(p["truth_spp"] == n for p in aimed)
+    local = mesolab.sweep(scene, knob="geometry.resolution", values=values, size=(24, 24), repeat=1, metric="truth", spp=n)
+    assert [p["error"] for p in aimed] == [p["error"] for p in local]
     # A worker's tasks run on its process's kept Workbench (_on=): a sweep there leaves its last setting's stages in that
     # workbench's cache and measures what a sweep of its own does.
     with mesolab.Workbench() as kept:
@@ -232,6 +238,12 @@ def test_a_frontier_spread_over_its_points_measures_what_one_process_does(mesola
         r = cluster.client.submit(mesolab.cluster._frontier_point_task, pack, mesolab._core._content_hash(pack), options, 3.0, setting,
                                   "mesolab-cancel-test", "mesolab-budget-test", pure=False).result()
         assert (r["point"] is not None, r["stopped"]) == (measured, not measured)
+    # Truths to a noise target: each distance's truth sampled in rounds, its points measured against it (the one process's
+    # errors against the truth of as many samples).
+    aimed = mesolab.frontier(scene, client=cluster.client, distances=[3.0], budget=0, size=(24, 24), noise=0.02, repeat=1)
+    n = mesolab.cluster.last_run["truth_spp"][0]
+    assert n > 16 and mesolab.cluster.last_run["budget_reached"]
+    assert [p["rmse_rel"] for p in aimed] == [p["rmse_rel"] for p in mesolab.frontier(scene, distances=[3.0], budget=0, size=(24, 24), spp=n, repeat=1)]
     only = mesolab.frontier(scene, client=cluster.client, distances=[3.0, 5.0], budget=0, **kw)
     assert sorted((p["distance"], p["setting"]) for p in only) == [(3.0, "preset"), (5.0, "preset")]
     assert mesolab.cluster.last_run["budget_reached"]
