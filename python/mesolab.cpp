@@ -901,6 +901,21 @@ PYBIND11_MODULE(MESOLAB_MODULE_NAME, m) {
     m.attr("_truth_block") = kTruthBlock;
     m.attr("_noise_min_spp") = kNoiseMinSpp;
     m.def(
+        "_truth_cached",
+        [](const PyScene& s, const py::object& size, uint64_t seed) -> py::object {
+            const auto [w, h] = frame_size_arg(size);
+            const std::string key = truth_cache_key(version_string(), s.scene, w, h, seed);
+            std::optional<TruthAccumulator> a;
+            {
+                py::gil_scoped_release nogil;
+                a = TruthCache(cache_folder("truth"), version_string()).load(key);  // this build's entries only
+            }
+            if (!a || a->first != 0 || a->spp < 1 || a->width != w || a->height != h || a->seed != seed) return py::none();
+            return py::bytes(truth_part_bytes(TruthPart{s.scene.name, key, truth_build(version_string()), *a}));
+        },
+        py::arg("scene"), py::arg("size"), py::arg("seed"),
+        "This machine's cached truth of the scene at this size and seed (samples from 0) as a partial truth's bytes, or None.");
+    m.def(
         "_truth_sampling",
         [](const py::object& spp, const py::object& noise, const py::object& time_limit, uint64_t seed) {
             const TruthSettings st = truth_sampling_arg(spp, noise, time_limit, seed);

@@ -100,7 +100,23 @@ def _blocks(first, end, threads, block):
     elif int(block) < 1:
         raise _core.InputError(f"block={block}: expected samples per task, 1 or more")
     block = -(-int(block) // step) * step
-    return [(a, min(end, a + block)) for a in range(first, end, block)]
+    ranges, a = [], first
+    while a < end:  # boundaries on multiples of the block (the path tracer's blocks stay aligned when `first` is not)
+        b = min(end, (a // block + 1) * block)
+        ranges.append((a, b))
+        a = b
+    return ranges
+
+
+def _cached(client, scene, size, seed, spp):
+    """The caller's cached truth of `scene` (samples [0, n), n <= spp) as a partial truth and its future on the cluster, to
+    continue rather than render again: (bytes, n, future), or (None, 0, None)."""
+    part = _core._truth_cached(scene, size, seed)
+    n = _core._truth_part_info(part)["end"] if part is not None else 0
+    if part is None or n > spp:
+        return None, 0, None
+    [future] = client.scatter([dict(part=part, first=0, end=n, tasks=[])], hash=False)
+    return part, n, future
 
 
 def render_truth(wb, scene, client, *, size=(512, 512), backend="truth", aovs=(), spp=None, seed=1, noise=None, time_limit=None,
@@ -141,23 +157,27 @@ def truth_on(client, scene, *, size, spp, seed=1, block=None, progress=None, pac
     if spp < 1:
         raise _core.InputError(f"spp={spp}: expected 1 or more samples per pixel")
     threads = _threads(client)
-    blocks = _blocks(0, spp, threads, block)
+    size = tuple(int(x) for x in size)
+    cached, start, prior = _cached(client, scene, size, seed, spp)  # this machine's samples so far are continued, not rendered again
+    last_run.clear()
+    if start == spp:
+        last_run.update(tasks=[], cached_spp=start)
+        return cached
+    blocks = _blocks(start, spp, threads, block)
     if pack is None:
         pack = _core._pack_bytes(scene)
     pack_future, digest = _send_pack(client, pack)
     run = uuid.uuid4().hex[:12]
     event = f"mesolab-cancel-{run}"
-    size = tuple(int(x) for x in size)
-    futures, merges, root = _spread(client, pack_future, digest, size, seed, blocks, event, run)
+    futures, merges, root = _spread(client, pack_future, digest, size, seed, blocks, event, run, prior=prior)
     t0 = time.perf_counter()
     _collect(client, futures, event, progress, f"truth of {scene.name}: blocks of {blocks[0][1] - blocks[0][0]} samples", fetch=False,
              others=merges)
     t1 = time.perf_counter()
     result = _collect(client, [root], event, None, "merge", others=futures + merges)[0]
     _one_build([(t["worker"], t["build"]) for t in result["tasks"]])
-    last_run.clear()
     last_run.update(tasks=[{k: t[k] for k in ("first", "end", "worker", "seconds")} for t in result["tasks"]], wait_s=t1 - t0,
-                    merge_s=time.perf_counter() - t1, merges=len(merges), pack_bytes=len(pack))
+                    merge_s=time.perf_counter() - t1, merges=len(merges), pack_bytes=len(pack), cached_spp=start)
     return result["part"]
 
 
@@ -169,16 +189,27 @@ def truth_to_target(client, scene, *, size, spp, seed=1, noise=0.0, time_limit=0
     The bytes are the one-process truth of N samples."""
     threads = _threads(client)
     step = _core._truth_block
+    size = tuple(int(x) for x in size)
+    spp = int(spp)
+    cached, done, root = _cached(client, scene, size, seed, spp)  # this machine's samples so far are continued, not rendered again
+    last_run.clear()
+    if cached is not None:
+        reached = _core._truth_part_noise(cached) if done >= _core._noise_min_spp else float("inf")
+        ended = "noise" if noise and reached <= noise else "samples" if done >= spp else None
+        if ended:
+            last_run.update(tasks=[], rounds=[], ended=ended, cached_spp=done)
+            return cached, ended
     if pack is None:
         pack = _core._pack_bytes(scene)
     pack_future, digest = _send_pack(client, pack)
     run = uuid.uuid4().hex[:12]
     event = f"mesolab-cancel-{run}"
-    size = tuple(int(x) for x in size)
-    spp = int(spp)
     t0 = time.monotonic()
-    done, root, rounds = 0, None, []
-    end = min(spp, max(_core._noise_min_spp, 2 * threads * step))
+    rounds, start = [], done
+    end = min(spp, -(-max(_core._noise_min_spp, done + 2 * threads * step) // step) * step)  # rounds end on the tracer's blocks
+    if cached is not None and noise and reached < float("inf") and not time_limit:  # what the 1/sqrt(n) law asks of the cached samples'
+        # noise (with a time limit, a first round of the least size measures the pace)
+        end = min(spp, max(end, -(-int(done * (reached / noise) ** 2 * 1.1) // step) * step))
     while True:
         ranges = _blocks(done, end, threads, block)
         futures, merges, root = _spread(client, pack_future, digest, size, seed, ranges, event, run, prior=root)
@@ -201,13 +232,12 @@ def truth_to_target(client, scene, *, size, spp, seed=1, noise=0.0, time_limit=0
         if noise and reached > 0:
             want = max(want, int(done * (reached / noise) ** 2 * 1.1))
         if time_limit:  # what the time left allows at the rounds' pace so far
-            want = min(want, max(done + step, int(done + (time_limit - elapsed) * done / elapsed)))
+            want = min(want, max(done + step, int(done + (time_limit - elapsed) * (done - start) / elapsed)))
         end = min(spp, -(-want // step) * step)
     result = _collect(client, [root], event, None, "merge", others=every)[0]
     _one_build([(t["worker"], t["build"]) for t in result["tasks"]])
-    last_run.clear()
     last_run.update(tasks=[{k: t[k] for k in ("first", "end", "worker", "seconds")} for t in result["tasks"]], rounds=rounds, ended=ended,
-                    pack_bytes=len(pack))
+                    pack_bytes=len(pack), cached_spp=start)
     return result["part"], ended
 
 

@@ -33,6 +33,32 @@ def cluster(tmp_path_factory, mesolab):
         yield types.SimpleNamespace(client=client, dir=d)
 
 
+@pytest.fixture(scope="module", autouse=True)
+def caller_cache(tmp_path_factory):
+    """This process's truth cache, fresh for the module: the cluster continues what it holds, so only what these tests put there."""
+    old = os.environ.get("MESOLAB_CACHE_DIR")
+    os.environ["MESOLAB_CACHE_DIR"] = str(tmp_path_factory.mktemp("caller-cache"))
+    yield
+    if old is None:
+        os.environ.pop("MESOLAB_CACHE_DIR")
+    else:
+        os.environ["MESOLAB_CACHE_DIR"] = old
+
+
+@pytest.fixture(scope="module")
+def ref(mesolab, tmp_path_factory, caller_cache):
+    """The one-process references: a workbench with a truth cache of its own, so that they are rendered here (not read from what
+    the cluster merged) and the cluster does not continue them."""
+    old = os.environ["MESOLAB_CACHE_DIR"]
+    os.environ["MESOLAB_CACHE_DIR"] = str(tmp_path_factory.mktemp("reference-cache"))
+    try:
+        w = mesolab.Workbench()  # its truth cache is where MESOLAB_CACHE_DIR points now
+    finally:
+        os.environ["MESOLAB_CACHE_DIR"] = old
+    yield w
+    w.close()
+
+
 def _sphere(mesolab):
     return mesolab.load_preset(PRESETS / "basic" / "sphere.json")
 
@@ -42,9 +68,9 @@ def _same(a, b):
         assert a[aov].tobytes() == b[aov].tobytes(), aov
 
 
-def test_a_truth_from_blocks_on_two_workers_is_the_one_process_truth(mesolab, cluster, wb):
+def test_a_truth_from_blocks_on_two_workers_is_the_one_process_truth(mesolab, cluster, ref):
     scene = _sphere(mesolab)
-    one = wb.render(scene, backend="truth", size=SIZE, spp=24, seed=5, aovs=["truth_stderr", "normal"])
+    one = ref.render(scene, backend="truth", size=SIZE, spp=24, seed=5, aovs=["truth_stderr", "normal"])
     seen = []
     with mesolab.Workbench() as other:
         spread = other.render(scene, client=cluster.client, backend="truth", size=SIZE, spp=24, seed=5, block=4,
@@ -55,28 +81,37 @@ def test_a_truth_from_blocks_on_two_workers_is_the_one_process_truth(mesolab, cl
     assert len({t["worker"] for t in run["tasks"]}) == 2, "both workers should take blocks"
     assert seen[0] == 0 and seen[-1] == 1 and seen == sorted(seen), "progress reaches the caller, block by block"
     # Blocks merge to the same bytes in any order (exact integer sums).
-    parts = [(f"{a}:{a + 8}", wb._truth_part(scene, SIZE, 5, a, a + 8)) for a in (0, 8, 16)]
+    parts = [(f"{a}:{a + 8}", ref._truth_part(scene, SIZE, 5, a, a + 8)) for a in (0, 8, 16)]
     forward = mesolab._core._merge_truth_parts(parts)
     assert mesolab._core._merge_truth_parts(parts[::-1]) == forward
     assert mesolab._core._merge_truth_parts([parts[1], parts[2], parts[0]]) == forward
     with mesolab.Workbench() as third:
         _same(one, third._truth_from_part(scene, forward))
+        # This process's truth cache now holds those 24 samples (as if rendered here): asked again, no task; asked for 36, the
+        # cluster continues them with samples [24, 36) alone, to the one-process bytes of 36.
+        again = third.render(scene, client=cluster.client, backend="truth", size=SIZE, spp=24, seed=5)
+        assert mesolab.cluster.last_run == {"tasks": [], "cached_spp": 24}
+        _same(one, again)
+        more = third.render(scene, client=cluster.client, backend="truth", size=SIZE, spp=36, seed=5, block=4)
+        run = mesolab.cluster.last_run
+        assert run["cached_spp"] == 24 and sorted((t["first"], t["end"]) for t in run["tasks"]) == [(24, 28), (28, 32), (32, 36)]
+        _same(ref.render(scene, backend="truth", size=SIZE, spp=36, seed=5, aovs=["truth_stderr", "normal"]), more)
 
 
-def test_a_worker_that_dies_has_its_block_rerun_and_the_bytes_hold(mesolab, cluster, wb):
+def test_a_worker_that_dies_has_its_block_rerun_and_the_bytes_hold(mesolab, cluster, ref):
     scene = _sphere(mesolab)
-    one = wb.render(scene, backend="truth", size=SIZE, spp=16, seed=DIE_SEED, aovs=["truth_stderr", "normal"])
+    one = ref.render(scene, backend="truth", size=SIZE, spp=16, seed=DIE_SEED, aovs=["truth_stderr", "normal"])
     spread = mesolab.Workbench().render(scene, client=cluster.client, backend="truth", size=SIZE, spp=16, seed=DIE_SEED, block=4)
     assert (cluster.dir / "died").exists(), "the test hook should have ended a worker process"
     _same(one, spread)
     cluster.client.wait_for_workers(2, timeout=90)  # the nanny restarts it
 
 
-def test_packs_carry_what_the_scene_names_even_arrays(mesolab, cluster, wb):
+def test_packs_carry_what_the_scene_names_even_arrays(mesolab, cluster, ref):
     scene = _sphere(mesolab)
     rng = np.random.default_rng(3)
     scene["basic.albedo_map"] = (rng.random((16, 16, 3)) * 255).astype(np.uint8)  # in this process's cache only
-    one = wb.render(scene, backend="truth", size=SIZE, spp=8, seed=9, aovs=["truth_stderr", "normal"])
+    one = ref.render(scene, backend="truth", size=SIZE, spp=8, seed=9, aovs=["truth_stderr", "normal"])
     spread = mesolab.Workbench().render(scene, client=cluster.client, backend="truth", size=SIZE, spp=8, seed=9)
     _same(one, spread)
     assert mesolab.cluster.last_run["pack_bytes"] > 16 * 16 * 3 // 4
@@ -98,16 +133,16 @@ def test_ctrl_c_cancels_the_queue_and_stops_running_tasks(mesolab, cluster):
     assert len(cluster.client.nthreads()) == 2, "the workers survive a cancel"
 
 
-def test_a_mixed_cluster_is_refused(mesolab, wb):
+def test_a_mixed_cluster_is_refused(mesolab, ref):
     scene = _sphere(mesolab)
     build = mesolab._core._truth_build().encode()
     other = build[:-1] + (b"X" if build[-1:] != b"X" else b"Y")
-    a = wb._truth_part(scene, SIZE, 5, 0, 4)
-    b = wb._truth_part(scene, SIZE, 5, 4, 8).replace(build, other)
+    a = ref._truth_part(scene, SIZE, 5, 0, 4)
+    b = ref._truth_part(scene, SIZE, 5, 4, 8).replace(build, other)
     with pytest.raises(mesolab.InputError, match="build"):
         mesolab._core._merge_truth_parts([("a", a), ("b", b)])
     with pytest.raises(mesolab.InputError, match="another build"):
-        wb._truth_from_part(scene, mesolab._core._merge_truth_parts([("a", a.replace(build, other))]))
+        ref._truth_from_part(scene, mesolab._core._merge_truth_parts([("a", a.replace(build, other))]))
     with pytest.raises(mesolab.InputError, match="worker tcp://10.0.0.9:1 renders with another build"):
         mesolab.cluster._one_build([("tcp://10.0.0.9:1", other.decode())])
 
@@ -144,7 +179,7 @@ def test_gl_work_needs_a_gl_worker(mesolab, cluster):
         time.sleep(0.2)
 
 
-def test_a_truth_to_a_noise_target_on_the_cluster_is_the_one_process_truth_of_its_samples(mesolab, cluster, wb):
+def test_a_truth_to_a_noise_target_on_the_cluster_is_the_one_process_truth_of_its_samples(mesolab, cluster, ref):
     scene = _sphere(mesolab)
     seen = []
     with mesolab.Workbench() as other:
@@ -156,7 +191,7 @@ def test_a_truth_to_a_noise_target_on_the_cluster_is_the_one_process_truth_of_it
         assert len(rounds) >= 2 and rounds[-1]["end"] == t["spp"]  # a first round of 16 samples was not enough
         assert rounds[-1]["noise_rel"] <= 0.01 < min(r["noise_rel"] for r in rounds[:-1])
         assert seen[-1][1] == 1.0 and "target 1.00%" in seen[-1][0]
-        _same(wb.render(scene, backend="truth", size=SIZE, spp=t["spp"], seed=9, aovs=["truth_stderr", "normal"]), spread)
+        _same(ref.render(scene, backend="truth", size=SIZE, spp=t["spp"], seed=9, aovs=["truth_stderr", "normal"]), spread)
         # The most samples (spp=) and a time limit end it too, each said.
         capped = other.render(scene, client=cluster.client, backend="truth", size=SIZE, noise=1e-4, spp=40, seed=9)
         assert (capped.truth["ended"], capped.truth["spp"]) == ("samples", 40)
