@@ -131,6 +131,18 @@ def test_ctrl_c_cancels_the_queue_and_stops_running_tasks(mesolab, cluster):
         assert time.monotonic() < deadline, f"tasks still running 20 s after Ctrl-C: {cluster.client.processing()}"
         time.sleep(0.2)
     assert len(cluster.client.nthreads()) == 2, "the workers survive a cancel"
+    # A frontier's points too (Ctrl-C once its first point is in): its queued settings are cancelled, the running ones stop at
+    # their next poll.
+    def interrupt_after_the_first_point(stage, fraction):
+        if stage.startswith("frontier of") and fraction > 0:
+            _thread.interrupt_main()
+
+    with pytest.raises(KeyboardInterrupt):
+        mesolab.frontier(scene, client=cluster.client, size=(512, 512), spp=4, repeat=100, budget=600, progress=interrupt_after_the_first_point)
+    deadline = time.monotonic() + 20
+    while any(cluster.client.processing().values()):
+        assert time.monotonic() < deadline, f"frontier tasks still running 20 s after Ctrl-C: {cluster.client.processing()}"
+        time.sleep(0.2)
 
 
 def test_a_mixed_cluster_is_refused(mesolab, ref):
