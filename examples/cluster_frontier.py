@@ -66,9 +66,11 @@ import mesolab  # noqa: E402
 
 scene = mesolab.load_preset(args.preset)
 options = dict(size=(args.size, args.size), spp=args.spp, budget=3600, repeat=3)
+os.environ["MESOLAB_CACHE_DIR"] = str(work / "one-process-cache")  # its truth apart: the cluster would continue it, not render it
 t0 = time.perf_counter()
 one = mesolab.frontier(scene, **options)
 one_s = time.perf_counter() - t0
+os.environ["MESOLAB_CACHE_DIR"] = str(work / "cache")
 
 with mesolab.cluster.local_cluster(args.workers, threads=1, folder=work) as client:
     started = {}

@@ -62,7 +62,9 @@ import mesolab  # noqa: E402
 with mesolab.cluster.local_cluster(args.workers, threads=1, folder=work) as client:  # caches of their own
     scene = mesolab.load_preset(args.preset)
     size = (args.size, args.size)
+    os.environ["MESOLAB_CACHE_DIR"] = str(work / "one-process-cache")  # this process's truth apart: the cluster would continue it
     wb = mesolab.Workbench()
+    os.environ["MESOLAB_CACHE_DIR"] = str(work / "cache")
     wb.render(scene, backend="cpu", size=(16, 16))  # this process's own warm-up (stages), outside the clock, as the workers' is not
     t0 = time.perf_counter()
     one = wb.render(scene, backend="truth", size=size, spp=args.spp, seed=1, aovs=["truth_stderr", "normal"])
