@@ -272,7 +272,12 @@ public:
         const int samples = p.end - p.first;
         batches_.resize(size_t(std::max(0, samples)));
         if (sources == 0 || samples <= 0) return;
-        const std::vector<double> power = source_power(p.lighting, centre, radius);
+        std::vector<double> power = source_power(p.lighting, centre, radius);
+        if (!guided_) {
+            guided_ = true;
+            if (!plain_ && !std::getenv("MESOLAB_TRUTH_NO_IMPORTANCE") && p.seen && !p.seen->empty()) guide(p, centre, radius, power);
+        }
+        if (!useful_.empty()) power = useful_;  // photons split by the power that reaches what the camera sees
         constexpr int kChunks = 64;
         if (!sized_) {
             // The events a photon leaves near the surface, from a pilot of kPilot photons whose
@@ -318,6 +323,7 @@ public:
                     std::vector<ScatterVertex>().swap(ch);
                 }
                 batches_[size_t(j)].events[size_t(c)] = CellMap<ScatterVertex>(std::move(events), 4.f * radius_[c], origin);
+                batches_[size_t(j)].events[size_t(c)].keep_weights([](const ScatterVertex& v) { return v.weight; });
             }
         });
     }
@@ -367,12 +373,7 @@ public:
                     // only x's facet plane cuts it as a rule.
                     const double hw = wall.hit() ? (t_b - t) * cos_w : 3.4e38;  // distance to the wall's plane
                     const double rd = std::clamp(hw, 0.25 * double(radius_[c]), double(radius_[c]));
-                    const float r2 = float(rd * rd);
-                    double found = 0.0;
-                    b.events[size_t(c)].for_each_near(z, float(rd), [&](const ScatterVertex& v) {
-                        const vec3 d = v.p - z;
-                        if (glm::dot(d, d) <= r2) found += double(v.weight);
-                    });
+                    const double found = b.events[size_t(c)].weight_within(z, float(rd));
                     if (!(found > 0.0)) continue;
                     // Its volume inside the medium: less the cap beyond x's facet plane and, to first
                     // order, the sliver between that plane and the surface bending away by its mean
@@ -415,6 +416,8 @@ private:
     static constexpr int kPilot = 4096;      // photons that size a batch
     static constexpr double kMostEvents = 8.0 * (1 << 20);  // events kept a sample, about (16 bytes each)
     static constexpr int kDistances = 4;    // points on each direction per channel
+    static constexpr int kGuide = 16;       // cells per side of a source's guided square (importance)
+    static constexpr int kGuidePilot = 32;  // pilot photons a cell
 
     // What a chunk of photons left: per channel, their exits and their events near the surface.
     struct Walks {
@@ -490,49 +493,181 @@ private:
     }
 
     // Photon i of batch k: its source (split: allocate's), its channel (in turn, each a third of
-    // the source's photons, weight x 3), then the walk: its scattering events near the surface
-    // and, where it leaves after a reflection or without scattering, its exit.
+    // the source's photons, weight x 3), where it starts (emit; the source's guide, when it has
+    // one, picks the cell of its two guided numbers) and its walk.
     void trace_photon(const TruthPrep& p, vec3 centre, float radius, const std::vector<int>& split, int k, int i, Walks& out) const {
         TruthRng rng(p.seed ^ 0x7472616e736c75ull, uint64_t(p.geometry) << 32 | uint64_t(i), uint64_t(k));
         const int source = int(std::upper_bound(split.begin(), split.end(), i) - split.begin());
         const int start = source == 0 ? 0 : split[size_t(source) - 1];
         const int channel = (i - start) % 3;
         const double per_source = double(split[size_t(source)] - start);
+        float u[4] = {rng.next(), rng.next(), rng.next(), rng.next()};
+        double factor = 1.0;  // the uniform cell's probability over the guided cell's
+        if (size_t(source) < guides_.size() && !guides_[size_t(source)].cdf.empty()) {
+            const Guide& g = guides_[size_t(source)];
+            const float pick = rng.next();
+            const int cell = int(std::min<size_t>(g.cdf.size() - 1, size_t(std::upper_bound(g.cdf.begin(), g.cdf.end(), double(pick)) - g.cdf.begin())));
+            factor = g.factor[size_t(cell)];
+            const int a = guided_pair(p.lighting, source);
+            u[a] = (float(cell % kGuide) + u[a]) / float(kGuide), u[a + 1] = (float(cell / kGuide) + u[a + 1]) / float(kGuide);
+        }
         vec3 o, d;
-        double power = 0.0;
-        const float u1 = rng.next(), u2 = rng.next(), u3 = rng.next(), u4 = rng.next();
+        const double power = emit(p.lighting, centre, radius, source, channel, u, o, d);
+        walk(p, o, d, 3.0 * power / per_source * factor, channel, rng, out);
+    }
+
+    // [Importance] More photons where the camera sees the object: importance-driven photon
+    // emission (Peter and Pietrek 1998, "Importance Driven Construction of Photon Maps", EGWR),
+    // with the camera's view as the importance. Each source's two guided numbers (guided_pair)
+    // fall in a kGuide x kGuide grid of cells of equal probability under the plain emission; a
+    // pilot of kGuidePilot photons a cell (their own streams, the same in every process) measures
+    // what each cell's photons bring near the seen points: the weight of their scattering events
+    // and exits within `reach` of one (three of the largest mean free path plus two radii, where
+    // the gather finds them). A photon then picks cell c with probability
+    //   P_c = 0.75 U_c / sum U + 0.25 / kGuide²,
+    // U_c that pilot's figure, and carries the weight times (1 / kGuide²) / P_c: the mean is the
+    // plain emission's for any U (a defensive mixture: a cell the pilot found useless keeps a
+    // quarter of its photons, at 4 times their weight). The sources share the photons by the power
+    // each brings near the seen points (the mean of U over the cells) in place of the power each
+    // sends towards the object. Points the camera sees only through other surfaces (a mirror) keep
+    // the defensive share.
+    void guide(const TruthPrep& p, vec3 centre, float radius, const std::vector<double>& power) {
+        // The seen points, dilated by `reach`: cells of a grid over the object's box.
+        float reach = 0.f;
+        for (int c = 0; c < 3; ++c)
+            if (sigma_t_[c] > 0.0) reach = std::max(reach, float(3.0 / sigma_t_[c]) + 2.f * radius_[c]);
+        if (!(reach > 0.f)) reach = longest_;
+        reach = std::min(reach, longest_);
+        const vec3 lo = lo_ - vec3(reach), ext = hi_ - lo_ + vec3(2.f * reach);
+        const float cell = std::max(0.5f * reach, std::max({ext.x, ext.y, ext.z}) / 160.f);
+        const glm::ivec3 n = glm::max(glm::ivec3(glm::ceil(ext / cell)), glm::ivec3(1));
+        auto index = [&](int x, int y, int z) { return (size_t(z) * size_t(n.y) + size_t(y)) * size_t(n.x) + size_t(x); };
+        std::vector<uint8_t> near(size_t(n.x) * size_t(n.y) * size_t(n.z), 0);
+        for (const vec3& q : *p.seen) {
+            const glm::ivec3 c = glm::clamp(glm::ivec3(glm::floor((q - lo) / cell)), glm::ivec3(0), n - 1);
+            near[index(c.x, c.y, c.z)] = 1;
+        }
+        // Dilated by m cells along each axis in turn (a running count over the window).
+        const int m = int(std::ceil(reach / cell));
+        for (int axis = 0; axis < 3; ++axis) {
+            const int len = n[axis];
+            const glm::ivec3 step(axis == 0, axis == 1, axis == 2);
+            const glm::ivec3 lines = n - step * (len - 1);
+            std::vector<uint8_t> line(static_cast<size_t>(len));
+            for (int z = 0; z < lines.z; ++z)
+                for (int y = 0; y < lines.y; ++y)
+                    for (int x = 0; x < lines.x; ++x) {
+                        for (int i = 0; i < len; ++i) line[size_t(i)] = near[index(x + step.x * i, y + step.y * i, z + step.z * i)];
+                        int count = 0;
+                        for (int i = 0; i < std::min(len, m); ++i) count += line[size_t(i)];
+                        for (int i = 0; i < len; ++i) {
+                            if (i + m < len) count += line[size_t(i + m)];
+                            if (i - m - 1 >= 0) count -= line[size_t(i - m - 1)];
+                            near[index(x + step.x * i, y + step.y * i, z + step.z * i)] = count > 0;
+                        }
+                    }
+        }
+        auto seen_near = [&](vec3 q) {
+            const glm::ivec3 c = glm::ivec3(glm::floor((q - lo) / cell));
+            if (glm::any(glm::lessThan(c, glm::ivec3(0))) || glm::any(glm::greaterThanEqual(c, n))) return false;
+            return near[index(c.x, c.y, c.z)] != 0;
+        };
+        // The pilot: per source and cell, the mean weight its photons bring near the seen points.
+        constexpr int cells = kGuide * kGuide;
+        const int sources = int(power.size());
+        std::vector<double> U(size_t(sources) * cells, 0.0);
+        mesolab::parallel_for(0, sources * cells, [&](int job) {
+            const int source = job / cells, c = job % cells;
+            if (!(power[size_t(source)] > 0.0)) return;
+            const int a = guided_pair(p.lighting, source);
+            Walks w;
+            double sum = 0.0;
+            for (int j = 0; j < kGuidePilot; ++j) {
+                TruthRng rng(0x6775696465ull, uint64_t(p.geometry) << 32 | uint64_t(job), uint64_t(j));
+                float u[4] = {rng.next(), rng.next(), rng.next(), rng.next()};
+                u[a] = (float(c % kGuide) + u[a]) / float(kGuide), u[a + 1] = (float(c / kGuide) + u[a + 1]) / float(kGuide);
+                vec3 o, d;
+                const int channel = j % 3;
+                const double start = 3.0 * emit(p.lighting, centre, radius, source, channel, u, o, d);
+                walk(p, o, d, start, channel, rng, w);
+                for (int ch = 0; ch < 3; ++ch) {
+                    for (const ScatterVertex& v : w.events[size_t(ch)])
+                        if (seen_near(v.p)) sum += double(v.weight);
+                    for (const PhotonExit& e : w.exits[size_t(ch)])
+                        if (seen_near(e.p)) sum += double(e.power);
+                    w.events[size_t(ch)].clear(), w.exits[size_t(ch)].clear();
+                }
+            }
+            U[size_t(job)] = sum / double(kGuidePilot);
+        });
+        guides_.assign(size_t(sources), Guide{});
+        useful_.assign(size_t(sources), 0.0);
+        double any = 0.0;
+        for (int source = 0; source < sources; ++source) {
+            double total = 0.0;
+            for (int c = 0; c < cells; ++c) total += U[size_t(source) * cells + size_t(c)];
+            useful_[size_t(source)] = total / double(cells);
+            any += total;
+            if (!(total > 0.0)) continue;
+            Guide& g = guides_[size_t(source)];
+            double cdf = 0.0;
+            for (int c = 0; c < cells; ++c) {
+                const double P = 0.75 * U[size_t(source) * cells + size_t(c)] / total + 0.25 / double(cells);
+                cdf += P;
+                g.cdf.push_back(cdf);
+                g.factor.push_back(1.0 / (double(cells) * P));
+            }
+            for (double& v : g.cdf) v /= cdf;
+        }
+        if (!(any > 0.0)) useful_.clear();  // nothing seen is lit: the split by power
+    }
+
+    // Which two of a photon's four numbers place it (the guided pair, from index a): a sun's
+    // point on its disc (0, 1); a point light's direction in its cone and the sky's direction (2, 3).
+    static int guided_pair(const Lighting& lighting, int source) {
+        return source < int(lighting.lights.size()) && !lighting.lights[size_t(source)].point ? 0 : 2;
+    }
+
+    // A photon of `source`, channel `channel`, from the numbers u: its start o and direction d
+    // (towards the object), and the power the source sends that way in that channel (what the
+    // photon would carry were it the source's only one).
+    double emit(const Lighting& lighting, vec3 centre, float radius, int source, int channel, const float u[4], vec3& o, vec3& d) const {
         auto disc = [&](vec3 towards_source) {  // a point of the disc facing `towards_source`, beyond the sphere
             vec3 t, b;
             basis(towards_source, t, b);
-            const float r = radius * std::sqrt(u1), phi = 2.f * kPi * u2;
+            const float r = radius * std::sqrt(u[0]), phi = 2.f * kPi * u[1];
             o = centre + towards_source * (1.01f * radius) + r * (std::cos(phi) * t + std::sin(phi) * b);
             d = -towards_source;
         };
-        if (source < int(p.lighting.lights.size())) {
-            const Light& l = p.lighting.lights[size_t(source)];
+        if (source < int(lighting.lights.size())) {
+            const Light& l = lighting.lights[size_t(source)];
             if (!l.point) {
                 disc(glm::normalize(l.direction));
-                power = double(l.radiance[channel]) * kPi * double(radius) * radius;
-            } else {
-                const vec3 to = centre - l.position;
-                const float dist = glm::length(to);
-                const double cos_max = dist > radius ? std::sqrt(1.0 - double(radius) * radius / (double(dist) * dist)) : -1.0;
-                const double cos_t = 1.0 - double(u3) * (1.0 - cos_max), sin_t = std::sqrt(std::max(0.0, 1.0 - cos_t * cos_t));
-                vec3 t, b;
-                const vec3 axis = dist > 0.f ? to / dist : vec3(0.f, 0.f, 1.f);
-                basis(axis, t, b);
-                const float phi = 2.f * kPi * u4;
-                o = l.position;
-                d = glm::normalize(float(sin_t) * (std::cos(phi) * t + std::sin(phi) * b) + float(cos_t) * axis);
-                power = double(l.radiance[channel]) * 2.0 * std::numbers::pi * (1.0 - cos_max);
+                return double(l.radiance[channel]) * kPi * double(radius) * radius;
             }
-        } else {
-            const vec3 w = uniform_sphere(u3, u4);  // towards where the light comes from
-            disc(w);
-            power = double(p.lighting.env.radiance(w)[channel]) * 4.0 * std::numbers::pi * std::numbers::pi * double(radius) * radius;
+            const vec3 to = centre - l.position;
+            const float dist = glm::length(to);
+            const double cos_max = dist > radius ? std::sqrt(1.0 - double(radius) * radius / (double(dist) * dist)) : -1.0;
+            const double cos_t = 1.0 - double(u[2]) * (1.0 - cos_max), sin_t = std::sqrt(std::max(0.0, 1.0 - cos_t * cos_t));
+            vec3 t, b;
+            const vec3 axis = dist > 0.f ? to / dist : vec3(0.f, 0.f, 1.f);
+            basis(axis, t, b);
+            const float phi = 2.f * kPi * u[3];
+            o = l.position;
+            d = glm::normalize(float(sin_t) * (std::cos(phi) * t + std::sin(phi) * b) + float(cos_t) * axis);
+            return double(l.radiance[channel]) * 2.0 * std::numbers::pi * (1.0 - cos_max);
         }
-        double weight = 3.0 * power / per_source;
+        const vec3 w = uniform_sphere(u[2], u[3]);  // towards where the light comes from
+        disc(w);
+        return double(lighting.env.radiance(w)[channel]) * 4.0 * std::numbers::pi * std::numbers::pi * double(radius) * radius;
+    }
+
+    // A photon of `channel` starting at o towards d with `weight`, shadowed by everything in the
+    // scene: its scattering events near the surface and, where it leaves after a reflection or
+    // without scattering, its exit.
+    void walk(const TruthPrep& p, vec3 o, vec3 d, double weight, int channel, TruthRng& rng, Walks& out) const {
         if (!(weight > 0.0)) return;
+        const double start_weight = weight;
         // Into the medium.
         const RayHit in = p.rt.intersect(o, d);
         if (in.geometry != p.geometry) return;  // shadowed by another object, or missed
@@ -583,7 +718,7 @@ private:
             // bound, less `free`, says so.)
             if (double(bound) - free < double(depth_[channel])) out.events[size_t(channel)].push_back({x, float(weight)});
             scattered = true, reflected = false;
-            if (weight < 0.2 * 3.0 * power / per_source) {  // Russian roulette below a fifth of the start
+            if (weight < 0.2 * start_weight) {  // Russian roulette below a fifth of the start
                 if (rng.next() < 0.5f) return;
                 weight *= 2.0;
             }
@@ -606,7 +741,15 @@ private:
     std::vector<float> mean_curvature_;  // per triangle, 1 / world unit (positive where the surface bends away from its outside)
     int photons_ = 0;  // per sample
     bool sized_ = false;  // photons_ set from the pilot
-    bool plain_ = false;  // photons split evenly over the sources (MESOLAB_TRUTH_PLAIN)
+    bool plain_ = false;  // photons split evenly over the sources, no importance (MESOLAB_TRUTH_PLAIN)
+    // Importance (guide): per source, the cells' cumulative probabilities and weight factors (none:
+    // the plain emission), and the power each brings near the seen points (empty: split by power).
+    struct Guide {
+        std::vector<double> cdf, factor;
+    };
+    std::vector<Guide> guides_;
+    std::vector<double> useful_;
+    bool guided_ = false;  // guide ran (or had nothing to go on)
     DistanceBound bound_;
     const RayScene* rt_ = nullptr;  // the scene of the last prepare (it outlives the samples)
     float eps_ = 1e-4f;
@@ -755,7 +898,7 @@ TruthObject make_truth_object(const Scene& s, const Evaluation& ev, int object, 
 TruthObject truth_object(const Scene& s, const Evaluation& ev, int object) { return make_truth_object(s, ev, object, 1.0); }
 
 ExitanceEstimate truth_exitance(const Scene& s, const Evaluation& ev, int object, const std::vector<vec3>& points, const std::vector<vec3>& normals,
-                                int samples, uint64_t seed, double radius_scale) {
+                                int samples, uint64_t seed, double radius_scale, bool importance) {
     if (points.size() != normals.size()) throw std::invalid_argument("truth_exitance: as many normals as points");
     std::shared_ptr<TranslucentTruth> material;
     const TruthObject t = make_truth_object(s, ev, object, radius_scale, &material);
@@ -771,7 +914,7 @@ ExitanceEstimate truth_exitance(const Scene& s, const Evaluation& ev, int object
     const float eps = std::max(1e-6f, 1e-5f * glm::length(hi - lo));
     std::vector<dvec3> sum(points.size(), dvec3(0.0)), sum2(points.size(), dvec3(0.0));
     for (int k = 0; k < samples; ++k) {
-        t.prepare(TruthPrep{rt, 0, lighting, k, k + 1, seed, eps, 0.5f * (lo + hi), 0.5f * glm::length(hi - lo), nullptr});
+        t.prepare(TruthPrep{rt, 0, lighting, k, k + 1, seed, eps, 0.5f * (lo + hi), 0.5f * glm::length(hi - lo), nullptr, importance ? &points : nullptr});
         mesolab::parallel_for(size_t(0), points.size(), [&](size_t i) {
             TruthHit h;
             h.p = points[i], h.ng = h.n = glm::normalize(normals[i]);

@@ -492,6 +492,27 @@ TruthAccumulator accumulate_truth(const Scene& s, const Evaluation& ev, int widt
         }
         rasterize(items, cam.raster, gb);
     }
+    // Where the camera sees each object that traces light before the pixels (its importance).
+    std::vector<std::vector<vec3>> seen(sc.objects.size());
+    bool tracers = false;
+    for (const TruthObject& ob : sc.objects) tracers = tracers || bool(ob.prepare);
+    if (tracers) {
+        std::vector<std::vector<std::vector<vec3>>> rows(size_t(height), std::vector<std::vector<vec3>>(sc.objects.size()));
+        mesolab::parallel_for(0, height, [&](int y) {
+            for (int x = 0; x < width; ++x) {
+                if (cam.texture_mode) {
+                    const size_t g = gb.index(x, y);
+                    if (gb.object[g] >= 0 && sc.objects[size_t(gb.object[g])].prepare) rows[size_t(y)][size_t(gb.object[g])].push_back(gb.position[g]);
+                } else {
+                    const vec3 d = cam.ray_dir(x, y);
+                    const RayHit h = sc.rt.intersect(cam.eye, d, 0.f);
+                    if (h.hit() && sc.objects[size_t(h.geometry)].prepare) rows[size_t(y)][size_t(h.geometry)].push_back(cam.eye + h.t * d);
+                }
+            }
+        });
+        for (auto& row : rows)  // in row order: the same list at any thread count
+            for (size_t i = 0; i < row.size(); ++i) seen[i].insert(seen[i].end(), row[i].begin(), row[i].end());
+    }
     TruthAccumulator a;
     if (from && from->continues(width, height, st.seed, st.first, st.spp) && !from->exitance.empty() == media) {
         a = *from;
@@ -516,7 +537,7 @@ TruthAccumulator accumulate_truth(const Scene& s, const Evaluation& ev, int widt
         for (size_t i = 0; i < sc.objects.size(); ++i)
             if (sc.objects[i].prepare)
                 sc.objects[i].prepare(TruthPrep{sc.rt, int(i), lighting, k0, k1, st.seed, sc.eps, 0.5f * (all.lo + all.hi),
-                                                0.5f * glm::length(all.hi - all.lo), cancel});
+                                                0.5f * glm::length(all.hi - all.lo), cancel, &seen[i]});
         sample_block(sc, lighting, cam, gb, lift, st, k0, k1, a, cancel);
         if (cancel && cancel->load()) {
             a.ended = TruthEnd::Cancelled;

@@ -142,6 +142,11 @@ struct TruthPrep {
     vec3 centre{0.f};   // the scene's bounding sphere
     float radius = 1.f;
     const std::atomic<bool>* cancel = nullptr;
+    // World points where the camera sees this object (the pixel centres' first hits; texture
+    // mode: the texels' surface points), the same for every block of a frame; empty: unknown.
+    // A light tracer may send more of its paths where they are seen (importance), never fewer
+    // than a fixed share elsewhere.
+    const std::vector<vec3>* seen = nullptr;
 };
 
 // One object as the truth sees it: a mesh placed by `to_world`, and its material.
