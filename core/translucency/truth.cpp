@@ -17,7 +17,7 @@
 //
 // The exitance at a point x the camera sees (truth.h) does not depend on the mesh's vertices:
 // - the light that leaves straight from a scattering event (most of it) comes from the events'
-//   density near x: from x, 16 directions into the medium (∝ cos θ) and on each 4 distances per
+//   density near x: from x, 16 directions into the medium (∝ cos θ) and on each 2 distances per
 //   channel (∝ σt e^-σt t), the events within r_c (a quarter of the channel's mean free path) of
 //   each such point over the ball's volume inside the medium, times T / (4 σt) (exitance_at);
 // - the light that leaves after a reflection since its last event, or without any, is the power of
@@ -415,7 +415,7 @@ private:
     static constexpr int kDirections = 16;  // directions from a point per sample
     static constexpr int kPilot = 4096;      // photons that size a batch
     static constexpr double kMostEvents = 8.0 * (1 << 20);  // events kept a sample, about (16 bytes each)
-    static constexpr int kDistances = 4;    // points on each direction per channel
+    static constexpr int kDistances = 2;    // points on each direction per channel
     static constexpr int kGuide = 16;       // cells per side of a source's guided square (importance)
     static constexpr int kGuidePilot = 32;  // pilot photons a cell
 
