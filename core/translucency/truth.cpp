@@ -9,11 +9,14 @@
 // transmittance, walk (free paths of mean 1/σt, albedo σs′/σt per step, Russian roulette below a
 // fifth of the weight), reflect or leave at the boundary by the exact Fresnel reflectance. Each
 // sample of the truth is an independent batch of photons (16 per square of the smallest mean free
-// path's side of the surface, at most 2^20 and fewer where a pilot shows each photon leaving many
-// events, so that a batch keeps about 8 million events, 128 MB; split over the lights and the
-// environment by the power each sends towards the object, a quarter evenly, one colour channel per
-// photon), so the spread over samples is the exitance's standard error; a batch is traced, used
-// for every pixel and dropped, one at a time.
+// path's side of the surface, at most 2^20, or 64 per point the camera sees where that is more, at
+// most 2^22; fewer where a pilot shows each photon leaving many events, so that a batch keeps about
+// 16 million events, 256 MB; split over the lights and the environment by the power each brings
+// where the camera looks, a quarter evenly, one colour channel per photon), so the spread over samples is the
+// exitance's standard error; a batch is traced, used for every pixel and dropped, one at a time.
+// A sample's gather costs about the same however many photons it finds (its look-ups wait on memory
+// more than they read), so larger batches than the surface alone asks for pay where many pixels
+// look: 64 a point gave the least noise² × time of 16, 64 and 256 a patch (fig9-bright, 512²).
 //
 // The exitance at a point x the camera sees (truth.h) does not depend on the mesh's vertices:
 // - the light that leaves straight from a scattering event (most of it) comes from the events'
@@ -233,7 +236,7 @@ public:
         }
         longest_ = glm::length(hi_ - lo_) * 1.01f;
         // Photons per sample: kPhotonsPerPatch per square of the smallest mean free path's side of
-        // the surface, within [2^14, 2^20].
+        // the surface, within [2^14, 2^20] (prepare raises it for the points the camera sees).
         photons_ = int(std::clamp(kPhotonsPerPatch * area / (smallest * smallest), double(1 << 14), double(1 << 20)));
     }
 
@@ -294,7 +297,10 @@ public:
             for (const Walks& w : walks)
                 for (const auto& e : w.events) events += e.size();
             const double per_photon = std::max(1.0, double(events) / double(split.back()));
-            photons_ = int(std::clamp(std::min(double(photons_), double(kMostEvents) / per_photon), double(1 << 12), double(1 << 20)));
+            // At least kPhotonsPerSeen a point the camera sees, within the events' budget.
+            double photons = double(photons_);
+            if (p.seen) photons = std::max(photons, kPhotonsPerSeen * double(p.seen->size()));
+            photons_ = int(std::clamp(std::min(photons, double(kMostEvents) / per_photon), double(1 << 12), double(1 << 22)));
             sized_ = true;
         }
         const std::vector<int> split = allocate(power, photons_);
@@ -412,9 +418,10 @@ public:
 private:
     static constexpr double kDepth = 8.0;  // events kept within this many mean free paths of the surface
     static constexpr double kPhotonsPerPatch = 16.0;
+    static constexpr double kPhotonsPerSeen = 64.0;
     static constexpr int kDirections = 16;  // directions from a point per sample
     static constexpr int kPilot = 4096;      // photons that size a batch
-    static constexpr double kMostEvents = 8.0 * (1 << 20);  // events kept a sample, about (16 bytes each)
+    static constexpr double kMostEvents = 16.0 * (1 << 20);  // events kept a sample, about (16 bytes each)
     static constexpr int kDistances = 2;    // points on each direction per channel
     static constexpr int kGuide = 16;       // cells per side of a source's guided square (importance)
     static constexpr int kGuidePilot = 32;  // pilot photons a cell
