@@ -423,7 +423,7 @@ private:
     static constexpr int kPilot = 4096;      // photons that size a batch
     static constexpr double kMostEvents = 16.0 * (1 << 20);  // events kept a sample, about (16 bytes each)
     static constexpr int kDistances = 2;    // points on each direction per channel
-    static constexpr int kGuide = 16;       // cells per side of a source's guided square (importance)
+    static constexpr int kGuide = 64;       // cells per side of a source's guided square (importance)
     static constexpr int kGuidePilot = 32;  // pilot photons a cell
 
     // What a chunk of photons left: per channel, their exits and their events near the surface.

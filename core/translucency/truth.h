@@ -30,6 +30,7 @@
 #include <cstdint>
 #include <cstring>
 #include <memory>
+#include <utility>
 #include <vector>
 
 namespace mesolab {
@@ -78,8 +79,9 @@ private:
 };
 
 // Records with a position, sorted into cubic cells of one size and found again by the cells a ball
-// overlaps (a hash table of the cells, open addressing). The records keep their given order within
-// a cell, so that a sum over a query is the same whatever threads made them.
+// overlaps (a dense grid of the cells where it is small next to the records, else a hash table of
+// those that hold any). The records keep their given order within a cell, so that a sum over a
+// query is the same whatever threads made them.
 template <class Record>
 class CellMap {
 public:
@@ -105,9 +107,20 @@ private:
         uint32_t begin = 0, end = 0;  // records_[begin, end); end == 0: an empty slot
     };
     const Cell* find(int32_t x, int32_t y, int32_t z) const;
+    // The records of the cells (x0..x1, y, z): one range, since the records are sorted by cell
+    // with x the fastest-changing coordinate. [begin, end); empty where none.
+    std::pair<uint32_t, uint32_t> row(int32_t x0, int32_t x1, int32_t y, int32_t z) const;
+    // The cells a ball overlaps, clamped to those that hold records: false where none.
+    bool cells_of(vec3 p, float radius, glm::ivec3& lo, glm::ivec3& hi) const;
     std::vector<Record> records_;  // grouped by cell
     std::vector<float> x_, y_, z_, w_;  // keep_weights: the records' positions and weights, the same order
-    std::vector<Cell> table_;      // a power of two
+    // Where the cells' grid (n_ cells on each axis from the origin) is small next to the records,
+    // each cell's first record: start_[x + n.x (y + n.y z)], one past the last cell the record count
+    // (a look-up is one read, and a row's ends lie side by side). Otherwise a hash table of the
+    // cells that hold records (open addressing, a power of two) and start_ empty.
+    std::vector<uint32_t> start_;
+    std::vector<Cell> table_;
+    glm::ivec3 n_{0};
     float inv_cell_ = 0.f;
     vec3 origin_{0.f};
 };
@@ -144,16 +157,39 @@ template <class Record>
 CellMap<Record>::CellMap(std::vector<Record> records, float cell, vec3 origin) : inv_cell_(1.f / cell), origin_(origin) {
     const size_t n = records.size();
     if (n == 0 || !(cell > 0.f) || n >= size_t(UINT32_MAX)) return;
-    // Each record's cell (counted from `origin`, which lies below every record) packed into a key
-    // of as many bits a coordinate as the records' extent needs, sorted by a stable radix sort of
-    // 16-bit digits: the records grouped by cell, in their given order within each.
-    std::vector<glm::uvec3> at(n);
-    glm::uvec3 most(0u);
-    for (size_t i = 0; i < n; ++i) {
-        const vec3 f = glm::clamp(glm::floor((records[i].p - origin_) * inv_cell_), vec3(0.f), vec3(float((1 << 21) - 1)));
-        at[i] = glm::uvec3(f);
-        most = glm::max(most, at[i]);
+    // Each record's cell, counted from `origin` (below every record), within [0, 2^21).
+    const float inv = inv_cell_;
+    const vec3 o = origin_;
+    auto axis = [inv](float p, float o) {
+        const float f = (p - o) * inv;
+        return f > 0.f ? uint32_t(std::min(f, float((1 << 21) - 1))) : 0u;
+    };
+    auto cell_of = [&](const Record& r) { return glm::uvec3(axis(r.p.x, o.x), axis(r.p.y, o.y), axis(r.p.z, o.z)); };
+    vec3 top = records[0].p;
+    for (size_t i = 1; i < n; ++i) top = glm::max(top, records[i].p);
+    const glm::uvec3 most(axis(top.x, o.x), axis(top.y, o.y), axis(top.z, o.z));
+    n_ = glm::ivec3(most) + 1;
+    const size_t cells = size_t(n_.x) * size_t(n_.y) * size_t(n_.z);
+    if (cells <= std::max(n, size_t(1) << 20)) {
+        // A dense grid: a stable counting sort by cell (x fastest), the records in their given
+        // order within each.
+        std::vector<uint32_t> key(n);
+        start_.assign(cells + 1, 0u);
+        for (size_t i = 0; i < n; ++i) {
+            const glm::uvec3 c = cell_of(records[i]);
+            key[i] = uint32_t(c.x + size_t(n_.x) * (c.y + size_t(n_.y) * c.z));
+            ++start_[key[i] + 1];
+        }
+        for (size_t k = 1; k <= cells; ++k) start_[k] += start_[k - 1];
+        records_.resize(n);
+        for (size_t i = 0; i < n; ++i) records_[start_[key[i]]++] = records[i];  // start_[k] becomes cell k + 1's first
+        for (size_t k = cells; k-- > 1;) start_[k] = start_[k - 1];
+        start_[0] = 0;
+        return;
     }
+    // A hash table of the cells that hold records. Each record's cell packed into a key of as many
+    // bits a coordinate as the records' extent needs (x the lowest), sorted by a stable radix sort
+    // of 16-bit digits: the records grouped by cell, in their given order within each.
     int bits[3];
     for (int a = 0; a < 3; ++a) {
         bits[a] = 1;
@@ -162,10 +198,10 @@ CellMap<Record>::CellMap(std::vector<Record> records, float cell, vec3 origin) :
     std::vector<uint64_t> key(n), key2(n);
     std::vector<uint32_t> index(n), index2(n);
     for (size_t i = 0; i < n; ++i) {
-        key[i] = uint64_t(at[i].x) | uint64_t(at[i].y) << bits[0] | uint64_t(at[i].z) << (bits[0] + bits[1]);
+        const glm::uvec3 c = cell_of(records[i]);
+        key[i] = uint64_t(c.x) | uint64_t(c.y) << bits[0] | uint64_t(c.z) << (bits[0] + bits[1]);
         index[i] = uint32_t(i);
     }
-    std::vector<glm::uvec3>().swap(at);
     std::vector<uint32_t> count(1 << 16);
     for (int shift = 0; shift < bits[0] + bits[1] + bits[2]; shift += 16) {
         std::fill(count.begin(), count.end(), 0u);
@@ -184,13 +220,13 @@ CellMap<Record>::CellMap(std::vector<Record> records, float cell, vec3 origin) :
     std::vector<uint64_t>().swap(key2);
     std::vector<uint32_t>().swap(index2);
     records_.resize(n);
-    size_t cells = 0;
+    size_t occupied = 0;
     for (size_t i = 0; i < n; ++i) {
         records_[i] = records[index[i]];
-        cells += i == 0 || key[i] != key[i - 1];
+        occupied += i == 0 || key[i] != key[i - 1];
     }
     size_t size = 16;
-    while (size < 2 * cells) size *= 2;
+    while (size < 2 * occupied) size *= 2;
     table_.assign(size, Cell{});
     for (size_t i = 0; i < n;) {
         size_t j = i + 1;
@@ -214,39 +250,61 @@ void CellMap<Record>::keep_weights(Weight&& weight) {
 }
 
 template <class Record>
+bool CellMap<Record>::cells_of(vec3 p, float radius, glm::ivec3& lo, glm::ivec3& hi) const {
+    if (start_.empty() && table_.empty()) return false;
+    const vec3 a = glm::floor((p - vec3(radius) - origin_) * inv_cell_), b = glm::floor((p + vec3(radius) - origin_) * inv_cell_);
+    if (!(a.x < float(n_.x) && a.y < float(n_.y) && a.z < float(n_.z) && b.x >= 0.f && b.y >= 0.f && b.z >= 0.f)) return false;
+    lo = glm::ivec3(glm::max(a, vec3(0.f)));
+    hi = glm::min(glm::ivec3(b), n_ - 1);
+    return true;
+}
+
+template <class Record>
+std::pair<uint32_t, uint32_t> CellMap<Record>::row(int32_t x0, int32_t x1, int32_t y, int32_t z) const {
+    if (!start_.empty()) {
+        const size_t k = size_t(x0) + size_t(n_.x) * (size_t(y) + size_t(n_.y) * size_t(z));
+        return {start_[k], start_[k + size_t(x1 - x0) + 1]};
+    }
+    uint32_t begin = 0, end = 0;
+    for (int32_t x = x0; x <= x1; ++x)
+        if (const Cell* c = find(x, y, z)) {
+            if (end == 0) begin = c->begin;
+            end = c->end;
+        }
+    return {begin, end};
+}
+
+template <class Record>
 double CellMap<Record>::weight_within(vec3 p, float radius) const {
-    if (table_.empty()) return 0.0;
+    glm::ivec3 lo, hi;
+    if (!cells_of(p, radius, lo, hi)) return 0.0;
     const float r2 = radius * radius;
-    const vec3 lo = glm::max(glm::floor((p - vec3(radius) - origin_) * inv_cell_), vec3(0.f)),
-               hi = glm::min(glm::floor((p + vec3(radius) - origin_) * inv_cell_), vec3(float((1 << 21) - 1)));
     double sum = 0.0;
-    for (int32_t z = int32_t(lo.z); z <= int32_t(hi.z); ++z)
-        for (int32_t y = int32_t(lo.y); y <= int32_t(hi.y); ++y)
-            for (int32_t x = int32_t(lo.x); x <= int32_t(hi.x); ++x) {
-                const Cell* c = find(x, y, z);
-                if (!c) continue;
-                // Eight independent lanes (GCC's vector extensions: SIMD on any target), then the
-                // rest one at a time.
-                typedef float f8 __attribute__((vector_size(32)));
-                typedef int32_t i8 __attribute__((vector_size(32)));
-                f8 acc = {0.f, 0.f, 0.f, 0.f, 0.f, 0.f, 0.f, 0.f};
-                uint32_t i = c->begin;
-                for (; i + 8 <= c->end; i += 8) {
-                    f8 px, py, pz, pw;
-                    std::memcpy(&px, &x_[i], sizeof px), std::memcpy(&py, &y_[i], sizeof py), std::memcpy(&pz, &z_[i], sizeof pz), std::memcpy(&pw, &w_[i], sizeof pw);
-                    const f8 dx = px - p.x, dy = py - p.y, dz = pz - p.z;
-                    const i8 inside = dx * dx + dy * dy + dz * dz <= r2;
-                    acc += (f8)((i8)pw & inside);
-                }
-                float lane[8];
-                std::memcpy(lane, &acc, sizeof lane);
-                float rest = 0.f;
-                for (; i < c->end; ++i) {
-                    const float dx = x_[i] - p.x, dy = y_[i] - p.y, dz = z_[i] - p.z;
-                    rest += dx * dx + dy * dy + dz * dz <= r2 ? w_[i] : 0.f;
-                }
-                sum += double((lane[0] + lane[1]) + (lane[2] + lane[3])) + double((lane[4] + lane[5]) + (lane[6] + lane[7])) + double(rest);
+    for (int32_t z = lo.z; z <= hi.z; ++z)
+        for (int32_t y = lo.y; y <= hi.y; ++y) {
+            const auto [begin, end] = row(lo.x, hi.x, y, z);
+            // Eight independent lanes (GCC's vector extensions: SIMD on any target), then the
+            // rest one at a time.
+            typedef float f8 __attribute__((vector_size(32)));
+            typedef int32_t i8 __attribute__((vector_size(32)));
+            f8 acc = {0.f, 0.f, 0.f, 0.f, 0.f, 0.f, 0.f, 0.f};
+            uint32_t i = begin;
+            for (; i + 8 <= end; i += 8) {
+                f8 px, py, pz, pw;
+                std::memcpy(&px, &x_[i], sizeof px), std::memcpy(&py, &y_[i], sizeof py), std::memcpy(&pz, &z_[i], sizeof pz), std::memcpy(&pw, &w_[i], sizeof pw);
+                const f8 dx = px - p.x, dy = py - p.y, dz = pz - p.z;
+                const i8 inside = dx * dx + dy * dy + dz * dz <= r2;
+                acc += (f8)((i8)pw & inside);
             }
+            float lane[8];
+            std::memcpy(lane, &acc, sizeof lane);
+            float rest = 0.f;
+            for (; i < end; ++i) {
+                const float dx = x_[i] - p.x, dy = y_[i] - p.y, dz = z_[i] - p.z;
+                rest += dx * dx + dy * dy + dz * dz <= r2 ? w_[i] : 0.f;
+            }
+            sum += double((lane[0] + lane[1]) + (lane[2] + lane[3])) + double((lane[4] + lane[5]) + (lane[6] + lane[7])) + double(rest);
+        }
     return sum;
 }
 
@@ -263,13 +321,12 @@ const typename CellMap<Record>::Cell* CellMap<Record>::find(int32_t x, int32_t y
 template <class Record>
 template <class F>
 void CellMap<Record>::for_each_near(vec3 p, float radius, F&& f) const {
-    if (table_.empty()) return;
-    const vec3 lo = glm::max(glm::floor((p - vec3(radius) - origin_) * inv_cell_), vec3(0.f)),
-               hi = glm::min(glm::floor((p + vec3(radius) - origin_) * inv_cell_), vec3(float((1 << 21) - 1)));
-    for (int32_t z = int32_t(lo.z); z <= int32_t(hi.z); ++z)
-        for (int32_t y = int32_t(lo.y); y <= int32_t(hi.y); ++y)
-            for (int32_t x = int32_t(lo.x); x <= int32_t(hi.x); ++x)
-                if (const Cell* c = find(x, y, z))
-                    for (uint32_t i = c->begin; i < c->end; ++i) f(records_[i]);
+    glm::ivec3 lo, hi;
+    if (!cells_of(p, radius, lo, hi)) return;
+    for (int32_t z = lo.z; z <= hi.z; ++z)
+        for (int32_t y = lo.y; y <= hi.y; ++y) {
+            const auto [begin, end] = row(lo.x, hi.x, y, z);
+            for (uint32_t i = begin; i < end; ++i) f(records_[i]);
+        }
 }
 }  // namespace mesolab::translucency
