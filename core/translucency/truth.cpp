@@ -24,7 +24,8 @@
 //   channel (∝ σt e^-σt t), the events within r_c (a quarter of the channel's mean free path) of
 //   each such point over the ball's volume inside the medium, times T / (4 σt) (exitance_at);
 // - the light that leaves after a reflection since its last event, or without any, is the power of
-//   those photons that left within r_c of x, over π r_c².
+//   those photons that left within r_c of x, over π r_c²; the light that crosses to the first wall
+//   without scattering and leaves there is each photon's expected share of it (walk, [Ballistic]).
 // Both blur at r_c, which the slab of tests/translucency (12 triangles or 3 mm squares, r and r/2)
 // shows to be below the noise. A photon's free path shorter than the distance to the nearest
 // triangle (DistanceBound) moves without a ray cast: the same result as casting it, sooner.
@@ -423,6 +424,7 @@ private:
     static constexpr int kPilot = 4096;      // photons that size a batch
     static constexpr double kMostEvents = 16.0 * (1 << 20);  // events kept a sample, about (16 bytes each)
     static constexpr int kDistances = 2;    // points on each direction per channel
+    static constexpr double kBallistic = 3.0;  // mean free paths to the first wall within which its exit is kept as expected
     static constexpr int kGuide = 64;       // cells per side of a source's guided square (importance)
     static constexpr int kGuidePilot = 32;  // pilot photons a cell
 
@@ -688,12 +690,39 @@ private:
         const double sigma_t = sigma_t_[channel];  // 1 / world unit
         const double albedo = (s_.medium.sigma_s[channel] + s_.medium.sigma_a[channel]) > 0.0
                                   ? s_.medium.sigma_s[channel] / (s_.medium.sigma_s[channel] + s_.medium.sigma_a[channel]) : 0.0;
+        // [Ballistic] Where the first wall the photon meets lies within kBallistic mean free paths,
+        // the light that crosses to it without scattering and leaves there is kept as its expected
+        // value: weight e^(-σt t) (1 - F) at that wall, for every such photon (an expected-value
+        // estimate of one term of the walk's sum; Spanier and Gelbard 1969, "Monte Carlo
+        // Principles and Neutron Transport Problems"); the walk below is drawn as before and
+        // leaves nothing where its first flight ends there. Through a part thinner than a mean
+        // free path (an ear) every photon then brings its share of that light, not a rare few all
+        // of it. Farther walls (whether one is near depends only on where the photon enters, so
+        // either estimate is unbiased) keep the drawn exit, and need no longer ray.
+        const float near = sigma_t > 0.0 ? float(kBallistic / sigma_t) : 3.4e38f;
+        const RayHit first = p.rt.intersect(x, d, 0.f, near);
+        if (first.hit() && first.geometry == p.geometry) {
+            vec3 m = glm::normalize(first.ng);
+            if (glm::dot(m, d) > 0.f) m = -m;  // inwards
+            double ct = 0.0;
+            const double F = fresnel(-double(glm::dot(m, d)), 1.0 / eta, ct);
+            const double crossed = weight * std::exp(-sigma_t * double(first.t)) * (1.0 - F);
+            if (crossed > 0.0) {
+                PhotonExit e;
+                e.p = x + first.t * d;
+                e.power = float(crossed);
+                for (int c = 0; c < 3; ++c) e.n[c] = int8_t(std::lround(-127.f * m[c]));
+                out.exits[size_t(channel)].push_back(e);
+            }
+        }
         bool scattered = false, reflected = false;  // since the last scattering event
         for (int step = 0; step < 1000000; ++step) {
             const double free = sigma_t > 0.0 ? -std::log(1.0 - double(rng.next())) / sigma_t : 3.4e38;
-            // Nothing within `free`: the ray cast would find nothing, so it is not cast.
+            // Nothing within `free`: the ray cast would find nothing, so it is not cast. The first
+            // flight's wall is known.
             const float bound = bound_.at(x);
-            const RayHit h = free < double(bound) ? RayHit{} : p.rt.intersect(x, d, 0.f, float(std::min(free, 3.4e38)));
+            const RayHit h = step == 0 && (first.hit() || free < double(near)) ? (first.hit() && double(first.t) <= free ? first : RayHit{})
+                             : free < double(bound) ? RayHit{} : p.rt.intersect(x, d, 0.f, float(std::min(free, 3.4e38)));
             if (h.hit()) {
                 if (h.geometry != p.geometry) return;  // another object inside this one: absorbed there
                 vec3 m = glm::normalize(h.ng);
@@ -707,8 +736,9 @@ private:
                     reflected = true;
                     continue;
                 }
-                // Out. Straight from an event: the events account for it. Otherwise kept.
-                if (!scattered || reflected) {
+                // Out. Straight from an event: the events account for it; at the end of the first
+                // flight: its expected value is kept already. Otherwise kept.
+                if (!(step == 0 && first.hit()) && (!scattered || reflected)) {
                     PhotonExit e;
                     e.p = at;
                     e.power = float(weight);

@@ -9,7 +9,7 @@ namespace mesolab {
 namespace {
 // What an entry is of, in full (the store compares it, so a hash collision is a miss).
 std::string key_text(const std::string& version, const Scene& s, int width, int height, uint64_t seed) {
-    std::string t = version + "\nsums exact; translucency's exitance gathered, its photons split by power and sent where the camera sees the object, two distances a direction, 64 photons a point seen, a guide of 64x64 cells\n";  // the truths' format and estimators
+    std::string t = version + "\nsums exact; translucency's exitance gathered, its photons split by power and sent where the camera sees the object, two distances a direction, 64 photons a point seen, a guide of 64x64 cells, ballistic exits kept as expected\n";  // the truths' format and estimators
     // The developer switch that selects the plain estimators (bumpsynth's without the split of
     // direct light, translucency's photons split evenly over the sources), and the one that sends
     // translucency's photons without the camera's importance: not the same bytes.
