@@ -315,22 +315,14 @@ public:
             const int j = job / 6, c = (job / 2) % 3;
             const vec3 origin = lo_ - vec3(4.f * radius_[c]);
             if (job % 2 == 0) {
-                std::vector<PhotonExit> exits;
-                for (int q = 0; q < kChunks; ++q) {  // in chunk order: the same bytes at any thread count
-                    auto& ch = chunks[size_t(j) * kChunks + size_t(q)].exits[size_t(c)];
-                    exits.insert(exits.end(), ch.begin(), ch.end());
-                    std::vector<PhotonExit>().swap(ch);
-                }
-                batches_[size_t(j)].exits[size_t(c)] = CellMap<PhotonExit>(std::move(exits), 2.f * radius_[c], origin);
+                // The chunks in order: the same bytes at any thread count.
+                std::vector<std::vector<PhotonExit>*> exits;
+                for (int q = 0; q < kChunks; ++q) exits.push_back(&chunks[size_t(j) * kChunks + size_t(q)].exits[size_t(c)]);
+                batches_[size_t(j)].exits[size_t(c)] = CellMap<PhotonExit>(exits, 2.f * radius_[c], origin);
             } else {
-                std::vector<ScatterVertex> events;
-                for (int q = 0; q < kChunks; ++q) {
-                    auto& ch = chunks[size_t(j) * kChunks + size_t(q)].events[size_t(c)];
-                    events.insert(events.end(), ch.begin(), ch.end());
-                    std::vector<ScatterVertex>().swap(ch);
-                }
-                batches_[size_t(j)].events[size_t(c)] = CellMap<ScatterVertex>(std::move(events), 4.f * radius_[c], origin);
-                batches_[size_t(j)].events[size_t(c)].keep_weights([](const ScatterVertex& v) { return v.weight; });
+                std::vector<std::vector<ScatterVertex>*> events;
+                for (int q = 0; q < kChunks; ++q) events.push_back(&chunks[size_t(j) * kChunks + size_t(q)].events[size_t(c)]);
+                batches_[size_t(j)].events[size_t(c)] = CellMap<ScatterVertex>(events, 4.f * radius_[c], origin, [](const ScatterVertex& v) { return v.weight; });
             }
         });
     }

@@ -27,9 +27,11 @@
 #include "core/stage.h"
 
 #include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <memory>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -87,7 +89,12 @@ class CellMap {
 public:
     CellMap() = default;
     // `origin`: a corner below every record (cells are counted from it); `cell`: the cells' side.
-    CellMap(std::vector<Record> records, float cell, vec3 origin);
+    CellMap(std::vector<Record> records, float cell, vec3 origin) : CellMap(std::vector<std::vector<Record>*>{&records}, cell, origin) {}
+    // The same from parts: their records in order, part after part, as if joined (each part is
+    // emptied on the way, so that they are never held twice). With `weight`, as keep_weights(weight)
+    // after it, without the records ever being held in the cells' order.
+    template <class Weight = std::nullptr_t>
+    CellMap(const std::vector<std::vector<Record>*>& parts, float cell, vec3 origin, Weight weight = nullptr);
     // Calls f(record) for every record in the cells that the ball (p, radius) overlaps.
     template <class F>
     void for_each_near(vec3 p, float radius, F&& f) const;
@@ -154,8 +161,11 @@ inline uint64_t cell_hash(int32_t x, int32_t y, int32_t z) {
 }  // namespace detail
 
 template <class Record>
-CellMap<Record>::CellMap(std::vector<Record> records, float cell, vec3 origin) : inv_cell_(1.f / cell), origin_(origin) {
-    const size_t n = records.size();
+template <class Weight>
+CellMap<Record>::CellMap(const std::vector<std::vector<Record>*>& parts, float cell, vec3 origin, Weight weight) : inv_cell_(1.f / cell), origin_(origin) {
+    constexpr bool weights_only = !std::is_same_v<Weight, std::nullptr_t>;
+    size_t n = 0;
+    for (const std::vector<Record>* part : parts) n += part->size();
     if (n == 0 || !(cell > 0.f) || n >= size_t(UINT32_MAX)) return;
     // Each record's cell, counted from `origin` (below every record), within [0, 2^21).
     const float inv = inv_cell_;
@@ -165,8 +175,9 @@ CellMap<Record>::CellMap(std::vector<Record> records, float cell, vec3 origin) :
         return f > 0.f ? uint32_t(std::min(f, float((1 << 21) - 1))) : 0u;
     };
     auto cell_of = [&](const Record& r) { return glm::uvec3(axis(r.p.x, o.x), axis(r.p.y, o.y), axis(r.p.z, o.z)); };
-    vec3 top = records[0].p;
-    for (size_t i = 1; i < n; ++i) top = glm::max(top, records[i].p);
+    vec3 top(-3.4e38f);
+    for (const std::vector<Record>* part : parts)
+        for (const Record& r : *part) top = glm::max(top, r.p);
     const glm::uvec3 most(axis(top.x, o.x), axis(top.y, o.y), axis(top.z, o.z));
     n_ = glm::ivec3(most) + 1;
     const size_t cells = size_t(n_.x) * size_t(n_.y) * size_t(n_.z);
@@ -175,17 +186,38 @@ CellMap<Record>::CellMap(std::vector<Record> records, float cell, vec3 origin) :
         // order within each.
         std::vector<uint32_t> key(n);
         start_.assign(cells + 1, 0u);
-        for (size_t i = 0; i < n; ++i) {
-            const glm::uvec3 c = cell_of(records[i]);
-            key[i] = uint32_t(c.x + size_t(n_.x) * (c.y + size_t(n_.y) * c.z));
-            ++start_[key[i] + 1];
-        }
+        size_t i = 0;
+        for (const std::vector<Record>* part : parts)
+            for (const Record& r : *part) {
+                const glm::uvec3 c = cell_of(r);
+                key[i] = uint32_t(c.x + size_t(n_.x) * (c.y + size_t(n_.y) * c.z));
+                ++start_[key[i++] + 1];
+            }
         for (size_t k = 1; k <= cells; ++k) start_[k] += start_[k - 1];
-        records_.resize(n);
-        for (size_t i = 0; i < n; ++i) records_[start_[key[i]]++] = records[i];  // start_[k] becomes cell k + 1's first
+        if constexpr (weights_only)
+            x_.resize(n), y_.resize(n), z_.resize(n), w_.resize(n);
+        else
+            records_.resize(n);
+        i = 0;
+        for (std::vector<Record>* part : parts) {
+            for (const Record& r : *part) {
+                const uint32_t to = start_[key[i++]]++;  // start_[k] becomes cell k + 1's first
+                if constexpr (weights_only)
+                    x_[to] = r.p.x, y_[to] = r.p.y, z_[to] = r.p.z, w_[to] = weight(r);
+                else
+                    records_[to] = r;
+            }
+            std::vector<Record>().swap(*part);
+        }
         for (size_t k = cells; k-- > 1;) start_[k] = start_[k - 1];
         start_[0] = 0;
         return;
+    }
+    std::vector<Record> records;
+    records.reserve(n);
+    for (std::vector<Record>* part : parts) {
+        records.insert(records.end(), part->begin(), part->end());
+        std::vector<Record>().swap(*part);
     }
     // A hash table of the cells that hold records. Each record's cell packed into a key of as many
     // bits a coordinate as the records' extent needs (x the lowest), sorted by a stable radix sort
@@ -238,6 +270,7 @@ CellMap<Record>::CellMap(std::vector<Record> records, float cell, vec3 origin) :
         table_[slot] = Cell{x, y, z, uint32_t(i), uint32_t(j)};
         i = j;
     }
+    if constexpr (weights_only) keep_weights(weight);
 }
 
 template <class Record>

@@ -1,7 +1,8 @@
 // The cells that translucency's truth finds its photons' events and exits in (CellMap, in
 // core/translucency/truth.h): a ball's sum of weights and its records are those a brute-force scan
 // finds, whether the cells sit in a dense grid (records packed in a small box) or in a hash table
-// (records in a few far-apart clusters), with balls that reach past the records' extent on every side.
+// (records in a few far-apart clusters), with balls that reach past the records' extent on every
+// side; built from parts, it gives the same sums to the bit.
 #include "core/translucency/truth.h"
 
 #include <gtest/gtest.h>
@@ -36,6 +37,14 @@ void expect_as_brute_force(const std::vector<ScatterVertex>& all, float cell, in
     CellMap<ScatterVertex> found(all, cell, lo - vec3(cell));
     CellMap<ScatterVertex> sums(all, cell, lo - vec3(cell));
     sums.keep_weights([](const ScatterVertex& v) { return v.weight; });
+    // The same records in uneven parts (one empty), weights only: the same sums, to the bit.
+    std::vector<std::vector<ScatterVertex>> pieces(4);
+    for (size_t i = 0; i < all.size(); ++i) pieces[i < all.size() / 7 ? 0 : i < all.size() / 2 ? 2 : 3].push_back(all[i]);
+    std::vector<std::vector<ScatterVertex>*> parts;
+    for (auto& piece : pieces) parts.push_back(&piece);
+    const CellMap<ScatterVertex> parted(parts, cell, lo - vec3(cell), [](const ScatterVertex& v) { return v.weight; });
+    for (const auto& piece : pieces) EXPECT_TRUE(piece.empty());  // emptied on the way
+    EXPECT_EQ(parted.size(), 0u);  // positions and weights only
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> u(0.f, 1.f);
     int nonempty = 0;
@@ -52,6 +61,7 @@ void expect_as_brute_force(const std::vector<ScatterVertex>& all, float cell, in
         }
         nonempty += inside > 0;
         EXPECT_NEAR(sums.weight_within(p, radius), expected, 1e-5 * (1.0 + expected)) << "ball " << q << " at radius " << radius;
+        EXPECT_EQ(parted.weight_within(p, radius), sums.weight_within(p, radius)) << "ball " << q << ", from parts";
         int near = 0, near_inside = 0;
         found.for_each_near(p, radius, [&](const ScatterVertex& v) {
             ++near;
