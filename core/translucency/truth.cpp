@@ -699,13 +699,7 @@ private:
             double ct = 0.0;
             const double F = fresnel(-double(glm::dot(m, d)), 1.0 / eta, ct);
             const double crossed = weight * std::exp(-sigma_t * double(first.t)) * (1.0 - F);
-            if (crossed > 0.0) {
-                PhotonExit e;
-                e.p = x + first.t * d;
-                e.power = float(crossed);
-                for (int c = 0; c < 3; ++c) e.n[c] = int8_t(std::lround(-127.f * m[c]));
-                out.exits[size_t(channel)].push_back(e);
-            }
+            if (crossed > 0.0) out.exits[size_t(channel)].push_back(PhotonExit::through(x + first.t * d, float(crossed), m));
         }
         bool scattered = false, reflected = false;  // since the last scattering event
         for (int step = 0; step < 1000000; ++step) {
@@ -730,13 +724,7 @@ private:
                 }
                 // Out. Straight from an event: the events account for it; at the end of the first
                 // flight: its expected value is kept already. Otherwise kept.
-                if (!(step == 0 && first.hit()) && (!scattered || reflected)) {
-                    PhotonExit e;
-                    e.p = at;
-                    e.power = float(weight);
-                    for (int c = 0; c < 3; ++c) e.n[c] = int8_t(std::lround(-127.f * m[c]));
-                    out.exits[size_t(channel)].push_back(e);
-                }
+                if (!(step == 0 && first.hit()) && (!scattered || reflected)) out.exits[size_t(channel)].push_back(PhotonExit::through(at, float(weight), m));
                 return;
             }
             x += float(free) * d;

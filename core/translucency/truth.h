@@ -139,6 +139,15 @@ struct PhotonExit {
     vec3 p{0.f};
     float power = 0.f;
     int8_t n[3] = {0, 0, 0};  // outward unit normal x 127
+
+    // The exit at `at` carrying `power`, through a facet whose inward unit normal is `m`.
+    static PhotonExit through(vec3 at, float power, vec3 m) {
+        PhotonExit e;
+        e.p = at;
+        e.power = power;
+        for (int c = 0; c < 3; ++c) e.n[c] = int8_t(std::lround(-127.f * m[c]));
+        return e;
+    }
 };
 
 // A scattering event of a photon of one channel near the surface: the point (world) and the
