@@ -298,6 +298,35 @@ double rms_of(const PointSamples& ps, const ModelFn& model, const ViewTable& tab
 }
 
 // [SECTION] Alternation
+void alternate(const PointSamples& ps, const FitOptions& o, const ViewTable& ones, const ModelFn& model, const std::function<void(const ViewTable&)>& refit,
+               ClothBrdf& b, FitReport& rep) {
+    rep.rounds = 1;
+    rep.converged = !o.lookup_table;
+    if (o.lookup_table) {
+        b.table = fit_table(ps, model);
+        ViewTable prev = ones;
+        for (int round = 1; round < o.max_rounds; ++round) {
+            double change = 0.0;
+            for (size_t i = 0; i < b.table.T.size(); ++i)
+                for (int c = 0; c < 3; ++c) change += std::abs(b.table.T[i][c] - prev.T[i][c]);
+            change /= std::max<double>(1.0, 3.0 * double(b.table.T.size()));
+            if (change < o.tolerance) {
+                rep.converged = true;
+                break;
+            }
+            prev = b.table;
+            refit(b.table);
+            b.table = fit_table(ps, model);
+            ++rep.rounds;
+        }
+    }
+    // The bound on f_r: twice the largest sample.
+    dvec3 peak(0.0);
+    for (const BrdfSample& s : ps.s) peak = glm::max(peak, s.f);
+    b.f_max = 2.0 * peak;
+    rep.rms = rms_of(ps, model, b.table, &rep.rel_rms);
+}
+
 ClothBrdf fit_brdf(const PointSamples& ps, const FitOptions& o, FitReport* report) {
     if (o.sheen) return fit_sheen(ps, o, report);
     if (o.lobes < 1 || o.lobes > 3) throw InputError("cloth.lobes: " + std::to_string(o.lobes) + " must be 1, 2 or 3");
@@ -317,32 +346,9 @@ ClothBrdf fit_brdf(const PointSamples& ps, const FitOptions& o, FitReport* repor
         ones = unit_table(ps);
     }
     b.L = fit_lobes(ps, ones, starts, o, &rep.starts_tried);
-    rep.rounds = 1;
-    rep.converged = !o.lookup_table;
-    if (o.lookup_table) {
-        b.table = fit_table(ps, b.L);
-        ViewTable prev = ones;
-        for (int round = 1; round < o.max_rounds; ++round) {
-            double change = 0.0;
-            for (size_t i = 0; i < b.table.T.size(); ++i)
-                for (int c = 0; c < 3; ++c) change += std::abs(b.table.T[i][c] - prev.T[i][c]);
-            change /= std::max<double>(1.0, 3.0 * double(b.table.T.size()));
-            if (change < o.tolerance) {
-                rep.converged = true;
-                break;
-            }
-            prev = b.table;
-            // Later rounds start from the current lobes only.
-            b.L = fit_lobes(ps, b.table, {b.L}, o);
-            b.table = fit_table(ps, b.L);
-            ++rep.rounds;
-        }
-    }
-    // The bound on f_r: twice the largest sample.
-    dvec3 peak(0.0);
-    for (const BrdfSample& s : ps.s) peak = glm::max(peak, s.f);
-    b.f_max = 2.0 * peak;
-    rep.rms = rms_of(ps, [&b](dvec3 l, dvec3 v) { return b.L.f(l, v); }, b.table, &rep.rel_rms);
+    const auto model = [&b](dvec3 l, dvec3 v) { return b.L.f(l, v); };
+    // Later rounds start from the current lobes only.
+    alternate(ps, o, ones, model, [&](const ViewTable& table) { b.L = fit_lobes(ps, table, {b.L}, o); }, b, rep);
     if (report) *report = rep;
     return b;
 }

@@ -93,6 +93,16 @@ ViewTable unit_table(const PointSamples& samples);
 // FitReport::rms (returned) and rel_rms (in *rel) of model × table over the samples.
 double rms_of(const PointSamples& samples, const ModelFn& model, const ViewTable& table, double* rel);
 
+// The alternation of steps 1 and 2 after a first fit of the model under the table of ones
+// (`ones`): without options.lookup_table, no table; with it, the table for the model (fit_table),
+// the model refitted under that table (`refit`) and the table again, until the table's mean
+// absolute change a view and channel is below options.tolerance (report.converged) or
+// options.max_rounds fits of the model are made (report.rounds, the first counted). Then b.f_max
+// (twice the largest sample) and report.rms and rel_rms of model × table. `model` evaluates b's
+// current model.
+void alternate(const PointSamples& samples, const FitOptions& options, const ViewTable& ones, const ModelFn& model,
+               const std::function<void(const ViewTable&)>& refit, ClothBrdf& b, FitReport& report);
+
 // The built-in starting points for `lobes` lobes, scaled to the samples' magnitude.
 std::vector<Lafortune> default_starts(const PointSamples& samples, int lobes);
 }  // namespace mesolab::cloth

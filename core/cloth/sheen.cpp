@@ -175,32 +175,9 @@ ClothBrdf fit_sheen(const PointSamples& ps, const FitOptions& o, FitReport* repo
     b.sheen = SheenLobe{};
     const ViewTable ones = o.lookup_table ? unit_table(ps) : ViewTable{};
     fit_model(ps, ones, o, b.L.kd, *b.sheen, false);
-    rep.rounds = 1;
-    rep.converged = !o.lookup_table;
     rep.starts_tried = kGrid;
     const auto model = [&b](dvec3 l, dvec3 v) { return b.f_model(l, v); };
-    if (o.lookup_table) {
-        b.table = fit_table(ps, model);
-        ViewTable prev = ones;
-        for (int round = 1; round < o.max_rounds; ++round) {
-            double change = 0.0;
-            for (size_t i = 0; i < b.table.T.size(); ++i)
-                for (int c = 0; c < 3; ++c) change += std::abs(b.table.T[i][c] - prev.T[i][c]);
-            change /= std::max<double>(1.0, 3.0 * double(b.table.T.size()));
-            if (change < o.tolerance) {
-                rep.converged = true;
-                break;
-            }
-            prev = b.table;
-            fit_model(ps, b.table, o, b.L.kd, *b.sheen, true);
-            b.table = fit_table(ps, model);
-            ++rep.rounds;
-        }
-    }
-    dvec3 peak(0.0);
-    for (const BrdfSample& s : ps.s) peak = glm::max(peak, s.f);
-    b.f_max = 2.0 * peak;
-    rep.rms = rms_of(ps, model, b.table, &rep.rel_rms);
+    alternate(ps, o, ones, model, [&](const ViewTable& table) { fit_model(ps, table, o, b.L.kd, *b.sheen, true); }, b, rep);
     if (report) *report = rep;
     return b;
 }
