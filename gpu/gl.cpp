@@ -60,18 +60,21 @@ Buffer make_storage_buffer(const void* data, size_t bytes, GLenum usage) {
     return Buffer(id);
 }
 
-Buffer make_storage_buffer_filled(size_t bytes, const std::function<void(void* dst)>& fill, const std::string& what, GLenum usage) {
-    Buffer b = make_storage_buffer(nullptr, bytes, usage);
-    if (bytes == 0) return b;
-    glBindBuffer(GL_SHADER_STORAGE_BUFFER, b.get());
-    void* dst = glMapBufferRange(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(bytes), GL_MAP_WRITE_BIT | GL_MAP_INVALIDATE_BUFFER_BIT);
-    if (!dst) {
+namespace {
+// f(pointer) on storage buffer b's first `bytes`, mapped with `access`: the buffer unmapped and
+// unbound again whatever f does. runtime_error naming `what` where the driver cannot map it, or
+// where its storage was lost while mapped (`use`: "for writing" or "for reading"; `done`:
+// "written" or "read").
+void with_mapped_storage(GLuint b, size_t bytes, GLbitfield access, const std::string& what, const char* use, const char* done, const std::function<void(void*)>& f) {
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, b);
+    void* p = glMapBufferRange(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(bytes), access);
+    if (!p) {
         glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
         check_gl(what.c_str());
-        throw std::runtime_error(what + ": the driver could not map a buffer of " + std::to_string(bytes) + " bytes for writing");
+        throw std::runtime_error(what + ": the driver could not map a buffer of " + std::to_string(bytes) + " bytes " + use);
     }
     try {
-        fill(dst);
+        f(p);
     } catch (...) {
         glUnmapBuffer(GL_SHADER_STORAGE_BUFFER);
         glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
@@ -80,30 +83,20 @@ Buffer make_storage_buffer_filled(size_t bytes, const std::function<void(void* d
     const GLboolean intact = glUnmapBuffer(GL_SHADER_STORAGE_BUFFER);
     glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
     check_gl(what.c_str());
-    if (!intact) throw std::runtime_error(what + ": a buffer's storage was lost while it was written (GL_FALSE from glUnmapBuffer)");
+    if (!intact) throw std::runtime_error(what + ": a buffer's storage was lost while it was " + done + " (GL_FALSE from glUnmapBuffer)");
+}
+}  // namespace
+
+Buffer make_storage_buffer_filled(size_t bytes, const std::function<void(void* dst)>& fill, const std::string& what, GLenum usage) {
+    Buffer b = make_storage_buffer(nullptr, bytes, usage);
+    if (bytes == 0) return b;
+    with_mapped_storage(b.get(), bytes, GL_MAP_WRITE_BIT | GL_MAP_INVALIDATE_BUFFER_BIT, what, "for writing", "written", fill);
     return b;
 }
 
 void read_storage_buffer(GLuint b, size_t bytes, const std::function<void(const void* src)>& read, const std::string& what) {
     if (bytes == 0) return;
-    glBindBuffer(GL_SHADER_STORAGE_BUFFER, b);
-    const void* src = glMapBufferRange(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(bytes), GL_MAP_READ_BIT);
-    if (!src) {
-        glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
-        check_gl(what.c_str());
-        throw std::runtime_error(what + ": the driver could not map " + std::to_string(bytes) + " bytes for reading");
-    }
-    try {
-        read(src);
-    } catch (...) {
-        glUnmapBuffer(GL_SHADER_STORAGE_BUFFER);
-        glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
-        throw;
-    }
-    const GLboolean intact = glUnmapBuffer(GL_SHADER_STORAGE_BUFFER);
-    glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
-    check_gl(what.c_str());
-    if (!intact) throw std::runtime_error(what + ": a buffer's storage was lost while it was read (GL_FALSE from glUnmapBuffer)");
+    with_mapped_storage(b, bytes, GL_MAP_READ_BIT, what, "for reading", "read", [&read](void* src) { read(src); });
 }
 
 Texture make_buffer_texture(const Buffer& b, GLenum format, GLintptr offset, GLsizeiptr bytes) {

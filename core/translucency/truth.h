@@ -223,10 +223,14 @@ CellMap<Record>::CellMap(const std::vector<std::vector<Record>*>& parts, float c
         return;
     }
     std::vector<Record> records;
-    records.reserve(n);
-    for (std::vector<Record>* part : parts) {
-        records.insert(records.end(), part->begin(), part->end());
-        std::vector<Record>().swap(*part);
+    if (parts.size() == 1) {
+        records.swap(*parts.front());  // one part: its records as they are, not a copy
+    } else {
+        records.reserve(n);
+        for (std::vector<Record>* part : parts) {
+            records.insert(records.end(), part->begin(), part->end());
+            std::vector<Record>().swap(*part);
+        }
     }
     // A hash table of the cells that hold records. Each record's cell packed into a key of as many
     // bits a coordinate as the records' extent needs (x the lowest), sorted by a stable radix sort
